@@ -1,0 +1,8 @@
+//! One module per subcommand.
+
+pub mod analyze;
+pub mod bench;
+pub mod eval;
+pub mod hw;
+pub mod info;
+pub mod render;

@@ -1,0 +1,55 @@
+//! `glint`: thin glue over the glint crates. Each subcommand lives in `cmd/<name>.rs`
+//! with its own `Args` and `run`.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod cmd;
+
+/// Render 3D biomedical images with cheap, accurate specular lobes, analyse the lobes
+/// against Phong's cos^n, and model the hardware unit that computes them.
+#[derive(Parser)]
+#[command(name = "glint", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a volume (or the built-in phantom) to a PNG.
+    Render(cmd::render::Args),
+    /// Evaluate lobes at given angles or cosines.
+    Eval(cmd::eval::Args),
+    /// Accuracy of the lobes against cos^n: tables, CSVs and plots.
+    Analyze(cmd::analyze::Args),
+    /// Measure lobe throughput against libm powf.
+    #[command(subcommand)]
+    Bench(cmd::bench::Command),
+    /// Describe a volume or surface file.
+    Info(cmd::info::Args),
+    /// The specular unit: ROM contents, width sweeps, stage-by-stage evaluation.
+    #[command(subcommand)]
+    Hw(cmd::hw::Command),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => cmd::render::run(args),
+        Command::Eval(args) => cmd::eval::run(args),
+        Command::Analyze(args) => cmd::analyze::run(args),
+        Command::Bench(args) => cmd::bench::run(args),
+        Command::Info(args) => cmd::info::run(args),
+        Command::Hw(args) => cmd::hw::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            // One line for the user: the error and its causes, joined.
+            eprintln!("glint: error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! glint-hw: placeholder, filled in by its issue.

@@ -1,0 +1,1 @@
+//! glint-io: placeholder, filled in by its issue.

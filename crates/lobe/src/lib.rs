@@ -1,0 +1,35 @@
+//! Specular lobes for shading: the exact Phong/Blinn power `cos^n γ` and the cheap
+//! approximations of it studied by glint.
+//!
+//! ```
+//! use glint_lobe::{Lobe, LobeKind};
+//!
+//! // The paper's energy fit K_4 for a shininess of 100.
+//! let k = Lobe::<f64>::new(LobeKind::EnergyFit, 100.0, 4).unwrap();
+//! let exact = Lobe::<f64>::new(LobeKind::Exact, 100.0, 4).unwrap();
+//! let c = 5f64.to_radians().cos();
+//! assert!((k.eval(c) - exact.eval(c)).abs() < 0.05);
+//! assert_eq!(k.eval(1.0), 1.0);
+//!
+//! // Bad parameters are rejected with a typed error.
+//! assert!(Lobe::<f32>::new(LobeKind::EnergyFit, -1.0, 4).is_err());
+//! ```
+//!
+//! Every lobe maps `c = cos γ` to `[0, 1]`, with value 1 at `c = 1`. The power fits
+//! share one form, `f_a(c) = max(0, 1 - a·(1 - c))^(2^v)`, and differ only in `a`:
+//! `(n+1)/(2^v+1)` for the energy fit (Pavlov, Romanyuk and Dumenko), `n/2^v` for the
+//! slope fit (Lyon 1993), and the value minimising the maximum absolute error for the
+//! minimax fit (see [`minimax_coefficient`]).
+
+#![warn(missing_docs)]
+
+mod coefficient;
+mod geometry;
+mod lobe;
+
+pub use coefficient::{
+    energy_fit_coefficient, max_abs_error, minimax_coefficient, power_lobe_integral,
+    slope_fit_coefficient, ErrorPeak,
+};
+pub use geometry::{blinn_cos, phong_cos, reflect, Geometry};
+pub use lobe::{Lobe, LobeError, LobeKind, Real, MAX_N, MAX_V};

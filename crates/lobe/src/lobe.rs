@@ -1,0 +1,253 @@
+//! The closed set of lobes behind one `eval`.
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::coefficient::{energy_fit_coefficient, minimax_coefficient, slope_fit_coefficient};
+
+/// Largest shininess exponent accepted. Phong exponents in practice stay below ~1000
+/// (the paper's range); 10000 leaves room for very sharp mirrors.
+pub const MAX_N: f64 = 10_000.0;
+
+/// Largest `v` accepted, so the fixed power is at most `2^10 = 1024`.
+pub const MAX_V: u32 = 10;
+
+/// The floating-point types a [`Lobe`] evaluates in: `f32` and `f64`.
+pub trait Real: num_traits::Float + fmt::Debug + Send + Sync + 'static {
+    /// Converts from `f64`, rounding to nearest.
+    fn from_f64(x: f64) -> Self;
+}
+
+impl Real for f32 {
+    fn from_f64(x: f64) -> Self {
+        x as f32
+    }
+}
+
+impl Real for f64 {
+    fn from_f64(x: f64) -> Self {
+        x
+    }
+}
+
+/// Which lobe: the names users type are `exact`, `k`, `g`, `schlick`, `gauss`, `minimax`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum LobeKind {
+    /// `max(c, 0)^n`, the Phong/Blinn reference.
+    Exact,
+    /// The paper's energy fit K_v: `a = (n+1)/(2^v+1)`.
+    EnergyFit,
+    /// The slope fit G_v (Lyon 1993): `a = n/2^v`.
+    SlopeFit,
+    /// Schlick's rational form `c / (n - n·c + c)` for `c > 0`, else 0.
+    Schlick,
+    /// The spherical-Gaussian form `exp(n·(c - 1))`.
+    Gauss,
+    /// The power form with `a` minimising the maximum absolute error against `cos^n`.
+    Minimax,
+}
+
+impl LobeKind {
+    /// Every kind, in the order tables and plots list them.
+    pub const ALL: [LobeKind; 6] = [
+        LobeKind::Exact,
+        LobeKind::EnergyFit,
+        LobeKind::SlopeFit,
+        LobeKind::Schlick,
+        LobeKind::Gauss,
+        LobeKind::Minimax,
+    ];
+
+    /// The short name users type (`exact`, `k`, `g`, `schlick`, `gauss`, `minimax`).
+    pub fn name(self) -> &'static str {
+        match self {
+            LobeKind::Exact => "exact",
+            LobeKind::EnergyFit => "k",
+            LobeKind::SlopeFit => "g",
+            LobeKind::Schlick => "schlick",
+            LobeKind::Gauss => "gauss",
+            LobeKind::Minimax => "minimax",
+        }
+    }
+
+    /// Whether the lobe is a power fit `max(0, 1 - a(1-c))^(2^v)` and so depends on `v`.
+    pub fn uses_v(self) -> bool {
+        matches!(
+            self,
+            LobeKind::EnergyFit | LobeKind::SlopeFit | LobeKind::Minimax
+        )
+    }
+}
+
+impl fmt::Display for LobeKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for LobeKind {
+    type Err = LobeError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let lower = s.trim().to_ascii_lowercase();
+        Ok(match lower.as_str() {
+            "exact" | "phong" | "blinn" | "pow" => LobeKind::Exact,
+            "k" | "energy" | "energy-fit" => LobeKind::EnergyFit,
+            "g" | "slope" | "slope-fit" => LobeKind::SlopeFit,
+            "schlick" => LobeKind::Schlick,
+            "gauss" | "gaussian" | "sg" => LobeKind::Gauss,
+            "minimax" => LobeKind::Minimax,
+            _ => return Err(LobeError::UnknownKind(s.to_string())),
+        })
+    }
+}
+
+/// Why a lobe could not be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LobeError {
+    /// The shininess exponent is NaN, infinite, negative or above [`MAX_N`].
+    #[error("invalid shininess n = {0}: expected a finite number in 0..={MAX_N}")]
+    InvalidN(f64),
+    /// `v` is above [`MAX_V`].
+    #[error("invalid v = {0}: expected 0..={MAX_V} (power 2^v at most 1024)")]
+    InvalidV(u32),
+    /// The lobe name is not one of the known kinds.
+    #[error("unknown lobe '{0}': expected one of exact, k, g, schlick, gauss, minimax")]
+    UnknownKind(String),
+}
+
+/// The evaluation form, with its parameters already converted to `T`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Form<T> {
+    /// `max(c, 0)^n`.
+    Exact { n: T },
+    /// `max(0, 1 - a(1 - c))^(2^v)`.
+    Power { a: T, v: u32 },
+    /// `c / (n - n c + c)` for `c > 0`.
+    Schlick { n: T },
+    /// `exp(n (c - 1))`.
+    Gauss { n: T },
+}
+
+/// A specular lobe: a validated kind and its parameters, evaluated with [`Lobe::eval`].
+///
+/// `Lobe` is a small `Copy` value; the render loop holds one and never needs to know
+/// which kind it is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lobe<T> {
+    kind: LobeKind,
+    n: f64,
+    v: u32,
+    a: f64,
+    form: Form<T>,
+}
+
+impl<T: Real> Lobe<T> {
+    /// Builds a lobe of `kind` for shininess `n` and power `2^v`.
+    ///
+    /// `v` is validated for every kind but only used by the power fits (`k`, `g`,
+    /// `minimax`). The minimax fit searches its coefficient here, once (a few ms).
+    pub fn new(kind: LobeKind, n: f64, v: u32) -> Result<Self, LobeError> {
+        if !n.is_finite() || !(0.0..=MAX_N).contains(&n) {
+            return Err(LobeError::InvalidN(n));
+        }
+        if v > MAX_V {
+            return Err(LobeError::InvalidV(v));
+        }
+        let a = match kind {
+            LobeKind::EnergyFit => energy_fit_coefficient(n, v),
+            LobeKind::SlopeFit => slope_fit_coefficient(n, v),
+            LobeKind::Minimax => minimax_coefficient(n, v),
+            LobeKind::Exact | LobeKind::Schlick | LobeKind::Gauss => f64::NAN,
+        };
+        let tn = T::from_f64(n);
+        let form = match kind {
+            LobeKind::Exact => Form::Exact { n: tn },
+            LobeKind::EnergyFit | LobeKind::SlopeFit | LobeKind::Minimax => Form::Power {
+                a: T::from_f64(a),
+                v,
+            },
+            LobeKind::Schlick => Form::Schlick { n: tn },
+            LobeKind::Gauss => Form::Gauss { n: tn },
+        };
+        Ok(Lobe {
+            kind,
+            n,
+            v,
+            a,
+            form,
+        })
+    }
+
+    /// The kind of lobe.
+    pub fn kind(&self) -> LobeKind {
+        self.kind
+    }
+
+    /// The shininess exponent `n` it approximates (or is, for `exact`).
+    pub fn n(&self) -> f64 {
+        self.n
+    }
+
+    /// `v`, the power fits' exponent being `2^v`.
+    pub fn v(&self) -> u32 {
+        self.v
+    }
+
+    /// The coefficient `a` of a power fit, `None` for the other kinds.
+    pub fn coefficient(&self) -> Option<f64> {
+        self.kind.uses_v().then_some(self.a)
+    }
+
+    /// Evaluates the lobe at `c = cos γ`.
+    ///
+    /// `c` is clamped to `[-1, 1]`; NaN gives 0. The result always lies in `[0, 1]`.
+    #[inline]
+    pub fn eval(&self, c: T) -> T {
+        let zero = T::zero();
+        let one = T::one();
+        if c.is_nan() {
+            return zero;
+        }
+        let c = c.max(-one).min(one);
+        let y = match self.form {
+            Form::Exact { n } => c.max(zero).powf(n),
+            Form::Power { a, v } => {
+                let mut b = one - a * (one - c);
+                if b <= zero {
+                    return zero;
+                }
+                for _ in 0..v {
+                    b = b * b;
+                }
+                b
+            }
+            Form::Schlick { n } => {
+                if c > zero {
+                    c / (n - n * c + c)
+                } else {
+                    zero
+                }
+            }
+            Form::Gauss { n } => (n * (c - one)).exp(),
+        };
+        // The forms above already lie in [0, 1] for c in [-1, 1]; the clamp guards
+        // against rounding only (e.g. Schlick's division).
+        y.max(zero).min(one)
+    }
+
+    /// Evaluates the lobe for every element of `cos`, writing `out`.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    pub fn eval_slice(&self, cos: &[T], out: &mut [T]) {
+        assert_eq!(
+            cos.len(),
+            out.len(),
+            "eval_slice: input and output lengths differ"
+        );
+        for (o, &c) in out.iter_mut().zip(cos) {
+            *o = self.eval(c);
+        }
+    }
+}

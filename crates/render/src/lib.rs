@@ -1,0 +1,1 @@
+//! glint-render: placeholder, filled in by its issue.
