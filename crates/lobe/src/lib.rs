@@ -23,6 +23,7 @@
 
 #![warn(missing_docs)]
 
+mod batch;
 mod coefficient;
 mod geometry;
 mod lobe;

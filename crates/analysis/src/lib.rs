@@ -1,0 +1,1 @@
+//! glint-analysis: placeholder, filled in by its issue.

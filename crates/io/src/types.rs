@@ -1,0 +1,247 @@
+//! The data model every reader produces.
+
+use std::path::PathBuf;
+
+/// Why a file could not be read. Every variant names the file and the problem.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum IoError {
+    /// The operating system refused (missing file, permissions, ...).
+    #[error("{path}: {source}")]
+    Os {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The format or a feature of it is not supported.
+    #[error("{path}: unsupported: {what}")]
+    Unsupported {
+        /// The file.
+        path: PathBuf,
+        /// What is not supported.
+        what: String,
+    },
+    /// The bytes are not a valid file of the format.
+    #[error("{path}: {what}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        what: String,
+    },
+    /// An in-memory volume or mesh is inconsistent (not tied to a file).
+    #[error("{0}")]
+    Inconsistent(String),
+}
+
+/// Voxel samples in the type the file stores them.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Samples {
+    /// Unsigned 8-bit.
+    U8(Vec<u8>),
+    /// Signed 8-bit.
+    I8(Vec<i8>),
+    /// Unsigned 16-bit.
+    U16(Vec<u16>),
+    /// Signed 16-bit.
+    I16(Vec<i16>),
+    /// Unsigned 32-bit.
+    U32(Vec<u32>),
+    /// Signed 32-bit.
+    I32(Vec<i32>),
+    /// 32-bit float.
+    F32(Vec<f32>),
+    /// 64-bit float.
+    F64(Vec<f64>),
+}
+
+macro_rules! each_samples {
+    ($s:expr, $v:ident => $body:expr) => {
+        match $s {
+            Samples::U8($v) => $body,
+            Samples::I8($v) => $body,
+            Samples::U16($v) => $body,
+            Samples::I16($v) => $body,
+            Samples::U32($v) => $body,
+            Samples::I32($v) => $body,
+            Samples::F32($v) => $body,
+            Samples::F64($v) => $body,
+        }
+    };
+}
+
+impl Samples {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        each_samples!(self, v => v.len())
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The stored sample `i` as f64 (unscaled).
+    pub fn get(&self, i: usize) -> f64 {
+        each_samples!(self, v => v[i] as f64)
+    }
+
+    /// The type's name as NIfTI/NRRD users know it (`uint8`, `int16`, `float32`, ...).
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Samples::U8(_) => "uint8",
+            Samples::I8(_) => "int8",
+            Samples::U16(_) => "uint16",
+            Samples::I16(_) => "int16",
+            Samples::U32(_) => "uint32",
+            Samples::I32(_) => "int32",
+            Samples::F32(_) => "float32",
+            Samples::F64(_) => "float64",
+        }
+    }
+}
+
+/// A 3D scalar volume on a regular grid.
+///
+/// Sample `(i, j, k)` is at `samples[i + dims[0] * (j + dims[1] * k)]` (x fastest, as
+/// NIfTI, NRRD and DICOM store them). Its physical value is
+/// `slope * stored + intercept` (NIfTI scl_slope/scl_inter, DICOM rescale).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Volume {
+    /// Samples along i, j, k.
+    pub dims: [usize; 3],
+    /// Voxel size in mm along i, j, k (the column norms of the affine's 3x3 part).
+    pub spacing: [f64; 3],
+    /// Voxel index (i, j, k, 1) to world RAS+ mm, row-major.
+    pub affine: [[f64; 4]; 4],
+    /// The stored samples.
+    pub samples: Samples,
+    /// Scale applied to stored samples.
+    pub slope: f64,
+    /// Offset applied after the scale.
+    pub intercept: f64,
+    /// Units of the physical values where known (e.g. "HU").
+    pub units: Option<String>,
+}
+
+impl Volume {
+    /// A volume with a diagonal affine of `spacing`, origin at voxel 0, no scaling.
+    pub fn new(dims: [usize; 3], spacing: [f64; 3], samples: Samples) -> Result<Self, IoError> {
+        let count = dims
+            .iter()
+            .try_fold(1usize, |acc, &d| acc.checked_mul(d))
+            .ok_or_else(|| IoError::Inconsistent(format!("dims {dims:?} overflow")))?;
+        if count == 0 || count != samples.len() {
+            return Err(IoError::Inconsistent(format!(
+                "dims {dims:?} need {count} samples, got {}",
+                samples.len()
+            )));
+        }
+        if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
+            return Err(IoError::Inconsistent(format!(
+                "invalid spacing {spacing:?}"
+            )));
+        }
+        let mut affine = [[0.0; 4]; 4];
+        for a in 0..3 {
+            affine[a][a] = spacing[a];
+        }
+        affine[3][3] = 1.0;
+        Ok(Volume {
+            dims,
+            spacing,
+            affine,
+            samples,
+            slope: 1.0,
+            intercept: 0.0,
+            units: None,
+        })
+    }
+
+    /// Number of voxels.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Whether the volume has no voxels (never true for a constructed volume).
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// The physical value of voxel `(i, j, k)`.
+    ///
+    /// # Panics
+    /// If the index is out of range.
+    pub fn value(&self, i: usize, j: usize, k: usize) -> f64 {
+        let idx = i + self.dims[0] * (j + self.dims[1] * k);
+        self.slope * self.samples.get(idx) + self.intercept
+    }
+
+    /// All physical values as f32, in storage order.
+    pub fn to_f32(&self) -> Vec<f32> {
+        let (s, b) = (self.slope, self.intercept);
+        each_samples!(&self.samples, v => v.iter().map(|&x| (s * x as f64 + b) as f32).collect())
+    }
+
+    /// The minimum and maximum physical value (NaN samples ignored).
+    pub fn range(&self) -> (f64, f64) {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        each_samples!(&self.samples, v => for &x in v.iter() {
+            let x = x as f64;
+            if x < lo { lo = x; }
+            if x > hi { hi = x; }
+        });
+        let (a, b) = (
+            self.slope * lo + self.intercept,
+            self.slope * hi + self.intercept,
+        );
+        (a.min(b), a.max(b))
+    }
+}
+
+/// A triangle surface mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions in world mm.
+    pub positions: Vec<[f32; 3]>,
+    /// Triangles as indices into `positions`, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex normals, when the file has them.
+    pub normals: Option<Vec<[f32; 3]>>,
+    /// One scalar per vertex, when the file has them.
+    pub scalars: Option<Vec<f32>>,
+}
+
+impl Mesh {
+    /// Axis-aligned bounds `(min, max)`, `None` for a mesh without vertices.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let first = *self.positions.first()?;
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(mut lo, mut hi), p| {
+                    for a in 0..3 {
+                        lo[a] = lo[a].min(p[a]);
+                        hi[a] = hi[a].max(p[a]);
+                    }
+                    (lo, hi)
+                }),
+        )
+    }
+
+    /// Checks that every triangle index is in range.
+    pub fn validate(&self) -> Result<(), IoError> {
+        let n = self.positions.len();
+        if let Some(t) = self
+            .triangles
+            .iter()
+            .find(|t| t.iter().any(|&i| i as usize >= n))
+        {
+            return Err(IoError::Inconsistent(format!(
+                "triangle {t:?} indexes past the {n} vertices"
+            )));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,1 @@
+//! Batch evaluation over slices (SIMD kernels land here).
