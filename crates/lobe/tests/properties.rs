@@ -76,7 +76,7 @@ proptest! {
     }
 
     #[test]
-    fn mirror_configuration_gives_cos_one(theta in 0.0f64..1.5, phi in 0.0f64..6.28) {
+    fn mirror_configuration_gives_cos_one(theta in 0.0f64..1.5, phi in 0.0f64..std::f64::consts::TAU) {
         // L at angle theta from N, V its mirror image about N: both conventions give 1.
         let n = [0.0, 0.0, 1.0];
         let l = [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()];
