@@ -94,7 +94,11 @@ impl Measurement {
         self.worst(ns, |e| (e.ideal_power, 0))
     }
 
-    fn worst(&self, ns: std::ops::RangeInclusive<u32>, pick: impl Fn(&ErrorsAtN) -> (f64, i64)) -> Worst {
+    fn worst(
+        &self,
+        ns: std::ops::RangeInclusive<u32>,
+        pick: impl Fn(&ErrorsAtN) -> (f64, i64),
+    ) -> Worst {
         let mut best = Worst {
             error: 0.0,
             n: *ns.start(),
@@ -142,7 +146,10 @@ impl<'a> Prepared<'a> {
         let t = (self.one - cos) as f64 / self.one as f64;
         let mut pw = 1.0f64;
         for (n, &a) in self.coeffs.iter().enumerate() {
-            let out = self.unit.output_code(self.unit.lobe_code(cos, n as u32), self.full) as f64;
+            let out = self
+                .unit
+                .output_code(self.unit.lobe_code(cos, n as u32), self.full)
+                as f64;
             let mut l = 1.0 - a * t;
             if l <= 0.0 {
                 l = 0.0;
@@ -216,14 +223,22 @@ pub fn measure(unit: &Unit) -> Measurement {
 /// Whether the unit's error against `reference` stays within `bound_lsb` (plus
 /// [`BOUND_SLACK_LSB`]) for every code of the reference's range and every `n` with
 /// `include_n[n]` (all `n` if `None`). Stops at the first violation.
-pub fn within(unit: &Unit, reference: Reference, bound_lsb: f64, include_n: Option<&[bool]>) -> bool {
+pub fn within(
+    unit: &Unit,
+    reference: Reference,
+    bound_lsb: f64,
+    include_n: Option<&[bool]>,
+) -> bool {
     let p = Prepared::new(unit);
     let bound = bound_lsb + BOUND_SLACK_LSB;
     let lo = match reference {
         Reference::Lobe => -p.one,
         Reference::Power => 0,
     };
-    let keep = |n: usize| include_n.map_or(true, |m| m.get(n).copied().unwrap_or(false));
+    let keep = |n: usize| match include_n {
+        None => true,
+        Some(m) => m.get(n).copied().unwrap_or(false),
+    };
     !(lo..=p.one).into_par_iter().any(|cos| {
         let mut bad = false;
         p.visit(cos, |n, out, lobe, power| {

@@ -142,7 +142,10 @@ impl<'u> Pipeline<'u> {
             let (prev, prev_frac) = if k == 0 {
                 (old.base.map(|r| (r.b, r.ks)), f.mul_frac)
             } else {
-                (old.squares[k - 1].map(|r| (r.s, r.ks)), f.square_frac[k - 1])
+                (
+                    old.squares[k - 1].map(|r| (r.s, r.ks)),
+                    f.square_frac[k - 1],
+                )
             };
             squares.push(prev.map(|(s, ks)| SquareReg {
                 s: requantize(

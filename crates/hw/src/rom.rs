@@ -23,12 +23,19 @@ pub struct Rom {
     words: Vec<u64>,
 }
 
+/// Minimax coefficients already computed, by `(v, n_bits)`.
+type MinimaxCache = HashMap<(u32, u32), Arc<Vec<f64>>>;
+
 /// The real (f64) coefficients `a(n)`, `n = 0 .. 2^n_bits`.
 ///
 /// The energy fit is `(n+1)/(2^v+1)`; the minimax ones come from
 /// [`glint_lobe::minimax_coefficient`] (a few ms each, so they are computed in parallel
 /// and cached for the life of the process).
-pub fn real_coefficients(kind: Coefficients, v: u32, n_bits: u32) -> Result<Arc<Vec<f64>>, HwError> {
+pub fn real_coefficients(
+    kind: Coefficients,
+    v: u32,
+    n_bits: u32,
+) -> Result<Arc<Vec<f64>>, HwError> {
     if v > MAX_V {
         return Err(HwError::InvalidV(v));
     }
@@ -45,9 +52,13 @@ pub fn real_coefficients(kind: Coefficients, v: u32, n_bits: u32) -> Result<Arc<
             (0..count).map(|n| (n as f64 + 1.0) / m1).collect(),
         )),
         Coefficients::Minimax => {
-            static CACHE: OnceLock<Mutex<HashMap<(u32, u32), Arc<Vec<f64>>>>> = OnceLock::new();
+            static CACHE: OnceLock<Mutex<MinimaxCache>> = OnceLock::new();
             let cache = CACHE.get_or_init(Default::default);
-            if let Some(found) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&(v, n_bits)) {
+            if let Some(found) = cache
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .get(&(v, n_bits))
+            {
                 return Ok(found.clone());
             }
             let values: Arc<Vec<f64>> = Arc::new(
@@ -116,7 +127,7 @@ impl Rom {
         } else {
             (1u128 << coef_bits) - 1
         };
-        let m1 = ((1u128 << v) + 1) as u128;
+        let m1 = (1u128 << v) + 1;
         let words = exact
             .iter()
             .enumerate()
@@ -212,7 +223,11 @@ impl Rom {
             }
         };
         let mut out = String::with_capacity(self.words.len() * (digits + 1) + 512);
-        let _ = writeln!(out, "// glint ROM1 ({}): {formula}, v = {}", self.coefficients, self.v);
+        let _ = writeln!(
+            out,
+            "// glint ROM1 ({}): {formula}, v = {}",
+            self.coefficients, self.v
+        );
         let _ = writeln!(
             out,
             "// {} words of {} bits, unsigned UQ{}.{} (value = word / 2^{}), rounding {}",
@@ -223,7 +238,11 @@ impl Rom {
             self.frac_bits,
             self.round
         );
-        let _ = writeln!(out, "// address = n (0..{}), load with $readmemh", self.words.len() - 1);
+        let _ = writeln!(
+            out,
+            "// address = n (0..{}), load with $readmemh",
+            self.words.len() - 1
+        );
         for w in &self.words {
             let _ = writeln!(out, "{w:0digits$x}");
         }

@@ -135,7 +135,13 @@ pub fn format_ranges(r: &[(u32, u32)]) -> String {
         return "none".into();
     }
     r.iter()
-        .map(|&(a, b)| if a == b { format!("{a}") } else { format!("{a}-{b}") })
+        .map(|&(a, b)| {
+            if a == b {
+                format!("{a}")
+            } else {
+                format!("{a}-{b}")
+            }
+        })
         .collect::<Vec<_>>()
         .join(", ")
 }

@@ -88,7 +88,10 @@ impl Unit {
             config.coef_round,
         )?;
         let mul_int = rom.int_bits() + 2;
-        check_register("MUL output (coef integer bits + 2 + mul_frac)", mul_int + config.mul_frac)?;
+        check_register(
+            "MUL output (coef integer bits + 2 + mul_frac)",
+            mul_int + config.mul_frac,
+        )?;
         check_register("Sm2 (signed, MUL width + 1)", mul_int + config.mul_frac + 1)?;
         let formats = Formats {
             cos_frac: config.cos_frac(),
@@ -240,7 +243,12 @@ impl Unit {
         let mut frac = f.mul_frac;
         // BMUL: v squarings, each rounded to its stage's width.
         for &next in &f.square_frac {
-            s = requantize(s as u128 * s as u128, 2 * frac, next, self.config.square_round) as u64;
+            s = requantize(
+                s as u128 * s as u128,
+                2 * frac,
+                next,
+                self.config.square_round,
+            ) as u64;
             frac = next;
         }
         s

@@ -54,7 +54,7 @@ fn stream_and_compare(config: Config) {
         }
         schedule.push(Some(*inp));
     }
-    schedule.extend(std::iter::repeat(None).take(latency));
+    schedule.resize(schedule.len() + latency, None);
     let mut outputs: Vec<Option<Output>> = Vec::with_capacity(schedule.len());
     for inp in &schedule {
         outputs.push(pipe.clock(*inp).unwrap());
@@ -127,7 +127,11 @@ fn spec(cfg: &Config, input: &Input) -> [u64; 3] {
     let m1 = f64::from((1u32 << cfg.v) + 1);
     // Largest a = 2^n_bits/(2^v+1); its integer bits (for the small configs, 0 or 1).
     let max_a = f64::from(1u32 << cfg.n_bits) / m1;
-    let int_bits = if max_a < 1.0 { 0 } else { (max_a.floor() as u64).ilog2() + 1 };
+    let int_bits = if max_a < 1.0 {
+        0
+    } else {
+        (max_a.floor() as u64).ilog2() + 1
+    };
     let coef_frac = cfg.coef_bits - int_bits;
     let a = quantise((input.n as f64 + 1.0) / m1, coef_frac, cfg.coef_round)
         .min((2f64.powi(cfg.coef_bits as i32) - 1.0) / 2f64.powi(coef_frac as i32));
@@ -137,7 +141,9 @@ fn spec(cfg: &Config, input: &Input) -> [u64; 3] {
     for &f in &cfg.square_frac {
         s = quantise(s * s, f, cfg.square_round);
     }
-    input.ks.map(|k| quantise(s * k as f64, 0, cfg.out_round) as u64)
+    input
+        .ks
+        .map(|k| quantise(s * k as f64, 0, cfg.out_round) as u64)
 }
 
 #[test]

@@ -12,7 +12,13 @@ fn zero_widths_are_rejected() {
     for (cfg, field) in [
         (Config { n_bits: 0, ..d() }, "n_bits"),
         (Config { cos_bits: 0, ..d() }, "cos_bits"),
-        (Config { coef_bits: 0, ..d() }, "coef_bits"),
+        (
+            Config {
+                coef_bits: 0,
+                ..d()
+            },
+            "coef_bits",
+        ),
         (Config { mul_frac: 0, ..d() }, "mul_frac"),
         (Config { out_bits: 0, ..d() }, "out_bits"),
         (
@@ -26,7 +32,10 @@ fn zero_widths_are_rejected() {
         let e = err(cfg);
         assert_eq!(e, HwError::ZeroWidth { field }, "{e}");
         let msg = e.to_string();
-        assert!(msg.contains(field) && msg.contains("at least 1 bit"), "{msg}");
+        assert!(
+            msg.contains(field) && msg.contains("at least 1 bit"),
+            "{msg}"
+        );
         assert!(!msg.contains('\n'));
     }
 }
@@ -54,15 +63,25 @@ fn widths_overflowing_64_bit_registers_are_rejected() {
     let d = Config::default;
     // A 65-bit ROM word.
     assert!(matches!(
-        err(Config { coef_bits: 65, ..d() }),
+        err(Config {
+            coef_bits: 65,
+            ..d()
+        }),
         HwError::TooWide { bits: 65, .. }
     ));
     // MUL output: 6 integer bits of a (n <= 1023, v = 4) + 2 + 57 = 65 bits.
-    let e = err(Config { mul_frac: 57, ..d() });
+    let e = err(Config {
+        mul_frac: 57,
+        ..d()
+    });
     assert!(matches!(e, HwError::TooWide { bits: 65, .. }), "{e}");
     assert!(e.to_string().contains("64-bit"), "{e}");
     // ... while 6 + 2 + 55 + 1 (signed Sm2) = 64 fits.
-    assert!(Unit::new(Config { mul_frac: 55, ..d() }).is_ok());
+    assert!(Unit::new(Config {
+        mul_frac: 55,
+        ..d()
+    })
+    .is_ok());
     // A squaring stage UQ1.63 is 64 bits, UQ1.64 is 65.
     assert!(Unit::new(Config {
         square_frac: vec![63, 63, 63, 63],
@@ -78,11 +97,17 @@ fn widths_overflowing_64_bit_registers_are_rejected() {
     ));
     // Sm1 forms 1 - cos in cos_bits + 1 bits.
     assert!(matches!(
-        err(Config { cos_bits: 64, ..d() }),
+        err(Config {
+            cos_bits: 64,
+            ..d()
+        }),
         HwError::TooWide { bits: 65, .. }
     ));
     assert!(matches!(
-        err(Config { out_bits: 65, ..d() }),
+        err(Config {
+            out_bits: 65,
+            ..d()
+        }),
         HwError::TooWide { bits: 65, .. }
     ));
 }
@@ -100,7 +125,10 @@ fn other_inconsistent_configurations_are_rejected() {
     assert_eq!(err(Config { n_bits: 14, ..d() }), HwError::InvalidNBits(14));
     // a(1023) = 1024/17 ≈ 60.2 needs 6 integer bits.
     assert!(matches!(
-        err(Config { coef_bits: 5, ..d() }),
+        err(Config {
+            coef_bits: 5,
+            ..d()
+        }),
         HwError::TooNarrow {
             field: "coef_bits",
             ..
@@ -152,7 +180,10 @@ fn inputs_out_of_range_are_rejected() {
             ..ok
         },
         Input { n: 1024, ..ok },
-        Input { ks: [0, 256, 0], ..ok },
+        Input {
+            ks: [0, 256, 0],
+            ..ok
+        },
     ] {
         assert!(matches!(unit.eval(&bad), Err(HwError::Input(_))), "{bad:?}");
         // The pipeline refuses it too, without taking a clock edge.

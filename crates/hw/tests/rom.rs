@@ -30,13 +30,20 @@ fn readmemh_text() {
     let text = rom.to_readmemh();
     let data: Vec<&str> = text.lines().filter(|l| !l.starts_with("//")).collect();
     assert_eq!(data.len(), 1024);
-    assert!(data.iter().all(|l| l.len() == 4 && l.chars().all(|c| c.is_ascii_hexdigit())));
+    assert!(data
+        .iter()
+        .all(|l| l.len() == 4 && l.chars().all(|c| c.is_ascii_hexdigit())));
     assert_eq!(data[16], "0400");
     assert_eq!(data[1023], "f0f1");
     assert!(text.lines().next().unwrap().starts_with("// glint ROM1"));
     // 18-bit words take 5 hex digits.
     let wide = Rom::new(Coefficients::EnergyFit, 4, 10, 18, Rounding::Nearest).unwrap();
-    let first = wide.to_readmemh().lines().find(|l| !l.starts_with("//")).unwrap().to_string();
+    let first = wide
+        .to_readmemh()
+        .lines()
+        .find(|l| !l.starts_with("//"))
+        .unwrap()
+        .to_string();
     assert_eq!(first.len(), 5);
 }
 

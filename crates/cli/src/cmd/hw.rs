@@ -25,13 +25,17 @@ pub enum Command {
                       glint hw sweep --out-bits 10 --v 4 --coef minimax")]
     Sweep(SweepArgs),
     /// Evaluate one input and print every stage's value.
-    #[command(after_help = "Examples:\n  glint hw eval --cos 0.98 --n 100 --ks-rgb 255,200,180\n  \
+    #[command(
+        after_help = "Examples:\n  glint hw eval --cos 0.98 --n 100 --ks-rgb 255,200,180\n  \
                       glint hw eval --config unit.json --cos 0.98 --n 100 --ks-rgb 255,200,180\n  \
-                      glint hw eval --print-config > unit.json")]
+                      glint hw eval --print-config > unit.json"
+    )]
     Eval(EvalArgs),
     /// Measure a configuration's maximum error exhaustively (every cos code, every n).
-    #[command(after_help = "Examples:\n  glint hw check\n  glint hw check --out-bits 10\n  \
-                      glint hw check --config unit.json")]
+    #[command(
+        after_help = "Examples:\n  glint hw check\n  glint hw check --out-bits 10\n  \
+                      glint hw check --config unit.json"
+    )]
     Check(CheckArgs),
 }
 
@@ -269,7 +273,10 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     // The functional model must agree with the pipeline; say so if it ever does not.
     let functional = unit.eval(&input)?;
     if functional != trace.output {
-        bail!("internal error: functional model {functional:?} != pipeline {:?}", trace.output);
+        bail!(
+            "internal error: functional model {functional:?} != pipeline {:?}",
+            trace.output
+        );
     }
     // Also stream it through a busy pipeline (neighbours on both sides) as a check.
     let mut pipe = Pipeline::new(&unit);
@@ -281,7 +288,10 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
         busy = pipe.clock(Some(neighbour))?;
     }
     if busy != Some(trace.output) {
-        bail!("internal error: busy pipeline {busy:?} != {:?}", trace.output);
+        bail!(
+            "internal error: busy pipeline {busy:?} != {:?}",
+            trace.output
+        );
     }
 
     let f = unit.formats();
@@ -295,11 +305,18 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
         cfg.coefficients,
         unit.latency()
     );
-    println!("{:<12} {:<18} {:>22} {:>18}  value", "stage", "format", "code", "hex");
+    println!(
+        "{:<12} {:<18} {:>22} {:>18}  value",
+        "stage", "format", "code", "hex"
+    );
     let row = |stage: &str, fmt: String, code: String, hexs: String, value: String| {
         println!("{stage:<12} {fmt:<18} {code:>22} {hexs:>18}  {value}");
     };
-    let cos_mask = if cfg.cos_bits >= 64 { u64::MAX } else { (1u64 << cfg.cos_bits) - 1 };
+    let cos_mask = if cfg.cos_bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << cfg.cos_bits) - 1
+    };
     row(
         "RG1 cos",
         format!("Q1.{} signed", f.cos_frac),
@@ -307,16 +324,32 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
         hex(cos as u64 & cos_mask, cfg.cos_bits),
         format!("{c:.12}"),
     );
-    row("RG2 n", format!("U{}", cfg.n_bits), input.n.to_string(), hex(input.n as u64, cfg.n_bits), input.n.to_string());
+    row(
+        "RG2 n",
+        format!("U{}", cfg.n_bits),
+        input.n.to_string(),
+        hex(input.n as u64, cfg.n_bits),
+        input.n.to_string(),
+    );
     let r1 = trace.rom_sm1;
     row(
         "ROM1 a(n)",
         format!("UQ{}.{}", f.coef_int, f.coef_frac),
         r1.a.to_string(),
         hex(r1.a, cfg.coef_bits),
-        format!("{:.12} (exact {:.12})", val(r1.a, f.coef_frac), unit.rom().exact()[input.n as usize]),
+        format!(
+            "{:.12} (exact {:.12})",
+            val(r1.a, f.coef_frac),
+            unit.rom().exact()[input.n as usize]
+        ),
     );
-    row("Sm1 1-cos", format!("UQ2.{}", f.t_frac), r1.t.to_string(), hex(r1.t, f.t_frac + 2), format!("{:.12}", val(r1.t, f.t_frac)));
+    row(
+        "Sm1 1-cos",
+        format!("UQ2.{}", f.t_frac),
+        r1.t.to_string(),
+        hex(r1.t, f.t_frac + 2),
+        format!("{:.12}", val(r1.t, f.t_frac)),
+    );
     row(
         "MUL a(1-cos)",
         format!("UQ{}.{}", f.mul_int, f.mul_frac),
@@ -328,8 +361,14 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
         "Sm2 1-p",
         format!("Q{}.{} signed", f.mul_int, f.mul_frac),
         trace.base.diff.to_string(),
-        hex(trace.base.diff as u64 & ((1u64 << f.sm2_bits().min(63)) - 1), f.sm2_bits()),
-        format!("{:.12}", trace.base.diff as f64 / 2f64.powi(f.mul_frac as i32)),
+        hex(
+            trace.base.diff as u64 & ((1u64 << f.sm2_bits().min(63)) - 1),
+            f.sm2_bits(),
+        ),
+        format!(
+            "{:.12}",
+            trace.base.diff as f64 / 2f64.powi(f.mul_frac as i32)
+        ),
     );
     row(
         "SW base",
@@ -350,7 +389,11 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     }
     let a = unit.rom().exact()[input.n as usize];
     let base = 1.0 - a * (1.0 - c);
-    let lobe = if base <= 0.0 { 0.0 } else { base.powi(1 << cfg.v) };
+    let lobe = if base <= 0.0 {
+        0.0
+    } else {
+        base.powi(1 << cfg.v)
+    };
     let power = c.max(0.0).powf(input.n as f64);
     for (k, name) in ["R", "G", "B"].iter().enumerate() {
         let ks = input.ks[k] as f64;
@@ -368,7 +411,10 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
             ),
         );
     }
-    println!("# output R,G,B = {},{},{}", trace.output.rgb[0], trace.output.rgb[1], trace.output.rgb[2]);
+    println!(
+        "# output R,G,B = {},{},{}",
+        trace.output.rgb[0], trace.output.rgb[1], trace.output.rgb[2]
+    );
     Ok(())
 }
 
@@ -393,12 +439,19 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     let w = m.worst_lobe(0..=last);
     println!(
         "max error vs exact lobe ({}): {:.4} LSB at n = {}, cos = {:.9}",
-        if cfg.coefficients == Coefficients::EnergyFit { "K_v" } else { "minimax power lobe" },
+        if cfg.coefficients == Coefficients::EnergyFit {
+            "K_v"
+        } else {
+            "minimax power lobe"
+        },
         w.error,
         w.n,
         unit.cos_value(w.cos)
     );
-    println!("{:<12} {:>14} {:>22} {:>22}", "n range", "vs lobe", "vs cos^n (unit)", "vs cos^n (ideal)");
+    println!(
+        "{:<12} {:>14} {:>22} {:>22}",
+        "n range", "vs lobe", "vs cos^n (unit)", "vs cos^n (ideal)"
+    );
     let mut ranges = vec![(0u32, 15u32), (16, 63), (64, 255), (256, last)];
     ranges.retain(|&(a, _)| a <= last);
     if let Some(r) = ranges.last_mut() {
@@ -421,9 +474,16 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
         .fold(f64::MIN, f64::max);
     println!("max over n of (unit - ideal) error vs cos^n: {excess:.4} LSB");
     for bound in [0.5, 1.0] {
-        let ok: Vec<bool> = m.per_n.iter().map(|e| e.power <= bound + glint_hw::BOUND_SLACK_LSB).collect();
+        let ok: Vec<bool> = m
+            .per_n
+            .iter()
+            .map(|e| e.power <= bound + glint_hw::BOUND_SLACK_LSB)
+            .collect();
         let ranges = ranges_of(&ok);
-        println!("n where the unit is within {bound} LSB of cos^n: {}", format_ranges(&ranges));
+        println!(
+            "n where the unit is within {bound} LSB of cos^n: {}",
+            format_ranges(&ranges)
+        );
     }
     Ok(())
 }
