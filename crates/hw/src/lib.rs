@@ -49,7 +49,9 @@ pub use config::{Coefficients, Config, Rounding, MAX_N_BITS, MAX_REGISTER_BITS, 
 pub use fixed::requantize;
 pub use pipeline::{BaseReg, MulReg, Pipeline, Registers, RomSm1Reg, SquareReg, Trace};
 pub use rom::{coefficient_int_bits, real_coefficients, Rom};
-pub use sweep::{format_ranges, markdown_table, sweep_row, SweepRow, Target, Widths, START_FRAC};
+pub use sweep::{
+    format_ranges, markdown_table, mask_ranges, sweep_row, SweepRow, Target, Widths, START_FRAC,
+};
 pub use unit::{Formats, Input, Output, Unit};
 
 /// Why a configuration or an input was rejected.

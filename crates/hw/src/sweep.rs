@@ -110,7 +110,8 @@ fn config_with(base: &Config, coef_int: u32, w: &Widths) -> Config {
     }
 }
 
-fn ranges(mask: &[bool]) -> Vec<(u32, u32)> {
+/// The indices where `mask` is true, as inclusive ranges `(first, last)`.
+pub fn mask_ranges(mask: &[bool]) -> Vec<(u32, u32)> {
     let mut out = Vec::new();
     let mut start = None;
     for (n, &m) in mask.iter().enumerate() {
@@ -170,7 +171,7 @@ pub fn sweep_row(
             Reference::Power => e.ideal_power <= target.bound + BOUND_SLACK_LSB,
         })
         .collect();
-    let feasible_n = ranges(&mask);
+    let feasible_n = mask_ranges(&mask);
     let label = format!("v={v} {} <= {} LSB", target.reference.label(), target.bound);
     let err_of = |m: &crate::Measurement| {
         m.per_n

@@ -1,7 +1,7 @@
 //! The width search on a small configuration: what it reports meets the target, and
 //! every stage one bit narrower misses it.
 
-use glint_hw::{measure, sweep_row, within, Config, Reference, Target, Unit};
+use glint_hw::{mask_ranges, measure, sweep_row, within, Config, Reference, Target, Unit};
 
 fn base() -> Config {
     Config {
@@ -81,4 +81,13 @@ fn cos_n_rows_only_ask_where_an_ideal_unit_can_succeed() {
         "{:?}",
         row.feasible_n
     );
+}
+
+#[test]
+fn mask_ranges_join_runs() {
+    assert_eq!(
+        mask_ranges(&[true, true, false, true, false, false, true]),
+        vec![(0, 1), (3, 3), (6, 6)]
+    );
+    assert!(mask_ranges(&[false, false]).is_empty());
 }

@@ -7,8 +7,8 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use glint_hw::{
-    format_ranges, markdown_table, measure, sweep_row, Coefficients, Config, Input, Pipeline,
-    Reference, Rom, Rounding, Target, Unit,
+    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, Input,
+    Pipeline, Reference, Rom, Rounding, Target, Unit,
 };
 
 /// Subcommands of `glint hw`.
@@ -154,6 +154,35 @@ fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
     }
 }
 
+/// Builds the unit, naming the configuration file in the error if there is one.
+fn build_unit(config: Config, path: Option<&Path>) -> anyhow::Result<Unit> {
+    match path {
+        None => Ok(Unit::new(config)?),
+        Some(p) => Unit::new(config).with_context(|| format!("in {}", p.display())),
+    }
+}
+
+/// Largest exhaustive check `glint hw check` runs (~1 min of CPU at ~25 ns a point).
+const MAX_CHECK_POINTS: u64 = 1 << 32;
+/// Largest exhaustive check per step of `glint hw sweep` (it runs ~30-40 of them).
+const MAX_SWEEP_POINTS: u64 = 1 << 28;
+
+/// Refuses configurations whose exhaustive check (every cos code in [-1, 1] × every
+/// n) would run for too long, with the numbers in the message.
+fn check_exhaustive_size(unit: &Unit, max: u64) -> anyhow::Result<()> {
+    let cfg = unit.config();
+    let points = (2 * unit.cos_one() as u64 + 1) << cfg.n_bits;
+    if points > max {
+        bail!(
+            "an exhaustive check of cos_bits = {} and n_bits = {} is {points} points per pass, \
+             more than the {max} this command runs; use fewer bits",
+            cfg.cos_bits,
+            cfg.n_bits
+        );
+    }
+    Ok(())
+}
+
 /// Writes `text` to `path` through a temporary file in the same directory, so a failed
 /// run leaves no partial file.
 fn write_atomically(path: &Path, text: &str) -> anyhow::Result<()> {
@@ -214,6 +243,11 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
             ..Config::default()
         };
         base.validate()?;
+        let probe = Unit::new(Config {
+            coef_bits: 64,
+            ..base.clone()
+        })?;
+        check_exhaustive_size(&probe, MAX_SWEEP_POINTS)?;
         for &reference in refs {
             for &bound in &args.bound {
                 let row = sweep_row(&base, Target { reference, bound }, &mut |line| {
@@ -248,7 +282,7 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
 
 fn eval(args: EvalArgs) -> anyhow::Result<()> {
     let config = load_config(args.config.as_deref())?;
-    let unit = Unit::new(config)?;
+    let unit = build_unit(config, args.config.as_deref())?;
     if args.print_config {
         println!("{}", unit.config().to_json());
         return Ok(());
@@ -423,7 +457,8 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     if let Some(b) = args.out_bits {
         config.out_bits = b;
     }
-    let unit = Unit::new(config)?;
+    let unit = build_unit(config, args.config.as_deref())?;
+    check_exhaustive_size(&unit, MAX_CHECK_POINTS)?;
     let started = Instant::now();
     let m = measure(&unit);
     let secs = started.elapsed().as_secs_f64();
@@ -479,7 +514,7 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
             .iter()
             .map(|e| e.power <= bound + glint_hw::BOUND_SLACK_LSB)
             .collect();
-        let ranges = ranges_of(&ok);
+        let ranges = mask_ranges(&ok);
         println!(
             "n where the unit is within {bound} LSB of cos^n: {}",
             format_ranges(&ranges)
@@ -488,19 +523,49 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn ranges_of(mask: &[bool]) -> Vec<(u32, u32)> {
-    let mut out: Vec<(u32, u32)> = Vec::new();
-    for (n, &m) in mask.iter().enumerate() {
-        if m {
-            match out.last_mut() {
-                Some(r) if r.1 + 1 == n as u32 => r.1 = n as u32,
-                _ => out.push((n as u32, n as u32)),
-            }
-        }
-    }
-    out
-}
-
 fn serde_json_line(cfg: &Config) -> String {
     serde_json::to_string(cfg).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rom_file_is_readmemh_and_bad_runs_leave_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("rom1.hex");
+        let args = |v: u32| RomArgs {
+            v,
+            n_bits: 10,
+            coef_bits: 16,
+            coef: Coefficients::EnergyFit,
+            round: Rounding::Nearest,
+            output: out.clone(),
+        };
+        run(Command::Rom(args(4))).unwrap();
+        let text = std::fs::read_to_string(&out).unwrap();
+        let words: Vec<&str> = text.lines().filter(|l| !l.starts_with("//")).collect();
+        // 1024 words; a(16) = 17/17 = 1.0 = 0x400 in UQ6.10.
+        assert_eq!(words.len(), 1024);
+        assert_eq!(words[16], "0400");
+        std::fs::remove_file(&out).unwrap();
+        let err = run(Command::Rom(args(11))).unwrap_err();
+        assert!(format!("{err:#}").contains("v = 11"));
+        assert!(!out.exists());
+        // Only the temporary files' directory entries could remain; there are none.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn oversized_exhaustive_checks_are_refused() {
+        let unit = Unit::new(Config {
+            cos_bits: 30,
+            ..Config::default()
+        })
+        .unwrap();
+        assert!(check_exhaustive_size(&unit, MAX_CHECK_POINTS).is_err());
+        let unit = Unit::new(Config::default()).unwrap();
+        assert!(check_exhaustive_size(&unit, MAX_SWEEP_POINTS).is_ok());
+    }
 }
