@@ -1,13 +1,571 @@
-//! `glint hw` (not implemented yet).
+//! `glint hw`: the fixed-point model of the specular unit (ROM contents, width sweeps,
+//! stage-by-stage evaluation, exhaustive error check).
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use glint_hw::{
+    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, Input,
+    Pipeline, Reference, Rom, Rounding, Target, Unit,
+};
 
 /// Subcommands of `glint hw`.
 #[derive(clap::Subcommand)]
 pub enum Command {
-    /// Placeholder.
-    Todo,
+    /// Write ROM1 (the coefficient a(n) for every n) in Verilog $readmemh format.
+    #[command(
+        after_help = "Examples:\n  glint hw rom --v 4 --n-bits 10 --coef-bits 16 -o rom1.hex\n  \
+                      glint hw rom --v 4 --n-bits 10 --coef-bits 16 --coef minimax -o rom1_minimax.hex"
+    )]
+    Rom(RomArgs),
+    /// Search the smallest per-stage widths meeting 0.5 and 1 LSB bounds (exhaustive).
+    #[command(after_help = "Examples:\n  glint hw sweep --out-bits 8\n  \
+                      glint hw sweep --out-bits 10 --v 4 --coef minimax")]
+    Sweep(SweepArgs),
+    /// Evaluate one input and print every stage's value.
+    #[command(
+        after_help = "Examples:\n  glint hw eval --cos 0.98 --n 100 --ks-rgb 255,200,180\n  \
+                      glint hw eval --config unit.json --cos 0.98 --n 100 --ks-rgb 255,200,180\n  \
+                      glint hw eval --print-config > unit.json"
+    )]
+    Eval(EvalArgs),
+    /// Measure a configuration's maximum error exhaustively (every cos code, every n).
+    #[command(
+        after_help = "Examples:\n  glint hw check\n  glint hw check --out-bits 10\n  \
+                      glint hw check --config unit.json"
+    )]
+    Check(CheckArgs),
+}
+
+/// Arguments of `glint hw rom`.
+#[derive(clap::Args)]
+pub struct RomArgs {
+    /// BMUL squarings; the power is 2^v (0..=10).
+    #[arg(long, default_value_t = 4)]
+    v: u32,
+    /// Width of n, the ROM address (1..=13).
+    #[arg(long, default_value_t = 10)]
+    n_bits: u32,
+    /// Width of a ROM word (integer bits are derived from the largest coefficient).
+    #[arg(long, default_value_t = 16)]
+    coef_bits: u32,
+    /// Coefficients: k (the paper's energy fit, (n+1)/(2^v+1)) or minimax.
+    #[arg(long, default_value = "k", value_parser = parse_coef)]
+    coef: Coefficients,
+    /// Rounding of the words: nearest or truncate.
+    #[arg(long, default_value = "nearest", value_parser = parse_round)]
+    round: Rounding,
+    /// Output file (written atomically).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Arguments of `glint hw sweep`.
+#[derive(clap::Args)]
+pub struct SweepArgs {
+    /// Output code width (k_s·I inputs and R, G, B outputs).
+    #[arg(long, default_value_t = 8)]
+    out_bits: u32,
+    /// Values of v to sweep, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [3u32, 4, 5])]
+    v: Vec<u32>,
+    /// Bounds in output LSBs, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.5f64, 1.0])]
+    bound: Vec<f64>,
+    /// Coefficients in ROM1: k or minimax.
+    #[arg(long, default_value = "k", value_parser = parse_coef)]
+    coef: Coefficients,
+    /// Width of n (1..=13).
+    #[arg(long, default_value_t = 10)]
+    n_bits: u32,
+    /// Width of the signed cos code (Q1.(cos_bits-2)); every code in [-1, 1] is checked.
+    #[arg(long, default_value_t = 16)]
+    cos_bits: u32,
+    /// Rounding of every stage: nearest or truncate.
+    #[arg(long, default_value = "nearest", value_parser = parse_round)]
+    round: Rounding,
+    /// Skip the rows against cos^n (only the exact lobe).
+    #[arg(long)]
+    lobe_only: bool,
+}
+
+/// Arguments of `glint hw eval`.
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    /// Configuration file (JSON; missing fields take the defaults) [default: built-in].
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// cos γ as a real number (rounded to the input code).
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "cos_code", required_unless_present_any = ["cos_code", "print_config"])]
+    cos: Option<f64>,
+    /// cos γ as the signed input code instead.
+    #[arg(long, allow_negative_numbers = true)]
+    cos_code: Option<i64>,
+    /// Shininess exponent n.
+    #[arg(long, default_value_t = 100)]
+    n: u32,
+    /// k_s·I for R, G, B as output-width codes.
+    #[arg(long, value_delimiter = ',', num_args = 1, default_values_t = [255u64, 200, 180])]
+    ks_rgb: Vec<u64>,
+    /// Print the configuration (JSON) and exit; a starting point for --config files.
+    #[arg(long)]
+    print_config: bool,
+}
+
+/// Arguments of `glint hw check`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// Configuration file (JSON) [default: built-in].
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Override the configuration's output width.
+    #[arg(long)]
+    out_bits: Option<u32>,
+}
+
+fn parse_coef(s: &str) -> Result<Coefficients, String> {
+    s.parse().map_err(|e: glint_hw::HwError| e.to_string())
+}
+
+fn parse_round(s: &str) -> Result<Rounding, String> {
+    s.parse().map_err(|e: glint_hw::HwError| e.to_string())
 }
 
 /// Runs `glint hw`.
-pub fn run(_command: Command) -> anyhow::Result<()> {
-    anyhow::bail!("'glint hw' is not implemented yet")
+pub fn run(command: Command) -> anyhow::Result<()> {
+    match command {
+        Command::Rom(args) => rom(args),
+        Command::Sweep(args) => sweep(args),
+        Command::Eval(args) => eval(args),
+        Command::Check(args) => check(args),
+    }
+}
+
+fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
+    match path {
+        None => Ok(Config::default()),
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("reading configuration {}", p.display()))?;
+            Config::from_json(&text).with_context(|| format!("in {}", p.display()))
+        }
+    }
+}
+
+/// Builds the unit, naming the configuration file in the error if there is one.
+fn build_unit(config: Config, path: Option<&Path>) -> anyhow::Result<Unit> {
+    match path {
+        None => Ok(Unit::new(config)?),
+        Some(p) => Unit::new(config).with_context(|| format!("in {}", p.display())),
+    }
+}
+
+/// Largest exhaustive check `glint hw check` runs (~1 min of CPU at ~25 ns a point).
+const MAX_CHECK_POINTS: u64 = 1 << 32;
+/// Largest exhaustive check per step of `glint hw sweep` (it runs ~30-40 of them).
+const MAX_SWEEP_POINTS: u64 = 1 << 28;
+
+/// Refuses configurations whose exhaustive check (every cos code in [-1, 1] × every
+/// n) would run for too long, with the numbers in the message.
+fn check_exhaustive_size(unit: &Unit, max: u64) -> anyhow::Result<()> {
+    let cfg = unit.config();
+    let points = (2 * unit.cos_one() as u64 + 1) << cfg.n_bits;
+    if points > max {
+        bail!(
+            "an exhaustive check of cos_bits = {} and n_bits = {} is {points} points per pass, \
+             more than the {max} this command runs; use fewer bits",
+            cfg.cos_bits,
+            cfg.n_bits
+        );
+    }
+    Ok(())
+}
+
+/// Writes `text` to `path` through a temporary file in the same directory, so a failed
+/// run leaves no partial file.
+fn write_atomically(path: &Path, text: &str) -> anyhow::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir)
+        .with_context(|| format!("creating a temporary file in {}", dir.display()))?;
+    tmp.write_all(text.as_bytes())
+        .with_context(|| format!("writing {}", path.display()))?;
+    tmp.persist(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+fn rom(args: RomArgs) -> anyhow::Result<()> {
+    let rom = Rom::new(args.coef, args.v, args.n_bits, args.coef_bits, args.round)?;
+    write_atomically(&args.output, &rom.to_readmemh())?;
+    eprintln!(
+        "wrote {} words of {} bits (UQ{}.{}, {} coefficients, v = {}) to {}",
+        rom.words().len(),
+        rom.word_bits(),
+        rom.int_bits(),
+        rom.frac_bits(),
+        rom.coefficients(),
+        rom.v(),
+        args.output.display()
+    );
+    Ok(())
+}
+
+fn sweep(args: SweepArgs) -> anyhow::Result<()> {
+    for &b in &args.bound {
+        if !(b.is_finite() && b > 0.0) {
+            bail!("invalid --bound {b}: a bound is a positive number of output LSBs");
+        }
+    }
+    let started = Instant::now();
+    let mut rows = Vec::new();
+    let refs: &[Reference] = if args.lobe_only {
+        &[Reference::Lobe]
+    } else {
+        &[Reference::Lobe, Reference::Power]
+    };
+    for &v in &args.v {
+        let base = Config {
+            v,
+            n_bits: args.n_bits,
+            cos_bits: args.cos_bits,
+            coefficients: args.coef,
+            coef_round: args.round,
+            mul_round: args.round,
+            square_frac: vec![1; v as usize],
+            square_round: args.round,
+            out_bits: args.out_bits,
+            out_round: args.round,
+            ..Config::default()
+        };
+        base.validate()?;
+        let probe = Unit::new(Config {
+            coef_bits: 64,
+            ..base.clone()
+        })?;
+        check_exhaustive_size(&probe, MAX_SWEEP_POINTS)?;
+        for &reference in refs {
+            for &bound in &args.bound {
+                let row = sweep_row(&base, Target { reference, bound }, &mut |line| {
+                    eprintln!("[{:>6.1} s] {line}", started.elapsed().as_secs_f64())
+                })?;
+                rows.push(row);
+            }
+        }
+    }
+    let points = rows.first().map_or(0, |r| r.points_per_check);
+    println!(
+        "# glint hw sweep: out_bits = {}, coefficients = {}, n_bits = {}, cos Q1.{} ({} bits), rounding {}",
+        args.out_bits,
+        args.coef,
+        args.n_bits,
+        args.cos_bits.saturating_sub(2),
+        args.cos_bits,
+        args.round
+    );
+    println!(
+        "# error = |code - F·L(c,n)| in LSBs, F = k_s·I full scale = {}; exhaustive: every cos code in [-1,1] (lobe) or [0,1] (cos^n) x every n = {} points per check",
+        (1u64 << args.out_bits.min(63)) - 1,
+        points
+    );
+    println!(
+        "# 'n where asked': for cos^n, the n where an ideal unit (exact lobe, correctly rounded) meets the bound"
+    );
+    print!("{}", markdown_table(&rows));
+    eprintln!("total {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn eval(args: EvalArgs) -> anyhow::Result<()> {
+    let config = load_config(args.config.as_deref())?;
+    let unit = build_unit(config, args.config.as_deref())?;
+    if args.print_config {
+        println!("{}", unit.config().to_json());
+        return Ok(());
+    }
+    if args.ks_rgb.len() != 3 {
+        bail!(
+            "--ks-rgb takes three codes R,G,B, got {}",
+            args.ks_rgb.len()
+        );
+    }
+    let cos = match (args.cos, args.cos_code) {
+        (_, Some(code)) => code,
+        (Some(c), None) => unit.cos_code(c)?,
+        (None, None) => bail!("give --cos or --cos-code"),
+    };
+    let input = Input {
+        cos,
+        n: args.n,
+        ks: [args.ks_rgb[0], args.ks_rgb[1], args.ks_rgb[2]],
+    };
+    let trace = unit.trace(&input)?;
+    // The functional model must agree with the pipeline; say so if it ever does not.
+    let functional = unit.eval(&input)?;
+    if functional != trace.output {
+        bail!(
+            "internal error: functional model {functional:?} != pipeline {:?}",
+            trace.output
+        );
+    }
+    // Also stream it through a busy pipeline (neighbours on both sides) as a check.
+    let mut pipe = Pipeline::new(&unit);
+    let neighbour = Input { n: 0, ..input };
+    pipe.clock(Some(neighbour))?;
+    pipe.clock(Some(input))?;
+    let mut busy = None;
+    for _ in 0..unit.latency() {
+        busy = pipe.clock(Some(neighbour))?;
+    }
+    if busy != Some(trace.output) {
+        bail!(
+            "internal error: busy pipeline {busy:?} != {:?}",
+            trace.output
+        );
+    }
+
+    let f = unit.formats();
+    let cfg = unit.config();
+    let c = unit.cos_value(cos);
+    let hex = |x: u64, bits: u32| format!("0x{:0w$x}", x, w = bits.div_ceil(4) as usize);
+    let val = |x: u64, frac: u32| x as f64 / 2f64.powi(frac as i32);
+    println!(
+        "# glint hw eval: v = {}, coefficients = {}, latency = {} clocks, one input per clock",
+        cfg.v,
+        cfg.coefficients,
+        unit.latency()
+    );
+    println!(
+        "{:<12} {:<18} {:>22} {:>18}  value",
+        "stage", "format", "code", "hex"
+    );
+    let row = |stage: &str, fmt: String, code: String, hexs: String, value: String| {
+        println!("{stage:<12} {fmt:<18} {code:>22} {hexs:>18}  {value}");
+    };
+    let cos_mask = if cfg.cos_bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << cfg.cos_bits) - 1
+    };
+    row(
+        "RG1 cos",
+        format!("Q1.{} signed", f.cos_frac),
+        cos.to_string(),
+        hex(cos as u64 & cos_mask, cfg.cos_bits),
+        format!("{c:.12}"),
+    );
+    row(
+        "RG2 n",
+        format!("U{}", cfg.n_bits),
+        input.n.to_string(),
+        hex(input.n as u64, cfg.n_bits),
+        input.n.to_string(),
+    );
+    let r1 = trace.rom_sm1;
+    row(
+        "ROM1 a(n)",
+        format!("UQ{}.{}", f.coef_int, f.coef_frac),
+        r1.a.to_string(),
+        hex(r1.a, cfg.coef_bits),
+        format!(
+            "{:.12} (exact {:.12})",
+            val(r1.a, f.coef_frac),
+            unit.rom().exact()[input.n as usize]
+        ),
+    );
+    row(
+        "Sm1 1-cos",
+        format!("UQ2.{}", f.t_frac),
+        r1.t.to_string(),
+        hex(r1.t, f.t_frac + 2),
+        format!("{:.12}", val(r1.t, f.t_frac)),
+    );
+    row(
+        "MUL a(1-cos)",
+        format!("UQ{}.{}", f.mul_int, f.mul_frac),
+        trace.mul.p.to_string(),
+        hex(trace.mul.p, f.mul_bits()),
+        format!("{:.12}", val(trace.mul.p, f.mul_frac)),
+    );
+    row(
+        "Sm2 1-p",
+        format!("Q{}.{} signed", f.mul_int, f.mul_frac),
+        trace.base.diff.to_string(),
+        hex(
+            trace.base.diff as u64 & ((1u64 << f.sm2_bits().min(63)) - 1),
+            f.sm2_bits(),
+        ),
+        format!(
+            "{:.12}",
+            trace.base.diff as f64 / 2f64.powi(f.mul_frac as i32)
+        ),
+    );
+    row(
+        "SW base",
+        format!("UQ1.{}", f.mul_frac),
+        trace.base.b.to_string(),
+        hex(trace.base.b, f.mul_frac + 1),
+        format!("{:.12}", val(trace.base.b, f.mul_frac)),
+    );
+    for (k, sq) in trace.squares.iter().enumerate() {
+        let fr = f.square_frac[k];
+        row(
+            &format!("BMUL^{}", 1u64 << (k + 1)),
+            format!("UQ1.{fr}"),
+            sq.s.to_string(),
+            hex(sq.s, fr + 1),
+            format!("{:.12}", val(sq.s, fr)),
+        );
+    }
+    let a = unit.rom().exact()[input.n as usize];
+    let base = 1.0 - a * (1.0 - c);
+    let lobe = if base <= 0.0 {
+        0.0
+    } else {
+        base.powi(1 << cfg.v)
+    };
+    let power = c.max(0.0).powf(input.n as f64);
+    for (k, name) in ["R", "G", "B"].iter().enumerate() {
+        let ks = input.ks[k] as f64;
+        row(
+            &format!("MUL{} {name}", k + 1),
+            format!("U{}", cfg.out_bits),
+            trace.output.rgb[k].to_string(),
+            hex(trace.output.rgb[k], cfg.out_bits),
+            format!(
+                "exact lobe·ks {:.4} (err {:+.4} LSB), cos^n·ks {:.4} (err {:+.4} LSB)",
+                lobe * ks,
+                trace.output.rgb[k] as f64 - lobe * ks,
+                power * ks,
+                trace.output.rgb[k] as f64 - power * ks
+            ),
+        );
+    }
+    println!(
+        "# output R,G,B = {},{},{}",
+        trace.output.rgb[0], trace.output.rgb[1], trace.output.rgb[2]
+    );
+    Ok(())
+}
+
+fn check(args: CheckArgs) -> anyhow::Result<()> {
+    let mut config = load_config(args.config.as_deref())?;
+    if let Some(b) = args.out_bits {
+        config.out_bits = b;
+    }
+    let unit = build_unit(config, args.config.as_deref())?;
+    check_exhaustive_size(&unit, MAX_CHECK_POINTS)?;
+    let started = Instant::now();
+    let m = measure(&unit);
+    let secs = started.elapsed().as_secs_f64();
+    let cfg = unit.config();
+    let last = (1u32 << cfg.n_bits) - 1;
+    println!(
+        "# glint hw check: {} points (every cos code in [-1,1] x every n 0..={last}), k_s·I = {} (full scale), {:.1} s",
+        m.points,
+        unit.full_scale(),
+        secs
+    );
+    println!("# configuration: {}", serde_json_line(cfg));
+    let w = m.worst_lobe(0..=last);
+    println!(
+        "max error vs exact lobe ({}): {:.4} LSB at n = {}, cos = {:.9}",
+        if cfg.coefficients == Coefficients::EnergyFit {
+            "K_v"
+        } else {
+            "minimax power lobe"
+        },
+        w.error,
+        w.n,
+        unit.cos_value(w.cos)
+    );
+    println!(
+        "{:<12} {:>14} {:>22} {:>22}",
+        "n range", "vs lobe", "vs cos^n (unit)", "vs cos^n (ideal)"
+    );
+    let mut ranges = vec![(0u32, 15u32), (16, 63), (64, 255), (256, last)];
+    ranges.retain(|&(a, _)| a <= last);
+    if let Some(r) = ranges.last_mut() {
+        r.1 = r.1.min(last);
+    }
+    ranges.push((0, last));
+    for (a, b) in ranges {
+        println!(
+            "{:<12} {:>14.4} {:>22.4} {:>22.4}",
+            format!("{a}-{b}"),
+            m.worst_lobe(a..=b).error,
+            m.worst_power(a..=b).error,
+            m.worst_ideal_power(a..=b).error
+        );
+    }
+    let excess = m
+        .per_n
+        .iter()
+        .map(|e| e.power - e.ideal_power)
+        .fold(f64::MIN, f64::max);
+    println!("max over n of (unit - ideal) error vs cos^n: {excess:.4} LSB");
+    for bound in [0.5, 1.0] {
+        let ok: Vec<bool> = m
+            .per_n
+            .iter()
+            .map(|e| e.power <= bound + glint_hw::BOUND_SLACK_LSB)
+            .collect();
+        let ranges = mask_ranges(&ok);
+        println!(
+            "n where the unit is within {bound} LSB of cos^n: {}",
+            format_ranges(&ranges)
+        );
+    }
+    Ok(())
+}
+
+fn serde_json_line(cfg: &Config) -> String {
+    serde_json::to_string(cfg).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rom_file_is_readmemh_and_bad_runs_leave_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("rom1.hex");
+        let args = |v: u32| RomArgs {
+            v,
+            n_bits: 10,
+            coef_bits: 16,
+            coef: Coefficients::EnergyFit,
+            round: Rounding::Nearest,
+            output: out.clone(),
+        };
+        run(Command::Rom(args(4))).unwrap();
+        let text = std::fs::read_to_string(&out).unwrap();
+        let words: Vec<&str> = text.lines().filter(|l| !l.starts_with("//")).collect();
+        // 1024 words; a(16) = 17/17 = 1.0 = 0x400 in UQ6.10.
+        assert_eq!(words.len(), 1024);
+        assert_eq!(words[16], "0400");
+        std::fs::remove_file(&out).unwrap();
+        let err = run(Command::Rom(args(11))).unwrap_err();
+        assert!(format!("{err:#}").contains("v = 11"));
+        assert!(!out.exists());
+        // Only the temporary files' directory entries could remain; there are none.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn oversized_exhaustive_checks_are_refused() {
+        let unit = Unit::new(Config {
+            cos_bits: 30,
+            ..Config::default()
+        })
+        .unwrap();
+        assert!(check_exhaustive_size(&unit, MAX_CHECK_POINTS).is_err());
+        let unit = Unit::new(Config::default()).unwrap();
+        assert!(check_exhaustive_size(&unit, MAX_SWEEP_POINTS).is_ok());
+    }
 }

@@ -1,0 +1,248 @@
+//! The configuration of the unit: every stage's width, fixed-point format and rounding,
+//! and its validation.
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+use crate::HwError;
+
+/// Largest `v` accepted: BMUL has `v` squaring stages, so the power is at most
+/// `2^10 = 1024` (the same limit as [`glint_lobe::MAX_V`]).
+pub const MAX_V: u32 = 10;
+
+/// Largest width of the `n` input (RG2, the ROM1 address): `n <= 2^13 - 1 = 8191`,
+/// which stays below the lobe library's [`glint_lobe::MAX_N`] of 10000 and keeps ROM1
+/// at most 8192 words.
+pub const MAX_N_BITS: u32 = 13;
+
+/// Every register and every adder result of the model is held in a 64-bit integer;
+/// products are formed at full (128-bit) width and rounded back, as a hardware
+/// multiplier forms its full product before the rounding logic.
+pub const MAX_REGISTER_BITS: u32 = 64;
+
+/// How a stage drops fraction bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Rounding {
+    /// Drop the low bits (round toward zero; every rounded value here is >= 0).
+    Truncate,
+    /// Round to nearest, ties up: add half an output LSB, then drop the low bits.
+    Nearest,
+}
+
+impl Rounding {
+    /// The name used in configuration files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Rounding::Truncate => "truncate",
+            Rounding::Nearest => "nearest",
+        }
+    }
+}
+
+impl fmt::Display for Rounding {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Rounding {
+    type Err = HwError;
+
+    fn from_str(s: &str) -> Result<Self, HwError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "truncate" | "trunc" | "floor" => Ok(Rounding::Truncate),
+            "nearest" | "round" => Ok(Rounding::Nearest),
+            _ => Err(HwError::Parse(format!(
+                "unknown rounding '{s}': expected truncate or nearest"
+            ))),
+        }
+    }
+}
+
+/// Which coefficient `a(n)` ROM1 holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Coefficients {
+    /// The paper's energy fit `a = (n+1)/(2^v+1)` (K_v).
+    #[serde(rename = "k")]
+    EnergyFit,
+    /// The `a` minimising the maximum absolute error against `cos^n`
+    /// ([`glint_lobe::minimax_coefficient`]); same hardware, other ROM contents.
+    #[serde(rename = "minimax")]
+    Minimax,
+}
+
+impl Coefficients {
+    /// The name used in configuration files and on the command line (`k`, `minimax`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Coefficients::EnergyFit => "k",
+            Coefficients::Minimax => "minimax",
+        }
+    }
+}
+
+impl fmt::Display for Coefficients {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Coefficients {
+    type Err = HwError;
+
+    fn from_str(s: &str) -> Result<Self, HwError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "k" | "energy" | "energy-fit" => Ok(Coefficients::EnergyFit),
+            "minimax" => Ok(Coefficients::Minimax),
+            _ => Err(HwError::Parse(format!(
+                "unknown coefficients '{s}': expected k or minimax"
+            ))),
+        }
+    }
+}
+
+/// Every parameter of the unit. Formats (see `docs/hardware.md`):
+///
+/// - RG1 `cos`: signed two's complement, `cos_bits` wide, `cos_bits - 2` fraction bits
+///   (Q1.f: sign, one integer bit, f fraction bits), so 1.0 is exactly representable.
+/// - RG2 `n`: unsigned integer, `n_bits` wide.
+/// - ROM1 `a(n)`: unsigned UQi.f, `coef_bits` wide; `i` is the fewest integer bits that
+///   hold the largest coefficient, `f = coef_bits - i`.
+/// - MUL output `p = a·t`: UQ(i+2).`mul_frac`; Sm2/SW output base: UQ1.`mul_frac`.
+/// - BMUL stage `k`: UQ1.`square_frac[k]`.
+/// - RGB: `k_s·I` codes and outputs are unsigned `out_bits` integers.
+///
+/// Missing fields of a configuration file take the default's values.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Config {
+    /// BMUL raises the base to `2^v` with `v` squarings (0..=10; the paper's is 4).
+    pub v: u32,
+    /// Width of the shininess input `n` and of the ROM1 address (1..=13).
+    pub n_bits: u32,
+    /// Width of the signed `cos γ` input code (Q1.(cos_bits-2)).
+    pub cos_bits: u32,
+    /// Which coefficients ROM1 holds.
+    pub coefficients: Coefficients,
+    /// Width of a ROM1 word.
+    pub coef_bits: u32,
+    /// How ROM1 contents are rounded from the real coefficients.
+    pub coef_round: Rounding,
+    /// Fraction bits of the MUL output and of the base (Sm2, SW).
+    pub mul_frac: u32,
+    /// How MUL rounds the product `a·t`.
+    pub mul_round: Rounding,
+    /// Fraction bits of each BMUL squaring stage's output, one entry per stage (`v`).
+    pub square_frac: Vec<u32>,
+    /// How each squaring stage rounds.
+    pub square_round: Rounding,
+    /// Width of the `k_s·I` inputs and of the R, G, B outputs.
+    pub out_bits: u32,
+    /// How the RGB multipliers round to the output code.
+    pub out_round: Rounding,
+}
+
+impl Default for Config {
+    /// The default configuration: the paper's v = 4, n <= 1023, cos as Q1.14, 8-bit
+    /// colours, and the smallest widths `glint hw sweep --out-bits 10` finds for a
+    /// 10-bit output within 1 LSB of the exact K_4 over every input (measured: 0.9645
+    /// LSB at 10 bits, 0.6235 LSB at 8 bits; see `docs/hardware.md` for why).
+    fn default() -> Self {
+        Config {
+            v: 4,
+            n_bits: 10,
+            cos_bits: 16,
+            coefficients: Coefficients::EnergyFit,
+            coef_bits: 18,
+            coef_round: Rounding::Nearest,
+            mul_frac: 15,
+            mul_round: Rounding::Nearest,
+            square_frac: vec![14, 14, 14, 12],
+            square_round: Rounding::Nearest,
+            out_bits: 8,
+            out_round: Rounding::Nearest,
+        }
+    }
+}
+
+impl Config {
+    /// Parses a JSON configuration; missing fields take the default's values.
+    pub fn from_json(text: &str) -> Result<Config, HwError> {
+        serde_json::from_str(text).map_err(|e| HwError::Parse(e.to_string()))
+    }
+
+    /// The configuration as pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a Config always serialises")
+    }
+
+    /// Fraction bits of the `cos` input code.
+    pub fn cos_frac(&self) -> u32 {
+        self.cos_bits.saturating_sub(2)
+    }
+
+    /// Checks everything that does not depend on the ROM contents: no zero widths,
+    /// `v` and `n_bits` in range, one `square_frac` entry per squaring, and every
+    /// register within [`MAX_REGISTER_BITS`].
+    pub fn validate(&self) -> Result<(), HwError> {
+        if self.v > MAX_V {
+            return Err(HwError::InvalidV(self.v));
+        }
+        let widths: [(&'static str, u32); 5] = [
+            ("n_bits", self.n_bits),
+            ("cos_bits", self.cos_bits),
+            ("coef_bits", self.coef_bits),
+            ("mul_frac", self.mul_frac),
+            ("out_bits", self.out_bits),
+        ];
+        for (field, w) in widths {
+            if w == 0 {
+                return Err(HwError::ZeroWidth { field });
+            }
+        }
+        if self.n_bits > MAX_N_BITS {
+            return Err(HwError::InvalidNBits(self.n_bits));
+        }
+        if self.cos_bits < 2 {
+            return Err(HwError::TooNarrow {
+                field: "cos_bits",
+                bits: self.cos_bits,
+                reason: "the signed Q1.f cos code needs a sign and an integer bit",
+            });
+        }
+        if self.square_frac.len() != self.v as usize {
+            return Err(HwError::SquareCount {
+                v: self.v,
+                got: self.square_frac.len(),
+            });
+        }
+        if self.square_frac.contains(&0) {
+            return Err(HwError::ZeroWidth {
+                field: "square_frac",
+            });
+        }
+        // Sm1 forms 1 - cos in one more bit than the signed input.
+        check_register("Sm1 (1 - cos)", self.cos_bits + 1)?;
+        check_register("ROM1 word (coef_bits)", self.coef_bits)?;
+        // The base register is UQ1.mul_frac; MUL/Sm2 add integer bits, checked once
+        // the ROM's integer width is known (Unit::new).
+        check_register("SW base (mul_frac + 1)", self.mul_frac.saturating_add(1))?;
+        for &f in &self.square_frac {
+            check_register("BMUL stage (square_frac + 1)", f.saturating_add(1))?;
+        }
+        check_register("RGB output (out_bits)", self.out_bits)?;
+        Ok(())
+    }
+}
+
+/// Rejects a register wider than the model's 64-bit integers.
+pub(crate) fn check_register(register: &'static str, bits: u32) -> Result<(), HwError> {
+    if bits > MAX_REGISTER_BITS {
+        Err(HwError::TooWide { register, bits })
+    } else {
+        Ok(())
+    }
+}
