@@ -19,6 +19,7 @@ mod common;
 pub mod gifti;
 pub mod mesh;
 pub mod nifti;
+pub mod nrrd;
 pub mod raw;
 mod types;
 
@@ -174,6 +175,7 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
     }
     match Format::guess(path) {
         Some(Format::Nifti) => nifti::read(path, options),
+        Some(Format::Nrrd) => nrrd::read(path, options),
         Some(Format::Raw) => unsupported(
             path,
             "a raw file needs its dimensions, type and spacing (ReadOptions::raw)",

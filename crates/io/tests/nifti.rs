@@ -119,11 +119,7 @@ pub fn all_types() -> Vec<Samples> {
         Samples::U16((0..n).map(|i| (i as u16) * 2700).collect()),
         Samples::I16((0..n).map(|i| (i as i16) * 1400 - 16000).collect()),
         Samples::U32((0..n).map(|i| (i as u32) * 150_000_000).collect()),
-        Samples::I32(
-            (0..n)
-                .map(|i| i * 90_000_000 - 1_000_000_000)
-                .collect(),
-        ),
+        Samples::I32((0..n).map(|i| i * 90_000_000 - 1_000_000_000).collect()),
         Samples::F32((0..n).map(|i| i as f32 * 0.37 - 3.0).collect()),
         Samples::F64((0..n).map(|i| i as f64 * -1e-3 + 1e10).collect()),
     ]
