@@ -376,3 +376,12 @@ pub(crate) fn write_atomic(
     tmp.persist(path).map_err(|e| os(e.error))?;
     Ok(())
 }
+
+/// Whether a file has DICOM's "DICM" marker after the 128-byte preamble (PS3.10 7.1).
+pub(crate) fn has_dicom_magic(path: &Path) -> bool {
+    let mut head = [0u8; 132];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && &head[128..] == b"DICM"
+}

@@ -16,6 +16,7 @@
 #![warn(missing_docs)]
 
 mod common;
+pub mod dicom;
 pub mod gifti;
 pub mod mesh;
 pub mod nifti;
@@ -176,6 +177,7 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
     match Format::guess(path) {
         Some(Format::Nifti) => nifti::read(path, options),
         Some(Format::Nrrd) => nrrd::read(path, options),
+        Some(Format::Dicom) => dicom::read(path, options),
         Some(Format::Raw) => unsupported(
             path,
             "a raw file needs its dimensions, type and spacing (ReadOptions::raw)",
@@ -185,6 +187,7 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
             path,
             &format!("{} volumes are not implemented yet", f.name()),
         ),
+        None if common::has_dicom_magic(path) => dicom::read(path, options),
         None => unsupported(
             path,
             "unknown volume extension (expected .nii, .nii.gz, .nrrd, .nhdr, .dcm, a DICOM \

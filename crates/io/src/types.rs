@@ -78,6 +78,14 @@ pub enum IoError {
         /// What is wrong with it.
         what: String,
     },
+    /// A DICOM directory mixes series, image sizes or pixel formats.
+    #[error("{path}: mixed series: {what}")]
+    MixedSeries {
+        /// The directory.
+        path: PathBuf,
+        /// The series found.
+        what: String,
+    },
     /// A mesh face refers to a vertex that does not exist.
     #[error("{path}: bad mesh index: {what}")]
     BadIndex {
@@ -103,6 +111,7 @@ impl IoError {
             | IoError::SizeMismatch { path, .. }
             | IoError::TooLarge { path, .. }
             | IoError::Geometry { path, .. }
+            | IoError::MixedSeries { path, .. }
             | IoError::BadIndex { path, .. } => Some(path),
             IoError::Inconsistent(_) => None,
         }
