@@ -1,17 +1,39 @@
 //! Readers for biomedical volumes (NIfTI, NRRD, DICOM, raw) and surfaces (STL, OBJ,
-//! PLY, GIFTI) into one [`Volume`] and one [`Mesh`] type.
+//! PLY, GIFTI) into one [`Volume`] and one [`Mesh`] type, with writers for round trips.
 //!
 //! ```
-//! use glint_io::{Samples, Volume};
+//! use glint_io::{nifti, Endian, ReadOptions, Samples, Volume};
 //!
 //! // A 2x2x2 volume of u8 samples with 1 mm voxels at the origin.
 //! let vol = Volume::new([2, 2, 2], [1.0; 3], Samples::U8(vec![0, 1, 2, 3, 4, 5, 6, 7])).unwrap();
 //! assert_eq!(vol.value(1, 1, 1), 7.0);
 //! assert_eq!(vol.range(), (0.0, 7.0));
+//!
+//! // Write it as gzipped NIfTI and read it back; the format follows the extension.
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("tiny.nii.gz");
+//! nifti::write(&path, &vol, true, Endian::Little).unwrap();
+//! let back = glint_io::read_volume(&path, &ReadOptions::default()).unwrap();
+//! assert_eq!(back.samples, vol.samples);
+//! assert_eq!(back.affine, vol.affine);
 //! ```
 //!
 //! World coordinates are millimetres in RAS+ (x towards the patient's Right, y Anterior,
-//! z Superior), NIfTI's convention; readers of LPS formats (DICOM) convert.
+//! z Superior), NIfTI's convention; readers of LPS formats (DICOM, NRRD in LPS space)
+//! convert. Every reader checks the announced size against [`ReadOptions::max_voxels`]
+//! and the file before allocating for samples, and every error names the file
+//! ([`IoError`]).
+//!
+//! | format | module | read | write |
+//! | --- | --- | --- | --- |
+//! | NIfTI-1 `.nii`, `.nii.gz` | [`nifti`] | yes | yes |
+//! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
+//! | DICOM file or directory | [`dicom`] | uncompressed | no |
+//! | raw samples | [`raw`] | yes | yes |
+//! | STL | [`mesh`] | binary, ASCII | binary |
+//! | OBJ | [`mesh`] | yes | yes |
+//! | PLY | [`mesh`] | ASCII, binary | ASCII, binary |
+//! | GIFTI `.gii`, `.gii.gz` | [`gifti`] | ASCII, Base64, GZipBase64 | same |
 
 #![warn(missing_docs)]
 

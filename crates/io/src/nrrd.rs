@@ -21,7 +21,7 @@ use crate::{Format, IoError, ReadOptions, Samples, Volume, VolumeFile};
 /// Longest header accepted: real headers are a few hundred bytes.
 const MAX_HEADER_BYTES: u64 = 1 << 20;
 
-/// NRRD data encodings for [`write`].
+/// NRRD data encodings for [`write()`] and [`write_detached`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Encoding {
     /// Samples as bytes.

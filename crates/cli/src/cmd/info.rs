@@ -1,6 +1,7 @@
 //! `glint info`: what a volume or surface file holds (format, dims, spacing, type, range,
 //! affine; or vertex and triangle counts and bounds), as text or JSON.
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::bail;
@@ -48,6 +49,12 @@ pub struct Args {
 
 /// Runs `glint info`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    print!("{}", report(&args)?);
+    Ok(())
+}
+
+/// The text or JSON `glint info` prints.
+fn report(args: &Args) -> anyhow::Result<String> {
     let mut options = ReadOptions {
         max_voxels: args.max_voxels,
         ..ReadOptions::default()
@@ -79,28 +86,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.file.display()
         );
     }
+    let mut out = String::new();
     if is_mesh {
         let file = glint_io::open_mesh(&args.file)?;
         if args.json {
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&mesh_json(&args, &file))?
-            );
+            out = serde_json::to_string_pretty(&mesh_json(args, &file))? + "\n";
         } else {
-            print_mesh(&args, &file);
+            print_mesh(&mut out, args, &file)?;
         }
     } else {
         let file = glint_io::open_volume(&args.file, &options)?;
         if args.json {
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&volume_json(&args, &file))?
-            );
+            out = serde_json::to_string_pretty(&volume_json(args, &file))? + "\n";
         } else {
-            print_volume(&args, &file);
+            print_volume(&mut out, args, &file)?;
         }
     }
-    Ok(())
+    Ok(out)
 }
 
 fn volume_json(args: &Args, f: &VolumeFile) -> Value {
@@ -131,47 +133,56 @@ fn finite_or_null(x: f64) -> Value {
     }
 }
 
-fn print_volume(args: &Args, f: &VolumeFile) {
+fn print_volume(out: &mut String, args: &Args, f: &VolumeFile) -> std::fmt::Result {
     let v = &f.volume;
     let (lo, hi) = v.range();
-    println!("file:     {}", args.file.display());
-    println!("format:   {} volume", f.format.name());
-    println!(
+    writeln!(out, "file:     {}", args.file.display())?;
+    writeln!(out, "format:   {} volume", f.format.name())?;
+    writeln!(
+        out,
         "dims:     {} x {} x {} ({} voxels)",
         v.dims[0],
         v.dims[1],
         v.dims[2],
         v.len()
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "spacing:  {} x {} x {} mm",
         num(v.spacing[0]),
         num(v.spacing[1]),
         num(v.spacing[2])
-    );
-    println!("type:     {}", v.samples.type_name());
+    )?;
+    writeln!(out, "type:     {}", v.samples.type_name())?;
     if v.slope != 1.0 || v.intercept != 0.0 {
-        println!(
+        writeln!(
+            out,
             "scaling:  value = {} * stored + {}",
             num(v.slope),
             num(v.intercept)
-        );
+        )?;
     }
-    let units = v.units.as_deref().unwrap_or("");
-    println!("range:    {} .. {} {units}", num(lo), num(hi));
-    println!("affine (voxel -> RAS+ mm):");
+    let units = v
+        .units
+        .as_deref()
+        .map(|u| format!(" {u}"))
+        .unwrap_or_default();
+    writeln!(out, "range:    {} .. {}{units}", num(lo), num(hi))?;
+    writeln!(out, "affine (voxel -> RAS+ mm):")?;
     for row in &v.affine {
-        println!(
+        writeln!(
+            out,
             "  {:>12} {:>12} {:>12} {:>12}",
             num(row[0]),
             num(row[1]),
             num(row[2]),
             num(row[3])
-        );
+        )?;
     }
     for n in &f.notes {
-        println!("note:     {n}");
+        writeln!(out, "note:     {n}")?;
     }
+    Ok(())
 }
 
 fn mesh_json(args: &Args, f: &MeshFile) -> Value {
@@ -191,16 +202,17 @@ fn mesh_json(args: &Args, f: &MeshFile) -> Value {
     })
 }
 
-fn print_mesh(args: &Args, f: &MeshFile) {
+fn print_mesh(out: &mut String, args: &Args, f: &MeshFile) -> std::fmt::Result {
     let m = &f.mesh;
-    println!("file:      {}", args.file.display());
-    println!("format:    {} surface", f.format.name());
-    println!("vertices:  {}", m.positions.len());
-    println!("triangles: {}", m.triangles.len());
-    println!(
+    writeln!(out, "file:      {}", args.file.display())?;
+    writeln!(out, "format:    {} surface", f.format.name())?;
+    writeln!(out, "vertices:  {}", m.positions.len())?;
+    writeln!(out, "triangles: {}", m.triangles.len())?;
+    writeln!(
+        out,
         "normals:   {}",
         if m.normals.is_some() { "yes" } else { "no" }
-    );
+    )?;
     if let Some(s) = &m.scalars {
         let (lo, hi) = s
             .iter()
@@ -208,7 +220,7 @@ fn print_mesh(args: &Args, f: &MeshFile) {
             .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
                 (a.min(x), b.max(x))
             });
-        println!("scalars:   {} .. {}", num(lo.into()), num(hi.into()));
+        writeln!(out, "scalars:   {} .. {}", num(lo.into()), num(hi.into()))?;
     }
     if let Some((lo, hi)) = m.bounds() {
         let fmt = |p: [f32; 3]| {
@@ -219,14 +231,15 @@ fn print_mesh(args: &Args, f: &MeshFile) {
                 num(p[2].into())
             )
         };
-        println!("bounds:    {} .. {} mm", fmt(lo), fmt(hi));
+        writeln!(out, "bounds:    {} .. {} mm", fmt(lo), fmt(hi))?;
     }
     if let Some(cs) = &f.coordinate_system {
-        println!("space:     {cs}");
+        writeln!(out, "space:     {cs}")?;
     }
     for n in &f.notes {
-        println!("note:      {n}");
+        writeln!(out, "note:      {n}")?;
     }
+    Ok(())
 }
 
 /// A number with at most 4 decimals and no trailing zeros.
@@ -245,7 +258,27 @@ fn num(x: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::num;
+    use super::{num, report, Args};
+    use clap::Parser;
+    use glint_io::{Endian, Mesh, Samples, Volume};
+    use serde_json::Value;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn run(argv: &[&str]) -> anyhow::Result<String> {
+        let cli = Cli::try_parse_from(std::iter::once("info").chain(argv.iter().copied()))?;
+        report(&cli.args)
+    }
+
+    fn json(argv: &[&str]) -> Value {
+        let mut a = argv.to_vec();
+        a.push("--json");
+        serde_json::from_str(&run(&a).unwrap()).unwrap()
+    }
 
     #[test]
     fn numbers_drop_trailing_zeros() {
@@ -254,5 +287,116 @@ mod tests {
         assert_eq!(num(0.5), "0.5");
         assert_eq!(num(-0.0), "0");
         assert_eq!(num(1.23456), "1.2346");
+    }
+
+    #[test]
+    fn nifti_text_and_json() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.nii.gz");
+        let mut vol = Volume::new([4, 3, 2], [1.0; 3], Samples::I16((0..24).collect())).unwrap();
+        vol.affine[0] = [0.0, 0.0, -2.5, 10.0];
+        vol.affine[2] = [1.0, 0.0, 0.0, -4.0];
+        vol.slope = 2.0;
+        glint_io::nifti::write(&p, &vol, true, Endian::Little).unwrap();
+        let path = p.to_str().unwrap();
+        let text = run(&[path]).unwrap();
+        assert!(text.contains("format:   NIfTI-1 volume"), "{text}");
+        assert!(text.contains("dims:     4 x 3 x 2 (24 voxels)"), "{text}");
+        // Column norms of the affine: (0,0,1) -> 1, (0,1,0) -> 1, (-2.5,0,0) -> 2.5.
+        assert!(text.contains("spacing:  1 x 1 x 2.5 mm"), "{text}");
+        // Stored 0..23 scaled by 2.
+        assert!(text.contains("range:    0 .. 46\n"), "{text}");
+        let v = json(&[path]);
+        assert_eq!(v["dims"], serde_json::json!([4, 3, 2]));
+        assert_eq!(v["type"], "int16");
+        assert_eq!(
+            v["affine_voxel_to_ras_mm"][0],
+            serde_json::json!([0.0, 0.0, -2.5, 10.0])
+        );
+        assert_eq!(
+            v["affine_voxel_to_ras_mm"][2],
+            serde_json::json!([1.0, 0.0, 0.0, -4.0])
+        );
+    }
+
+    #[test]
+    fn raw_flags() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.raw");
+        std::fs::write(&p, [0u8, 1, 0, 2, 0xFF, 0xFF]).unwrap();
+        let path = p.to_str().unwrap();
+        let v = json(&[
+            path,
+            "--raw-dims",
+            "3,1,1",
+            "--raw-type",
+            "u16",
+            "--raw-endian",
+            "big",
+            "--raw-spacing",
+            "0.5,1,1",
+        ]);
+        assert_eq!(v["type"], "uint16");
+        assert_eq!(v["range"], serde_json::json!([1.0, 65535.0]));
+        assert_eq!(v["spacing_mm"], serde_json::json!([0.5, 1.0, 1.0]));
+        let err = run(&[path]).unwrap_err().to_string();
+        assert!(err.contains("--raw-dims"), "{err}");
+        let err = run(&[path, "--raw-dims", "3,1"]).unwrap_err().to_string();
+        assert!(err.contains("three sizes"), "{err}");
+        let err = run(&[path, "--raw-dims", "3,1,1", "--raw-type", "c64"])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("unknown sample type"), "{err}");
+    }
+
+    #[test]
+    fn max_voxels_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.raw");
+        std::fs::write(&p, [0u8; 27]).unwrap();
+        let err = run(&[
+            p.to_str().unwrap(),
+            "--raw-dims",
+            "3,3,3",
+            "--max-voxels",
+            "26",
+        ])
+        .unwrap_err();
+        assert!(err.to_string().contains("too large"), "{err}");
+    }
+
+    #[test]
+    fn mesh_json() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.ply");
+        let mesh = Mesh {
+            positions: vec![[0.0, 0.0, 0.0], [2.0, 0.0, -1.0], [0.0, 3.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            ..Mesh::default()
+        };
+        glint_io::mesh::write_ply(&p, &mesh, glint_io::mesh::PlyEncoding::BinaryLittleEndian)
+            .unwrap();
+        let v = json(&[p.to_str().unwrap()]);
+        assert_eq!(v["vertices"], 3);
+        assert_eq!(v["triangles"], 1);
+        assert_eq!(v["bounds_mm"]["min"], serde_json::json!([0.0, 0.0, -1.0]));
+        assert_eq!(v["bounds_mm"]["max"], serde_json::json!([2.0, 3.0, 0.0]));
+        let text = run(&[p.to_str().unwrap()]).unwrap();
+        assert!(
+            text.contains("bounds:    (0, 0, -1) .. (2, 3, 0) mm"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn bad_file_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("broken.nii");
+        std::fs::write(&p, b"not a nifti file at all").unwrap();
+        let err = run(&[p.to_str().unwrap()]).unwrap_err().to_string();
+        assert!(
+            err.contains("broken.nii") && err.contains("truncated"),
+            "{err}"
+        );
     }
 }
