@@ -496,6 +496,26 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     let dims = [first.cols, first.rows, frames.len()];
     let bytes_per = usize::from(first.bits_allocated / 8);
     checked_voxels(path, dims, bytes_per, options.max_voxels)?;
+    // Each file must be at least as large as the pixels it announces, checked before
+    // dicom-object reads (and allocates for) them.
+    for h in &headers {
+        let need = (h.rows * h.cols * h.frames * bytes_per) as u64;
+        let len = std::fs::metadata(&h.path)
+            .map_err(|e| IoError::Os {
+                path: h.path.clone(),
+                source: e,
+            })?
+            .len();
+        if len < need {
+            return Err(IoError::SizeMismatch {
+                path: h.path.clone(),
+                what: format!(
+                    "{} rows x {} columns x {} frames of {}-bit pixels need {need} bytes, the file has {len}",
+                    h.rows, h.cols, h.frames, h.bits_allocated
+                ),
+            });
+        }
+    }
 
     let along = |p: &[f64; 3]| dot(*p, normal);
     frames.sort_by(|a, b| along(&a.position).total_cmp(&along(&b.position)));

@@ -133,7 +133,7 @@ pub fn read(path: &Path) -> Result<MeshFile, IoError> {
         !matches!(
             a.intent.as_str(),
             "NIFTI_INTENT_POINTSET" | "NIFTI_INTENT_TRIANGLE" | "NIFTI_INTENT_VECTOR"
-        ) && a.dims == [n]
+        ) && (a.dims == [n] || a.dims == [n, 1])
     }) {
         mesh.scalars = Some(values(path, a)?.into_iter().map(|v| v as f32).collect());
         notes.push(format!("scalars from a {} array", a.intent));

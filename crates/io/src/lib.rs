@@ -187,10 +187,10 @@ pub fn read_volume(path: &Path, options: &ReadOptions) -> Result<Volume, IoError
 
 /// Reads a volume like [`read_volume`], with the format and notes.
 pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
-    if !path.exists() {
+    if let Err(e) = std::fs::metadata(path) {
         return Err(IoError::Os {
             path: path.into(),
-            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+            source: e,
         });
     }
     if let Some(params) = &options.raw {
@@ -225,11 +225,15 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, IoError> {
 
 /// Reads a mesh like [`read_mesh`], with the format and coordinate system.
 pub fn open_mesh(path: &Path) -> Result<MeshFile, IoError> {
-    if !path.is_file() {
-        return Err(IoError::Os {
-            path: path.into(),
-            source: std::io::Error::from(std::io::ErrorKind::NotFound),
-        });
+    match std::fs::metadata(path) {
+        Err(e) => {
+            return Err(IoError::Os {
+                path: path.into(),
+                source: e,
+            })
+        }
+        Ok(m) if m.is_dir() => return unsupported(path, "a directory is not a surface file"),
+        Ok(_) => {}
     }
     match Format::guess(path) {
         Some(Format::Stl) => mesh::read_stl(path),

@@ -161,7 +161,7 @@ pub fn read_obj(path: &Path) -> Result<MeshFile, IoError> {
         tobj::LoadError::FaceVertexOutOfBounds | tobj::LoadError::FaceNormalOutOfBounds => {
             IoError::BadIndex {
                 path: path.into(),
-                what: format!("a face {e}"),
+                what: format!("{e} (a face refers to a vertex or normal that does not exist)"),
             }
         }
         tobj::LoadError::ReadError => IoError::Os {
@@ -251,7 +251,15 @@ pub fn read_ply(path: &Path) -> Result<MeshFile, IoError> {
     let mut reader = BufReader::new(file);
     let parser = ply_rs_bw::parser::Parser::<DefaultElement>::new();
     let ply = parser.read_ply(&mut reader).map_err(|e| {
-        let msg = e.to_string();
+        // ply-rs-bw's messages span lines (the offending text, the parser state): keep
+        // the first, so the user gets one line.
+        let msg = e
+            .to_string()
+            .lines()
+            .next()
+            .unwrap_or_default()
+            .trim()
+            .to_string();
         if msg.to_ascii_lowercase().contains("magic")
             || msg.contains("ply") && msg.contains("line 1")
         {

@@ -11,7 +11,9 @@ use std::path::PathBuf;
 #[non_exhaustive]
 pub enum IoError {
     /// The operating system refused (missing file, permissions, ...).
-    #[error("{path}: {source}")]
+    // The OS error is the source, not part of the message: `{:#}` (anyhow) prints the
+    // chain, which would otherwise repeat it.
+    #[error("{path}: I/O error")]
     Os {
         /// The file.
         path: PathBuf,
