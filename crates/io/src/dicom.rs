@@ -107,7 +107,7 @@ fn find(
     None
 }
 
-fn header_of(path: &Path, obj: &InMemDicomObject) -> Result<Header, IoError> {
+fn header_of(path: &Path, obj: &InMemDicomObject, max_voxels: u64) -> Result<Header, IoError> {
     let need = |tag, name: &str| {
         int(obj, tag).ok_or_else(|| invalid(path, format!("missing or bad {name}")))
     };
@@ -124,6 +124,13 @@ fn header_of(path: &Path, obj: &InMemDicomObject) -> Result<Header, IoError> {
             format!("bad image size: {rows} rows, {cols} columns, {frames} frames"),
         ));
     }
+    // Bound the frame count before anything is sized by it.
+    checked_voxels(
+        path,
+        [cols as usize, rows as usize, frames as usize],
+        1,
+        max_voxels,
+    )?;
     if spp != 1 {
         return Err(IoError::Unsupported {
             path: path.into(),
@@ -270,7 +277,7 @@ fn header_of(path: &Path, obj: &InMemDicomObject) -> Result<Header, IoError> {
     })
 }
 
-fn open_header(path: &Path) -> Result<Header, IoError> {
+fn open_header(path: &Path, max_voxels: u64) -> Result<Header, IoError> {
     // Files without the PS3.10 preamble and "DICM" marker (bare data sets from old
     // systems) are not read.
     if !has_dicom_magic(path) {
@@ -284,7 +291,7 @@ fn open_header(path: &Path) -> Result<Header, IoError> {
         .read_until(tags::PIXEL_DATA)
         .open_file(path)
         .map_err(|e| open_error(path, e))?;
-    header_of(path, &obj)
+    header_of(path, &obj, max_voxels)
 }
 
 fn open_error(path: &Path, e: dicom_object::ReadError) -> IoError {
@@ -353,7 +360,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         let mut headers = Vec::new();
         let mut skipped = 0;
         for p in &entries {
-            match open_header(p) {
+            match open_header(p, options.max_voxels) {
                 Ok(h) => headers.push(h),
                 // Not DICOM at all (a README, a thumbnail): skip it, but say so.
                 Err(IoError::BadMagic { .. }) => skipped += 1,
@@ -368,7 +375,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         }
         headers
     } else {
-        vec![open_header(path)?]
+        vec![open_header(path, options.max_voxels)?]
     };
 
     // One series, one image size, one pixel format.

@@ -419,6 +419,31 @@ fn too_many_voxels_refused_before_reading_pixels() {
     write(&p, o, EXPLICIT_LE);
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(matches!(err, IoError::TooLarge { .. }), "{err}");
+    // A 1x1 image claiming 10^12 frames: refused before any per-frame bookkeeping.
+    let mut o = image(1, 1, "1.2.3.15", 1, false);
+    put(
+        &mut o,
+        tags::NUMBER_OF_FRAMES,
+        VR::IS,
+        dicom_value!(Str, "1000000000000"),
+    );
+    put(
+        &mut o,
+        tags::IMAGE_POSITION_PATIENT,
+        VR::DS,
+        ds(&[0.0, 0.0, 0.0]),
+    );
+    put(&mut o, tags::SLICE_THICKNESS, VR::DS, ds(&[1.0]));
+    put(
+        &mut o,
+        tags::PIXEL_DATA,
+        VR::OW,
+        PrimitiveValue::U16(vec![0; 2].into()),
+    );
+    let p = dir.path().join("frames.dcm");
+    write(&p, o, EXPLICIT_LE);
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(matches!(err, IoError::TooLarge { .. }), "{err}");
 }
 
 #[test]
