@@ -6,6 +6,9 @@ use std::path::{Path, PathBuf};
 use glint_io::{gifti, mesh, nifti, nrrd, Endian, Mesh, ReadOptions, Samples, Volume};
 use proptest::prelude::*;
 
+/// Writes one fixture file.
+type Writer<'a> = Box<dyn Fn(&Path) + 'a>;
+
 /// One valid file per format, written once into a directory that lives for the test.
 fn originals(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     let mut vol = Volume::new([5, 4, 3], [1.0; 3], Samples::I16((0..60).collect())).unwrap();
@@ -21,7 +24,7 @@ fn originals(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
         normals: None,
         scalars: Some(vec![1.0, 2.0, 3.0, 4.0]),
     };
-    let files: Vec<(&str, Box<dyn Fn(&Path)>)> = vec![
+    let files: Vec<(&str, Writer)> = vec![
         (
             "a.nii",
             Box::new(|p| nifti::write(p, &vol, false, Endian::Big).unwrap()),
