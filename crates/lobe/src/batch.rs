@@ -34,6 +34,10 @@
 
 use crate::{Lobe, LobeKind};
 
+#[cfg(target_arch = "x86_64")]
+mod avx512;
+pub mod measure;
+
 /// One compiled version of the batch kernels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum KernelPath {
@@ -230,7 +234,12 @@ mod x86 {
     /// The kernels compiled for AVX-512.
     #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
     pub(super) unsafe fn eval_avx512(params: &Params, cos: &[f32], out: &mut [f32]) {
-        eval_all(params, cos, out)
+        match *params {
+            // Hand-written: vpermi2pd table lookups instead of gathers.
+            Params::Exact { n } => super::avx512::exact(n, cos, out),
+            Params::Gauss { n } => super::avx512::gauss(n, cos, out),
+            _ => eval_all(params, cos, out),
+        }
     }
 
     /// The kernels compiled for AVX2 + FMA.
@@ -350,7 +359,7 @@ fn gauss(n: f32, c: f32) -> f32 {
     let cc = clamp_lo(clamp_hi(c));
     let t = n * (cc - 1.0);
     let x = f64::from(t) * LOG2_E;
-    let y = exp2_f64(x) as f32;
+    let y = round_to_f32(exp2_f64(x));
     let y = if 1.0 < y { 1.0 } else { y };
     if c.is_nan() {
         0.0
@@ -363,13 +372,34 @@ fn gauss(n: f32, c: f32) -> f32 {
 #[inline(always)]
 fn exact(n: f64, at_zero: f32, c: f32) -> f32 {
     let cc = clamp_hi(c);
-    let y = exp2_f64(n * log2_f64(cc)) as f32;
+    let y = round_to_f32(exp2_f64(n * log2_f64(cc)));
     // c <= 0 and NaN take the else branch; NaN is then zeroed below.
     let y = if cc > 0.0 { y } else { at_zero };
     if c.is_nan() {
         0.0
     } else {
         y
+    }
+}
+
+/// `y as f32` for `0 <= y <= 1`, without ever producing a subnormal in an FP
+/// instruction: on Intel cores a subnormal (or underflowing) result of a vector
+/// conversion takes a microcode assist of ~100+ cycles, which made the kernels
+/// slower than libm on inputs whose `c^n` underflows. Below 2^-126 the f32 result is
+/// the integer `round(y · 2^149)` (round to nearest even, as the conversion would),
+/// read off the low bits of `y · 2^149 + 2^52`; that is the subnormal's bit pattern.
+#[inline(always)]
+fn round_to_f32(y: f64) -> f32 {
+    const TWO_M126: f64 = f64::from_bits((1023 - 126) << 52);
+    const TWO_P149: f64 = f64::from_bits((1023 + 149) << 52);
+    const TWO_P52: f64 = f64::from_bits((1023 + 52) << 52);
+    let tiny = y < TWO_M126;
+    let normal = (if tiny { 1.0 } else { y }) as f32;
+    let sub = f32::from_bits((y * TWO_P149 + TWO_P52).to_bits() as u32);
+    if tiny {
+        sub
+    } else {
+        normal
     }
 }
 
@@ -450,12 +480,19 @@ fn log2_f64(c: f32) -> f64 {
     let top = tmp & 0xff80_0000;
     let z = f64::from(f32::from_bits(ix.wrapping_sub(top)));
     let k = f64::from((tmp as i32) >> 23);
-    // r = z/c_i - 1, |r| < 0.0297; the subtraction is exact (Sterbenz).
-    let r = z * LOG2_INVC[i] - 1.0;
+    // r = z/c_i - 1 with one rounding, |r| < 0.0297.
+    let r = z.mul_add(LOG2_INVC[i], -1.0);
+    // log2(1 + r) = r·q(r), q of degree 6 by Estrin's scheme (short dependency chain).
     let p = LOG2_POLY;
-    let poly = r
-        * (p[0] + r * (p[1] + r * (p[2] + r * (p[3] + r * (p[4] + r * (p[5] + r * p[6]))))));
-    (LOG2_LOGC[i] + k) + poly
+    let r2 = r * r;
+    let q01 = p[1].mul_add(r, p[0]);
+    let q23 = p[3].mul_add(r, p[2]);
+    let q45 = p[5].mul_add(r, p[4]);
+    let r4 = r2 * r2;
+    let q03 = q23.mul_add(r2, q01);
+    let q46 = p[6].mul_add(r2, q45);
+    let q = q46.mul_add(r4, q03);
+    r.mul_add(q, LOG2_LOGC[i] + k)
 }
 
 /// `2^(i/16)` as f64 bits minus `i << 48`, so that adding `k << 48` for `k ≡ i (mod
@@ -503,8 +540,11 @@ fn exp2_f64(x: f64) -> f64 {
     let r = x - kd;
     let s = f64::from_bits(EXP2_TABLE[(ki & 15) as usize].wrapping_add(ki << 48));
     let p = EXP2_POLY;
-    let poly = 1.0 + r * (p[0] + r * (p[1] + r * (p[2] + r * p[3])));
-    s * poly
+    let r2 = r * r;
+    let q01 = p[1].mul_add(r, p[0]);
+    let q23 = p[3].mul_add(r, p[2]);
+    let q = q23.mul_add(r2, q01);
+    s * r.mul_add(q, 1.0)
 }
 
 #[cfg(test)]
