@@ -57,7 +57,11 @@ fn k(bencher: Bencher, len: usize) {
 
 #[divan::bench(args = LENS)]
 fn k_scalar_eval(bencher: Bencher, len: usize) {
-    bench_workload(bencher, len, Workload::LobeScalar(lobe(LobeKind::EnergyFit)));
+    bench_workload(
+        bencher,
+        len,
+        Workload::LobeScalar(lobe(LobeKind::EnergyFit)),
+    );
 }
 
 #[divan::bench(args = LENS)]

@@ -21,7 +21,12 @@ impl Table16 {
     #[target_feature(enable = "avx512f")]
     fn from_f64(t: &[f64; 16]) -> Self {
         // SAFETY: 16 f64 are read from a 16-element array, 8 at a time.
-        unsafe { Table16(_mm512_loadu_pd(t.as_ptr()), _mm512_loadu_pd(t.as_ptr().add(8))) }
+        unsafe {
+            Table16(
+                _mm512_loadu_pd(t.as_ptr()),
+                _mm512_loadu_pd(t.as_ptr().add(8)),
+            )
+        }
     }
 
     #[inline]
@@ -182,7 +187,10 @@ fn gauss_x16(k: &Consts, n: __m512, c: __m512) -> __m512 {
     let cc = _mm512_max_ps(_mm512_set1_ps(-1.0), _mm512_min_ps(one, c));
     let t = _mm512_mul_ps(n, _mm512_sub_ps(cc, one));
     let x0 = _mm512_mul_pd(_mm512_cvtps_pd(_mm512_castps512_ps256(t)), splat(LOG2_E));
-    let x1 = _mm512_mul_pd(_mm512_cvtps_pd(_mm512_extractf32x8_ps::<1>(t)), splat(LOG2_E));
+    let x1 = _mm512_mul_pd(
+        _mm512_cvtps_pd(_mm512_extractf32x8_ps::<1>(t)),
+        splat(LOG2_E),
+    );
     let y = round_x16([exp2_x8(k, x0), exp2_x8(k, x1)]);
     zero_nan(c, _mm512_min_ps(one, y))
 }
