@@ -102,6 +102,12 @@ impl KernelPath {
     /// The widest path this CPU supports; [`Lobe::eval_slice`](crate::Lobe::eval_slice)
     /// uses it.
     pub fn best() -> KernelPath {
+        // Detected once: eval_slice calls this for every slice, however short.
+        static BEST: std::sync::OnceLock<KernelPath> = std::sync::OnceLock::new();
+        *BEST.get_or_init(Self::detect_best)
+    }
+
+    fn detect_best() -> KernelPath {
         if KernelPath::Avx512.is_supported() {
             KernelPath::Avx512
         } else if KernelPath::Avx2.is_supported() {
