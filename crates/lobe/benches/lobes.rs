@@ -108,9 +108,9 @@ fn ratio_table() {
     }
     println!();
     println!(
-        "Ratios (n = {N}, v = {V}, SIMD path {}, single thread, best of {} samples):",
+        "Ratios (n = {N}, v = {V}, SIMD path {}, single thread, fastest ~{:?} sample):",
         KernelPath::best(),
-        glint_lobe::measure::SAMPLES
+        glint_lobe::measure::SAMPLE_TIME
     );
     for len in LENS {
         let cos = cosines(len);

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::time::Duration;
 
 use anyhow::{bail, Context};
-use glint_lobe::measure::{cosines, measure, Workload, SAMPLES};
+use glint_lobe::measure::{cosines, measure, Workload, SAMPLE_TIME};
 use glint_lobe::{KernelPath, Lobe, LobeKind};
 use serde_json::json;
 
@@ -25,8 +25,8 @@ const MAX_LEN: usize = 1 << 26;
     after_help = "Each workload maps an f32 array of cosines (angles spread over \
 0..90 degrees) to an array of results. 4096 elements (16 KiB in + 16 KiB out) stay in \
 the L1 cache; 1048576 (4 MiB + 4 MiB) do not, so there the copy is the bound. \
-Figures are the best of 7 samples (other processes only slow a sample down); expect \
-noise on a busy machine.\n\nExamples:\n  glint bench lobes\n  \
+Figures are the fastest of many ~1 ms samples (other processes only slow a sample \
+down); expect some noise on a busy machine.\n\nExamples:\n  glint bench lobes\n  \
 glint bench lobes --n 1000 --v 5 --len 4096 --json"
 )]
 pub struct LobesArgs {
@@ -132,11 +132,12 @@ fn cpu_model() -> Option<String> {
 fn print_table(w: &mut impl Write, args: &LobesArgs, rows: &[Row]) -> std::io::Result<()> {
     writeln!(
         w,
-        "# n = {}, v = {}; SIMD path {} ({} f32 lanes); single thread; best of {SAMPLES} samples",
+        "# n = {}, v = {}; SIMD path {} ({} f32 lanes); single thread; fastest of {:?} samples",
         args.n,
         args.v,
         KernelPath::best(),
-        KernelPath::best().lanes()
+        KernelPath::best().lanes(),
+        SAMPLE_TIME
     )?;
     if let Some(cpu) = cpu_model() {
         writeln!(w, "# cpu: {cpu}")?;
@@ -183,7 +184,7 @@ fn print_json(w: &mut impl Write, args: &LobesArgs, rows: &[Row]) -> std::io::Re
         "simd_path": KernelPath::best().name(),
         "cpu": cpu_model(),
         "threads": 1,
-        "samples": SAMPLES,
+        "sample_time_ms": SAMPLE_TIME.as_secs_f64() * 1e3,
         "budget_ms": args.budget_ms,
         "results": results,
     });

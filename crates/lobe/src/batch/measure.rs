@@ -64,42 +64,61 @@ pub struct Rate {
     pub evals_per_sec: f64,
     /// Evaluations per second, median sample.
     pub median_evals_per_sec: f64,
+    /// Number of timed samples.
+    pub samples: usize,
 }
 
-/// Number of timed samples per measurement; the fastest is reported, because on a
-/// shared machine other processes only ever slow a sample down.
-pub const SAMPLES: usize = 7;
+/// Fewest timed samples per measurement.
+pub const MIN_SAMPLES: usize = 7;
 
-/// Times `workload` over `cos` for about `budget` in total (after one warm-up call)
-/// and returns its throughput.
+/// Target length of one timed sample. Short samples are rarely interrupted by other
+/// processes, and the fastest one is reported (interruptions only ever slow a
+/// sample down), so short samples give stable figures on a shared machine.
+pub const SAMPLE_TIME: Duration = Duration::from_millis(1);
+
+/// Times `workload` over `cos` for about `budget` in total (after a warm-up of a
+/// tenth of it) in samples of about [`SAMPLE_TIME`] (at least one call and at least
+/// [`MIN_SAMPLES`] samples) and returns its throughput.
+///
+/// Input and output are copied to / allocated at 64-byte aligned addresses, as a
+/// renderer's buffers would be, so results do not depend on where the allocator
+/// happened to put them.
 pub fn measure(workload: &Workload, cos: &[f32], budget: Duration) -> Rate {
-    let mut out = vec![0.0f32; cos.len()];
+    let mut input_buf = vec![0.0f32; cos.len() + 16];
+    let at = input_buf.as_ptr().align_offset(64).min(16);
+    input_buf[at..at + cos.len()].copy_from_slice(cos);
+    let cos = &input_buf[at..at + cos.len()];
+    let mut out_buf = vec![0.0f32; cos.len() + 16];
+    let at = out_buf.as_ptr().align_offset(64).min(16);
+    let out = &mut out_buf[at..at + cos.len()];
     let len = cos.len().max(1);
     // Warm up (caches, page faults, CPU frequency) and size the samples.
     let start = Instant::now();
     let mut calls = 0u64;
-    while calls == 0 || start.elapsed() < budget / (2 * SAMPLES as u32) {
-        workload.run(black_box(cos), black_box(&mut out));
+    while calls == 0 || start.elapsed() < budget / 10 {
+        workload.run(black_box(cos), black_box(&mut *out));
         calls += 1;
     }
     let per_call = start.elapsed().as_secs_f64() / calls as f64;
-    let sample_time = budget.as_secs_f64() / SAMPLES as f64;
-    let reps = ((sample_time / per_call.max(1e-9)) as u64).max(1);
-    let mut rates: Vec<f64> = (0..SAMPLES)
+    let reps = ((SAMPLE_TIME.as_secs_f64() / per_call.max(1e-9)) as u64).max(1);
+    let sample = per_call * reps as f64;
+    let samples = ((budget.as_secs_f64() / sample) as usize).max(MIN_SAMPLES);
+    let mut rates: Vec<f64> = (0..samples)
         .map(|_| {
             let t = Instant::now();
             for _ in 0..reps {
-                workload.run(black_box(cos), black_box(&mut out));
+                workload.run(black_box(cos), black_box(&mut *out));
             }
             let secs = t.elapsed().as_secs_f64().max(1e-12);
             (reps as f64 * len as f64) / secs
         })
         .collect();
-    black_box(&out);
+    black_box(&*out);
     rates.sort_by(f64::total_cmp);
     Rate {
-        evals_per_sec: rates[SAMPLES - 1],
-        median_evals_per_sec: rates[SAMPLES / 2],
+        evals_per_sec: rates[samples - 1],
+        median_evals_per_sec: rates[samples / 2],
+        samples,
     }
 }
 
