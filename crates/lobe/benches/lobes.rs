@@ -106,6 +106,12 @@ fn ratio_table() {
     for kind in LobeKind::ALL.into_iter().filter(|&k| k != LobeKind::Exact) {
         rows.push((kind.name().into(), Workload::Lobe(lobe(kind))));
     }
+    for path in KernelPath::supported() {
+        rows.push((
+            format!("k, {path} path"),
+            Workload::LobeOnPath(lobe(LobeKind::EnergyFit), path),
+        ));
+    }
     println!();
     println!(
         "Ratios (n = {N}, v = {V}, SIMD path {}, single thread, fastest ~{:?} sample):",
@@ -132,4 +138,37 @@ fn ratio_table() {
         }
         println!();
     }
+    subnormal_cost();
+}
+
+/// The cost of subnormal results: the kernels keep gradual underflow (as `eval`
+/// does), and on Intel cores a vector instruction with a subnormal result takes a
+/// microcode assist. Times `k` on the L1 block as is and with the few inputs whose
+/// K_4 is subnormal (or underflows on the way) moved to c = 1.
+fn subnormal_cost() {
+    let k = lobe(LobeKind::EnergyFit);
+    let cos = cosines(LENS[0]);
+    let a = k.coefficient().expect("k is a power fit") as f32;
+    // b = 1 - a(1 - c) below 2^(-126/16) = 0.0043 gives b^16 < 2^-126.
+    let clean: Vec<f32> = cos
+        .iter()
+        .map(|&c| {
+            let b = 1.0 - a * (1.0 - c);
+            if b > 0.0 && b < 0.0044 {
+                1.0
+            } else {
+                c
+            }
+        })
+        .collect();
+    let moved = cos.iter().zip(&clean).filter(|(x, y)| x != y).count();
+    let budget = Duration::from_millis(300);
+    let with = measure(&Workload::Lobe(k), &cos, budget).evals_per_sec;
+    let without = measure(&Workload::Lobe(k), &clean, budget).evals_per_sec;
+    println!(
+        "Subnormal results: k on the {} inputs {with:.3e} evals/s; with the {moved} inputs \
+         whose result is subnormal moved to c = 1: {without:.3e} ({:+.0}%)",
+        LENS[0],
+        100.0 * (without / with - 1.0)
+    );
 }

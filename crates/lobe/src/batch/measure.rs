@@ -28,6 +28,9 @@ use crate::Lobe;
 pub enum Workload {
     /// [`Lobe::eval_slice`] (the SIMD kernels for f32).
     Lobe(Lobe<f32>),
+    /// [`eval_slice_with`](crate::eval_slice_with) on a given path (which must be
+    /// supported; unsupported paths leave the output untouched).
+    LobeOnPath(Lobe<f32>, crate::KernelPath),
     /// [`Lobe::eval_slice_scalar`]: `eval` one element at a time.
     LobeScalar(Lobe<f32>),
     /// libm's `powf`: `max(c, 0)^n`, one call per element.
@@ -45,6 +48,11 @@ impl Workload {
     pub fn run(&self, cos: &[f32], out: &mut [f32]) {
         match self {
             Workload::Lobe(lobe) => lobe.eval_slice(cos, out),
+            Workload::LobeOnPath(lobe, path) => {
+                // Only an unsupported path or a length mismatch can fail; both leave
+                // `out` as it was, which the caller sees as a zero-cost run.
+                let _ = crate::eval_slice_with(lobe, *path, cos, out);
+            }
             Workload::LobeScalar(lobe) => lobe.eval_slice_scalar(cos, out),
             Workload::LibmPowf { n } => {
                 let n = black_box(*n);
