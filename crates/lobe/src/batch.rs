@@ -69,7 +69,8 @@ impl KernelPath {
         }
     }
 
-    /// f32 lanes per vector on this path (1 for the scalar fallback).
+    /// f32 lanes per vector on this path (1 for the fallback, which is written for
+    /// one lane; the compiler may still use SSE2 there).
     pub fn lanes(self) -> usize {
         match self {
             KernelPath::Scalar => 1,

@@ -16,8 +16,9 @@ pub enum Command {
     Lobes(LobesArgs),
 }
 
-/// Largest array length accepted by `--len` (64 Mi elements, 256 MiB in + out).
-const MAX_LEN: usize = 1 << 26;
+/// Largest array length accepted by `--len`: 16 Mi elements (64 MiB per array; the
+/// measurement holds three such arrays).
+const MAX_LEN: usize = 1 << 24;
 
 /// Arguments of `glint bench lobes`.
 #[derive(clap::Args)]
@@ -190,4 +191,48 @@ fn print_json(w: &mut impl Write, args: &LobesArgs, rows: &[Row]) -> std::io::Re
     });
     serde_json::to_writer_pretty(&mut *w, &doc)?;
     writeln!(w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(len: Vec<usize>, n: f64, budget_ms: u64) -> LobesArgs {
+        LobesArgs {
+            n,
+            v: 4,
+            len,
+            budget_ms,
+            json: true,
+        }
+    }
+
+    #[test]
+    fn bad_arguments_are_errors() {
+        let msg = |a| format!("{:#}", lobes(a).unwrap_err());
+        assert!(msg(args(vec![0], 100.0, 10)).contains("invalid --len 0"));
+        assert!(msg(args(vec![MAX_LEN + 1], 100.0, 10)).contains("invalid --len"));
+        assert!(msg(args(vec![], 100.0, 10)).contains("at least one"));
+        assert!(msg(args(vec![16], 100.0, 0)).contains("invalid --budget-ms 0"));
+        assert!(msg(args(vec![16], -1.0, 10)).contains("invalid shininess"));
+    }
+
+    #[test]
+    fn ratios_are_against_the_same_length() {
+        let row = |name: &str, len, rate| Row {
+            name: name.into(),
+            len,
+            evals_per_sec: rate,
+            median_evals_per_sec: rate,
+        };
+        let rows = [
+            row("copy", 16, 8.0),
+            row("libm-powf", 16, 2.0),
+            row("copy", 32, 4.0),
+            row("libm-powf", 32, 1.0),
+        ];
+        assert_eq!(references(&rows, 16), (2.0, 8.0));
+        assert_eq!(references(&rows, 32), (1.0, 4.0));
+        assert!(references(&rows, 64).0.is_nan());
+    }
 }
