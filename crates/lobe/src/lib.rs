@@ -28,6 +28,8 @@ mod coefficient;
 mod geometry;
 mod lobe;
 
+pub use batch::measure;
+pub use batch::{eval_slice_with, pow_slice, BatchError, KernelPath};
 pub use coefficient::{
     energy_fit_coefficient, max_abs_error, minimax_coefficient, power_lobe_integral,
     slope_fit_coefficient, ErrorPeak,
