@@ -102,7 +102,7 @@ where
         .y_desc(p.y_desc)
         .label_style((FONT, 15))
         .axis_desc_style((FONT, 17))
-        .light_line_style(RGBColor(235, 235, 235))
+        .light_line_style(WHITE)
         .draw()?;
     if p.zero_line {
         chart.draw_series(LineSeries::new(
@@ -112,10 +112,7 @@ where
     }
     for (label, color, pts) in &p.series {
         let color = *color;
-        let visible = pts
-            .iter()
-            .copied()
-            .filter(|&(x, _)| x >= p.x_range.0 && x <= p.x_range.1);
+        let visible = thin(pts, p.x_range);
         chart
             .draw_series(LineSeries::new(visible, color.stroke_width(2)))?
             .label(label.as_str())
@@ -131,6 +128,46 @@ where
         .label_font((FONT, 15))
         .draw()?;
     Ok(())
+}
+
+/// The points of a series inside `x`, thinned to at most ~2 per pixel column of a
+/// 900-pixel-wide plot (keeping each column's lowest and highest point, so peaks
+/// survive), to keep the SVG files small.
+fn thin(pts: &[(f64, f64)], x: (f64, f64)) -> Vec<(f64, f64)> {
+    const COLUMNS: f64 = 900.0;
+    let width = (x.1 - x.0) / COLUMNS;
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut column: Option<i64> = None;
+    let mut lo = (0.0, f64::INFINITY);
+    let mut hi = (0.0, f64::NEG_INFINITY);
+    let flush = |out: &mut Vec<(f64, f64)>, lo: (f64, f64), hi: (f64, f64)| {
+        let (a, b) = if lo.0 <= hi.0 { (lo, hi) } else { (hi, lo) };
+        out.push(a);
+        if b != a {
+            out.push(b);
+        }
+    };
+    for &(px, py) in pts.iter().filter(|&&(px, _)| px >= x.0 && px <= x.1) {
+        let col = ((px - x.0) / width).floor() as i64;
+        if column != Some(col) {
+            if column.is_some() {
+                flush(&mut out, lo, hi);
+            }
+            column = Some(col);
+            lo = (px, py);
+            hi = (px, py);
+        }
+        if py < lo.1 {
+            lo = (px, py);
+        }
+        if py > hi.1 {
+            hi = (px, py);
+        }
+    }
+    if column.is_some() {
+        flush(&mut out, lo, hi);
+    }
+    out
 }
 
 /// Draws a figure into `dir/stem.png` and `dir/stem.svg`; evaluates to the file names.
