@@ -19,7 +19,7 @@ pub const COMPARED: [LobeKind; 5] = [
 /// Points over the whole range in a curve (uniform in γ).
 const WHOLE_RANGE_POINTS: usize = 1201;
 /// Points over the highlight (γ where `cos^n >= 1e-4`) in a curve.
-const HIGHLIGHT_POINTS: usize = 3000;
+const HIGHLIGHT_POINTS: usize = 3001;
 
 /// The angles (radians) of a curve for `cos^n`: uniform over [0, π/2], three times
 /// denser over the highlight (where `cos^n >= 1e-4`, where every lobe changes fastest),
@@ -30,7 +30,7 @@ pub fn curve_angles(n: f64, kinks: &[f64]) -> Vec<f64> {
     let mut g: Vec<f64> = (0..WHOLE_RANGE_POINTS)
         .map(|i| FRAC_PI_2 * i as f64 / (WHOLE_RANGE_POINTS - 1) as f64)
         .collect();
-    // Offset by half a step so the two grids never coincide, even when the highlight
+    // Offset by half a step (3001 is prime) so the two grids never coincide, even when the highlight
     // covers the whole range (small n).
     g.extend((0..HIGHLIGHT_POINTS).map(|i| highlight * (i as f64 + 0.5) / HIGHLIGHT_POINTS as f64));
     g.extend(

@@ -18,6 +18,9 @@ use crate::error::AnalysisError;
 use crate::map::{ErrorMap, MAP_FITS};
 use crate::metrics::{level_angle, CUTOFF_LEVEL};
 
+/// A line: legend label, colour, points.
+type Series = (String, RGBColor, Vec<(f64, f64)>);
+
 type DrawResult = Result<(), Box<dyn Error>>;
 
 const FONT: &str = "sans-serif";
@@ -63,12 +66,12 @@ struct LinePanel<'a> {
     x_range: (f64, f64),
     x_desc: &'a str,
     y_desc: &'a str,
-    series: Vec<(String, RGBColor, Vec<(f64, f64)>)>,
+    series: Vec<Series>,
     zero_line: bool,
     legend_pos: SeriesLabelPosition,
 }
 
-fn y_range(series: &[(String, RGBColor, Vec<(f64, f64)>)], x: (f64, f64)) -> (f64, f64) {
+fn y_range(series: &[Series], x: (f64, f64)) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (_, _, pts) in series {
         for &(px, py) in pts {
@@ -212,7 +215,7 @@ macro_rules! render_both {
     }};
 }
 
-fn error_series(c: &Curves, kinds: &[LobeKind]) -> Vec<(String, RGBColor, Vec<(f64, f64)>)> {
+fn error_series(c: &Curves, kinds: &[LobeKind]) -> Vec<Series> {
     kinds
         .iter()
         .filter_map(|&k| {

@@ -153,4 +153,35 @@ mod tests {
         assert_eq!(parse_ns("10,100, 1000").unwrap(), vec![10.0, 100.0, 1000.0]);
         assert!(parse_ns("ten").is_err());
     }
+
+    fn args(n: &str, v: &str, out: Option<PathBuf>) -> Args {
+        Args {
+            n: n.into(),
+            v: v.into(),
+            out,
+            tolerance: None,
+            report: None,
+        }
+    }
+
+    #[test]
+    fn bad_arguments_give_one_error_and_no_output() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out");
+        for (n, v, msg) in [
+            ("-1", "4", "invalid n = -1"),
+            ("100", "11", "invalid v = 11"),
+            ("100", "4..11", "invalid v = 11"),
+            ("", "4", "list of n values is empty"),
+            ("100", ",", "list of v values is empty"),
+        ] {
+            let err = run(args(n, v, Some(out.clone()))).unwrap_err();
+            let line = format!("{err:#}");
+            assert!(line.contains(msg) && !line.contains('\n'), "{line}");
+            assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+        }
+        let mut a = args("100", "4", None);
+        a.tolerance = Some(-1.0);
+        assert!(format!("{:#}", run(a).unwrap_err()).contains("invalid tolerance"));
+    }
 }
