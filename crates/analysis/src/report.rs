@@ -338,8 +338,8 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
         w,
         "\n**Verdict:** holds as a cost claim: the degree is fixed at 2^v = 16 and the unit \
          needs v = 4 squarings for every n. It is not free: with v = 4 the max abs error is \
-         {}–{} for n ≥ 100, and 1/255 needs one or two more squarers (table above; map \
-         below). `glint analyze --tolerance TOL --n N` prints the cheapest v for any \
+         {}–{} for n ≥ 100, and reaching 1/255 takes the larger v of the table above \
+         (one squarer per step of v; map below). `glint analyze --tolerance TOL --n N` prints the cheapest v for any \
          target.\n",
         f4(kmin),
         f4(kmax)
