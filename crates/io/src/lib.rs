@@ -1,31 +1,146 @@
 //! Readers for biomedical volumes (NIfTI, NRRD, DICOM, raw) and surfaces (STL, OBJ,
-//! PLY, GIFTI) into one [`Volume`] and one [`Mesh`] type.
+//! PLY, GIFTI) into one [`Volume`] and one [`Mesh`] type, with writers for round trips.
 //!
 //! ```
-//! use glint_io::{Samples, Volume};
+//! use glint_io::{nifti, Endian, ReadOptions, Samples, Volume};
 //!
 //! // A 2x2x2 volume of u8 samples with 1 mm voxels at the origin.
 //! let vol = Volume::new([2, 2, 2], [1.0; 3], Samples::U8(vec![0, 1, 2, 3, 4, 5, 6, 7])).unwrap();
 //! assert_eq!(vol.value(1, 1, 1), 7.0);
 //! assert_eq!(vol.range(), (0.0, 7.0));
+//!
+//! // Write it as gzipped NIfTI and read it back; the format follows the extension.
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("tiny.nii.gz");
+//! nifti::write(&path, &vol, true, Endian::Little).unwrap();
+//! let back = glint_io::read_volume(&path, &ReadOptions::default()).unwrap();
+//! assert_eq!(back.samples, vol.samples);
+//! assert_eq!(back.affine, vol.affine);
 //! ```
 //!
 //! World coordinates are millimetres in RAS+ (x towards the patient's Right, y Anterior,
-//! z Superior), NIfTI's convention; readers of LPS formats (DICOM) convert.
+//! z Superior), NIfTI's convention; readers of LPS formats (DICOM, NRRD in LPS space)
+//! convert. Every reader checks the announced size against [`ReadOptions::max_voxels`]
+//! and the file before allocating for samples, and every error names the file
+//! ([`IoError`]).
+//!
+//! | format | module | read | write |
+//! | --- | --- | --- | --- |
+//! | NIfTI-1 `.nii`, `.nii.gz` | [`nifti`] | yes | yes |
+//! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
+//! | DICOM file or directory | [`dicom`] | uncompressed | no |
+//! | raw samples | [`raw`] | yes | yes |
+//! | STL | [`mesh`] | binary, ASCII | binary |
+//! | OBJ | [`mesh`] | yes | yes |
+//! | PLY | [`mesh`] | ASCII, binary | ASCII, binary |
+//! | GIFTI `.gii`, `.gii.gz` | [`gifti`] | ASCII, Base64, GZipBase64 | same |
 
 #![warn(missing_docs)]
 
+mod common;
+pub mod dicom;
+pub mod gifti;
+pub mod mesh;
+pub mod nifti;
+pub mod nrrd;
+pub mod raw;
 mod types;
 
+pub use common::{Endian, ParseScalarTypeError, ScalarType};
 pub use types::{IoError, Mesh, Samples, Volume};
 
 use std::path::Path;
+
+/// The file formats glint reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Format {
+    /// NIfTI-1 (`.nii`, `.nii.gz`).
+    Nifti,
+    /// NRRD (`.nrrd`, `.nhdr` + data file).
+    Nrrd,
+    /// DICOM (a file or a directory of slices).
+    Dicom,
+    /// Headerless samples described by the caller.
+    Raw,
+    /// STL, binary or ASCII.
+    Stl,
+    /// Wavefront OBJ.
+    Obj,
+    /// Stanford PLY, ASCII or binary.
+    Ply,
+    /// GIFTI surface (`.gii`, `.gii.gz`).
+    Gifti,
+}
+
+impl Format {
+    /// The format's usual name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Nifti => "NIfTI-1",
+            Format::Nrrd => "NRRD",
+            Format::Dicom => "DICOM",
+            Format::Raw => "raw",
+            Format::Stl => "STL",
+            Format::Obj => "OBJ",
+            Format::Ply => "PLY",
+            Format::Gifti => "GIFTI",
+        }
+    }
+
+    /// Whether the format holds surfaces (else volumes).
+    pub fn is_mesh(self) -> bool {
+        matches!(
+            self,
+            Format::Stl | Format::Obj | Format::Ply | Format::Gifti
+        )
+    }
+
+    /// Guesses the format from a path: a directory is DICOM; otherwise the extension
+    /// (case-insensitive, `.gz` looked through). `None` if unknown.
+    pub fn guess(path: &Path) -> Option<Format> {
+        if path.is_dir() {
+            return Some(Format::Dicom);
+        }
+        let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+        let name = name.strip_suffix(".gz").unwrap_or(&name);
+        let ext = name.rsplit_once('.').map(|(_, e)| e).unwrap_or("");
+        Some(match ext {
+            "nii" => Format::Nifti,
+            "nrrd" | "nhdr" => Format::Nrrd,
+            "dcm" | "dicom" | "ima" => Format::Dicom,
+            "raw" | "bin" | "img" => Format::Raw,
+            "stl" => Format::Stl,
+            "obj" => Format::Obj,
+            "ply" => Format::Ply,
+            "gii" => Format::Gifti,
+            _ => return None,
+        })
+    }
+}
+
+/// How to interpret a headerless file of samples.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawParams {
+    /// Samples along i, j, k (i fastest in the file).
+    pub dims: [usize; 3],
+    /// The stored type.
+    pub scalar: ScalarType,
+    /// Voxel size in mm.
+    pub spacing: [f64; 3],
+    /// Byte order of multi-byte samples.
+    pub endian: Endian,
+    /// Bytes to skip before the samples.
+    pub offset: u64,
+}
 
 /// Limits and hints for readers.
 #[derive(Clone, Debug)]
 pub struct ReadOptions {
     /// Refuse volumes with more voxels than this before allocating for them.
     pub max_voxels: u64,
+    /// Read the file as raw samples with these parameters, whatever its extension.
+    pub raw: Option<RawParams>,
 }
 
 impl Default for ReadOptions {
@@ -33,24 +148,105 @@ impl Default for ReadOptions {
         // 2^31 voxels: a 1290^3 volume, 8 GiB as f32; far above clinical CT (512^2 x ~2000).
         ReadOptions {
             max_voxels: 1 << 31,
+            raw: None,
         }
     }
+}
+
+/// A volume with what is known about the file it came from.
+#[derive(Clone, Debug)]
+pub struct VolumeFile {
+    /// The volume.
+    pub volume: Volume,
+    /// The format read.
+    pub format: Format,
+    /// Facts about the reading worth telling the user (where the affine came from,
+    /// dropped dimensions, ...).
+    pub notes: Vec<String>,
+}
+
+/// A mesh with what is known about the file it came from.
+#[derive(Clone, Debug)]
+pub struct MeshFile {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// The format read.
+    pub format: Format,
+    /// The space the positions are in, where the file says (GIFTI's DataSpace and
+    /// TransformedSpace, e.g. `NIFTI_XFORM_TALAIRACH`).
+    pub coordinate_system: Option<String>,
+    /// Facts about the reading worth telling the user.
+    pub notes: Vec<String>,
 }
 
 /// Reads a volume, choosing the format from the path (extension, or a directory of
 /// DICOM slices).
 pub fn read_volume(path: &Path, options: &ReadOptions) -> Result<Volume, IoError> {
-    let _ = options;
-    Err(IoError::Unsupported {
-        path: path.to_path_buf(),
-        what: "volume formats are not implemented yet".into(),
-    })
+    open_volume(path, options).map(|f| f.volume)
+}
+
+/// Reads a volume like [`read_volume`], with the format and notes.
+pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
+    if !path.exists() {
+        return Err(IoError::Os {
+            path: path.into(),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        });
+    }
+    if let Some(params) = &options.raw {
+        return raw::read(path, params, options);
+    }
+    match Format::guess(path) {
+        Some(Format::Nifti) => nifti::read(path, options),
+        Some(Format::Nrrd) => nrrd::read(path, options),
+        Some(Format::Dicom) => dicom::read(path, options),
+        Some(Format::Raw) => unsupported(
+            path,
+            "a raw file needs its dimensions, type and spacing (ReadOptions::raw)",
+        ),
+        Some(f) if f.is_mesh() => unsupported(path, "this is a surface format, not a volume"),
+        Some(f) => unsupported(
+            path,
+            &format!("{} volumes are not implemented yet", f.name()),
+        ),
+        None if common::has_dicom_magic(path) => dicom::read(path, options),
+        None => unsupported(
+            path,
+            "unknown volume extension (expected .nii, .nii.gz, .nrrd, .nhdr, .dcm, a DICOM \
+             directory, or raw parameters)",
+        ),
+    }
 }
 
 /// Reads a surface mesh, choosing the format from the extension.
 pub fn read_mesh(path: &Path) -> Result<Mesh, IoError> {
+    open_mesh(path).map(|f| f.mesh)
+}
+
+/// Reads a mesh like [`read_mesh`], with the format and coordinate system.
+pub fn open_mesh(path: &Path) -> Result<MeshFile, IoError> {
+    if !path.is_file() {
+        return Err(IoError::Os {
+            path: path.into(),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        });
+    }
+    match Format::guess(path) {
+        Some(Format::Stl) => mesh::read_stl(path),
+        Some(Format::Obj) => mesh::read_obj(path),
+        Some(Format::Ply) => mesh::read_ply(path),
+        Some(Format::Gifti) => gifti::read(path),
+        Some(_) => unsupported(path, "this is a volume format, not a surface"),
+        None => unsupported(
+            path,
+            "unknown surface extension (expected .stl, .obj, .ply, .gii or .gii.gz)",
+        ),
+    }
+}
+
+fn unsupported<T>(path: &Path, what: &str) -> Result<T, IoError> {
     Err(IoError::Unsupported {
         path: path.to_path_buf(),
-        what: "mesh formats are not implemented yet".into(),
+        what: what.into(),
     })
 }

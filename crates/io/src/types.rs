@@ -34,9 +34,88 @@ pub enum IoError {
         /// What is wrong with it.
         what: String,
     },
+    /// The file ends before the header or the data it announces.
+    #[error("{path}: truncated: {what}")]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// What was missing.
+        what: String,
+    },
+    /// The file does not start with the format's signature.
+    #[error("{path}: not a {format} file: {what}")]
+    BadMagic {
+        /// The file.
+        path: PathBuf,
+        /// The format that was expected.
+        format: &'static str,
+        /// What was found instead.
+        what: String,
+    },
+    /// The header announces a different amount of data than the file holds.
+    #[error("{path}: size mismatch: {what}")]
+    SizeMismatch {
+        /// The file.
+        path: PathBuf,
+        /// The sizes that disagree.
+        what: String,
+    },
+    /// The dimensions overflow or exceed the caller's voxel limit; checked before any
+    /// allocation for the samples.
+    #[error("{path}: too large: {what}")]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The dimensions and the limit.
+        what: String,
+    },
+    /// The voxel-to-world geometry is unusable (NaN or zero spacing, singular affine,
+    /// inconsistent slice positions).
+    #[error("{path}: bad geometry: {what}")]
+    Geometry {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        what: String,
+    },
+    /// A DICOM directory mixes series, image sizes or pixel formats.
+    #[error("{path}: mixed series: {what}")]
+    MixedSeries {
+        /// The directory.
+        path: PathBuf,
+        /// The series found.
+        what: String,
+    },
+    /// A mesh face refers to a vertex that does not exist.
+    #[error("{path}: bad mesh index: {what}")]
+    BadIndex {
+        /// The file.
+        path: PathBuf,
+        /// The face and the vertex count.
+        what: String,
+    },
     /// An in-memory volume or mesh is inconsistent (not tied to a file).
     #[error("{0}")]
     Inconsistent(String),
+}
+
+impl IoError {
+    /// The file the error is about, if it is about one.
+    pub fn path(&self) -> Option<&std::path::Path> {
+        match self {
+            IoError::Os { path, .. }
+            | IoError::Unsupported { path, .. }
+            | IoError::Invalid { path, .. }
+            | IoError::Truncated { path, .. }
+            | IoError::BadMagic { path, .. }
+            | IoError::SizeMismatch { path, .. }
+            | IoError::TooLarge { path, .. }
+            | IoError::Geometry { path, .. }
+            | IoError::MixedSeries { path, .. }
+            | IoError::BadIndex { path, .. } => Some(path),
+            IoError::Inconsistent(_) => None,
+        }
+    }
 }
 
 /// Voxel samples in the type the file stores them.

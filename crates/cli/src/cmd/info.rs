@@ -1,10 +1,402 @@
-//! `glint info` (not implemented yet).
+//! `glint info`: what a volume or surface file holds (format, dims, spacing, type, range,
+//! affine; or vertex and triangle counts and bounds), as text or JSON.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::bail;
+use glint_io::{Endian, Format, MeshFile, RawParams, ReadOptions, ScalarType, VolumeFile};
+use serde_json::{json, Value};
 
 /// Arguments of `glint info`.
 #[derive(clap::Args)]
-pub struct Args {}
+#[command(after_help = "Examples:\n  \
+    glint info mni152_t1_09a.nii.gz\n  \
+    glint info fsaverage5_pial_left.gii.gz --json\n  \
+    glint info ct_series/            (a directory of DICOM slices)\n  \
+    glint info head.raw --raw-dims 256,256,128 --raw-type u16 --raw-spacing 0.9,0.9,1.5")]
+pub struct Args {
+    /// The file (.nii, .nii.gz, .nrrd, .nhdr, .dcm, DICOM directory, .stl, .obj, .ply,
+    /// .gii, .gii.gz, or raw samples with --raw-dims).
+    file: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Refuse volumes with more voxels than this (checked before reading the samples).
+    #[arg(long, default_value_t = ReadOptions::default().max_voxels)]
+    max_voxels: u64,
+    /// Read FILE as headerless samples with these dimensions, e.g. 256,256,128.
+    #[arg(long, value_delimiter = ',', num_args = 1)]
+    raw_dims: Vec<usize>,
+    /// Sample type of a raw file: u8, i8, u16, i16, u32, i32, f32, f64.
+    #[arg(long, default_value = "u8", requires = "raw_dims")]
+    raw_type: String,
+    /// Voxel size of a raw file in mm, e.g. 0.9,0.9,1.5.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1,1,1",
+        requires = "raw_dims"
+    )]
+    raw_spacing: Vec<f64>,
+    /// Byte order of a raw file: little or big.
+    #[arg(long, default_value = "little", requires = "raw_dims")]
+    raw_endian: String,
+    /// Bytes to skip at the start of a raw file.
+    #[arg(long, default_value_t = 0, requires = "raw_dims")]
+    raw_offset: u64,
+}
 
 /// Runs `glint info`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("'glint info' is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    print!("{}", report(&args)?);
+    Ok(())
+}
+
+/// The text or JSON `glint info` prints.
+fn report(args: &Args) -> anyhow::Result<String> {
+    let mut options = ReadOptions {
+        max_voxels: args.max_voxels,
+        ..ReadOptions::default()
+    };
+    if !args.raw_dims.is_empty() {
+        let dims: [usize; 3] = args
+            .raw_dims
+            .as_slice()
+            .try_into()
+            .map_err(|_| anyhow::anyhow!("--raw-dims takes three sizes, e.g. 256,256,128"))?;
+        let spacing: [f64; 3] =
+            args.raw_spacing.as_slice().try_into().map_err(|_| {
+                anyhow::anyhow!("--raw-spacing takes three sizes in mm, e.g. 1,1,1")
+            })?;
+        let scalar: ScalarType = args.raw_type.parse()?;
+        let endian: Endian = args.raw_endian.parse().map_err(anyhow::Error::msg)?;
+        options.raw = Some(RawParams {
+            dims,
+            scalar,
+            spacing,
+            endian,
+            offset: args.raw_offset,
+        });
+    }
+    let is_mesh = options.raw.is_none() && Format::guess(&args.file).is_some_and(Format::is_mesh);
+    if options.raw.is_none() && Format::guess(&args.file) == Some(Format::Raw) {
+        bail!(
+            "{}: a raw file needs --raw-dims (and --raw-type, --raw-spacing)",
+            args.file.display()
+        );
+    }
+    let mut out = String::new();
+    if is_mesh {
+        let file = glint_io::open_mesh(&args.file)?;
+        if args.json {
+            out = serde_json::to_string_pretty(&mesh_json(args, &file))? + "\n";
+        } else {
+            print_mesh(&mut out, args, &file)?;
+        }
+    } else {
+        let file = glint_io::open_volume(&args.file, &options)?;
+        if args.json {
+            out = serde_json::to_string_pretty(&volume_json(args, &file))? + "\n";
+        } else {
+            print_volume(&mut out, args, &file)?;
+        }
+    }
+    Ok(out)
+}
+
+fn volume_json(args: &Args, f: &VolumeFile) -> Value {
+    let v = &f.volume;
+    let (lo, hi) = v.range();
+    json!({
+        "file": args.file.display().to_string(),
+        "kind": "volume",
+        "format": f.format.name(),
+        "dims": v.dims,
+        "voxels": v.len(),
+        "spacing_mm": v.spacing,
+        "type": v.samples.type_name(),
+        "slope": v.slope,
+        "intercept": v.intercept,
+        "range": [finite_or_null(lo), finite_or_null(hi)],
+        "units": v.units,
+        "affine_voxel_to_ras_mm": v.affine,
+        "notes": f.notes,
+    })
+}
+
+fn finite_or_null(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        Value::Null
+    }
+}
+
+fn print_volume(out: &mut String, args: &Args, f: &VolumeFile) -> std::fmt::Result {
+    let v = &f.volume;
+    let (lo, hi) = v.range();
+    writeln!(out, "file:     {}", args.file.display())?;
+    writeln!(out, "format:   {} volume", f.format.name())?;
+    writeln!(
+        out,
+        "dims:     {} x {} x {} ({} voxels)",
+        v.dims[0],
+        v.dims[1],
+        v.dims[2],
+        v.len()
+    )?;
+    writeln!(
+        out,
+        "spacing:  {} x {} x {} mm",
+        num(v.spacing[0]),
+        num(v.spacing[1]),
+        num(v.spacing[2])
+    )?;
+    writeln!(out, "type:     {}", v.samples.type_name())?;
+    if v.slope != 1.0 || v.intercept != 0.0 {
+        writeln!(
+            out,
+            "scaling:  value = {} * stored + {}",
+            num(v.slope),
+            num(v.intercept)
+        )?;
+    }
+    let units = v
+        .units
+        .as_deref()
+        .map(|u| format!(" {u}"))
+        .unwrap_or_default();
+    writeln!(out, "range:    {} .. {}{units}", num(lo), num(hi))?;
+    writeln!(out, "affine (voxel -> RAS+ mm):")?;
+    for row in &v.affine {
+        writeln!(
+            out,
+            "  {:>12} {:>12} {:>12} {:>12}",
+            num(row[0]),
+            num(row[1]),
+            num(row[2]),
+            num(row[3])
+        )?;
+    }
+    for n in &f.notes {
+        writeln!(out, "note:     {n}")?;
+    }
+    Ok(())
+}
+
+fn mesh_json(args: &Args, f: &MeshFile) -> Value {
+    let m = &f.mesh;
+    let bounds = m.bounds().map(|(lo, hi)| json!({"min": lo, "max": hi}));
+    json!({
+        "file": args.file.display().to_string(),
+        "kind": "mesh",
+        "format": f.format.name(),
+        "vertices": m.positions.len(),
+        "triangles": m.triangles.len(),
+        "normals": m.normals.is_some(),
+        "scalars": m.scalars.is_some(),
+        "bounds_mm": bounds,
+        "coordinate_system": f.coordinate_system,
+        "notes": f.notes,
+    })
+}
+
+fn print_mesh(out: &mut String, args: &Args, f: &MeshFile) -> std::fmt::Result {
+    let m = &f.mesh;
+    writeln!(out, "file:      {}", args.file.display())?;
+    writeln!(out, "format:    {} surface", f.format.name())?;
+    writeln!(out, "vertices:  {}", m.positions.len())?;
+    writeln!(out, "triangles: {}", m.triangles.len())?;
+    writeln!(
+        out,
+        "normals:   {}",
+        if m.normals.is_some() { "yes" } else { "no" }
+    )?;
+    if let Some(s) = &m.scalars {
+        let (lo, hi) = s
+            .iter()
+            .filter(|x| x.is_finite())
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        writeln!(out, "scalars:   {} .. {}", num(lo.into()), num(hi.into()))?;
+    }
+    if let Some((lo, hi)) = m.bounds() {
+        let fmt = |p: [f32; 3]| {
+            format!(
+                "({}, {}, {})",
+                num(p[0].into()),
+                num(p[1].into()),
+                num(p[2].into())
+            )
+        };
+        writeln!(out, "bounds:    {} .. {} mm", fmt(lo), fmt(hi))?;
+    }
+    if let Some(cs) = &f.coordinate_system {
+        writeln!(out, "space:     {cs}")?;
+    }
+    for n in &f.notes {
+        writeln!(out, "note:      {n}")?;
+    }
+    Ok(())
+}
+
+/// A number with at most 4 decimals and no trailing zeros.
+fn num(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let s = format!("{x:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{num, report, Args};
+    use clap::Parser;
+    use glint_io::{Endian, Mesh, Samples, Volume};
+    use serde_json::Value;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn run(argv: &[&str]) -> anyhow::Result<String> {
+        let cli = Cli::try_parse_from(std::iter::once("info").chain(argv.iter().copied()))?;
+        report(&cli.args)
+    }
+
+    fn json(argv: &[&str]) -> Value {
+        let mut a = argv.to_vec();
+        a.push("--json");
+        serde_json::from_str(&run(&a).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn numbers_drop_trailing_zeros() {
+        assert_eq!(num(1.0), "1");
+        assert_eq!(num(-98.0), "-98");
+        assert_eq!(num(0.5), "0.5");
+        assert_eq!(num(-0.0), "0");
+        assert_eq!(num(1.23456), "1.2346");
+    }
+
+    #[test]
+    fn nifti_text_and_json() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.nii.gz");
+        let mut vol = Volume::new([4, 3, 2], [1.0; 3], Samples::I16((0..24).collect())).unwrap();
+        vol.affine[0] = [0.0, 0.0, -2.5, 10.0];
+        vol.affine[2] = [1.0, 0.0, 0.0, -4.0];
+        vol.slope = 2.0;
+        glint_io::nifti::write(&p, &vol, true, Endian::Little).unwrap();
+        let path = p.to_str().unwrap();
+        let text = run(&[path]).unwrap();
+        assert!(text.contains("format:   NIfTI-1 volume"), "{text}");
+        assert!(text.contains("dims:     4 x 3 x 2 (24 voxels)"), "{text}");
+        // Column norms of the affine: (0,0,1) -> 1, (0,1,0) -> 1, (-2.5,0,0) -> 2.5.
+        assert!(text.contains("spacing:  1 x 1 x 2.5 mm"), "{text}");
+        // Stored 0..23 scaled by 2.
+        assert!(text.contains("range:    0 .. 46\n"), "{text}");
+        let v = json(&[path]);
+        assert_eq!(v["dims"], serde_json::json!([4, 3, 2]));
+        assert_eq!(v["type"], "int16");
+        assert_eq!(
+            v["affine_voxel_to_ras_mm"][0],
+            serde_json::json!([0.0, 0.0, -2.5, 10.0])
+        );
+        assert_eq!(
+            v["affine_voxel_to_ras_mm"][2],
+            serde_json::json!([1.0, 0.0, 0.0, -4.0])
+        );
+    }
+
+    #[test]
+    fn raw_flags() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.raw");
+        std::fs::write(&p, [0u8, 1, 0, 2, 0xFF, 0xFF]).unwrap();
+        let path = p.to_str().unwrap();
+        let v = json(&[
+            path,
+            "--raw-dims",
+            "3,1,1",
+            "--raw-type",
+            "u16",
+            "--raw-endian",
+            "big",
+            "--raw-spacing",
+            "0.5,1,1",
+        ]);
+        assert_eq!(v["type"], "uint16");
+        assert_eq!(v["range"], serde_json::json!([1.0, 65535.0]));
+        assert_eq!(v["spacing_mm"], serde_json::json!([0.5, 1.0, 1.0]));
+        let err = run(&[path]).unwrap_err().to_string();
+        assert!(err.contains("--raw-dims"), "{err}");
+        let err = run(&[path, "--raw-dims", "3,1"]).unwrap_err().to_string();
+        assert!(err.contains("three sizes"), "{err}");
+        let err = run(&[path, "--raw-dims", "3,1,1", "--raw-type", "c64"])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("unknown sample type"), "{err}");
+    }
+
+    #[test]
+    fn max_voxels_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.raw");
+        std::fs::write(&p, [0u8; 27]).unwrap();
+        let err = run(&[
+            p.to_str().unwrap(),
+            "--raw-dims",
+            "3,3,3",
+            "--max-voxels",
+            "26",
+        ])
+        .unwrap_err();
+        assert!(err.to_string().contains("too large"), "{err}");
+    }
+
+    #[test]
+    fn mesh_json() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.ply");
+        let mesh = Mesh {
+            positions: vec![[0.0, 0.0, 0.0], [2.0, 0.0, -1.0], [0.0, 3.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            ..Mesh::default()
+        };
+        glint_io::mesh::write_ply(&p, &mesh, glint_io::mesh::PlyEncoding::BinaryLittleEndian)
+            .unwrap();
+        let v = json(&[p.to_str().unwrap()]);
+        assert_eq!(v["vertices"], 3);
+        assert_eq!(v["triangles"], 1);
+        assert_eq!(v["bounds_mm"]["min"], serde_json::json!([0.0, 0.0, -1.0]));
+        assert_eq!(v["bounds_mm"]["max"], serde_json::json!([2.0, 3.0, 0.0]));
+        let text = run(&[p.to_str().unwrap()]).unwrap();
+        assert!(
+            text.contains("bounds:    (0, 0, -1) .. (2, 3, 0) mm"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn bad_file_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("broken.nii");
+        std::fs::write(&p, b"not a nifti file at all").unwrap();
+        let err = run(&[p.to_str().unwrap()]).unwrap_err().to_string();
+        assert!(
+            err.contains("broken.nii") && err.contains("truncated"),
+            "{err}"
+        );
+    }
 }

@@ -1,0 +1,387 @@
+//! Pieces every reader shares: sample types, byte order, size checks before allocation,
+//! affine geometry, and atomic writes.
+
+use std::fmt;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use crate::{IoError, Samples};
+
+/// The stored type of a volume's samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ScalarType {
+    /// Unsigned 8-bit.
+    U8,
+    /// Signed 8-bit.
+    I8,
+    /// Unsigned 16-bit.
+    U16,
+    /// Signed 16-bit.
+    I16,
+    /// Unsigned 32-bit.
+    U32,
+    /// Signed 32-bit.
+    I32,
+    /// 32-bit IEEE float.
+    F32,
+    /// 64-bit IEEE float.
+    F64,
+}
+
+impl ScalarType {
+    /// Every supported type.
+    pub const ALL: [ScalarType; 8] = [
+        ScalarType::U8,
+        ScalarType::I8,
+        ScalarType::U16,
+        ScalarType::I16,
+        ScalarType::U32,
+        ScalarType::I32,
+        ScalarType::F32,
+        ScalarType::F64,
+    ];
+
+    /// Bytes per sample.
+    pub fn size(self) -> usize {
+        match self {
+            ScalarType::U8 | ScalarType::I8 => 1,
+            ScalarType::U16 | ScalarType::I16 => 2,
+            ScalarType::U32 | ScalarType::I32 | ScalarType::F32 => 4,
+            ScalarType::F64 => 8,
+        }
+    }
+
+    /// The short name used on the command line (`u8`, `i16`, `f32`, ...).
+    pub fn short_name(self) -> &'static str {
+        match self {
+            ScalarType::U8 => "u8",
+            ScalarType::I8 => "i8",
+            ScalarType::U16 => "u16",
+            ScalarType::I16 => "i16",
+            ScalarType::U32 => "u32",
+            ScalarType::I32 => "i32",
+            ScalarType::F32 => "f32",
+            ScalarType::F64 => "f64",
+        }
+    }
+
+    /// The type of stored samples.
+    pub fn of(samples: &Samples) -> ScalarType {
+        match samples {
+            Samples::U8(_) => ScalarType::U8,
+            Samples::I8(_) => ScalarType::I8,
+            Samples::U16(_) => ScalarType::U16,
+            Samples::I16(_) => ScalarType::I16,
+            Samples::U32(_) => ScalarType::U32,
+            Samples::I32(_) => ScalarType::I32,
+            Samples::F32(_) => ScalarType::F32,
+            Samples::F64(_) => ScalarType::F64,
+        }
+    }
+}
+
+impl fmt::Display for ScalarType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.short_name())
+    }
+}
+
+/// Error of [`ScalarType::from_str`].
+#[derive(Debug, thiserror::Error)]
+#[error("unknown sample type '{0}' (expected u8, i8, u16, i16, u32, i32, f32 or f64)")]
+pub struct ParseScalarTypeError(String);
+
+impl FromStr for ScalarType {
+    type Err = ParseScalarTypeError;
+    /// Accepts the short names and the NIfTI/NRRD-style long ones (`uint16`, `float`).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s.trim().to_ascii_lowercase().as_str() {
+            "u8" | "uint8" | "uchar" => ScalarType::U8,
+            "i8" | "int8" | "char" => ScalarType::I8,
+            "u16" | "uint16" | "ushort" => ScalarType::U16,
+            "i16" | "int16" | "short" => ScalarType::I16,
+            "u32" | "uint32" | "uint" => ScalarType::U32,
+            "i32" | "int32" | "int" => ScalarType::I32,
+            "f32" | "float32" | "float" => ScalarType::F32,
+            "f64" | "float64" | "double" => ScalarType::F64,
+            _ => return Err(ParseScalarTypeError(s.to_string())),
+        })
+    }
+}
+
+/// Byte order of multi-byte samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Endian {
+    /// Least significant byte first (x86, ARM, most files).
+    #[default]
+    Little,
+    /// Most significant byte first.
+    Big,
+}
+
+impl FromStr for Endian {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "little" | "le" => Ok(Endian::Little),
+            "big" | "be" => Ok(Endian::Big),
+            _ => Err(format!("unknown byte order '{s}' (expected little or big)")),
+        }
+    }
+}
+
+/// Decodes `bytes` (exactly `n * ty.size()` long) into samples.
+pub(crate) fn decode_samples(bytes: &[u8], ty: ScalarType, endian: Endian) -> Samples {
+    macro_rules! conv {
+        ($t:ty, $n:expr) => {{
+            bytes
+                .chunks_exact($n)
+                .map(|c| {
+                    let a: [u8; $n] = c.try_into().expect("chunks_exact yields $n bytes");
+                    match endian {
+                        Endian::Little => <$t>::from_le_bytes(a),
+                        Endian::Big => <$t>::from_be_bytes(a),
+                    }
+                })
+                .collect()
+        }};
+    }
+    match ty {
+        ScalarType::U8 => Samples::U8(bytes.to_vec()),
+        ScalarType::I8 => Samples::I8(bytes.iter().map(|&b| b as i8).collect()),
+        ScalarType::U16 => Samples::U16(conv!(u16, 2)),
+        ScalarType::I16 => Samples::I16(conv!(i16, 2)),
+        ScalarType::U32 => Samples::U32(conv!(u32, 4)),
+        ScalarType::I32 => Samples::I32(conv!(i32, 4)),
+        ScalarType::F32 => Samples::F32(conv!(f32, 4)),
+        ScalarType::F64 => Samples::F64(conv!(f64, 8)),
+    }
+}
+
+/// Encodes samples as bytes in the given order.
+pub(crate) fn encode_samples(samples: &Samples, endian: Endian) -> Vec<u8> {
+    macro_rules! enc {
+        ($v:expr) => {
+            $v.iter()
+                .flat_map(|x| match endian {
+                    Endian::Little => x.to_le_bytes(),
+                    Endian::Big => x.to_be_bytes(),
+                })
+                .collect()
+        };
+    }
+    match samples {
+        Samples::U8(v) => v.clone(),
+        Samples::I8(v) => v.iter().map(|&x| x as u8).collect(),
+        Samples::U16(v) => enc!(v),
+        Samples::I16(v) => enc!(v),
+        Samples::U32(v) => enc!(v),
+        Samples::I32(v) => enc!(v),
+        Samples::F32(v) => enc!(v),
+        Samples::F64(v) => enc!(v),
+    }
+}
+
+/// The voxel count of `dims`, refused if it is zero, overflows, or exceeds `max_voxels`;
+/// also refused if the byte size overflows. Called before any allocation for samples.
+pub(crate) fn checked_voxels(
+    path: &Path,
+    dims: [usize; 3],
+    bytes_per_sample: usize,
+    max_voxels: u64,
+) -> Result<usize, IoError> {
+    if dims.contains(&0) {
+        return Err(IoError::Invalid {
+            path: path.into(),
+            what: format!("dimensions {dims:?} contain a zero"),
+        });
+    }
+    let count = dims
+        .iter()
+        .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64))
+        .ok_or_else(|| IoError::TooLarge {
+            path: path.into(),
+            what: format!("dimensions {dims:?} overflow a 64-bit voxel count"),
+        })?;
+    if count > max_voxels {
+        return Err(IoError::TooLarge {
+            path: path.into(),
+            what: format!(
+                "dimensions {}x{}x{} = {count} voxels exceed the limit of {max_voxels} \
+                 (raise it with --max-voxels)",
+                dims[0], dims[1], dims[2]
+            ),
+        });
+    }
+    let count = usize::try_from(count).map_err(|_| IoError::TooLarge {
+        path: path.into(),
+        what: format!("{count} voxels do not fit this machine's address space"),
+    })?;
+    count
+        .checked_mul(bytes_per_sample)
+        .ok_or_else(|| IoError::TooLarge {
+            path: path.into(),
+            what: format!("{count} voxels of {bytes_per_sample} bytes overflow"),
+        })?;
+    Ok(count)
+}
+
+/// Reads exactly `n` bytes. The buffer grows with the data actually read, so a header
+/// that lies about the size costs no more memory than the file holds.
+pub(crate) fn read_exact_growing(
+    path: &Path,
+    reader: impl Read,
+    n: usize,
+    what: &str,
+) -> Result<Vec<u8>, IoError> {
+    let mut buf = Vec::with_capacity(n.min(1 << 24));
+    reader
+        .take(n as u64)
+        .read_to_end(&mut buf)
+        .map_err(|e| os_or_invalid(path, e))?;
+    if buf.len() < n {
+        return Err(IoError::Truncated {
+            path: path.into(),
+            what: format!("{what}: expected {n} bytes, found {}", buf.len()),
+        });
+    }
+    Ok(buf)
+}
+
+/// Maps a read error: corrupt compressed streams are the file's fault, the rest the OS's.
+pub(crate) fn os_or_invalid(path: &Path, e: std::io::Error) -> IoError {
+    match e.kind() {
+        std::io::ErrorKind::InvalidData | std::io::ErrorKind::InvalidInput => IoError::Invalid {
+            path: path.into(),
+            what: format!("corrupt data: {e}"),
+        },
+        std::io::ErrorKind::UnexpectedEof => IoError::Truncated {
+            path: path.into(),
+            what: e.to_string(),
+        },
+        _ => IoError::Os {
+            path: path.into(),
+            source: e,
+        },
+    }
+}
+
+/// Opens a file for reading, naming it in the error.
+pub(crate) fn open(path: &Path) -> Result<std::fs::File, IoError> {
+    std::fs::File::open(path).map_err(|e| IoError::Os {
+        path: path.into(),
+        source: e,
+    })
+}
+
+/// Whether the file starts with the gzip signature.
+pub(crate) fn is_gzip(path: &Path) -> Result<bool, IoError> {
+    let mut magic = [0u8; 2];
+    let mut f = open(path)?;
+    let mut got = 0;
+    while got < 2 {
+        match f.read(&mut magic[got..]) {
+            Ok(0) => break,
+            Ok(k) => got += k,
+            Err(e) => return Err(os_or_invalid(path, e)),
+        }
+    }
+    Ok(got == 2 && magic == [0x1f, 0x8b])
+}
+
+/// Spacing = column norms of the affine's 3x3 part.
+pub(crate) fn spacing_of(affine: &[[f64; 4]; 4]) -> [f64; 3] {
+    std::array::from_fn(|c| {
+        (0..3)
+            .map(|r| affine[r][c] * affine[r][c])
+            .sum::<f64>()
+            .sqrt()
+    })
+}
+
+fn det3(a: &[[f64; 4]; 4]) -> f64 {
+    a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+        - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+        + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+}
+
+/// Checks that an affine is finite and non-singular (relative to its column norms), and
+/// returns its spacing.
+pub(crate) fn check_affine(path: &Path, affine: &[[f64; 4]; 4]) -> Result<[f64; 3], IoError> {
+    if affine.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(IoError::Geometry {
+            path: path.into(),
+            what: format!("the voxel-to-world affine has non-finite entries: {affine:?}"),
+        });
+    }
+    let spacing = spacing_of(affine);
+    let scale = spacing[0] * spacing[1] * spacing[2];
+    // A determinant that is a tiny fraction of the product of the column norms means the
+    // columns are (nearly) linearly dependent: voxels collapse to a plane or a line.
+    if scale == 0.0 || det3(affine).abs() < 1e-6 * scale {
+        return Err(IoError::Geometry {
+            path: path.into(),
+            what: format!(
+                "the voxel-to-world affine is singular (spacing {spacing:?}, determinant {:e})",
+                det3(affine)
+            ),
+        });
+    }
+    Ok(spacing)
+}
+
+/// Checks user- or header-given voxel sizes.
+pub(crate) fn check_spacing(path: &Path, spacing: [f64; 3]) -> Result<(), IoError> {
+    if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
+        return Err(IoError::Geometry {
+            path: path.into(),
+            what: format!("voxel spacing {spacing:?} must be finite and positive"),
+        });
+    }
+    Ok(())
+}
+
+/// A diagonal affine of `spacing` with the given origin.
+pub(crate) fn diagonal_affine(spacing: [f64; 3], origin: [f64; 3]) -> [[f64; 4]; 4] {
+    let mut a = [[0.0; 4]; 4];
+    for i in 0..3 {
+        a[i][i] = spacing[i];
+        a[i][3] = origin[i];
+    }
+    a[3][3] = 1.0;
+    a
+}
+
+/// Writes a file atomically: into a temporary file in the same directory, renamed into
+/// place only when complete, so a failure leaves no partial output.
+pub(crate) fn write_atomic(
+    path: &Path,
+    body: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), IoError> {
+    let os = |e: std::io::Error| IoError::Os {
+        path: path.into(),
+        source: e,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(os)?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+        body(&mut w).map_err(os)?;
+        w.flush().map_err(os)?;
+    }
+    tmp.persist(path).map_err(|e| os(e.error))?;
+    Ok(())
+}
+
+/// Whether a file has DICOM's "DICM" marker after the 128-byte preamble (PS3.10 7.1).
+pub(crate) fn has_dicom_magic(path: &Path) -> bool {
+    let mut head = [0u8; 132];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && &head[128..] == b"DICM"
+}
