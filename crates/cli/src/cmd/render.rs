@@ -122,6 +122,10 @@ pub struct Args {
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     no_skip: bool,
+    /// Benchmarking: write the resolved scene (camera, transfer function, material,
+    /// step, volume) as JSON, so scripts/bench-vtk can set VTK up identically.
+    #[arg(long, hide = true, value_name = "FILE")]
+    dump_scene: Option<PathBuf>,
 }
 
 fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
@@ -250,6 +254,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .map(|l| (l.direction(&camera), l.intensity))
         .collect();
     let n = args.n.unwrap_or(material.power as f64);
+    if let Some(path) = &args.dump_scene {
+        let eye = camera.eye;
+        let focal = camera.eye + camera.forward * 100.0;
+        let scene = serde_json::json!({
+            "input": args.input,
+            "size": [width, height],
+            "projection": match projection { Projection::Perspective => "perspective", Projection::Orthographic => "orthographic" },
+            "eye": [eye.x, eye.y, eye.z],
+            "focal_point": [focal.x, focal.y, focal.z],
+            "view_up": [camera.up.x, camera.up.y, camera.up.z],
+            // Perspective: full vertical view angle in degrees; orthographic: half height in mm.
+            "view_angle_deg": 2.0 * (camera.half_height as f64).atan().to_degrees(),
+            "parallel_scale": camera.half_height,
+            "step_mm": args.step * field.min_spacing(),
+            "min_spacing_mm": field.min_spacing(),
+            "opacity": tf.opacity.iter().map(|&(x, a)| [x, a]).collect::<Vec<_>>(),
+            "color": tf.color.iter().map(|&(x, c)| [x, c[0], c[1], c[2]]).collect::<Vec<_>>(),
+            "ambient": material.ambient,
+            "diffuse": material.diffuse,
+            "specular": material.specular,
+            "power": n,
+            "shade": material.shade,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&scene)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     let gate = (args.gate * (hi - lo) as f64 / field.min_spacing()) as f32;
     let shader = Shader::new(kind, n, args.v, geometry, material, lights, gate)?;
 
