@@ -12,9 +12,19 @@ use crate::math::{inverse3, linear_part, mul3, transpose3, Mat3, Vec3};
 /// 4 GiB, far above clinical CT (512 x 512 x 2000 = 2^29 would need 8 GiB).
 pub const MAX_FIELD_VOXELS: usize = 1 << 28;
 
-/// Edge of a macro cell in voxels (Levoy 1990's "hierarchical enumeration" uses
-/// blocks; 8 balances skip length against false positives for head-sized volumes).
-pub const MACRO_CELL: usize = 8;
+/// Edge of a macro cell in voxels (Levoy 1990, "Efficient ray tracing of volume data",
+/// skips empty space with a pyramid of such blocks; here two levels: cells of 4 voxels
+/// and blocks of 4^3 cells).
+pub const MACRO_CELL: usize = 4;
+
+/// Where a sample falls: the trilinear cell's lower corner, its linear index, and the
+/// fractions inside the cell.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Loc {
+    pub ijk: [usize; 3],
+    pub base: usize,
+    pub t: [f32; 3],
+}
 
 /// A scalar field on a regular grid with precomputed gradients.
 ///
@@ -23,6 +33,9 @@ pub const MACRO_CELL: usize = 8;
 /// at the faces) mapped through the inverse transpose of the affine's linear part.
 pub struct Field {
     pub(crate) dims: [usize; 3],
+    /// Values alone, for the classification test every sample makes (a quarter of the
+    /// memory traffic of the interleaved array).
+    pub(crate) values: Vec<f32>,
     pub(crate) data: Vec<[f32; 4]>,
     /// Voxel index to world (3x3 part and translation).
     pub(crate) to_world: Mat3,
@@ -165,6 +178,7 @@ impl Field {
 
         Ok(Field {
             dims,
+            values,
             data,
             to_world,
             origin,
@@ -233,10 +247,10 @@ impl Field {
         out
     }
 
-    /// Base index and fractions of the trilinear cell holding `p` (index units, inside
-    /// `[0, dims-1]`).
+    /// The trilinear cell holding `p` (index units, inside `[0, dims-1]`; outside
+    /// points are clamped to the border cells).
     #[inline(always)]
-    fn locate(&self, p: Vec3) -> (usize, f32, f32, f32) {
+    pub(crate) fn locate(&self, p: Vec3) -> Loc {
         let [nx, ny, nz] = self.dims;
         let fx = p.x.max(0.0);
         let fy = p.y.max(0.0);
@@ -244,30 +258,51 @@ impl Field {
         let i = (fx as usize).min(nx - 2);
         let j = (fy as usize).min(ny - 2);
         let k = (fz as usize).min(nz - 2);
-        let base = i + nx * (j + ny * k);
-        (
-            base,
-            (fx - i as f32).min(1.0),
-            (fy - j as f32).min(1.0),
-            (fz - k as f32).min(1.0),
-        )
+        Loc {
+            ijk: [i, j, k],
+            base: i + nx * (j + ny * k),
+            t: [
+                (fx - i as f32).min(1.0),
+                (fy - j as f32).min(1.0),
+                (fz - k as f32).min(1.0),
+            ],
+        }
+    }
+
+    /// Index of the macro cell holding a located sample (every voxel the sample reads
+    /// lies in that cell).
+    #[inline(always)]
+    pub(crate) fn cell_index(&self, loc: &Loc) -> usize {
+        let cd = self.cell_dims;
+        let [i, j, k] = loc.ijk.map(|x| x / MACRO_CELL);
+        i + cd[0] * (j + cd[1] * k)
     }
 
     /// Trilinear value at `p` (index units).
     #[inline(always)]
     pub fn value(&self, p: Vec3) -> f32 {
-        let (base, tx, ty, tz) = self.locate(p);
+        self.value_at(&self.locate(p))
+    }
+
+    /// Trilinear value at a located sample.
+    #[inline(always)]
+    pub(crate) fn value_at(&self, loc: &Loc) -> f32 {
+        let (base, [tx, ty, tz]) = (loc.base, loc.t);
         let [nx, ny, _] = self.dims;
         let sx = nx * ny;
-        let d = &self.data;
-        let c000 = d[base][0];
-        let c100 = d[base + 1][0];
-        let c010 = d[base + nx][0];
-        let c110 = d[base + nx + 1][0];
-        let c001 = d[base + sx][0];
-        let c101 = d[base + sx + 1][0];
-        let c011 = d[base + sx + nx][0];
-        let c111 = d[base + sx + nx + 1][0];
+        let d = &self.values;
+        assert!(base + sx + nx + 1 < d.len());
+        // SAFETY: `locate` clamps i <= nx-2, j <= ny-2, k <= nz-2, so every offset
+        // below is at most base + sx + nx + 1, checked above.
+        let at = |o: usize| unsafe { *d.get_unchecked(base + o) };
+        let c000 = at(0);
+        let c100 = at(1);
+        let c010 = at(nx);
+        let c110 = at(nx + 1);
+        let c001 = at(sx);
+        let c101 = at(sx + 1);
+        let c011 = at(sx + nx);
+        let c111 = at(sx + nx + 1);
         let x00 = c000 + tx * (c100 - c000);
         let x10 = c010 + tx * (c110 - c010);
         let x01 = c001 + tx * (c101 - c001);
@@ -280,7 +315,13 @@ impl Field {
     /// Trilinear world gradient at `p` (index units).
     #[inline(always)]
     pub fn gradient(&self, p: Vec3) -> Vec3 {
-        let (base, tx, ty, tz) = self.locate(p);
+        self.gradient_at(&self.locate(p))
+    }
+
+    /// Trilinear world gradient at a located sample.
+    #[inline(always)]
+    pub(crate) fn gradient_at(&self, loc: &Loc) -> Vec3 {
+        let (base, [tx, ty, tz]) = (loc.base, loc.t);
         let [nx, ny, _] = self.dims;
         let sx = nx * ny;
         let d = &self.data;
@@ -351,8 +392,10 @@ mod tests {
     #[test]
     fn macro_cells_bound_the_values() {
         let f = Field::new(&linear_volume()).unwrap();
-        assert_eq!(f.cell_dims, [1, 1, 1]);
-        assert_eq!(f.cells[0], (-5.0, 6.0 + 12.0));
+        // 4x5x6 voxels: cells cover voxels 0..=4 along each axis, then 4..=5 along z.
+        assert_eq!(f.cell_dims, [1, 1, 2]);
+        assert_eq!(f.cells[0], (-4.0, 6.0 + 12.0));
+        assert_eq!(f.cells[1], (-5.0, 6.0 + 12.0 - 4.0));
     }
 
     #[test]

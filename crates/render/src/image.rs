@@ -18,6 +18,8 @@ pub struct Image {
     pub rgb: Vec<[f32; 3]>,
     /// Accumulated opacity per pixel.
     pub alpha: Vec<f32>,
+    /// Work counts of the render that made it.
+    pub stats: crate::raycast::RenderStats,
 }
 
 /// PNG sample depth.

@@ -48,7 +48,9 @@ pub use error::RenderError;
 pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image};
 pub use presets::{preset, Preset, PRESETS};
-pub use raycast::{camera_for, render, Mode, RenderSettings, MAX_IMAGE_SIDE, TERMINATION_OPACITY};
+pub use raycast::{
+    camera_for, render, Mode, RenderSettings, RenderStats, MAX_IMAGE_SIDE, TERMINATION_OPACITY,
+};
 pub use shading::{Light, Shader};
 pub use tf::{
     linear_to_srgb, srgb_to_linear, Lut, Material, MaterialOverrides, TransferFunction, LUT_SIZE,

@@ -51,6 +51,9 @@ pub const TERMINATION_OPACITY: f32 = 0.99;
 /// Bisection steps refining an iso hit between two samples (2^-8 of a step).
 const ISO_REFINE_STEPS: u32 = 8;
 
+/// Macro cells per edge of the coarse blocks empty-space skipping leaps first.
+const COARSE: usize = 4;
+
 /// Rows per parallel task: each task renders a band of rows.
 const BAND_ROWS: usize = 8;
 
@@ -225,6 +228,9 @@ struct Caster<'a> {
     camera: Camera,
     /// Per macro cell: may a sample there contribute?
     active: Vec<bool>,
+    /// Per block of COARSE^3 macro cells: is any of them active?
+    coarse_active: Vec<bool>,
+    coarse_dims: [usize; 3],
     /// Step in mm.
     dt: f32,
 }
@@ -247,8 +253,18 @@ pub fn render(
     } else {
         vec![true; field.cells.len()]
     };
+    let cd = field.cell_dims;
+    let coarse_dims = cd.map(|d| d.div_ceil(COARSE));
+    let mut coarse_active = vec![false; coarse_dims.iter().product()];
+    for (idx, _) in active.iter().enumerate().filter(|(_, a)| **a) {
+        let c = [idx % cd[0], (idx / cd[0]) % cd[1], idx / (cd[0] * cd[1])];
+        let b = c.map(|x| x / COARSE);
+        coarse_active[b[0] + coarse_dims[0] * (b[1] + coarse_dims[1] * b[2])] = true;
+    }
     let caster = Caster {
         field,
+        coarse_active,
+        coarse_dims,
         lut,
         shader,
         settings,
@@ -259,14 +275,16 @@ pub fn render(
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut rgb = vec![[0.0f32; 3]; w * h];
     let mut alpha = vec![0.0f32; w * h];
-    rgb.par_chunks_mut(w * BAND_ROWS)
+    let stats = rgb
+        .par_chunks_mut(w * BAND_ROWS)
         .zip(alpha.par_chunks_mut(w * BAND_ROWS))
         .enumerate()
-        .for_each(|(band, (rgb, alpha))| {
+        .map(|(band, (rgb, alpha))| {
             let y0 = band * BAND_ROWS;
+            let mut stats = RenderStats::default();
             for (idx, (px, a)) in rgb.iter_mut().zip(alpha.iter_mut()).enumerate() {
                 let (x, y) = (idx % w, y0 + idx / w);
-                let (c, op) = caster.cast(x as f32, y as f32);
+                let (c, op) = caster.cast(x as f32, y as f32, &mut stats);
                 let bg = settings.background;
                 *px = [
                     c[0] + (1.0 - op) * bg[0],
@@ -276,18 +294,36 @@ pub fn render(
                 *a = op;
             }
             progress(rgb.len() as u64);
+            stats
+        })
+        .reduce(RenderStats::default, |a, b| RenderStats {
+            samples: a.samples + b.samples,
+            shaded: a.shaded + b.shaded,
+            skips: a.skips + b.skips,
         });
     Ok(Image {
         width: settings.width,
         height: settings.height,
         rgb,
         alpha,
+        stats,
     })
+}
+
+/// Work counts of one render (for tests and tuning; not timing).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderStats {
+    /// Samples classified (composite mode).
+    pub samples: u64,
+    /// Samples with non-zero opacity, shaded and composited.
+    pub shaded: u64,
+    /// Macro cells leapt over.
+    pub skips: u64,
 }
 
 impl Caster<'_> {
     /// Premultiplied colour and opacity of the ray through pixel `(x, y)`.
-    fn cast(&self, x: f32, y: f32) -> ([f32; 3], f32) {
+    fn cast(&self, x: f32, y: f32, stats: &mut RenderStats) -> ([f32; 3], f32) {
         let s = self.settings;
         let (origin, dir) = self.camera.ray(x, y, s.width, s.height);
         let f = self.field;
@@ -335,7 +371,7 @@ impl Caster<'_> {
         // for orthographic rays it is the same for all.
         let view = -dir;
         match s.mode {
-            Mode::Composite => self.composite(&ray, view),
+            Mode::Composite => self.composite(&ray, view, stats),
             Mode::Iso { threshold } => self.iso(&ray, view, threshold),
             Mode::Mip => self.mip(&ray),
         }
@@ -353,27 +389,46 @@ impl Caster<'_> {
         (c, c[0] + cd[0] * (c[1] + cd[1] * c[2]))
     }
 
-    /// The first sample index past the exit of macro cell `c` along the ray, at least
-    /// `k + 1`.
+    /// The first sample index past the exit of the box of `size` voxels whose lower
+    /// corner is `lo` (index space) along the ray, at least `k + 1`.
     #[inline]
-    fn skip_cell(&self, ray: &Ray, c: [usize; 3], k: i64) -> i64 {
+    fn skip_box(&self, ray: &Ray, lo: [usize; 3], size: usize, k: i64) -> i64 {
         let mut t_exit = f32::INFINITY;
         for a in 0..3 {
             let da = ray.d.get(a);
             if da.abs() > 1e-12 {
-                let face = if da > 0.0 {
-                    ((c[a] + 1) * MACRO_CELL) as f32
-                } else {
-                    (c[a] * MACRO_CELL) as f32
-                };
+                let face = if da > 0.0 { lo[a] + size } else { lo[a] } as f32;
                 t_exit = t_exit.min((face - ray.o.get(a)) * ray.inv_d.get(a));
             }
         }
-        let k_exit = (t_exit / self.dt).ceil() as i64;
+        // ceil without libm (baseline x86-64 has no rounding instruction).
+        let q = t_exit / self.dt;
+        let mut k_exit = q as i64;
+        if (k_exit as f32) < q {
+            k_exit += 1;
+        }
         k_exit.max(k + 1)
     }
 
-    fn composite(&self, ray: &Ray, view: Vec3) -> ([f32; 3], f32) {
+    /// Leaps over the empty region around macro cell `c`: its coarse block when the
+    /// whole block is empty, else the cell alone.
+    #[inline]
+    fn skip_empty(&self, ray: &Ray, c: [usize; 3], k: i64) -> i64 {
+        let b = c.map(|x| x / COARSE);
+        let bd = self.coarse_dims;
+        if !self.coarse_active[b[0] + bd[0] * (b[1] + bd[1] * b[2])] {
+            self.skip_box(
+                ray,
+                b.map(|x| x * COARSE * MACRO_CELL),
+                COARSE * MACRO_CELL,
+                k,
+            )
+        } else {
+            self.skip_box(ray, c.map(|x| x * MACRO_CELL), MACRO_CELL, k)
+        }
+    }
+
+    fn composite(&self, ray: &Ray, view: Vec3, stats: &mut RenderStats) -> ([f32; 3], f32) {
         let lighting: RayLighting = self.shader.for_ray(view);
         let mut color = [0.0f32; 3];
         let mut alpha = 0.0f32;
@@ -382,19 +437,23 @@ impl Caster<'_> {
         let mut cached_active = false;
         while k <= ray.k1 {
             let p = ray.at(k as f32 * self.dt);
-            let (c, cell) = self.cell_of(p);
+            let loc = self.field.locate(p);
+            let cell = self.field.cell_index(&loc);
             if cell != cached_cell {
                 cached_cell = cell;
                 cached_active = self.active[cell];
             }
             if !cached_active {
-                k = self.skip_cell(ray, c, k);
+                stats.skips += 1;
+                k = self.skip_empty(ray, loc.ijk.map(|x| x / MACRO_CELL), k);
                 continue;
             }
-            let v = self.field.value(p);
+            stats.samples += 1;
+            let v = self.field.value_at(&loc);
             let e = self.lut.get(v);
             if e[3] > 0.0 {
-                let g = self.field.gradient(p);
+                stats.shaded += 1;
+                let g = self.field.gradient_at(&loc);
                 let rgb = self.shader.shade([e[0], e[1], e[2]], g, &lighting);
                 let w = (1.0 - alpha) * e[3];
                 color[0] += w * rgb[0];
@@ -423,7 +482,7 @@ impl Caster<'_> {
                 cached_active = self.active[cell];
             }
             if !cached_active {
-                k = self.skip_cell(ray, c, k);
+                k = self.skip_empty(ray, c, k);
                 continue;
             }
             if self.field.value(p) >= threshold {
@@ -467,7 +526,7 @@ impl Caster<'_> {
                 let (c, cell) = self.cell_of(p);
                 // A cell whose maximum cannot beat the current best is skipped.
                 if self.field.cells[cell].1 <= best {
-                    k = self.skip_cell(ray, c, k);
+                    k = self.skip_empty(ray, c, k);
                     continue;
                 }
             }

@@ -82,9 +82,13 @@ pub struct Shader {
 /// (Phong) or the half vector (Blinn).
 pub(crate) struct RayLighting {
     pub view: Vec3,
-    /// Per light: direction, intensity, `L·V`, half vector.
-    pub lights: Vec<(Vec3, f32, f32, Vec3)>,
+    /// Per light: direction, intensity, `L·V`, half vector (the first `count`).
+    pub lights: [(Vec3, f32, f32, Vec3); MAX_LIGHTS],
+    pub count: usize,
 }
+
+/// Most lights a [`Shader`] takes.
+pub const MAX_LIGHTS: usize = 8;
 
 impl Shader {
     /// A shader for `lobe` (kind, n, v), `geometry`, `material`, lights given as world
@@ -100,6 +104,12 @@ impl Shader {
     ) -> Result<Shader, RenderError> {
         material.validate()?;
         let lobe = Lobe::<f32>::new(kind, n, v)?;
+        if lights.len() > MAX_LIGHTS {
+            return Err(RenderError::Parameter(format!(
+                "{} lights: at most {MAX_LIGHTS}",
+                lights.len()
+            )));
+        }
         if !gate.is_finite() || gate < 0.0 {
             return Err(RenderError::Parameter(format!(
                 "gradient gate {gate}: expected a finite number >= 0"
@@ -120,13 +130,14 @@ impl Shader {
     }
 
     pub(crate) fn for_ray(&self, view: Vec3) -> RayLighting {
+        let mut lights = [(Vec3::ZERO, 0.0, 0.0, Vec3::ZERO); MAX_LIGHTS];
+        for (slot, &(l, i)) in lights.iter_mut().zip(&self.lights) {
+            *slot = (l, i, l.dot(view), (l + view).normalize_or_zero());
+        }
         RayLighting {
             view,
-            lights: self
-                .lights
-                .iter()
-                .map(|&(l, i)| (l, i, l.dot(view), (l + view).normalize_or_zero()))
-                .collect(),
+            lights,
+            count: self.lights.len(),
         }
     }
 
@@ -166,7 +177,7 @@ impl Shader {
         }
         let mut diffuse = 0.0f32;
         let mut specular = 0.0f32;
-        for &(l, intensity, l_dot_v, h) in &ray.lights {
+        for &(l, intensity, l_dot_v, h) in &ray.lights[..ray.count] {
             let n_dot_l = n.dot(l);
             if n_dot_l > 0.0 {
                 diffuse += intensity * n_dot_l;

@@ -312,6 +312,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         b.finish_and_clear();
     }
     if args.repeat > 1 {
+        if let Some(img) = &image {
+            eprintln!("glint render: per frame {:?}", img.stats);
+        }
         println!(
             "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, step {})",
             elapsed.as_secs_f64() * 1e3 / args.repeat as f64,
