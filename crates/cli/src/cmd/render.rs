@@ -62,20 +62,20 @@ pub struct Args {
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     elevation: f64,
     /// Magnification (1 fits the volume's bounding sphere).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     zoom: f64,
     /// perspective (30° field of view) or orthographic.
     #[arg(long, default_value = "perspective")]
     projection: String,
     /// Sample distance along rays, in voxels of the smallest spacing.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     step: f64,
     /// Specular lobe: exact (cos^n), k (energy fit K_v), g (slope fit G_v), schlick,
     /// gauss, minimax.
     #[arg(long, default_value = "k")]
     lobe: String,
     /// Shininess n [default: the preset's specular power].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     n: Option<f64>,
     /// The power fits raise their base to 2^v.
     #[arg(long, default_value_t = 4)]
@@ -84,13 +84,13 @@ pub struct Args {
     #[arg(long, default_value = "phong")]
     geometry: String,
     /// Override the preset's ambient coefficient.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     ambient: Option<f32>,
     /// Override the preset's diffuse coefficient.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     diffuse: Option<f32>,
     /// Override the preset's specular coefficient.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     specular: Option<f32>,
     /// Extra directional light at AZ,EL degrees from the view direction (towards the
     /// image's right and top); repeatable. The headlight stays on.
@@ -102,7 +102,7 @@ pub struct Args {
     /// Gradient-magnitude gate: samples whose gradient is below this fraction of the
     /// value range per voxel get no directional shading (no random highlights in flat
     /// regions).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
     gate: f64,
     /// Image size WxH.
     #[arg(long, default_value = "512x512")]
@@ -331,4 +331,114 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         eprintln!("glint: wrote {}", args.output.display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    /// Runs `glint render ARGS -o DIR/out.png` in a fresh directory; returns the
+    /// result and whether any file was left in the directory.
+    fn run_in_tmp(extra: &[&str]) -> (anyhow::Result<()>, bool, tempfile::TempDir) {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.png");
+        let mut argv = vec!["glint", "-q", "-o", out.to_str().unwrap()];
+        argv.extend_from_slice(extra);
+        let cli = Cli::try_parse_from(argv).unwrap();
+        let result = run(cli.args);
+        let left = std::fs::read_dir(dir.path()).unwrap().count() > 0;
+        (result, left, dir)
+    }
+
+    #[test]
+    fn phantom_render_writes_a_png() {
+        let (result, left, dir) =
+            run_in_tmp(&["--size", "24x16", "--phantom-size", "24", "--depth", "16"]);
+        result.unwrap();
+        assert!(left);
+        let bytes = std::fs::read(dir.path().join("out.png")).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+        // IHDR: width 24, height 16, bit depth 16.
+        assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 24);
+        assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 16);
+        assert_eq!(bytes[24], 16);
+        // Only the output: the temporary file was renamed.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn bad_input_fails_without_output() {
+        let dir = tempfile::tempdir().unwrap();
+        let garbage = dir.path().join("garbage.nii");
+        std::fs::write(&garbage, b"not a volume").unwrap();
+        let bad_json = dir.path().join("tf.json");
+        std::fs::write(&bad_json, b"{\"opacity\": [[0, 0], [1, 2]], \"color\": []}").unwrap();
+        let not_json = dir.path().join("not.json");
+        std::fs::write(&not_json, b"opacity: 1").unwrap();
+        let cases: Vec<(Vec<String>, &str)> = vec![
+            (vec!["/nonexistent/volume.nii.gz".into()], "volume"),
+            (vec![garbage.to_str().unwrap().into()], "garbage.nii"),
+            (
+                vec!["--preset".into(), "ct-nonsense".into()],
+                "unknown preset",
+            ),
+            (
+                vec!["--tf".into(), bad_json.to_str().unwrap().into()],
+                "tf.json",
+            ),
+            (
+                vec!["--tf".into(), not_json.to_str().unwrap().into()],
+                "not.json",
+            ),
+            (
+                vec!["--tf".into(), "/nonexistent/tf.json".into()],
+                "tf.json",
+            ),
+            (vec!["--size".into(), "0x10".into()], "image size"),
+            (vec!["--size".into(), "100000x100000".into()], "image size"),
+            (vec!["--size".into(), "big".into()], "--size"),
+            (vec!["--phantom-size".into(), "1".into()], "phantom size"),
+            (
+                vec!["--phantom-size".into(), "100000".into()],
+                "phantom size",
+            ),
+            (vec!["--step".into(), "0".into()], "step"),
+            (vec!["--zoom".into(), "-1".into()], "zoom"),
+            (vec!["--lobe".into(), "cosine".into()], "lobe"),
+            (vec!["--n".into(), "-5".into()], "shininess"),
+            (vec!["--v".into(), "20".into()], "v = 20"),
+            (vec!["--geometry".into(), "ward".into()], "geometry"),
+            (vec!["--view".into(), "sideways".into()], "view"),
+            (vec!["--mode".into(), "xray".into()], "mode"),
+            (vec!["--depth".into(), "12".into()], "depth"),
+            (vec!["--light".into(), "45".into()], "--light"),
+            (vec!["--light".into(), "10,95".into()], "elevation"),
+            (vec!["--no-headlight".into()], "no light"),
+            (vec!["--specular".into(), "NaN".into()], "specular"),
+        ];
+        for (extra, needle) in cases {
+            let extra: Vec<&str> = extra.iter().map(|s| s.as_str()).collect();
+            let (result, left, _dir) = run_in_tmp(&extra);
+            let err = format!("{:#}", result.expect_err(&format!("{extra:?} should fail")));
+            assert!(err.contains(needle), "{extra:?}: '{err}' lacks '{needle}'");
+            assert!(!err.contains('\n'), "{extra:?}: one line expected: {err}");
+            assert!(!left, "{extra:?} left a file");
+        }
+    }
+
+    #[test]
+    fn size_and_light_parsing() {
+        assert_eq!(parse_size("640x480").unwrap(), (640, 480));
+        assert_eq!(parse_size("64X48").unwrap(), (64, 48));
+        assert!(parse_size("64").is_err());
+        let l = parse_light("-30,15").unwrap();
+        assert_eq!((l.azimuth, l.elevation), (-30.0, 15.0));
+    }
 }
