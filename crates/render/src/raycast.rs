@@ -394,10 +394,10 @@ impl Caster<'_> {
     #[inline]
     fn skip_box(&self, ray: &Ray, lo: [usize; 3], size: usize, k: i64) -> i64 {
         let mut t_exit = f32::INFINITY;
-        for a in 0..3 {
+        for (a, &lo_a) in lo.iter().enumerate() {
             let da = ray.d.get(a);
             if da.abs() > 1e-12 {
-                let face = if da > 0.0 { lo[a] + size } else { lo[a] } as f32;
+                let face = if da > 0.0 { lo_a + size } else { lo_a } as f32;
                 t_exit = t_exit.min((face - ray.o.get(a)) * ray.inv_d.get(a));
             }
         }

@@ -98,7 +98,7 @@ impl TransferFunction {
     /// Builds from VTK/Slicer flat arrays: opacity `x0 a0 x1 a1 ...`, colour
     /// `x0 r0 g0 b0 ...` (the count prefix Slicer writes is not included).
     pub fn from_flat(opacity: &[f64], color: &[f64]) -> Result<Self, RenderError> {
-        if opacity.len() % 2 != 0 || color.len() % 4 != 0 {
+        if !opacity.len().is_multiple_of(2) || !color.len().is_multiple_of(4) {
             return Err(RenderError::TransferFunction(
                 "flat arrays need pairs (value, opacity) and quads (value, r, g, b)".into(),
             ));

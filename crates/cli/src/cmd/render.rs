@@ -31,6 +31,14 @@ Transfer-function JSON (--tf): {\"opacity\": [[value, alpha], ...], \"color\": [
     \"ambient\": 0.1, \"diffuse\": 0.9, \"specular\": 0.2, \"power\": 10, \"shade\": true}\n  \
     (alpha per voxel of distance, colours sRGB in 0..1; the material fields are optional)")]
 pub struct Args {
+    // Boxed: the options are many, and main's subcommand enum should stay small.
+    #[command(flatten)]
+    opts: Box<Options>,
+}
+
+/// The options of `glint render` (boxed inside [`Args`]).
+#[derive(clap::Args)]
+struct Options {
     /// Volume to render (any format glint's io reads); without it, the built-in 3D
     /// Shepp-Logan head phantom.
     input: Option<PathBuf>,
@@ -151,6 +159,7 @@ fn parse_light(s: &str) -> anyhow::Result<Light> {
 
 /// Runs `glint render`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let args = *args.opts;
     // Parse and check every flag before any work.
     let (width, height) = parse_size(&args.size)?;
     let depth = match args.depth {
