@@ -150,6 +150,22 @@ fn visible_cells(field: &Field, lut: &Lut, mode: Mode) -> Vec<bool> {
         .collect()
 }
 
+/// The index-space box (voxel-centre coordinates) covering the `active` macro cells,
+/// `None` when none is.
+fn active_bounds(field: &Field, active: &[bool]) -> Option<([f64; 3], [f64; 3])> {
+    let cd = field.cell_dims;
+    let mut lo = [usize::MAX; 3];
+    let mut hi = [0usize; 3];
+    for (idx, _) in active.iter().enumerate().filter(|(_, v)| **v) {
+        let c = [idx % cd[0], (idx / cd[0]) % cd[1], idx / (cd[0] * cd[1])];
+        for a in 0..3 {
+            lo[a] = lo[a].min(c[a] * MACRO_CELL);
+            hi[a] = hi[a].max(((c[a] + 1) * MACRO_CELL).min(field.dims[a] - 1));
+        }
+    }
+    (lo[0] != usize::MAX).then(|| (lo.map(|x| x as f64), hi.map(|x| x as f64)))
+}
+
 /// The camera [`render`] uses for `field`, `tf` and `settings`: it frames the bounding
 /// sphere of what can be seen (the macro cells that can show a sample), or of the whole
 /// volume when nothing can.
@@ -161,23 +177,11 @@ pub fn camera_for(
     settings.validate()?;
     let lut = lut_for(field, tf, settings);
     let visible = visible_cells(field, &lut, settings.mode);
-    let cd = field.cell_dims;
-    let mut lo = [usize::MAX; 3];
-    let mut hi = [0usize; 3];
-    for (idx, _) in visible.iter().enumerate().filter(|(_, v)| **v) {
-        let c = [idx % cd[0], (idx / cd[0]) % cd[1], idx / (cd[0] * cd[1])];
-        for a in 0..3 {
-            lo[a] = lo[a].min(c[a] * MACRO_CELL);
-            hi[a] = hi[a].max(((c[a] + 1) * MACRO_CELL).min(field.dims[a] - 1));
-        }
-    }
-    if lo[0] == usize::MAX {
-        lo = [0; 3];
-        hi = field.dims.map(|d| d - 1);
-    }
+    let (lo, hi) = active_bounds(field, &visible)
+        .unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
     let mut corners = Vec::with_capacity(8);
     for n in 0..8 {
-        let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] } as f64);
+        let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });
         corners.push(field.index_to_world(p));
     }
     let mut wlo = [f64::INFINITY; 3];
@@ -228,6 +232,8 @@ struct Caster<'a> {
     camera: Camera,
     /// Per macro cell: may a sample there contribute?
     active: Vec<bool>,
+    /// Index-space box rays are clipped to.
+    clip_box: ([f64; 3], [f64; 3]),
     /// Per block of COARSE^3 macro cells: is any of them active?
     coarse_active: Vec<bool>,
     coarse_dims: [usize; 3],
@@ -261,8 +267,15 @@ pub fn render(
         let b = c.map(|x| x / COARSE);
         coarse_active[b[0] + coarse_dims[0] * (b[1] + coarse_dims[1] * b[2])] = true;
     }
+    let full_box = ([0.0; 3], field.dims.map(|d| (d - 1) as f64));
+    let clip_box = if settings.skip_empty && settings.mode != Mode::Mip {
+        active_bounds(field, &active).unwrap_or(([0.0; 3], [-1.0; 3]))
+    } else {
+        full_box
+    };
     let caster = Caster {
         field,
+        clip_box,
         coarse_active,
         coarse_dims,
         lut,
@@ -329,18 +342,21 @@ impl Caster<'_> {
         let f = self.field;
         let o = f.world_to_index([origin.x as f64, origin.y as f64, origin.z as f64]);
         let d = f.direction_to_index([dir.x as f64, dir.y as f64, dir.z as f64]);
-        // Slab test against the box of voxel centres [0, dims-1], t in mm.
+        // Slab test against the box of voxel centres [0, dims-1], or the box of the
+        // cells that can show a sample (samples outside it lie in inactive cells), t in
+        // mm.
+        let (lo_box, hi_box) = self.clip_box;
         let mut t0 = 0.0f64;
         let mut t1 = f64::INFINITY;
         for a in 0..3 {
-            let hi = (f.dims[a] - 1) as f64;
+            let (lo, hi) = (lo_box[a], hi_box[a]);
             if d[a].abs() < 1e-12 {
-                if o[a] < 0.0 || o[a] > hi {
+                if o[a] < lo || o[a] > hi {
                     return ([0.0; 3], 0.0);
                 }
             } else {
                 let inv = 1.0 / d[a];
-                let (ta, tb) = ((0.0 - o[a]) * inv, (hi - o[a]) * inv);
+                let (ta, tb) = ((lo - o[a]) * inv, (hi - o[a]) * inv);
                 t0 = t0.max(ta.min(tb));
                 t1 = t1.min(ta.max(tb));
             }
