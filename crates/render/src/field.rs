@@ -252,19 +252,27 @@ impl Field {
     #[inline(always)]
     pub(crate) fn locate(&self, p: Vec3) -> Loc {
         let [nx, ny, nz] = self.dims;
-        let fx = p.x.max(0.0);
-        let fy = p.y.max(0.0);
-        let fz = p.z.max(0.0);
-        let i = (fx as usize).min(nx - 2);
-        let j = (fy as usize).min(ny - 2);
-        let k = (fz as usize).min(nz - 2);
+        // Clamp in float first: then the value is finite (f32::max/min drop NaN) and
+        // within 0..=dims-2, which makes the unchecked conversion sound and saves the
+        // saturating conversion's checks in the innermost loop.
+        let fx = p.x.max(0.0).min((nx - 2) as f32);
+        let fy = p.y.max(0.0).min((ny - 2) as f32);
+        let fz = p.z.max(0.0).min((nz - 2) as f32);
+        // SAFETY: fx, fy, fz are finite and in [0, dims-2] (see above).
+        let (i, j, k) = unsafe {
+            (
+                fx.to_int_unchecked::<u32>() as usize,
+                fy.to_int_unchecked::<u32>() as usize,
+                fz.to_int_unchecked::<u32>() as usize,
+            )
+        };
         Loc {
             ijk: [i, j, k],
             base: i + nx * (j + ny * k),
             t: [
-                (fx - i as f32).min(1.0),
-                (fy - j as f32).min(1.0),
-                (fz - k as f32).min(1.0),
+                (p.x - i as f32).clamp(0.0, 1.0),
+                (p.y - j as f32).clamp(0.0, 1.0),
+                (p.z - k as f32).clamp(0.0, 1.0),
             ],
         }
     }

@@ -177,8 +177,8 @@ pub fn camera_for(
     settings.validate()?;
     let lut = lut_for(field, tf, settings);
     let visible = visible_cells(field, &lut, settings.mode);
-    let (lo, hi) = active_bounds(field, &visible)
-        .unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
+    let (lo, hi) =
+        active_bounds(field, &visible).unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
     let mut corners = Vec::with_capacity(8);
     for n in 0..8 {
         let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });

@@ -340,8 +340,11 @@ impl Lut {
     /// Table index of value `v` (nearest entry, clamped).
     #[inline(always)]
     pub fn index(&self, v: f32) -> usize {
-        let x = (v - self.lo) * self.scale + 0.5;
-        (x.max(0.0) as usize).min(LUT_SIZE - 1)
+        let x = ((v - self.lo) * self.scale + 0.5)
+            .max(0.0)
+            .min((LUT_SIZE - 1) as f32);
+        // SAFETY: x is finite (max/min drop NaN) and in [0, LUT_SIZE-1].
+        unsafe { x.to_int_unchecked::<u32>() as usize }
     }
 
     /// `[r, g, b, alpha']` at value `v`.
