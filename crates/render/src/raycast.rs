@@ -466,8 +466,9 @@ impl Caster<'_> {
             }
             stats.samples += 1;
             let v = self.field.value_at(&loc);
-            let e = self.lut.get(v);
-            if e[3] > 0.0 {
+            let li = self.lut.index(v);
+            if self.lut.alpha_at(li) > 0.0 {
+                let e = self.lut.entry_at(li);
                 stats.shaded += 1;
                 let g = self.field.gradient_at(&loc);
                 let rgb = self.shader.shade([e[0], e[1], e[2]], g, &lighting);

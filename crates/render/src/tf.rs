@@ -304,6 +304,8 @@ pub struct Lut {
     pub(crate) scale: f32,
     /// `[r, g, b, alpha']` per entry, colour linear.
     pub(crate) entries: Vec<[f32; 4]>,
+    /// The opacities alone (16 KiB, stays in L1 for the per-sample test).
+    alphas: Vec<f32>,
     /// `nonzero[i]` = number of entries below `i` with alpha' > 0, for O(1) range tests.
     nonzero: Vec<u32>,
 }
@@ -332,6 +334,7 @@ impl Lut {
         Lut {
             lo,
             scale,
+            alphas: entries.iter().map(|e| e[3]).collect(),
             entries,
             nonzero,
         }
@@ -351,6 +354,18 @@ impl Lut {
     #[inline(always)]
     pub fn get(&self, v: f32) -> [f32; 4] {
         self.entries[self.index(v)]
+    }
+
+    /// Opacity at table index `i` (from [`Lut::index`]).
+    #[inline(always)]
+    pub fn alpha_at(&self, i: usize) -> f32 {
+        self.alphas[i]
+    }
+
+    /// `[r, g, b, alpha']` at table index `i`.
+    #[inline(always)]
+    pub fn entry_at(&self, i: usize) -> [f32; 4] {
+        self.entries[i]
     }
 
     /// Whether any value in `[lo, hi]` has a non-zero opacity.

@@ -69,7 +69,7 @@ struct Options {
     /// Orbit the camera this many degrees upwards.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     elevation: f64,
-    /// Magnification (1 fits the volume's bounding sphere).
+    /// Magnification (1 frames what the transfer function makes visible).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     zoom: f64,
     /// perspective (30° field of view) or orthographic.
