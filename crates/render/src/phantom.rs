@@ -84,7 +84,8 @@ pub fn shepp_logan_blurred(p: [f64; 3], h: f64) -> f64 {
 }
 
 /// The phantom sampled on an `n`^3 grid of voxel centres spanning [-1, 1]^3 (200 mm),
-/// in RAS+ millimetres, with edges ramped over one voxel ([`shepp_logan_blurred`]).
+/// in RAS+ millimetres, with edges ramped over two voxels ([`shepp_logan_blurred`]) so
+/// trilinear samples and gradients of the thin skull are smooth.
 pub fn shepp_logan(n: usize) -> Result<Volume, RenderError> {
     if !(2..=MAX_PHANTOM_SIZE).contains(&n) {
         return Err(RenderError::Parameter(format!(
@@ -101,7 +102,7 @@ pub fn shepp_logan(n: usize) -> Result<Volume, RenderError> {
             for j in 0..n {
                 for i in 0..n {
                     slab[i + n * j] =
-                        shepp_logan_blurred([coord(i), coord(j), coord(k)], unit) as f32;
+                        shepp_logan_blurred([coord(i), coord(j), coord(k)], 2.0 * unit) as f32;
                 }
             }
         });
