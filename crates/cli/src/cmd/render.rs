@@ -189,6 +189,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = &args.preset {
         preset(p)?; // fail early on an unknown name
     }
+    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            bail!(
+                "cannot write {}: directory {} does not exist",
+                args.output.display(),
+                dir.display()
+            );
+        }
+    }
 
     let volume = match &args.input {
         Some(path) => read_volume(path, &ReadOptions::default())
