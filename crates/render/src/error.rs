@@ -1,0 +1,45 @@
+//! The one error type of the renderer.
+
+use std::path::PathBuf;
+
+/// Why a render could not be set up or written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RenderError {
+    /// The volume cannot be rendered (too small, too large, singular affine, ...).
+    #[error("volume cannot be rendered: {0}")]
+    Volume(String),
+    /// A render parameter is out of range (size, step, zoom, light, ...).
+    #[error("invalid parameter: {0}")]
+    Parameter(String),
+    /// A transfer function is malformed (unsorted points, values out of range, ...).
+    #[error("invalid transfer function: {0}")]
+    TransferFunction(String),
+    /// A transfer-function JSON file could not be read or parsed.
+    #[error("{path}: {what}")]
+    TransferFunctionFile {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        what: String,
+    },
+    /// No preset has this name.
+    #[error("unknown preset '{name}': expected one of {known}")]
+    UnknownPreset {
+        /// The name asked for.
+        name: String,
+        /// The known names, comma-separated.
+        known: String,
+    },
+    /// The lobe parameters were rejected by glint-lobe.
+    #[error(transparent)]
+    Lobe(#[from] glint_lobe::LobeError),
+    /// Writing the image failed.
+    #[error("{path}: {what}")]
+    Write {
+        /// The output file.
+        path: PathBuf,
+        /// What went wrong.
+        what: String,
+    },
+}

@@ -1,0 +1,576 @@
+//! The CPU ray caster: tiles of rays in parallel (rayon), trilinear samples at a fixed
+//! step, empty-space skipping over macro cells, early ray termination.
+
+use std::str::FromStr;
+
+use rayon::prelude::*;
+
+use crate::camera::{Camera, CameraSpec};
+use crate::error::RenderError;
+use crate::field::{Field, MACRO_CELL};
+use crate::image::Image;
+use crate::math::Vec3;
+use crate::shading::{RayLighting, Shader};
+use crate::tf::{Lut, TransferFunction};
+
+/// How samples along a ray make a pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// Front-to-back compositing of shaded, classified samples.
+    Composite,
+    /// The first point where the value reaches `threshold`, shaded and opaque.
+    Iso {
+        /// The iso value.
+        threshold: f32,
+    },
+    /// Maximum intensity projection, coloured by the transfer function.
+    Mip,
+}
+
+impl FromStr for Mode {
+    type Err = RenderError;
+    /// `composite`, `mip` or `iso` (the threshold is set separately).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "composite" | "dvr" => Ok(Mode::Composite),
+            "mip" => Ok(Mode::Mip),
+            "iso" | "isosurface" => Ok(Mode::Iso { threshold: 0.0 }),
+            _ => Err(RenderError::Parameter(format!(
+                "unknown mode '{s}': expected composite, iso or mip"
+            ))),
+        }
+    }
+}
+
+/// Largest image side accepted.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// Accumulated opacity at which a ray stops (early ray termination, Levoy 1990).
+pub const TERMINATION_OPACITY: f32 = 0.99;
+
+/// Bisection steps refining an iso hit between two samples (2^-8 of a step).
+const ISO_REFINE_STEPS: u32 = 8;
+
+/// Macro cells per edge of the coarse blocks empty-space skipping leaps first.
+const COARSE: usize = 4;
+
+/// Rows per parallel task: each task renders a band of rows.
+const BAND_ROWS: usize = 8;
+
+/// What to render and how.
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Sample distance in voxels (of the smallest spacing).
+    pub step: f64,
+    /// Compositing mode.
+    pub mode: Mode,
+    /// Camera placement.
+    pub camera: CameraSpec,
+    /// Background colour, linear RGB.
+    pub background: [f32; 3],
+    /// Empty-space skipping on (it never changes the image, only the speed).
+    pub skip_empty: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 512,
+            height: 512,
+            step: 0.5,
+            mode: Mode::Composite,
+            camera: CameraSpec::default(),
+            background: [0.0; 3],
+            skip_empty: true,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Checks the image size and the step.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if self.width == 0
+            || self.height == 0
+            || self.width > MAX_IMAGE_SIDE
+            || self.height > MAX_IMAGE_SIDE
+        {
+            return Err(RenderError::Parameter(format!(
+                "image size {}x{}: each side must be 1..={MAX_IMAGE_SIDE}",
+                self.width, self.height
+            )));
+        }
+        if !self.step.is_finite() || !(0.01..=100.0).contains(&self.step) {
+            return Err(RenderError::Parameter(format!(
+                "step {}: expected 0.01..=100 voxels",
+                self.step
+            )));
+        }
+        if let Mode::Iso { threshold } = self.mode {
+            if !threshold.is_finite() {
+                return Err(RenderError::Parameter(format!(
+                    "iso threshold {threshold} is not finite"
+                )));
+            }
+        }
+        if self.background.iter().any(|c| !c.is_finite()) {
+            return Err(RenderError::Parameter("background is not finite".into()));
+        }
+        Ok(())
+    }
+}
+
+/// The transfer function tabulated for `settings` (MIP shows the function's own
+/// opacity, not a per-step one).
+fn lut_for(field: &Field, tf: &TransferFunction, settings: &RenderSettings) -> Lut {
+    let (lo, hi) = field.range();
+    let lut_step = match settings.mode {
+        Mode::Mip => 1.0,
+        _ => settings.step,
+    };
+    Lut::new(tf, lo, hi, lut_step)
+}
+
+/// Per macro cell: can a sample there show? (composite: some value in the cell's range
+/// has opacity; iso: the cell reaches the threshold; MIP: the cell holds more than the
+/// volume's minimum).
+fn visible_cells(field: &Field, lut: &Lut, mode: Mode) -> Vec<bool> {
+    let floor = field.range().0;
+    field
+        .cells
+        .iter()
+        .map(|&(cmin, cmax)| match mode {
+            Mode::Composite => lut.any_opaque(cmin, cmax),
+            Mode::Iso { threshold } => cmax >= threshold,
+            Mode::Mip => cmax > floor,
+        })
+        .collect()
+}
+
+/// The index-space box (voxel-centre coordinates) covering the `active` macro cells,
+/// `None` when none is.
+fn active_bounds(field: &Field, active: &[bool]) -> Option<([f64; 3], [f64; 3])> {
+    let cd = field.cell_dims;
+    let mut lo = [usize::MAX; 3];
+    let mut hi = [0usize; 3];
+    for (idx, _) in active.iter().enumerate().filter(|(_, v)| **v) {
+        let c = [idx % cd[0], (idx / cd[0]) % cd[1], idx / (cd[0] * cd[1])];
+        for a in 0..3 {
+            lo[a] = lo[a].min(c[a] * MACRO_CELL);
+            hi[a] = hi[a].max(((c[a] + 1) * MACRO_CELL).min(field.dims[a] - 1));
+        }
+    }
+    (lo[0] != usize::MAX).then(|| (lo.map(|x| x as f64), hi.map(|x| x as f64)))
+}
+
+/// The camera [`render`] uses for `field`, `tf` and `settings`: it frames the bounding
+/// sphere of what can be seen (the macro cells that can show a sample), or of the whole
+/// volume when nothing can.
+pub fn camera_for(
+    field: &Field,
+    tf: &TransferFunction,
+    settings: &RenderSettings,
+) -> Result<Camera, RenderError> {
+    settings.validate()?;
+    let lut = lut_for(field, tf, settings);
+    let visible = visible_cells(field, &lut, settings.mode);
+    let (lo, hi) =
+        active_bounds(field, &visible).unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
+    let mut corners = Vec::with_capacity(8);
+    for n in 0..8 {
+        let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });
+        corners.push(field.index_to_world(p));
+    }
+    let mut wlo = [f64::INFINITY; 3];
+    let mut whi = [f64::NEG_INFINITY; 3];
+    for c in &corners {
+        for a in 0..3 {
+            wlo[a] = wlo[a].min(c[a]);
+            whi[a] = whi[a].max(c[a]);
+        }
+    }
+    let center = Vec3::new(
+        ((wlo[0] + whi[0]) / 2.0) as f32,
+        ((wlo[1] + whi[1]) / 2.0) as f32,
+        ((wlo[2] + whi[2]) / 2.0) as f32,
+    );
+    let radius = corners
+        .iter()
+        .map(|c| (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center).length())
+        .fold(0.0f32, f32::max);
+    // Place the camera for the bounding sphere, then tighten to the box's extent across
+    // the view (the sphere of a box's corners wastes much of the image), with a margin
+    // for perspective.
+    let (w, h) = (settings.width, settings.height);
+    let first = Camera::frame(&settings.camera, center, radius, w, h)?;
+    let aspect = w as f32 / h as f32;
+    let extent = corners
+        .iter()
+        .map(|c| {
+            let d = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center;
+            let (x, y) = (d.dot(first.right).abs(), d.dot(first.up).abs());
+            // In units of the shorter image side.
+            (x / aspect.max(1.0)).max(y * aspect.min(1.0))
+        })
+        .fold(0.0f32, f32::max);
+    let margin = match settings.camera.projection {
+        crate::camera::Projection::Perspective => 1.1,
+        crate::camera::Projection::Orthographic => 1.02,
+    };
+    Camera::frame(&settings.camera, center, extent * margin, w, h)
+}
+
+/// Per-render state shared by all rays.
+struct Caster<'a> {
+    field: &'a Field,
+    lut: Lut,
+    shader: &'a Shader,
+    settings: &'a RenderSettings,
+    camera: Camera,
+    /// Per macro cell: may a sample there contribute?
+    active: Vec<bool>,
+    /// Index-space box rays are clipped to.
+    clip_box: ([f64; 3], [f64; 3]),
+    /// Per block of COARSE^3 macro cells: is any of them active?
+    coarse_active: Vec<bool>,
+    coarse_dims: [usize; 3],
+    /// Step in mm.
+    dt: f32,
+}
+
+/// Renders `field` classified by `tf` and lit by `shader`. `progress` is called with
+/// the number of pixels finished after each band of rows (from worker threads).
+pub fn render(
+    field: &Field,
+    tf: &TransferFunction,
+    shader: &Shader,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Image, RenderError> {
+    settings.validate()?;
+    tf.validate()?;
+    let camera = camera_for(field, tf, settings)?;
+    let lut = lut_for(field, tf, settings);
+    let active = if settings.skip_empty {
+        visible_cells(field, &lut, settings.mode)
+    } else {
+        vec![true; field.cells.len()]
+    };
+    let cd = field.cell_dims;
+    let coarse_dims = cd.map(|d| d.div_ceil(COARSE));
+    let mut coarse_active = vec![false; coarse_dims.iter().product()];
+    for (idx, _) in active.iter().enumerate().filter(|(_, a)| **a) {
+        let c = [idx % cd[0], (idx / cd[0]) % cd[1], idx / (cd[0] * cd[1])];
+        let b = c.map(|x| x / COARSE);
+        coarse_active[b[0] + coarse_dims[0] * (b[1] + coarse_dims[1] * b[2])] = true;
+    }
+    let full_box = ([0.0; 3], field.dims.map(|d| (d - 1) as f64));
+    let clip_box = if settings.skip_empty && settings.mode != Mode::Mip {
+        active_bounds(field, &active).unwrap_or(([0.0; 3], [-1.0; 3]))
+    } else {
+        full_box
+    };
+    let caster = Caster {
+        field,
+        clip_box,
+        coarse_active,
+        coarse_dims,
+        lut,
+        shader,
+        settings,
+        camera,
+        active,
+        dt: (settings.step * field.min_spacing()) as f32,
+    };
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let mut rgb = vec![[0.0f32; 3]; w * h];
+    let mut alpha = vec![0.0f32; w * h];
+    let stats = rgb
+        .par_chunks_mut(w * BAND_ROWS)
+        .zip(alpha.par_chunks_mut(w * BAND_ROWS))
+        .enumerate()
+        .map(|(band, (rgb, alpha))| {
+            let y0 = band * BAND_ROWS;
+            let mut stats = RenderStats::default();
+            for (idx, (px, a)) in rgb.iter_mut().zip(alpha.iter_mut()).enumerate() {
+                let (x, y) = (idx % w, y0 + idx / w);
+                let (c, op) = caster.cast(x as f32, y as f32, &mut stats);
+                let bg = settings.background;
+                *px = [
+                    c[0] + (1.0 - op) * bg[0],
+                    c[1] + (1.0 - op) * bg[1],
+                    c[2] + (1.0 - op) * bg[2],
+                ];
+                *a = op;
+            }
+            progress(rgb.len() as u64);
+            stats
+        })
+        .reduce(RenderStats::default, |a, b| RenderStats {
+            samples: a.samples + b.samples,
+            shaded: a.shaded + b.shaded,
+            skips: a.skips + b.skips,
+        });
+    Ok(Image {
+        width: settings.width,
+        height: settings.height,
+        rgb,
+        alpha,
+        stats,
+    })
+}
+
+/// Work counts of one render (for tests and tuning; not timing).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderStats {
+    /// Samples classified (composite mode).
+    pub samples: u64,
+    /// Samples with non-zero opacity, shaded and composited.
+    pub shaded: u64,
+    /// Macro cells leapt over.
+    pub skips: u64,
+}
+
+impl Caster<'_> {
+    /// Premultiplied colour and opacity of the ray through pixel `(x, y)`.
+    fn cast(&self, x: f32, y: f32, stats: &mut RenderStats) -> ([f32; 3], f32) {
+        let s = self.settings;
+        let (origin, dir) = self.camera.ray(x, y, s.width, s.height);
+        let f = self.field;
+        let o = f.world_to_index([origin.x as f64, origin.y as f64, origin.z as f64]);
+        let d = f.direction_to_index([dir.x as f64, dir.y as f64, dir.z as f64]);
+        // Slab test against the box of voxel centres [0, dims-1], or the box of the
+        // cells that can show a sample (samples outside it lie in inactive cells), t in
+        // mm.
+        let (lo_box, hi_box) = self.clip_box;
+        let mut t0 = 0.0f64;
+        let mut t1 = f64::INFINITY;
+        for a in 0..3 {
+            let (lo, hi) = (lo_box[a], hi_box[a]);
+            if d[a].abs() < 1e-12 {
+                if o[a] < lo || o[a] > hi {
+                    return ([0.0; 3], 0.0);
+                }
+            } else {
+                let inv = 1.0 / d[a];
+                let (ta, tb) = ((lo - o[a]) * inv, (hi - o[a]) * inv);
+                t0 = t0.max(ta.min(tb));
+                t1 = t1.min(ta.max(tb));
+            }
+        }
+        if t0 > t1 {
+            return ([0.0; 3], 0.0);
+        }
+        let dt = self.dt as f64;
+        let k0 = (t0 / dt).ceil() as i64;
+        let k1 = (t1 / dt).floor() as i64;
+        if k1 < k0 {
+            return ([0.0; 3], 0.0);
+        }
+        let ray = Ray {
+            o: Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32),
+            d: Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32),
+            inv_d: Vec3::new(
+                (1.0 / d[0]) as f32,
+                (1.0 / d[1]) as f32,
+                (1.0 / d[2]) as f32,
+            ),
+            k0,
+            k1,
+            t0: t0 as f32,
+        };
+        // The view vector: from the sample towards the eye. Every sample of a ray lies
+        // on the line through the eye, so -dir is exact for each (perspective-correct);
+        // for orthographic rays it is the same for all.
+        let view = -dir;
+        match s.mode {
+            Mode::Composite => self.composite(&ray, view, stats),
+            Mode::Iso { threshold } => self.iso(&ray, view, threshold),
+            Mode::Mip => self.mip(&ray),
+        }
+    }
+
+    /// The macro cell holding index-space point `p`.
+    #[inline(always)]
+    fn cell_of(&self, p: Vec3) -> ([usize; 3], usize) {
+        let cd = self.field.cell_dims;
+        let c = [
+            ((p.x.max(0.0) as usize) / MACRO_CELL).min(cd[0] - 1),
+            ((p.y.max(0.0) as usize) / MACRO_CELL).min(cd[1] - 1),
+            ((p.z.max(0.0) as usize) / MACRO_CELL).min(cd[2] - 1),
+        ];
+        (c, c[0] + cd[0] * (c[1] + cd[1] * c[2]))
+    }
+
+    /// The first sample index past the exit of the box of `size` voxels whose lower
+    /// corner is `lo` (index space) along the ray, at least `k + 1`.
+    #[inline]
+    fn skip_box(&self, ray: &Ray, lo: [usize; 3], size: usize, k: i64) -> i64 {
+        let mut t_exit = f32::INFINITY;
+        for (a, &lo_a) in lo.iter().enumerate() {
+            let da = ray.d.get(a);
+            if da.abs() > 1e-12 {
+                let face = if da > 0.0 { lo_a + size } else { lo_a } as f32;
+                t_exit = t_exit.min((face - ray.o.get(a)) * ray.inv_d.get(a));
+            }
+        }
+        // ceil without libm (baseline x86-64 has no rounding instruction).
+        let q = t_exit / self.dt;
+        let mut k_exit = q as i64;
+        if (k_exit as f32) < q {
+            k_exit += 1;
+        }
+        k_exit.max(k + 1)
+    }
+
+    /// Leaps over the empty region around macro cell `c`: its coarse block when the
+    /// whole block is empty, else the cell alone.
+    #[inline]
+    fn skip_empty(&self, ray: &Ray, c: [usize; 3], k: i64) -> i64 {
+        let b = c.map(|x| x / COARSE);
+        let bd = self.coarse_dims;
+        if !self.coarse_active[b[0] + bd[0] * (b[1] + bd[1] * b[2])] {
+            self.skip_box(
+                ray,
+                b.map(|x| x * COARSE * MACRO_CELL),
+                COARSE * MACRO_CELL,
+                k,
+            )
+        } else {
+            self.skip_box(ray, c.map(|x| x * MACRO_CELL), MACRO_CELL, k)
+        }
+    }
+
+    fn composite(&self, ray: &Ray, view: Vec3, stats: &mut RenderStats) -> ([f32; 3], f32) {
+        let lighting: RayLighting = self.shader.for_ray(view);
+        let mut color = [0.0f32; 3];
+        let mut alpha = 0.0f32;
+        let mut k = ray.k0;
+        let mut cached_cell = usize::MAX;
+        let mut cached_active = false;
+        while k <= ray.k1 {
+            let p = ray.at(k as f32 * self.dt);
+            let loc = self.field.locate(p);
+            let cell = self.field.cell_index(&loc);
+            if cell != cached_cell {
+                cached_cell = cell;
+                cached_active = self.active[cell];
+            }
+            if !cached_active {
+                stats.skips += 1;
+                k = self.skip_empty(ray, loc.ijk.map(|x| x / MACRO_CELL), k);
+                continue;
+            }
+            stats.samples += 1;
+            let v = self.field.value_at(&loc);
+            let li = self.lut.index(v);
+            if self.lut.alpha_at(li) > 0.0 {
+                let e = self.lut.entry_at(li);
+                stats.shaded += 1;
+                let g = self.field.gradient_at(&loc);
+                let rgb = self.shader.shade([e[0], e[1], e[2]], g, &lighting);
+                let w = (1.0 - alpha) * e[3];
+                color[0] += w * rgb[0];
+                color[1] += w * rgb[1];
+                color[2] += w * rgb[2];
+                alpha += w;
+                if alpha >= TERMINATION_OPACITY {
+                    break;
+                }
+            }
+            k += 1;
+        }
+        (color, alpha)
+    }
+
+    fn iso(&self, ray: &Ray, view: Vec3, threshold: f32) -> ([f32; 3], f32) {
+        let mut k = ray.k0;
+        let mut cached_cell = usize::MAX;
+        let mut cached_active = false;
+        while k <= ray.k1 {
+            let t = k as f32 * self.dt;
+            let p = ray.at(t);
+            let (c, cell) = self.cell_of(p);
+            if cell != cached_cell {
+                cached_cell = cell;
+                cached_active = self.active[cell];
+            }
+            if !cached_active {
+                k = self.skip_empty(ray, c, k);
+                continue;
+            }
+            if self.field.value(p) >= threshold {
+                // Bisect between the previous sample point (below the threshold, or the
+                // entry point) and this one.
+                let mut lo = (t - self.dt).max(ray.t0);
+                let mut hi = t;
+                if k > ray.k0 && self.field.value(ray.at(lo)) < threshold {
+                    for _ in 0..ISO_REFINE_STEPS {
+                        let mid = 0.5 * (lo + hi);
+                        if self.field.value(ray.at(mid)) >= threshold {
+                            hi = mid;
+                        } else {
+                            lo = mid;
+                        }
+                    }
+                    // Linear interpolation inside the last bracket.
+                    let (vl, vh) = (self.field.value(ray.at(lo)), self.field.value(ray.at(hi)));
+                    if vh > vl {
+                        hi = lo + (hi - lo) * ((threshold - vl) / (vh - vl)).clamp(0.0, 1.0);
+                    }
+                }
+                let p = ray.at(hi);
+                let e = self.lut.get(threshold);
+                let g = self.field.gradient(p);
+                let lighting = self.shader.for_ray(view);
+                let rgb = self.shader.shade([e[0], e[1], e[2]], g, &lighting);
+                return (rgb, 1.0);
+            }
+            k += 1;
+        }
+        ([0.0; 3], 0.0)
+    }
+
+    fn mip(&self, ray: &Ray) -> ([f32; 3], f32) {
+        let mut best = f32::NEG_INFINITY;
+        let mut k = ray.k0;
+        while k <= ray.k1 {
+            let p = ray.at(k as f32 * self.dt);
+            if self.settings.skip_empty {
+                let (c, cell) = self.cell_of(p);
+                // A cell whose maximum cannot beat the current best is skipped.
+                if self.field.cells[cell].1 <= best {
+                    k = self.skip_empty(ray, c, k);
+                    continue;
+                }
+            }
+            best = best.max(self.field.value(p));
+            k += 1;
+        }
+        if !best.is_finite() {
+            return ([0.0; 3], 0.0);
+        }
+        let e = self.lut.get(best);
+        ([e[0] * e[3], e[1] * e[3], e[2] * e[3]], e[3])
+    }
+}
+
+/// A ray in index space with its sample range.
+struct Ray {
+    o: Vec3,
+    d: Vec3,
+    inv_d: Vec3,
+    k0: i64,
+    k1: i64,
+    t0: f32,
+}
+
+impl Ray {
+    #[inline(always)]
+    fn at(&self, t: f32) -> Vec3 {
+        self.o + self.d * t
+    }
+}

@@ -1,0 +1,345 @@
+//! Rendered images against answers derived independently of the renderer: Beer-Lambert
+//! absorption through a uniform slab, the analytic position and shape of a sphere's
+//! highlight for each geometry, the projected area of the phantom's skull in a MIP.
+
+use glint_io::{Samples, Volume};
+use glint_lobe::{Geometry, Lobe, LobeKind};
+use glint_render::{
+    camera_for, phantom, preset, render, CameraSpec, Field, Light, Material, Mode, Projection,
+    RenderSettings, Shader, TransferFunction, View,
+};
+
+fn ortho(view: View) -> CameraSpec {
+    CameraSpec {
+        view,
+        projection: Projection::Orthographic,
+        ..Default::default()
+    }
+}
+
+fn flat_material() -> Material {
+    Material {
+        ambient: 1.0,
+        diffuse: 0.0,
+        specular: 0.0,
+        power: 1.0,
+        shade: false,
+    }
+}
+
+/// A `n`^3 volume of 1 mm voxels, value 1 everywhere.
+fn uniform(n: usize) -> Volume {
+    Volume::new([n; 3], [1.0; 3], Samples::F32(vec![1.0; n * n * n])).unwrap()
+}
+
+#[test]
+fn composite_follows_beer_lambert_for_any_step() {
+    // Opacity a per voxel of distance through L voxels gives 1 - (1 - a)^L whatever
+    // the step (Max 1995, "Optical models for direct volume rendering"). The central
+    // ray of an orthographic view crosses the whole 33-voxel cube: L = 32.
+    let field = Field::new(&uniform(33)).unwrap();
+    let a = 0.05;
+    let tf = TransferFunction::from_flat(&[0.0, a, 2.0, a], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+    let shader = Shader::new(
+        LobeKind::Exact,
+        1.0,
+        0,
+        Geometry::Phong,
+        flat_material(),
+        vec![],
+        0.0,
+    )
+    .unwrap();
+    let expect = 1.0 - (1.0f64 - a).powf(32.0);
+    for step in [1.0, 0.5, 0.25, 0.1] {
+        let settings = RenderSettings {
+            width: 33,
+            height: 33,
+            step,
+            camera: ortho(View::Anterior),
+            ..Default::default()
+        };
+        let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+        let got = img.alpha[16 * 33 + 16] as f64;
+        // The samples cover L to within one step.
+        let slack = (1.0 - a).powf(32.0) * (1.0 - (1.0 - a).powf(step)) + 1e-4;
+        assert!(
+            (got - expect).abs() <= slack,
+            "step {step}: {got} vs {expect}"
+        );
+        // White colour on black: linear value equals the opacity.
+        assert!((img.pixel(16, 16)[0] as f64 - got).abs() < 1e-5);
+    }
+}
+
+/// A sphere of radius `r` voxels as a signed distance (positive inside) on `n`^3.
+fn sphere(n: usize, r: f32) -> Volume {
+    let c = (n - 1) as f32 / 2.0;
+    let mut v = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let d = ((i as f32 - c).powi(2) + (j as f32 - c).powi(2) + (k as f32 - c).powi(2))
+                    .sqrt();
+                v.push(r - d);
+            }
+        }
+    }
+    Volume::new([n; 3], [1.0; 3], Samples::F32(v)).unwrap()
+}
+
+#[test]
+fn sphere_highlight_matches_the_analytic_answer_for_each_geometry() {
+    let (n, r, size) = (72usize, 30.0f32, 160u32);
+    let field = Field::new(&sphere(n, r)).unwrap();
+    let tf =
+        TransferFunction::from_flat(&[-100.0, 1.0, 100.0, 1.0], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+    let settings = RenderSettings {
+        width: size,
+        height: size,
+        mode: Mode::Iso { threshold: 0.0 },
+        camera: ortho(View::Anterior),
+        ..Default::default()
+    };
+    let cam = camera_for(&field, &tf, &settings).unwrap();
+    let light = Light {
+        azimuth: 35.0,
+        elevation: 20.0,
+        intensity: 1.0,
+    }
+    .direction(&cam);
+    let view = -cam.forward;
+    let center = (n - 1) as f32 / 2.0; // world = index for 1 mm voxels at the origin
+    let specular_only = Material {
+        ambient: 0.0,
+        diffuse: 0.0,
+        specular: 1.0,
+        power: 60.0,
+        shade: true,
+    };
+    for geometry in [Geometry::Phong, Geometry::Blinn] {
+        let shader = Shader::new(
+            LobeKind::Exact,
+            60.0,
+            4,
+            geometry,
+            specular_only,
+            vec![(light, 1.0)],
+            0.0,
+        )
+        .unwrap();
+        let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+        // Pixel of a world point in this orthographic camera.
+        let to_pixel = |p: [f32; 3]| {
+            let d = [p[0] - cam.eye.x, p[1] - cam.eye.y, p[2] - cam.eye.z];
+            let u = d[0] * cam.right.x + d[1] * cam.right.y + d[2] * cam.right.z;
+            let v = d[0] * cam.up.x + d[1] * cam.up.y + d[2] * cam.up.z;
+            (
+                (u / cam.half_height + 1.0) * size as f32 / 2.0 - 0.5,
+                (1.0 - v / cam.half_height) * size as f32 / 2.0 - 0.5,
+            )
+        };
+        // Both geometries peak where the normal is the half vector H = (L+V)/|L+V|.
+        let h = (light + view).normalize_or_zero();
+        let (px, py) = to_pixel([center + r * h.x, center + r * h.y, center + r * h.z]);
+        let (mut best, mut bx, mut by) = (0.0f32, 0, 0);
+        for y in 0..size {
+            for x in 0..size {
+                let v = img.pixel(x, y)[0];
+                if v > best {
+                    (best, bx, by) = (v, x, y);
+                }
+            }
+        }
+        let dist = ((bx as f32 - px).powi(2) + (by as f32 - py).powi(2)).sqrt();
+        assert!(
+            dist <= 2.0,
+            "{geometry}: peak at ({bx},{by}), analytic ({px:.1},{py:.1})"
+        );
+        assert!(best > 0.95 && best <= 1.0, "{geometry}: peak {best}");
+
+        // Away from the peak, each pixel shows lobe(cos γ) for the sphere's analytic
+        // normal there (the view vector per sample is exact for orthographic rays).
+        let lobe = Lobe::<f64>::new(LobeKind::Exact, 60.0, 4).unwrap();
+        let mut checked = 0;
+        for (dx, dy) in [(6i32, 0i32), (0, 6), (-8, 3), (10, -10), (-4, -12)] {
+            let (x, y) = (
+                (px.round() as i32 + dx) as u32,
+                (py.round() as i32 + dy) as u32,
+            );
+            // Back-project the pixel centre onto the sphere.
+            let scale = cam.half_height * 2.0 / size as f32;
+            let u = (x as f32 + 0.5 - size as f32 / 2.0) * scale;
+            let v = (size as f32 / 2.0 - y as f32 - 0.5) * scale;
+            let c = cam.eye + cam.right * u + cam.up * v;
+            let oc = [c.x - center, c.y - center, c.z - center];
+            let f = cam.forward;
+            let b = oc[0] * f.x + oc[1] * f.y + oc[2] * f.z;
+            let cc = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - r * r;
+            let disc = b * b - cc;
+            assert!(disc > 0.0);
+            let t = -b - disc.sqrt();
+            let normal = [
+                (oc[0] + t * f.x) as f64,
+                (oc[1] + t * f.y) as f64,
+                (oc[2] + t * f.z) as f64,
+            ];
+            let l = [light.x as f64, light.y as f64, light.z as f64];
+            let vv = [view.x as f64, view.y as f64, view.z as f64];
+            let expect = lobe.eval(geometry.cos(normal, l, vv));
+            let got = img.pixel(x, y)[0] as f64;
+            assert!(
+                (got - expect).abs() < 0.06,
+                "{geometry} at ({x},{y}): {got} vs analytic {expect}"
+            );
+            checked += 1;
+        }
+        assert_eq!(checked, 5);
+    }
+}
+
+#[test]
+fn no_lobe_gives_nan_pixels() {
+    let field = Field::new(&phantom::shepp_logan(40).unwrap()).unwrap();
+    let p = preset("phantom").unwrap();
+    let tf = p.transfer_function(1.0).unwrap();
+    for mode in [Mode::Composite, Mode::Iso { threshold: 0.5 }] {
+        let settings = RenderSettings {
+            width: 40,
+            height: 40,
+            mode,
+            ..Default::default()
+        };
+        let cam = camera_for(&field, &tf, &settings).unwrap();
+        let lights = vec![
+            (Light::HEADLIGHT.direction(&cam), 1.0),
+            (
+                Light {
+                    azimuth: 80.0,
+                    elevation: -60.0,
+                    intensity: 1.0,
+                }
+                .direction(&cam),
+                1.0,
+            ),
+        ];
+        for kind in LobeKind::ALL {
+            for n in [0.0, 1.0, 100.0, 10_000.0] {
+                for geometry in [Geometry::Phong, Geometry::Blinn] {
+                    let shader =
+                        Shader::new(kind, n, 4, geometry, p.material(), lights.clone(), 0.0)
+                            .unwrap();
+                    let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+                    assert!(
+                        img.rgb.iter().flatten().all(|c| c.is_finite() && *c >= 0.0),
+                        "{kind} n={n} {geometry} {mode:?}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn phantom_mip_silhouette_has_the_skulls_projected_area() {
+    // Anterior orthographic MIP: every ray through the outer ellipsoid meets the skull
+    // (value 1), so the pixels above 0.5 cover the ellipse of semi-axes 0.69 (x) and
+    // 0.81 (z) phantom units: area π·0.69·0.81.
+    let n = 96;
+    let field = Field::new(&phantom::shepp_logan(n).unwrap()).unwrap();
+    let tf = TransferFunction::from_flat(&[0.0, 0.0, 1.0, 1.0], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+    let size = 200u32;
+    let settings = RenderSettings {
+        width: size,
+        height: size,
+        mode: Mode::Mip,
+        camera: ortho(View::Anterior),
+        ..Default::default()
+    };
+    let cam = camera_for(&field, &tf, &settings).unwrap();
+    let shader = Shader::new(
+        LobeKind::Exact,
+        1.0,
+        0,
+        Geometry::Phong,
+        flat_material(),
+        vec![],
+        0.0,
+    )
+    .unwrap();
+    let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+    let bright = img.rgb.iter().filter(|p| p[0] > 0.5).count() as f64;
+    let pixel_mm = 2.0 * cam.half_height as f64 / size as f64;
+    let area_mm2 = std::f64::consts::PI * 69.0 * 81.0;
+    let expect = area_mm2 / (pixel_mm * pixel_mm);
+    assert!(
+        (bright - expect).abs() / expect < 0.03,
+        "{bright} bright pixels, analytic {expect:.0}"
+    );
+}
+
+#[test]
+fn empty_space_skipping_never_changes_the_image() {
+    let field = Field::new(&phantom::shepp_logan(48).unwrap()).unwrap();
+    let p = preset("phantom").unwrap();
+    let tf = p.transfer_function(1.0).unwrap();
+    for mode in [Mode::Composite, Mode::Iso { threshold: 0.5 }, Mode::Mip] {
+        let mut settings = RenderSettings {
+            width: 48,
+            height: 40,
+            mode,
+            camera: CameraSpec {
+                azimuth: 33.0,
+                elevation: -21.0,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let cam = camera_for(&field, &tf, &settings).unwrap();
+        let shader = Shader::new(
+            LobeKind::EnergyFit,
+            40.0,
+            4,
+            Geometry::Blinn,
+            p.material(),
+            vec![(Light::HEADLIGHT.direction(&cam), 1.0)],
+            0.0,
+        )
+        .unwrap();
+        let fast = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+        settings.skip_empty = false;
+        let slow = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+        assert_eq!(fast.rgb, slow.rgb, "{mode:?}");
+        if mode == Mode::Composite {
+            assert!(fast.stats.samples < slow.stats.samples);
+        }
+    }
+}
+
+#[test]
+fn progress_reports_every_pixel() {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let field = Field::new(&phantom::shepp_logan(16).unwrap()).unwrap();
+    let tf = preset("phantom").unwrap().transfer_function(1.0).unwrap();
+    let shader = Shader::new(
+        LobeKind::Exact,
+        10.0,
+        4,
+        Geometry::Phong,
+        Material::default(),
+        vec![],
+        0.0,
+    )
+    .unwrap();
+    let settings = RenderSettings {
+        width: 37,
+        height: 23,
+        ..Default::default()
+    };
+    let done = AtomicU64::new(0);
+    render(&field, &tf, &shader, &settings, &|n| {
+        done.fetch_add(n, Ordering::Relaxed);
+    })
+    .unwrap();
+    assert_eq!(done.load(Ordering::Relaxed), 37 * 23);
+}
