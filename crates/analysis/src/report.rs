@@ -153,7 +153,7 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
     );
     let _ = writeln!(
         w,
-        "The model and the claims are in `shared/docs/paper.md` (Pavlov, Romanyuk, \
+        "The model and the claims are in [paper.md](paper.md) (Pavlov, Romanyuk, \
          Dumenko). K_v(n, γ) = max(0, 1 − (n+1)/(2^v+1)·(1 − cos γ))^(2^v) is the paper's \
          energy fit; G_v uses a = n/2^v (slope fit, Lyon 1993); `minimax` is the same \
          form with the a that minimises the maximum absolute error; Schlick is \
