@@ -165,7 +165,9 @@ impl<'a> Prepared<'a> {
 }
 
 /// Measures `unit` exhaustively (every code in `[-1, 1]`, every `n`, `k_s·I` at full
-/// scale), in parallel.
+/// scale), in parallel. The work is [`Unit::exhaustive_points`], which grows as
+/// `2^(cos_bits + n_bits)`: callers taking widths from users should bound it first
+/// (`glint hw check` refuses more than `2^32` points).
 pub fn measure(unit: &Unit) -> Measurement {
     let p = Prepared::new(unit);
     let count = p.coeffs.len();
@@ -216,13 +218,14 @@ pub fn measure(unit: &Unit) -> Measurement {
         );
     Measurement {
         per_n,
-        points: (2 * p.one as u64 + 1) * count as u64,
+        points: u64::try_from(unit.exhaustive_points()).unwrap_or(u64::MAX),
     }
 }
 
 /// Whether the unit's error against `reference` stays within `bound_lsb` (plus
 /// [`BOUND_SLACK_LSB`]) for every code of the reference's range and every `n` with
-/// `include_n[n]` (all `n` if `None`). Stops at the first violation.
+/// `include_n[n]` (all `n` if `None`). Stops at the first violation. Up to
+/// [`Unit::exhaustive_points`] of work, like [`measure`].
 pub fn within(
     unit: &Unit,
     reference: Reference,

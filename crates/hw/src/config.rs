@@ -4,7 +4,9 @@
 use std::fmt;
 use std::str::FromStr;
 
-use serde::{Deserialize, Serialize};
+use serde::de::value::MapAccessDeserializer;
+use serde::de::{MapAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::HwError;
 
@@ -21,6 +23,10 @@ pub const MAX_N_BITS: u32 = 13;
 /// products are formed at full (128-bit) width and rounded back, as a hardware
 /// multiplier forms its full product before the rounding logic.
 pub const MAX_REGISTER_BITS: u32 = 64;
+
+/// Largest `cos_bits`: Sm1 forms `1 - cos` in `cos_bits + 1` bits, which must fit a
+/// [`MAX_REGISTER_BITS`] register.
+pub const MAX_COS_BITS: u32 = MAX_REGISTER_BITS - 1;
 
 /// How a stage drops fraction bits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -115,9 +121,13 @@ impl FromStr for Coefficients {
 /// - BMUL stage `k`: UQ1.`square_frac[k]`.
 /// - RGB: `k_s·I` codes and outputs are unsigned `out_bits` integers.
 ///
-/// Missing fields of a configuration file take the default's values.
+/// Missing fields of a configuration file take the default's values; unknown fields,
+/// and anything but a JSON object (serde would otherwise read an array as the fields in
+/// order), are errors.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+// `remote = "Self"` makes the derives inherent functions (`Config::deserialize`), so
+// the trait impls below can wrap them: Deserialize accepts only a map.
+#[serde(remote = "Self", default, deny_unknown_fields)]
 pub struct Config {
     /// BMUL raises the base to `2^v` with `v` squarings (0..=10; the paper's is 4).
     pub v: u32,
@@ -168,8 +178,33 @@ impl Default for Config {
     }
 }
 
+impl Serialize for Config {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        Config::serialize(self, serializer)
+    }
+}
+
+impl<'de> Deserialize<'de> for Config {
+    /// Only a map (a JSON object) is a configuration: the derived code would also read
+    /// a sequence positionally, so `[4, 10]` would silently be `v = 4, n_bits = 10`.
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct ObjectOnly;
+        impl<'de> Visitor<'de> for ObjectOnly {
+            type Value = Config;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a JSON object of configuration fields, e.g. {\"v\": 4}")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Config, A::Error> {
+                Config::deserialize(MapAccessDeserializer::new(map))
+            }
+        }
+        deserializer.deserialize_map(ObjectOnly)
+    }
+}
+
 impl Config {
-    /// Parses a JSON configuration; missing fields take the default's values.
+    /// Parses a JSON configuration: a JSON object whose missing fields take the
+    /// default's values. Not validated; see [`Config::validate`].
     pub fn from_json(text: &str) -> Result<Config, HwError> {
         serde_json::from_str(text).map_err(|e| HwError::Parse(e.to_string()))
     }
@@ -184,9 +219,24 @@ impl Config {
         self.cos_bits.saturating_sub(2)
     }
 
+    /// Points of one exhaustive check ([`crate::measure`]): every `cos` code in
+    /// `[-1, 1]` times every `n`, `(2^(cos_bits - 1) + 1) · 2^n_bits`, so callers can
+    /// bound the work before building anything. Exact in `u128` (a valid configuration
+    /// has at most `(2^62 + 1) · 2^13`); `None` if `cos_bits < 2` or it would not fit.
+    pub fn exhaustive_points(&self) -> Option<u128> {
+        if self.cos_bits < 2 {
+            return None;
+        }
+        // 1 << k is exact for k < 128, which checked_shl guarantees.
+        let codes = 1u128.checked_shl(self.cos_bits - 1)? + 1;
+        codes.checked_mul(1u128.checked_shl(self.n_bits)?)
+    }
+
     /// Checks everything that does not depend on the ROM contents: no zero widths,
     /// `v` and `n_bits` in range, one `square_frac` entry per squaring, and every
-    /// register within [`MAX_REGISTER_BITS`].
+    /// register within [`MAX_REGISTER_BITS`]. Every field is bounded before any
+    /// arithmetic uses it, and widths are added in `u64`, so no value of a `u32` field
+    /// can wrap past a check.
     pub fn validate(&self) -> Result<(), HwError> {
         if self.v > MAX_V {
             return Err(HwError::InvalidV(self.v));
@@ -225,22 +275,32 @@ impl Config {
             });
         }
         // Sm1 forms 1 - cos in one more bit than the signed input.
-        check_register("Sm1 (1 - cos)", self.cos_bits + 1)?;
-        check_register("ROM1 word (coef_bits)", self.coef_bits)?;
+        check_register(
+            "Sm1 = cos_bits + 1 (so cos_bits <= 63)",
+            u64::from(self.cos_bits) + 1,
+        )?;
+        check_register("ROM1 word = coef_bits", self.coef_bits.into())?;
         // The base register is UQ1.mul_frac; MUL/Sm2 add integer bits, checked once
         // the ROM's integer width is known (Unit::new).
-        check_register("SW base (mul_frac + 1)", self.mul_frac.saturating_add(1))?;
+        check_register(
+            "SW base = mul_frac + 1 (so mul_frac <= 63)",
+            u64::from(self.mul_frac) + 1,
+        )?;
         for &f in &self.square_frac {
-            check_register("BMUL stage (square_frac + 1)", f.saturating_add(1))?;
+            check_register(
+                "BMUL stage = square_frac + 1 (so square_frac <= 63)",
+                u64::from(f) + 1,
+            )?;
         }
-        check_register("RGB output (out_bits)", self.out_bits)?;
+        check_register("RGB output = out_bits", self.out_bits.into())?;
         Ok(())
     }
 }
 
-/// Rejects a register wider than the model's 64-bit integers.
-pub(crate) fn check_register(register: &'static str, bits: u32) -> Result<(), HwError> {
-    if bits > MAX_REGISTER_BITS {
+/// Rejects a register wider than the model's 64-bit integers. `bits` is a `u64` so that
+/// callers add widths without wrapping.
+pub(crate) fn check_register(register: &'static str, bits: u64) -> Result<(), HwError> {
+    if bits > u64::from(MAX_REGISTER_BITS) {
         Err(HwError::TooWide { register, bits })
     } else {
         Ok(())

@@ -45,7 +45,9 @@ mod sweep;
 mod unit;
 
 pub use accuracy::{measure, within, ErrorsAtN, Measurement, Reference, Worst, BOUND_SLACK_LSB};
-pub use config::{Coefficients, Config, Rounding, MAX_N_BITS, MAX_REGISTER_BITS, MAX_V};
+pub use config::{
+    Coefficients, Config, Rounding, MAX_COS_BITS, MAX_N_BITS, MAX_REGISTER_BITS, MAX_V,
+};
 pub use fixed::requantize;
 pub use pipeline::{BaseReg, MulReg, Pipeline, Registers, RomSm1Reg, SquareReg, Trace};
 pub use rom::{coefficient_int_bits, real_coefficients, Rom};
@@ -92,8 +94,8 @@ pub enum HwError {
     TooWide {
         /// Which register.
         register: &'static str,
-        /// Its width.
-        bits: u32,
+        /// Its width (a `u64`: the sum of widths it is formed from never wraps).
+        bits: u64,
     },
     /// A configuration file or name could not be parsed.
     #[error("invalid configuration: {0}")]

@@ -110,7 +110,7 @@ impl Rom {
         if coef_bits == 0 {
             return Err(HwError::ZeroWidth { field: "coef_bits" });
         }
-        check_register("ROM1 word (coef_bits)", coef_bits)?;
+        check_register("ROM1 word = coef_bits", coef_bits.into())?;
         let exact = real_coefficients(coefficients, v, n_bits)?;
         let max = exact.iter().copied().fold(0.0, f64::max);
         let int_bits = integer_bits(max);

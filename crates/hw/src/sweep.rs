@@ -149,7 +149,9 @@ pub fn format_ranges(r: &[(u32, u32)]) -> String {
 
 /// Runs the search of the module docs for one target. `base` supplies `v`, `n_bits`,
 /// `cos_bits`, the coefficients, `out_bits` and every rounding mode; its widths are
-/// ignored. `progress` receives one line per check.
+/// ignored. `progress` receives one line per check. Each check is
+/// [`Config::exhaustive_points`] of work and a row runs ~30-40 of them, so callers taking
+/// `cos_bits`/`n_bits` from users should bound that first (`glint hw sweep` does).
 pub fn sweep_row(
     base: &Config,
     target: Target,

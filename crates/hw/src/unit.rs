@@ -87,12 +87,11 @@ impl Unit {
             config.coef_bits,
             config.coef_round,
         )?;
+        // validate() bounded every field; the sums are formed in u64 all the same.
         let mul_int = rom.int_bits() + 2;
-        check_register(
-            "MUL output (coef integer bits + 2 + mul_frac)",
-            mul_int + config.mul_frac,
-        )?;
-        check_register("Sm2 (signed, MUL width + 1)", mul_int + config.mul_frac + 1)?;
+        let mul_bits = u64::from(mul_int) + u64::from(config.mul_frac);
+        check_register("MUL output = coef integer bits + 2 + mul_frac", mul_bits)?;
+        check_register("Sm2 = MUL width + 1 (signed)", mul_bits + 1)?;
         let formats = Formats {
             cos_frac: config.cos_frac(),
             n_bits: config.n_bits,
@@ -146,6 +145,12 @@ impl Unit {
     /// The code `2^f` of `cos = 1.0`.
     pub fn cos_one(&self) -> i64 {
         1i64 << self.formats.cos_frac
+    }
+
+    /// Points of one exhaustive check ([`crate::measure`]), as
+    /// [`Config::exhaustive_points`]; exact for every valid configuration.
+    pub fn exhaustive_points(&self) -> u128 {
+        self.config.exhaustive_points().unwrap_or(u128::MAX)
     }
 
     /// Smallest and largest signed `cos` codes of RG1.

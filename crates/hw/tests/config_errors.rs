@@ -1,6 +1,6 @@
 //! Bad configurations and inputs are rejected with a clear, typed error.
 
-use glint_hw::{Config, HwError, Input, Pipeline, Unit};
+use glint_hw::{Config, HwError, Input, Pipeline, Unit, MAX_COS_BITS};
 
 fn err(config: Config) -> HwError {
     Unit::new(config).expect_err("configuration must be rejected")
@@ -194,4 +194,216 @@ fn inputs_out_of_range_are_rejected() {
     assert!(unit.cos_code(1.5).is_ok()); // Q1.14 holds up to 2 - 2^-14
     assert!(unit.cos_code(2.0).is_err());
     assert!(unit.cos_code(f64::NAN).is_err());
+}
+
+#[test]
+fn huge_widths_are_rejected_without_wrapping() {
+    let d = Config::default;
+    // cos_bits + 1 used to be formed in u32: u32::MAX + 1 wrapped to 0 in release and
+    // passed (overflow panic in debug).
+    let e = err(Config {
+        cos_bits: u32::MAX,
+        ..d()
+    });
+    assert_eq!(
+        e,
+        HwError::TooWide {
+            register: "Sm1 = cos_bits + 1 (so cos_bits <= 63)",
+            bits: 1 << 32,
+        }
+    );
+    assert!(e.to_string().contains("cos_bits <= 63"), "{e}");
+    for (cfg, want_bits) in [
+        (
+            Config {
+                mul_frac: u32::MAX,
+                ..d()
+            },
+            1u64 << 32,
+        ),
+        (
+            Config {
+                square_frac: vec![14, u32::MAX, 14, 12],
+                ..d()
+            },
+            1 << 32,
+        ),
+        (
+            Config {
+                coef_bits: u32::MAX,
+                ..d()
+            },
+            u64::from(u32::MAX),
+        ),
+        (
+            Config {
+                out_bits: u32::MAX,
+                ..d()
+            },
+            u64::from(u32::MAX),
+        ),
+    ] {
+        match err(cfg.clone()) {
+            HwError::TooWide { bits, .. } => assert_eq!(bits, want_bits, "{cfg:?}"),
+            e => panic!("{cfg:?}: {e}"),
+        }
+    }
+    assert_eq!(
+        err(Config {
+            n_bits: u32::MAX,
+            ..d()
+        }),
+        HwError::InvalidNBits(u32::MAX)
+    );
+    assert_eq!(
+        err(Config { v: u32::MAX, ..d() }),
+        HwError::InvalidV(u32::MAX)
+    );
+    // The largest accepted cos_bits works end to end: Q1.61, 1.0 = 2^61.
+    let unit = Unit::new(Config {
+        cos_bits: MAX_COS_BITS,
+        ..d()
+    })
+    .unwrap();
+    assert_eq!(unit.cos_one(), 1 << 61);
+    assert_eq!(unit.cos_code_range(), (-(1 << 62), (1 << 62) - 1));
+    let input = Input {
+        cos: unit.cos_code(0.98).unwrap(),
+        n: 100,
+        ks: [255, 255, 255],
+    };
+    // K_4(100, 0.98) = (1 - 101/17 · 0.02)^16 ≈ 0.128 (the lib example), · 255 ≈ 32.6.
+    let exact = (1.0f64 - 101.0 / 17.0 * (1.0 - unit.cos_value(input.cos))).powi(16) * 255.0;
+    let out = unit.eval(&input).unwrap();
+    assert!(
+        (out.rgb[0] as f64 - exact).abs() <= 1.0,
+        "{out:?} vs {exact}"
+    );
+    assert_eq!(unit.trace(&input).unwrap().output, out);
+}
+
+#[test]
+fn exhaustive_points_are_exact_and_never_wrap() {
+    let with = |cos_bits, n_bits| Config {
+        cos_bits,
+        n_bits,
+        ..Config::default()
+    };
+    // Every code in [-1, 1] of Q1.(c-2) is 2·2^(c-2) + 1 codes, times 2^n_bits n.
+    assert_eq!(
+        with(16, 10).exhaustive_points(),
+        Some((2 * (1 << 14) + 1) * 1024)
+    );
+    // The reviewer's case, which wrapped to 8192 in u64.
+    assert_eq!(
+        with(60, 13).exhaustive_points(),
+        Some(((1u128 << 59) + 1) * 8192)
+    );
+    let unit = Unit::new(with(63, 13)).unwrap();
+    assert_eq!(unit.exhaustive_points(), ((1u128 << 62) + 1) * 8192);
+    // Unvalidated absurd widths give None, not a wrapped count or a panic.
+    assert_eq!(with(u32::MAX, 13).exhaustive_points(), None);
+    assert_eq!(with(16, u32::MAX).exhaustive_points(), None);
+    assert_eq!(with(1, 10).exhaustive_points(), None);
+    assert_eq!(with(128, 1).exhaustive_points(), None); // (2^127 + 1) · 2 > u128::MAX
+}
+
+#[test]
+fn configuration_files_must_be_json_objects() {
+    // serde's derived struct code reads a JSON array as the fields in order: "[4, 10]"
+    // was silently v = 4, n_bits = 10.
+    for bad in ["[4, 10]", "[]", "[4]", "null", "4", "\"v\"", "true"] {
+        let e = Config::from_json(bad).expect_err(bad);
+        let msg = e.to_string();
+        assert!(matches!(e, HwError::Parse(_)), "{bad}: {e}");
+        assert!(msg.contains("JSON object"), "{bad}: {msg}");
+        assert!(!msg.contains('\n'), "{msg}");
+    }
+    // An object still works, with positions in errors of its fields.
+    assert_eq!(Config::from_json("{}").unwrap(), Config::default());
+    let e = Config::from_json("{\n  \"v\": \"four\"\n}").unwrap_err();
+    assert!(e.to_string().contains("line 2"), "{e}");
+    // Duplicate fields and fields of the wrong shape are errors.
+    for bad in [
+        r#"{"v": 4, "v": 5}"#,
+        r#"{"square_frac": 14}"#,
+        r#"{"square_frac": {"0": 14}}"#,
+        r#"{"n_bits": 4294967296}"#,
+        r#"{"n_bits": 1.5}"#,
+    ] {
+        assert!(Config::from_json(bad).is_err(), "{bad}");
+    }
+    // A parseable file with absurd widths is caught by validation.
+    let c = Config::from_json(r#"{"cos_bits": 4294967295}"#).unwrap();
+    assert!(c.validate().is_err());
+}
+
+mod any_config {
+    use super::*;
+    use glint_hw::{Coefficients, Rounding};
+    use proptest::prelude::*;
+
+    /// Mostly plausible widths, so that many cases get past validation, plus the
+    /// edges and anything at all.
+    fn width() -> impl Strategy<Value = u32> {
+        prop_oneof![
+            24 => 1u32..=64,
+            1 => Just(0u32),
+            1 => 65u32..=70,
+            1 => Just(u32::MAX),
+            1 => any::<u32>(),
+        ]
+    }
+
+    prop_compose! {
+        fn config()(
+            v in prop_oneof![8 => 0u32..=10, 1 => 11u32..=12, 1 => any::<u32>()],
+            n_bits in prop_oneof![8 => 1u32..=10, 1 => 0u32..=14, 1 => any::<u32>()],
+            cos_bits in width(),
+            coef_bits in width(),
+            mul_frac in width(),
+            out_bits in width(),
+            extra in prop_oneof![8 => Just(0usize), 1 => Just(1usize)],
+            square in proptest::collection::vec(width(), 0..=12),
+            nearest in any::<bool>(),
+        ) -> Config {
+            // Mostly the right number of square_frac entries, so later checks run.
+            let want = (v.min(12) as usize + extra).min(square.len());
+            let round = if nearest { Rounding::Nearest } else { Rounding::Truncate };
+            Config {
+                v, n_bits, cos_bits, coefficients: Coefficients::EnergyFit, coef_bits,
+                coef_round: round, mul_frac, mul_round: round,
+                square_frac: square[..want].to_vec(), square_round: round,
+                out_bits, out_round: round,
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(1024))]
+
+        /// Any configuration is either rejected with an error or builds a unit whose
+        /// extreme inputs evaluate without overflow: no panic in between (the tests
+        /// run with overflow checks on).
+        #[test]
+        fn never_panics(cfg in config()) {
+            match Unit::new(cfg.clone()) {
+                Err(e) => prop_assert!(!e.to_string().contains('\n')),
+                Ok(unit) => {
+                    prop_assert!(cfg.cos_bits <= MAX_COS_BITS && cfg.out_bits <= 64);
+                    prop_assert!(unit.config().exhaustive_points().is_some());
+                    let (lo, hi) = unit.cos_code_range();
+                    let n_max = (1u32 << cfg.n_bits) - 1;
+                    for cos in [lo, -unit.cos_one(), 0, unit.cos_one(), hi] {
+                        for n in [0, n_max] {
+                            let input = Input { cos, n, ks: [unit.full_scale(), 0, 1] };
+                            let out = unit.eval(&input).unwrap();
+                            prop_assert!(out.rgb[0] <= unit.full_scale());
+                            prop_assert_eq!(unit.trace(&input).unwrap().output, out);
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

@@ -1,14 +1,14 @@
 //! `glint hw`: the fixed-point model of the specular unit (ROM contents, width sweeps,
 //! stage-by-stage evaluation, exhaustive error check).
 
-use std::io::Write as _;
+use std::io::{Read as _, Write as _};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context};
 use glint_hw::{
-    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, Input,
-    Pipeline, Reference, Rom, Rounding, Target, Unit,
+    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, HwError,
+    Input, Pipeline, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
 };
 
 /// Subcommands of `glint hw`.
@@ -143,23 +143,43 @@ pub fn run(command: Command) -> anyhow::Result<()> {
     }
 }
 
+/// Largest configuration file read: a real one is well under 1 KiB, and reading is
+/// bounded so that `--config /dev/zero` or a huge file fails instead of filling memory.
+const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
 fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
     match path {
         None => Ok(Config::default()),
         Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("reading configuration {}", p.display()))?;
+            let reading = || format!("reading configuration {}", p.display());
+            let mut text = String::new();
+            std::fs::File::open(p)
+                .with_context(reading)?
+                .take(MAX_CONFIG_BYTES + 1)
+                .read_to_string(&mut text)
+                .with_context(reading)?;
+            if text.len() as u64 > MAX_CONFIG_BYTES {
+                bail!(
+                    "configuration {} is larger than {MAX_CONFIG_BYTES} bytes; it is not a glint hw configuration",
+                    p.display()
+                );
+            }
             Config::from_json(&text).with_context(|| format!("in {}", p.display()))
         }
     }
 }
 
+/// Runs `f`, naming the configuration file in its error if there is one.
+fn in_file<T>(path: Option<&Path>, f: impl FnOnce() -> Result<T, HwError>) -> anyhow::Result<T> {
+    match path {
+        None => Ok(f()?),
+        Some(p) => f().with_context(|| format!("in {}", p.display())),
+    }
+}
+
 /// Builds the unit, naming the configuration file in the error if there is one.
 fn build_unit(config: Config, path: Option<&Path>) -> anyhow::Result<Unit> {
-    match path {
-        None => Ok(Unit::new(config)?),
-        Some(p) => Unit::new(config).with_context(|| format!("in {}", p.display())),
-    }
+    in_file(path, || Unit::new(config))
 }
 
 /// Largest exhaustive check `glint hw check` runs (~1 min of CPU at ~25 ns a point).
@@ -168,19 +188,36 @@ const MAX_CHECK_POINTS: u64 = 1 << 32;
 const MAX_SWEEP_POINTS: u64 = 1 << 28;
 
 /// Refuses configurations whose exhaustive check (every cos code in [-1, 1] × every
-/// n) would run for too long, with the numbers in the message.
-fn check_exhaustive_size(unit: &Unit, max: u64) -> anyhow::Result<()> {
-    let cfg = unit.config();
-    let points = (2 * unit.cos_one() as u64 + 1) << cfg.n_bits;
-    if points > max {
-        bail!(
-            "an exhaustive check of cos_bits = {} and n_bits = {} is {points} points per pass, \
-             more than the {max} this command runs; use fewer bits",
-            cfg.cos_bits,
-            cfg.n_bits
-        );
+/// n) would run for too long, with the numbers and the largest `cos_bits` that fits in
+/// the message. `cfg` must be validated; the count is exact (u128), so no width can
+/// wrap it below the limit.
+fn check_exhaustive_size(cfg: &Config, max: u64) -> anyhow::Result<()> {
+    let limit = u128::from(max);
+    let fits = |c: &Config| c.exhaustive_points().is_some_and(|p| p <= limit);
+    if fits(cfg) {
+        return Ok(());
     }
-    Ok(())
+    let points = cfg
+        .exhaustive_points()
+        .map_or_else(|| "too many".to_string(), |p| p.to_string());
+    let hint = (2..=MAX_COS_BITS)
+        .rev()
+        .find(|&cos_bits| {
+            fits(&Config {
+                cos_bits,
+                ..cfg.clone()
+            })
+        })
+        .map_or_else(
+            || "use a smaller n_bits".to_string(),
+            |c| format!("at n_bits = {} use cos_bits <= {c}", cfg.n_bits),
+        );
+    bail!(
+        "an exhaustive check of cos_bits = {} and n_bits = {} is {points} points per pass, \
+         more than the {max} this command runs; {hint}",
+        cfg.cos_bits,
+        cfg.n_bits
+    )
 }
 
 /// Writes `text` to `path` through a temporary file in the same directory, so a failed
@@ -229,6 +266,10 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
         &[Reference::Lobe, Reference::Power]
     };
     for &v in &args.v {
+        // Before `square_frac: vec![..; v]` below: no allocation sized by unchecked input.
+        if v > MAX_V {
+            return Err(HwError::InvalidV(v).into());
+        }
         let base = Config {
             v,
             n_bits: args.n_bits,
@@ -243,11 +284,12 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
             ..Config::default()
         };
         base.validate()?;
-        let probe = Unit::new(Config {
+        // Before the ROM is built (minimax coefficients take seconds) or anything runs.
+        check_exhaustive_size(&base, MAX_SWEEP_POINTS)?;
+        Unit::new(Config {
             coef_bits: 64,
             ..base.clone()
         })?;
-        check_exhaustive_size(&probe, MAX_SWEEP_POINTS)?;
         for &reference in refs {
             for &bound in &args.bound {
                 let row = sweep_row(&base, Target { reference, bound }, &mut |line| {
@@ -269,7 +311,7 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
     );
     println!(
         "# error = |code - F·L(c,n)| in LSBs, F = k_s·I full scale = {}; exhaustive: every cos code in [-1,1] (lobe) or [0,1] (cos^n) x every n = {} points per check",
-        (1u64 << args.out_bits.min(63)) - 1,
+        full_scale(args.out_bits),
         points
     );
     println!(
@@ -346,16 +388,11 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     let row = |stage: &str, fmt: String, code: String, hexs: String, value: String| {
         println!("{stage:<12} {fmt:<18} {code:>22} {hexs:>18}  {value}");
     };
-    let cos_mask = if cfg.cos_bits >= 64 {
-        u64::MAX
-    } else {
-        (1u64 << cfg.cos_bits) - 1
-    };
     row(
         "RG1 cos",
         format!("Q1.{} signed", f.cos_frac),
         cos.to_string(),
-        hex(cos as u64 & cos_mask, cfg.cos_bits),
+        hex(cos as u64 & full_scale(cfg.cos_bits), cfg.cos_bits),
         format!("{c:.12}"),
     );
     row(
@@ -396,7 +433,7 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
         format!("Q{}.{} signed", f.mul_int, f.mul_frac),
         trace.base.diff.to_string(),
         hex(
-            trace.base.diff as u64 & ((1u64 << f.sm2_bits().min(63)) - 1),
+            trace.base.diff as u64 & full_scale(f.sm2_bits()),
             f.sm2_bits(),
         ),
         format!(
@@ -457,8 +494,10 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     if let Some(b) = args.out_bits {
         config.out_bits = b;
     }
+    // Validate and bound the work before the ROM is built or anything runs.
+    in_file(args.config.as_deref(), || config.validate())?;
+    check_exhaustive_size(&config, MAX_CHECK_POINTS)?;
     let unit = build_unit(config, args.config.as_deref())?;
-    check_exhaustive_size(&unit, MAX_CHECK_POINTS)?;
     let started = Instant::now();
     let m = measure(&unit);
     let secs = started.elapsed().as_secs_f64();
@@ -523,6 +562,13 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `2^bits - 1` (all ones), for any width up to 64.
+fn full_scale(bits: u32) -> u64 {
+    u64::MAX
+        .checked_shr(64u32.saturating_sub(bits))
+        .unwrap_or(0)
+}
+
 fn serde_json_line(cfg: &Config) -> String {
     serde_json::to_string(cfg).unwrap_or_default()
 }
@@ -559,13 +605,139 @@ mod tests {
 
     #[test]
     fn oversized_exhaustive_checks_are_refused() {
-        let unit = Unit::new(Config {
-            cos_bits: 30,
+        let cfg = |cos_bits, n_bits| Config {
+            cos_bits,
+            n_bits,
             ..Config::default()
-        })
-        .unwrap();
-        assert!(check_exhaustive_size(&unit, MAX_CHECK_POINTS).is_err());
-        let unit = Unit::new(Config::default()).unwrap();
-        assert!(check_exhaustive_size(&unit, MAX_SWEEP_POINTS).is_ok());
+        };
+        // (2^29 + 1) · 2^10 > 2^32.
+        assert!(check_exhaustive_size(&cfg(30, 10), MAX_CHECK_POINTS).is_err());
+        assert!(check_exhaustive_size(&Config::default(), MAX_SWEEP_POINTS).is_ok());
+        // The reviewer's case: (2^59 + 1) << 13 wrapped to 8192 in u64 and passed.
+        // Every cos_bits up to the maximum must be refused at n_bits = 13 beyond the
+        // limit: (2^(c-1) + 1) · 2^13 <= 2^32 only for c <= 19 (2^18 · 2^13 = 2^31).
+        for c in 2..=MAX_COS_BITS {
+            let ok = check_exhaustive_size(&cfg(c, 13), MAX_CHECK_POINTS).is_ok();
+            assert_eq!(ok, c <= 19, "cos_bits = {c}");
+        }
+        let e = check_exhaustive_size(&cfg(60, 13), MAX_CHECK_POINTS).unwrap_err();
+        let msg = format!("{e:#}");
+        // (2^59 + 1) · 2^13, by hand.
+        let points = ((1u128 << 59) + 1) * 8192;
+        assert!(msg.contains(&points.to_string()), "{msg}");
+        assert!(msg.contains("cos_bits <= 19"), "{msg}");
+        assert!(!msg.contains('\n'), "{msg}");
+    }
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    fn eval_args(config: PathBuf) -> EvalArgs {
+        EvalArgs {
+            config: Some(config),
+            cos: Some(0.98),
+            cos_code: None,
+            n: 100,
+            ks_rgb: vec![255, 200, 180],
+            print_config: false,
+        }
+    }
+
+    /// One line naming the file, without a panic.
+    fn one_line_error(r: anyhow::Result<()>, file: &Path, want: &str) {
+        let msg = format!("{:#}", r.unwrap_err());
+        assert!(msg.contains(&file.display().to_string()), "{msg}");
+        assert!(msg.contains(want), "{msg}");
+        assert!(!msg.contains('\n'), "{msg}");
+    }
+
+    #[test]
+    fn hostile_configuration_files_fail_with_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // The review's repros: a u32::MAX width (wrapped past validation, then a
+        // formatting panic in eval and a hang in check), a check too large to run, and
+        // a JSON array read as positional fields.
+        let huge = write(d, "huge.json", r#"{"cos_bits": 4294967295}"#);
+        one_line_error(
+            run(Command::Eval(eval_args(huge.clone()))),
+            &huge,
+            "4294967296 bits",
+        );
+        let mut print = eval_args(huge.clone());
+        print.print_config = true;
+        one_line_error(run(Command::Eval(print)), &huge, "cos_bits <= 63");
+        let check = |p: &Path| {
+            run(Command::Check(CheckArgs {
+                config: Some(p.to_path_buf()),
+                out_bits: None,
+            }))
+        };
+        one_line_error(check(&huge), &huge, "64-bit");
+        let big = write(d, "big.json", r#"{"cos_bits": 60, "n_bits": 13}"#);
+        let msg = format!("{:#}", check(&big).unwrap_err());
+        assert!(msg.contains("more than the 4294967296"), "{msg}");
+        let array = write(d, "array.json", "[4, 10]");
+        one_line_error(
+            run(Command::Eval(eval_args(array.clone()))),
+            &array,
+            "JSON object",
+        );
+        one_line_error(check(&array), &array, "JSON object");
+        // Every other width at u32::MAX is refused too.
+        for field in ["v", "n_bits", "coef_bits", "mul_frac", "out_bits"] {
+            let p = write(d, "f.json", &format!(r#"{{"{field}": 4294967295}}"#));
+            one_line_error(check(&p), &p, field);
+        }
+        let p = write(d, "sq.json", r#"{"square_frac": [14, 14, 14, 4294967295]}"#);
+        one_line_error(check(&p), &p, "square_frac");
+        // A file far larger than any configuration is refused without reading it all.
+        let p = write(
+            d,
+            "large.json",
+            &" ".repeat((MAX_CONFIG_BYTES + 10) as usize),
+        );
+        one_line_error(check(&p), &p, "larger than");
+    }
+
+    fn sweep_args(v: Vec<u32>, cos_bits: u32, n_bits: u32) -> SweepArgs {
+        SweepArgs {
+            out_bits: 8,
+            v,
+            bound: vec![1.0],
+            coef: Coefficients::EnergyFit,
+            n_bits,
+            cos_bits,
+            round: Rounding::Nearest,
+            lobe_only: true,
+        }
+    }
+
+    #[test]
+    fn sweep_refuses_absurd_sizes_before_working() {
+        // The review's repro: wrapped to 8192 points and ran for ever.
+        let e = run(Command::Sweep(sweep_args(vec![4], 60, 13))).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("more than the 268435456"),
+            "{e:#}"
+        );
+        let e = run(Command::Sweep(sweep_args(vec![4], u32::MAX, 10))).unwrap_err();
+        assert!(format!("{e:#}").contains("cos_bits <= 63"), "{e:#}");
+        // v = u32::MAX would size a 16 GiB square_frac list before validation.
+        let e = run(Command::Sweep(sweep_args(vec![u32::MAX], 16, 10))).unwrap_err();
+        assert!(format!("{e:#}").contains("v = 4294967295"), "{e:#}");
+    }
+
+    #[test]
+    fn full_scale_by_hand() {
+        assert_eq!(full_scale(0), 0);
+        assert_eq!(full_scale(1), 1);
+        assert_eq!(full_scale(8), 255);
+        assert_eq!(full_scale(63), (1u64 << 63) - 1);
+        assert_eq!(full_scale(64), u64::MAX);
+        assert_eq!(full_scale(65), u64::MAX);
     }
 }
