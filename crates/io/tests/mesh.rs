@@ -347,3 +347,73 @@ fn fsaverage5_sulcal_depth_is_not_a_surface() {
     assert!(matches!(err, IoError::Invalid { .. }), "{err}");
     assert!(err.to_string().contains("NIFTI_INTENT_SHAPE"), "{err}");
 }
+
+/// A binary STL of one triangle with the given corners.
+fn stl_binary(corners: [[f32; 3]; 3]) -> Vec<u8> {
+    let mut b = vec![0u8; 80];
+    b.extend(1u32.to_le_bytes());
+    b.extend([0u8; 12]);
+    for c in corners {
+        for x in c {
+            b.extend(x.to_le_bytes());
+        }
+    }
+    b.extend([0u8; 2]);
+    b
+}
+
+/// Review defect 5: non-finite positions and normals are refused by every mesh format
+/// (binary STL and OBJ used to accept them and report infinite bounds).
+#[test]
+fn non_finite_vertices_refused_in_every_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+        property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    let tri = "ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\"";
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        (
+            "nan.stl",
+            stl_binary([[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        ),
+        (
+            "inf.stl",
+            stl_binary([[0.0, 0.0, 0.0], [f32::INFINITY, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        ),
+        ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec()),
+        (
+            "nrm.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 inf\nf 1//1 2//1 3//1\n".to_vec(),
+        ),
+        ("nan.ply", {
+            // Binary: ASCII PLY has no spelling of NaN that ply-rs parses.
+            let mut b = ply_head
+                .replace("ascii", "binary_little_endian")
+                .into_bytes();
+            for x in [0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 1.0, 0.0f32] {
+                b.extend(x.to_le_bytes());
+            }
+            b.push(3);
+            for i in [0i32, 1, 2] {
+                b.extend(i.to_le_bytes());
+            }
+            b
+        }),
+        (
+            "inf.gii",
+            gifti_doc((ASCII_ROW, "0 0 0 inf 0 0 0 1 0"), (tri, "0 1 2")).into_bytes(),
+        ),
+    ];
+    for (name, bytes) in cases {
+        let err = expect_err(&dir, name, bytes);
+        assert!(
+            matches!(err, IoError::Invalid { .. }) && err.to_string().contains("non-finite"),
+            "{name}: {err}"
+        );
+    }
+    let mut m = tetra();
+    m.normals.as_mut().unwrap()[2][1] = f32::NAN;
+    assert!(matches!(m.validate(), Err(IoError::Inconsistent(_))));
+    let p = dir.path().join("out.stl");
+    assert!(mesh::write_stl(&p, &m).is_err());
+    assert!(!p.exists());
+}
