@@ -417,3 +417,46 @@ fn non_finite_vertices_refused_in_every_format() {
     assert!(mesh::write_stl(&p, &m).is_err());
     assert!(!p.exists());
 }
+
+/// Review defect 3: a small gzipped GIFTI inflating to far more XML than its arrays can
+/// hold (a decompression bomb) is refused without inflating it all, and `<Data>` text
+/// beyond what the dimensions announce is refused instead of being copied.
+#[test]
+fn gifti_decompression_bomb_and_oversized_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = "ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\"";
+    // 80 MB of blanks after nine numbers: valid XML, about 80 kB gzipped (ratio ~1000).
+    let pad = " ".repeat(80 << 20);
+    let doc = gifti_doc((ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")), (tri, "0 1 2"));
+    let gz = common::gzip(doc.as_bytes());
+    assert!(gz.len() < 1 << 20);
+    let err = expect_err(&dir, "bomb.gii.gz", gz);
+    assert!(matches!(err, IoError::TooLarge { .. }), "{err}");
+    // Uncompressed: 200 kB of blanks in the Data of a 3x3 array.
+    let pad = " ".repeat(200_000);
+    let doc = gifti_doc((ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")), (tri, "0 1 2"));
+    let err = expect_err(&dir, "padded.gii", doc);
+    assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
+    // Modest padding is fine.
+    let doc = gifti_doc((ASCII_ROW, "\n 0 0 0\n 1 0 0\n 0 1 0\n"), (tri, "0 1 2"));
+    let f = glint_io::open_mesh(&file(&dir, "ok.gii", doc)).unwrap();
+    assert_eq!(f.mesh.positions.len(), 3);
+}
+
+/// Review defect 10: a one-dimensional VECTOR array is not per-vertex normals; it used
+/// to fail the whole read, now it is skipped.
+#[test]
+fn gifti_one_dimensional_vector_array_is_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = "ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\"";
+    let vec1 = "<DataArray Intent=\"NIFTI_INTENT_VECTOR\" DataType=\"NIFTI_TYPE_FLOAT32\" \
+        ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"1\" Dim0=\"3\" Encoding=\"ASCII\" \
+        Endian=\"LittleEndian\"><Data>1 2 3</Data></DataArray>\n</GIFTI>";
+    let doc = gifti_doc((ASCII_ROW, "0 0 0 1 0 0 0 1 0"), (tri, "0 1 2"))
+        .replace("NumberOfDataArrays=\"2\"", "NumberOfDataArrays=\"3\"")
+        .replace("</GIFTI>", vec1);
+    let f = glint_io::open_mesh(&file(&dir, "vec1.gii", doc)).unwrap();
+    assert_eq!(f.mesh.positions.len(), 3);
+    assert_eq!(f.mesh.triangles, vec![[0, 1, 2]]);
+    assert!(f.mesh.normals.is_none());
+}
