@@ -377,7 +377,11 @@ fn check_declared_lengths(path: &Path) -> Result<(), IoError> {
                 _ => {}
             }
         }
-        let (ex, be) = if in_meta { (true, false) } else { (explicit, big) };
+        let (ex, be) = if in_meta {
+            (true, false)
+        } else {
+            (explicit, big)
+        };
         let u16_at = |b: &[u8], i: usize| {
             if be {
                 u16::from_be_bytes([b[i], b[i + 1]])

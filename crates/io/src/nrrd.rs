@@ -337,7 +337,10 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     // vector, list, ...) is not a voxel dimension.
     if let Some(kinds) = field("kinds") {
         for (i, k) in kinds.split_whitespace().take(dimension).enumerate() {
-            if !matches!(k.to_ascii_lowercase().as_str(), "domain" | "space" | "none" | "???") {
+            if !matches!(
+                k.to_ascii_lowercase().as_str(),
+                "domain" | "space" | "none" | "???"
+            ) {
                 return Err(IoError::Unsupported {
                     path: path.into(),
                     what: format!(

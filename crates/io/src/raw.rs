@@ -4,8 +4,8 @@ use std::io::{BufReader, Seek, SeekFrom};
 use std::path::Path;
 
 use crate::common::{
-    check_affine, check_spacing, checked_voxels, decode_samples, diagonal_affine, encode_samples, open,
-    os_or_invalid, read_exact_growing, write_atomic, Endian,
+    check_affine, check_spacing, checked_voxels, decode_samples, diagonal_affine, encode_samples,
+    open, os_or_invalid, read_exact_growing, write_atomic, Endian,
 };
 use crate::{Format, IoError, RawParams, ReadOptions, Volume, VolumeFile};
 

@@ -626,7 +626,8 @@ fn element_lengths_beyond_the_file_are_refused_before_parsing() {
     std::fs::write(&p, &bytes).unwrap();
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
-        err.to_string().contains("(0029,1010) declares 4294967040 bytes"),
+        err.to_string()
+            .contains("(0029,1010) declares 4294967040 bytes"),
         "{err}"
     );
     // The walk accepts the same files unpatched, in every transfer syntax.

@@ -379,7 +379,10 @@ fn non_finite_vertices_refused_in_every_format() {
             "inf.stl",
             stl_binary([[0.0, 0.0, 0.0], [f32::INFINITY, 0.0, 0.0], [0.0, 1.0, 0.0]]),
         ),
-        ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec()),
+        (
+            "nan.obj",
+            b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(),
+        ),
         (
             "nrm.obj",
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 inf\nf 1//1 2//1 3//1\n".to_vec(),
@@ -427,14 +430,20 @@ fn gifti_decompression_bomb_and_oversized_data() {
     let tri = "ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\"";
     // 80 MB of blanks after nine numbers: valid XML, about 80 kB gzipped (ratio ~1000).
     let pad = " ".repeat(80 << 20);
-    let doc = gifti_doc((ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")), (tri, "0 1 2"));
+    let doc = gifti_doc(
+        (ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")),
+        (tri, "0 1 2"),
+    );
     let gz = common::gzip(doc.as_bytes());
     assert!(gz.len() < 1 << 20);
     let err = expect_err(&dir, "bomb.gii.gz", gz);
     assert!(matches!(err, IoError::TooLarge { .. }), "{err}");
     // Uncompressed: 200 kB of blanks in the Data of a 3x3 array.
     let pad = " ".repeat(200_000);
-    let doc = gifti_doc((ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")), (tri, "0 1 2"));
+    let doc = gifti_doc(
+        (ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")),
+        (tri, "0 1 2"),
+    );
     let err = expect_err(&dir, "padded.gii", doc);
     assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
     // Modest padding is fine.
