@@ -29,6 +29,13 @@ const STEP_TOLERANCE: f64 = 0.05;
 /// Tolerance on direction cosines when checking that slices share an orientation.
 const ORIENTATION_TOLERANCE: f64 = 1e-4;
 
+/// Tolerance on the length of, and the angle between, the direction cosines of
+/// ImageOrientationPatient.
+const UNIT_TOLERANCE: f64 = 1e-3;
+
+/// Relative tolerance when comparing PixelSpacing across the slices of a series.
+const SPACING_TOLERANCE: f64 = 1e-3;
+
 fn invalid(path: &Path, what: impl Into<String>) -> IoError {
     IoError::Invalid {
         path: path.into(),
@@ -144,6 +151,22 @@ fn header_of(path: &Path, obj: &InMemDicomObject, max_voxels: u64) -> Result<Hea
         return Err(IoError::Unsupported {
             path: path.into(),
             what: format!("{bits_allocated} bits allocated, {bits_stored} stored"),
+        });
+    }
+    // The pixels of every frame must fit in the file before anything (per-frame
+    // positions, rescales, the pixel buffer) is sized by the frame count.
+    let need = (rows as u64)
+        .checked_mul(cols as u64)
+        .and_then(|x| x.checked_mul(frames as u64))
+        .and_then(|x| x.checked_mul(bits_allocated as u64 / 8));
+    let len = file_len(path)?;
+    if need.is_none_or(|need| need > len) {
+        return Err(IoError::SizeMismatch {
+            path: path.into(),
+            what: format!(
+                "{rows} rows x {cols} columns x {frames} frames of {bits_allocated}-bit pixels \
+                 need more bytes than the file's {len}"
+            ),
         });
     }
     let orientation = find(
@@ -287,11 +310,167 @@ fn open_header(path: &Path, max_voxels: u64) -> Result<Header, IoError> {
             what: "no \"DICM\" marker after the 128-byte preamble".into(),
         });
     }
+    check_declared_lengths(path)?;
     let obj = OpenFileOptions::new()
         .read_until(tags::PIXEL_DATA)
         .open_file(path)
         .map_err(|e| open_error(path, e))?;
     header_of(path, &obj, max_voxels)
+}
+
+fn file_len(path: &Path) -> Result<u64, IoError> {
+    std::fs::metadata(path)
+        .map(|m| m.len())
+        .map_err(|e| IoError::Os {
+            path: path.into(),
+            source: e,
+        })
+}
+
+/// VRs whose explicit-VR header has two reserved bytes and a 32-bit length (PS3.5 7.1.2).
+const LONG_VRS: [&[u8; 2]; 13] = [
+    b"OB", b"OD", b"OF", b"OL", b"OV", b"OW", b"SQ", b"SV", b"UC", b"UN", b"UR", b"UT", b"UV",
+];
+
+/// Walks the element headers of a DICOM file (meta group, data set, nested sequence
+/// items, encapsulated pixel fragments) and refuses any element whose declared length
+/// exceeds the bytes left in the file.
+///
+/// dicom-rs allocates a value buffer of the declared length before reading it, so a
+/// 400-byte file declaring a 4 GB element costs 4 GB of memory before "truncated" is
+/// reported. dicom-parser offers no length limit, hence this hand-written header walk
+/// (headers only, no values). Where the walk cannot follow the encoding (deflated
+/// transfer syntax, an undefined-length UN element, an unknown VR) it stops and leaves
+/// the rest to dicom-rs: it only ever rejects a length it parsed unambiguously.
+fn check_declared_lengths(path: &Path) -> Result<(), IoError> {
+    use std::io::{BufReader, Read, Seek, SeekFrom};
+    let file = crate::common::open(path)?;
+    let len = file_len(path)?;
+    let mut r = BufReader::new(file);
+    let io = |e: std::io::Error| crate::common::os_or_invalid(path, e);
+    r.seek(SeekFrom::Start(132)).map_err(io)?;
+    let mut pos: u64 = 132;
+    let too_long = |tag: (u16, u16), declared: u64, left: u64| IoError::Truncated {
+        path: path.into(),
+        what: format!(
+            "element ({:04X},{:04X}) declares {declared} bytes, only {left} are left in the file",
+            tag.0, tag.1
+        ),
+    };
+    let mut ts = String::new();
+    let (mut explicit, mut big) = (true, false);
+    let mut in_meta = true;
+    let mut buf = [0u8; 12];
+    loop {
+        if pos + 8 > len {
+            return Ok(());
+        }
+        r.read_exact(&mut buf[..8]).map_err(io)?;
+        pos += 8;
+        if in_meta && u16::from_le_bytes([buf[0], buf[1]]) != 0x0002 {
+            in_meta = false;
+            match ts.as_str() {
+                "1.2.840.10008.1.2" => explicit = false,
+                "1.2.840.10008.1.2.2" => big = true,
+                // Deflated: the data set is a zlib stream, no headers to walk.
+                "1.2.840.10008.1.2.1.99" => return Ok(()),
+                _ => {}
+            }
+        }
+        let (ex, be) = if in_meta {
+            (true, false)
+        } else {
+            (explicit, big)
+        };
+        let u16_at = |b: &[u8], i: usize| {
+            if be {
+                u16::from_be_bytes([b[i], b[i + 1]])
+            } else {
+                u16::from_le_bytes([b[i], b[i + 1]])
+            }
+        };
+        let u32_at = |b: &[u8], i: usize| {
+            if be {
+                u32::from_be_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+            } else {
+                u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+            }
+        };
+        let tag = (u16_at(&buf, 0), u16_at(&buf, 2));
+        let mut sequence = false;
+        let declared = if tag.0 == 0xFFFE || !ex {
+            // Items and delimiters never carry a VR; implicit VR: 32-bit length.
+            if tag.0 != 0xFFFE {
+                use dicom_core::dictionary::{DataDictionary, DataDictionaryEntry, VirtualVr};
+                sequence = dicom_dictionary_std::StandardDataDictionary
+                    .by_tag(dicom_core::Tag(tag.0, tag.1))
+                    .is_some_and(|e| matches!(e.vr(), VirtualVr::Exact(dicom_core::VR::SQ)));
+            }
+            u32_at(&buf, 4)
+        } else {
+            let vr = [buf[4], buf[5]];
+            if !vr.iter().all(u8::is_ascii_uppercase) {
+                return Ok(());
+            }
+            if LONG_VRS.contains(&&vr) {
+                if pos + 4 > len {
+                    return Ok(());
+                }
+                r.read_exact(&mut buf[8..12]).map_err(io)?;
+                pos += 4;
+                let l = u32_at(&buf, 8);
+                if &vr == b"UN" && l == u32::MAX {
+                    // An implicit-VR sequence inside explicit VR (PS3.5 6.2.2): stop.
+                    return Ok(());
+                }
+                sequence = &vr == b"SQ";
+                l
+            } else {
+                u32::from(u16_at(&buf, 6))
+            }
+        };
+        if declared == u32::MAX {
+            if tag == (0x7FE0, 0x0010) {
+                // Encapsulated pixel data: fragments until the sequence delimiter.
+                loop {
+                    if pos + 8 > len {
+                        return Ok(());
+                    }
+                    r.read_exact(&mut buf[..8]).map_err(io)?;
+                    pos += 8;
+                    let (g, e, l) = (u16_at(&buf, 0), u16_at(&buf, 2), u32_at(&buf, 4));
+                    if (g, e) == (0xFFFE, 0xE0DD) {
+                        break;
+                    }
+                    if u64::from(l) > len - pos {
+                        return Err(too_long((g, e), l.into(), len - pos));
+                    }
+                    r.seek_relative(i64::from(l)).map_err(io)?;
+                    pos += u64::from(l);
+                }
+            }
+            // Otherwise an undefined-length sequence or item: walk into it.
+            continue;
+        }
+        let declared = u64::from(declared);
+        if declared > len - pos {
+            return Err(too_long(tag, declared, len - pos));
+        }
+        if tag.0 == 0xFFFE || sequence {
+            // Walk into items and sequences so nested lengths are checked too.
+            continue;
+        }
+        if tag == (0x0002, 0x0010) && declared <= 64 {
+            let mut v = vec![0u8; declared as usize];
+            r.read_exact(&mut v).map_err(io)?;
+            ts = String::from_utf8_lossy(&v)
+                .trim_end_matches(['\0', ' '])
+                .to_string();
+        } else {
+            r.seek_relative(declared as i64).map_err(io)?;
+        }
+        pos += declared;
+    }
 }
 
 fn open_error(path: &Path, e: dicom_object::ReadError) -> IoError {
@@ -427,6 +606,26 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             (None, None) => true,
             _ => false,
         };
+        let same_spacing = match (h.pixel_spacing, first.pixel_spacing) {
+            (Some(a), Some(b)) => a
+                .iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= SPACING_TOLERANCE * x.abs().max(y.abs())),
+            (None, None) => true,
+            _ => false,
+        };
+        if !same_spacing {
+            return Err(IoError::MixedSeries {
+                path: path.into(),
+                what: format!(
+                    "{} has PixelSpacing {:?}, {} has {:?}",
+                    first.path.display(),
+                    first.pixel_spacing,
+                    h.path.display(),
+                    h.pixel_spacing
+                ),
+            });
+        }
         if !same_orientation {
             return Err(IoError::Geometry {
                 path: path.into(),
@@ -446,7 +645,28 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     });
     let row_dir = [orientation[0], orientation[1], orientation[2]];
     let col_dir = [orientation[3], orientation[4], orientation[5]];
+    // Direction cosines are unit vectors at right angles (PS3.3 C.7.6.2.1.1); anything
+    // else would silently scale or shear the geometry.
+    let (nr, nc) = (dot(row_dir, row_dir).sqrt(), dot(col_dir, col_dir).sqrt());
+    if !(nr.is_finite() && nc.is_finite())
+        || (nr - 1.0).abs() > UNIT_TOLERANCE
+        || (nc - 1.0).abs() > UNIT_TOLERANCE
+        || dot(row_dir, col_dir).abs() > UNIT_TOLERANCE
+    {
+        return Err(IoError::Geometry {
+            path: path.into(),
+            what: format!(
+                "ImageOrientationPatient {orientation:?} is not two orthogonal unit vectors \
+                 (lengths {nr:.4} and {nc:.4}, dot product {:.4})",
+                dot(row_dir, col_dir)
+            ),
+        });
+    }
+    let row_dir = row_dir.map(|x| x / nr);
+    let col_dir = col_dir.map(|x| x / nc);
     let normal = cross(row_dir, col_dir);
+    let nn = dot(normal, normal).sqrt();
+    let normal = normal.map(|x| x / nn);
     let pixel_spacing = first.pixel_spacing.unwrap_or_else(|| {
         notes.push("no PixelSpacing: 1 mm pixels assumed".into());
         [1.0, 1.0]

@@ -20,6 +20,17 @@ use crate::{Format, IoError, Mesh, MeshFile};
 /// Largest XML document accepted (after gzip): far above a 1M-vertex surface in ASCII.
 const MAX_XML_BYTES: u64 = 4 << 30;
 
+/// Largest inflation accepted for a gzipped document (decompressed / compressed size).
+const MAX_GZIP_RATIO: u64 = 64;
+
+/// A gzipped document may always inflate to this many bytes, whatever its ratio.
+const MIN_XML_CAP: u64 = 64 << 20;
+
+/// Characters of `<Data>` text accepted per announced value (ASCII numbers with
+/// separators, or base64 with line breaks, take far fewer), plus a fixed slack.
+const DATA_CHARS_PER_VALUE: usize = 32;
+const DATA_SLACK: usize = 1 << 16;
+
 /// GIFTI data encodings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Encoding {
@@ -43,6 +54,19 @@ struct DataArray {
     transformed_space: Option<String>,
     matrix: Option<String>,
     data: String,
+    /// The `<Data>` text ran past what the dimensions allow; the rest was dropped.
+    overflow: bool,
+}
+
+impl DataArray {
+    /// Most `<Data>` characters the announced dimensions can explain.
+    fn data_cap(&self) -> usize {
+        self.dims
+            .iter()
+            .fold(1usize, |acc, &d| acc.saturating_mul(d))
+            .saturating_mul(DATA_CHARS_PER_VALUE)
+            .saturating_add(DATA_SLACK)
+    }
 }
 
 fn invalid(path: &Path, what: impl Into<String>) -> IoError {
@@ -58,6 +82,18 @@ fn invalid(path: &Path, what: impl Into<String>) -> IoError {
 pub fn read(path: &Path) -> Result<MeshFile, IoError> {
     let gz = is_gzip(path)?;
     let file = open(path)?;
+    let file_len = file.metadata().map_err(|e| os_or_invalid(path, e))?.len();
+    // A gzip bomb (a megabyte inflating to gigabytes of whitespace) is stopped at a
+    // ratio no real surface reaches: base64 or ASCII numbers compress a few times, not
+    // a hundred.
+    let max_xml = if gz {
+        file_len
+            .saturating_mul(MAX_GZIP_RATIO)
+            .max(MIN_XML_CAP)
+            .min(MAX_XML_BYTES)
+    } else {
+        MAX_XML_BYTES
+    };
     let mut text = Vec::new();
     let reader: Box<dyn Read> = if gz {
         Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(
@@ -67,13 +103,20 @@ pub fn read(path: &Path) -> Result<MeshFile, IoError> {
         Box::new(file)
     };
     reader
-        .take(MAX_XML_BYTES + 1)
+        .take(max_xml + 1)
         .read_to_end(&mut text)
         .map_err(|e| os_or_invalid(path, e))?;
-    if text.len() as u64 > MAX_XML_BYTES {
+    if text.len() as u64 > max_xml {
         return Err(IoError::TooLarge {
             path: path.into(),
-            what: format!("XML larger than {MAX_XML_BYTES} bytes"),
+            what: if gz {
+                format!(
+                    "the {file_len}-byte gzip file inflates past {max_xml} bytes of XML \
+                     (more than {MAX_GZIP_RATIO}x: a decompression bomb?)"
+                )
+            } else {
+                format!("XML larger than {MAX_XML_BYTES} bytes")
+            },
         });
     }
     let text = String::from_utf8(text).map_err(|_| invalid(path, "the XML is not UTF-8"))?;
@@ -125,7 +168,7 @@ pub fn read(path: &Path) -> Result<MeshFile, IoError> {
     }
     if let Some(a) = arrays
         .iter()
-        .find(|a| a.intent == "NIFTI_INTENT_VECTOR" && a.dims.first() == Some(&n))
+        .find(|a| a.intent == "NIFTI_INTENT_VECTOR" && a.dims == [n, 3])
     {
         mesh.normals = Some(rows3(path, a, "VECTOR", |v| v as f32)?);
     }
@@ -267,7 +310,13 @@ fn parse_xml(path: &Path, text: &str) -> Result<Vec<DataArray>, IoError> {
 fn add_text(current: &mut Option<DataArray>, stack: &[String], s: &str) {
     let Some(a) = current.as_mut() else { return };
     match stack.last().map(String::as_str) {
-        Some("Data") => a.data.push_str(s),
+        Some("Data") => {
+            if a.data.len().saturating_add(s.len()) > a.data_cap() {
+                a.overflow = true;
+            } else {
+                a.data.push_str(s);
+            }
+        }
         Some("DataSpace") => a.data_space = Some(s.trim().to_string()),
         Some("TransformedSpace") => a.transformed_space = Some(s.trim().to_string()),
         Some("MatrixData") => a.matrix.get_or_insert_with(String::new).push_str(s),
@@ -291,6 +340,16 @@ fn values(path: &Path, a: &DataArray) -> Result<Vec<f64>, IoError> {
             path: path.into(),
             what: format!("data array dimensions {:?}", a.dims),
         })?;
+    if a.overflow {
+        return Err(IoError::SizeMismatch {
+            path: path.into(),
+            what: format!(
+                "{} array: more than {} characters of data for {count} values",
+                a.intent,
+                a.data_cap()
+            ),
+        });
+    }
     let size = match a.data_type.as_str() {
         "NIFTI_TYPE_UINT8" => 1,
         "NIFTI_TYPE_INT32" | "NIFTI_TYPE_FLOAT32" => 4,

@@ -12,10 +12,17 @@ use ply_rs_bw::ply::{
 use crate::common::{open, os_or_invalid, write_atomic};
 use crate::{Format, IoError, Mesh, MeshFile};
 
-/// Refuses a mesh whose faces refer to vertices it does not have, or whose normals or
-/// scalars do not match the vertex count.
+/// Refuses a mesh whose faces refer to vertices it does not have, whose normals or
+/// scalars do not match the vertex count, or whose positions or normals are not finite.
+/// Every mesh reader (STL, OBJ, PLY, GIFTI) and writer ends with this check.
 pub(crate) fn check_indices(path: &Path, mesh: &Mesh) -> Result<(), IoError> {
     let n = mesh.positions.len();
+    if let Some(what) = mesh.non_finite() {
+        return Err(IoError::Invalid {
+            path: path.into(),
+            what,
+        });
+    }
     if let Some((k, t)) = mesh
         .triangles
         .iter()

@@ -333,7 +333,24 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         }
     };
 
-    // Geometry.
+    // Geometry. Every axis must be spatial: a color or vector axis (kinds RGB-color,
+    // vector, list, ...) is not a voxel dimension.
+    if let Some(kinds) = field("kinds") {
+        for (i, k) in kinds.split_whitespace().take(dimension).enumerate() {
+            if !matches!(
+                k.to_ascii_lowercase().as_str(),
+                "domain" | "space" | "none" | "???"
+            ) {
+                return Err(IoError::Unsupported {
+                    path: path.into(),
+                    what: format!(
+                        "axis {i} is a non-spatial axis (kind '{k}'); only scalar volumes \
+                         with spatial axes are read"
+                    ),
+                });
+            }
+        }
+    }
     let mut notes = Vec::new();
     let space = field("space").map(str::to_ascii_lowercase);
     let flip = match space.as_deref() {
@@ -399,7 +416,12 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             }
             None => notes.push("no spacings or space directions: 1 mm voxels".into()),
         }
-        diagonal_affine(spacing, [0.0; 3])
+        // A space origin is a world position even without space directions.
+        let origin = match field("space origin") {
+            Some(o) => vector(path, o)?.unwrap_or([0.0; 3]),
+            None => [0.0; 3],
+        };
+        diagonal_affine(spacing, std::array::from_fn(|r| flip[r] * origin[r]))
     };
     let spacing = check_affine(path, &affine)?;
     Ok(VolumeFile {

@@ -4,8 +4,8 @@ use std::io::{BufReader, Seek, SeekFrom};
 use std::path::Path;
 
 use crate::common::{
-    check_spacing, checked_voxels, decode_samples, diagonal_affine, encode_samples, open,
-    os_or_invalid, read_exact_growing, write_atomic, Endian,
+    check_affine, check_spacing, checked_voxels, decode_samples, diagonal_affine, encode_samples,
+    open, os_or_invalid, read_exact_growing, write_atomic, Endian,
 };
 use crate::{Format, IoError, RawParams, ReadOptions, Volume, VolumeFile};
 
@@ -13,6 +13,8 @@ use crate::{Format, IoError, RawParams, ReadOptions, Volume, VolumeFile};
 /// must hold exactly that many bytes: a different size usually means wrong parameters.
 pub fn read(path: &Path, params: &RawParams, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     check_spacing(path, params.spacing)?;
+    // Positive but degenerate sizes (1e-300 mm: a zero voxel volume) are refused too.
+    check_affine(path, &diagonal_affine(params.spacing, [0.0; 3]))?;
     let size = params.scalar.size();
     let count = checked_voxels(path, params.dims, size, options.max_voxels)?;
     let nbytes = (count * size) as u64;

@@ -315,8 +315,25 @@ impl Mesh {
         )
     }
 
-    /// Checks that every triangle index is in range.
+    /// Describes the first non-finite vertex position or normal, if any.
+    pub(crate) fn non_finite(&self) -> Option<String> {
+        let bad = |v: &[[f32; 3]]| v.iter().position(|p| p.iter().any(|x| !x.is_finite()));
+        if let Some(k) = bad(&self.positions) {
+            return Some(format!(
+                "vertex {k} has a non-finite position {:?}",
+                self.positions[k]
+            ));
+        }
+        let normals = self.normals.as_deref().unwrap_or_default();
+        bad(normals).map(|k| format!("vertex {k} has a non-finite normal {:?}", normals[k]))
+    }
+
+    /// Checks that every position and normal is finite and every triangle index is in
+    /// range.
     pub fn validate(&self) -> Result<(), IoError> {
+        if let Some(what) = self.non_finite() {
+            return Err(IoError::Inconsistent(what));
+        }
         let n = self.positions.len();
         if let Some(t) = self
             .triangles

@@ -521,3 +521,183 @@ fn compressed_pixel_data_is_unsupported() {
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(matches!(err, IoError::Unsupported { .. }), "{err}");
 }
+
+/// A one-slice 16-bit image at the origin with `px` as its pixel data.
+fn slice_with(rows: u16, cols: u16, series: &str, px: Vec<u16>) -> InMemDicomObject {
+    let mut o = image(rows, cols, series, 1, false);
+    put(
+        &mut o,
+        tags::IMAGE_POSITION_PATIENT,
+        VR::DS,
+        ds(&[0.0, 0.0, 0.0]),
+    );
+    put(
+        &mut o,
+        tags::PIXEL_DATA,
+        VR::OW,
+        PrimitiveValue::U16(px.into()),
+    );
+    o
+}
+
+/// Review defect 1: a 1x1 image announcing 2^31 - 1 frames (within the voxel limit)
+/// used to size per-frame vectors (64 GB) before the file-size check and abort the
+/// process; it must be refused from the header, since the file cannot hold those pixels.
+#[test]
+fn frame_count_beyond_the_file_size_is_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    for with_position in [true, false] {
+        let mut o = slice_with(1, 1, "1.2.3.20", vec![0]);
+        if !with_position {
+            o.remove_element(tags::IMAGE_POSITION_PATIENT);
+        }
+        put(
+            &mut o,
+            tags::NUMBER_OF_FRAMES,
+            VR::IS,
+            dicom_value!(Str, "2147483647"),
+        );
+        put(&mut o, tags::SLICE_THICKNESS, VR::DS, ds(&[1.0]));
+        let p = dir.path().join(format!("frames{with_position}.dcm"));
+        write(&p, o, EXPLICIT_LE);
+        let opts = ReadOptions {
+            max_voxels: u64::MAX,
+            ..ReadOptions::default()
+        };
+        let err = glint_io::read_volume(&p, &opts).unwrap_err();
+        assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
+    }
+}
+
+/// Offset of the first occurrence of `needle` in `hay`.
+fn find_bytes(hay: &[u8], needle: &[u8]) -> usize {
+    hay.windows(needle.len())
+        .position(|w| w == needle)
+        .expect("pattern in the file")
+}
+
+/// Review defect 2: dicom-rs allocates an element's declared length before reading it,
+/// so a few hundred bytes declaring a 4 GB PixelData (or private OB element) cost 4 GB
+/// of memory. The declared lengths are now checked against the file size first: the
+/// error names the element and its declared length.
+#[test]
+fn element_lengths_beyond_the_file_are_refused_before_parsing() {
+    let dir = tempfile::tempdir().unwrap();
+    for ts in [EXPLICIT_LE, IMPLICIT_LE, EXPLICIT_BE] {
+        let p = dir.path().join("pix.dcm");
+        write(&p, slice_with(2, 2, "1.2.3.21", vec![1; 4]), ts);
+        let mut bytes = std::fs::read(&p).unwrap();
+        // The length field of PixelData (7FE0,0010): after the tag, plus VR and two
+        // reserved bytes in explicit VR.
+        let (tag, len_at, huge): (&[u8], usize, [u8; 4]) = match ts {
+            EXPLICIT_LE => (&[0xE0, 0x7F, 0x10, 0x00], 8, 0xFFFF_FFF0u32.to_le_bytes()),
+            IMPLICIT_LE => (&[0xE0, 0x7F, 0x10, 0x00], 4, 0xFFFF_FFF0u32.to_le_bytes()),
+            _ => (&[0x7F, 0xE0, 0x00, 0x10], 8, 0xFFFF_FFF0u32.to_be_bytes()),
+        };
+        let at = find_bytes(&bytes, tag) + len_at;
+        bytes[at..at + 4].copy_from_slice(&huge);
+        std::fs::write(&p, &bytes).unwrap();
+        let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            matches!(err, IoError::Truncated { .. }) && msg.contains("declares 4294967280 bytes"),
+            "{ts}: {msg}"
+        );
+    }
+    // A private OB element before the pixel data.
+    let mut o = slice_with(2, 2, "1.2.3.22", vec![1; 4]);
+    put(
+        &mut o,
+        Tag(0x0029, 0x0010),
+        VR::LO,
+        dicom_value!(Str, "GLINT"),
+    );
+    put(
+        &mut o,
+        Tag(0x0029, 0x1010),
+        VR::OB,
+        PrimitiveValue::U8(vec![0xAB; 4].into()),
+    );
+    let p = dir.path().join("private.dcm");
+    write(&p, o, EXPLICIT_LE);
+    let mut bytes = std::fs::read(&p).unwrap();
+    let at = find_bytes(&bytes, &[0x29, 0x00, 0x10, 0x10, b'O', b'B']) + 8;
+    bytes[at..at + 4].copy_from_slice(&0xFFFF_FF00u32.to_le_bytes());
+    std::fs::write(&p, &bytes).unwrap();
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("(0029,1010) declares 4294967040 bytes"),
+        "{err}"
+    );
+    // The walk accepts the same files unpatched, in every transfer syntax.
+    for ts in [EXPLICIT_LE, IMPLICIT_LE, EXPLICIT_BE] {
+        let p = dir.path().join("fine.dcm");
+        write(&p, slice_with(2, 2, "1.2.3.23", vec![7; 4]), ts);
+        let v = glint_io::read_volume(&p, &ReadOptions::default()).unwrap();
+        assert_eq!(v.samples, Samples::U16(vec![7; 4]), "{ts}");
+    }
+}
+
+/// Review defect 6: direction cosines that are not unit length (2\0\0\0\2\0) used to
+/// scale the spacing silently; zero vectors and non-orthogonal ones are errors too, while
+/// rounding in the sixth decimal is accepted.
+#[test]
+fn orientation_must_be_orthonormal() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, iop) in [
+        [2.0, 0.0, 0.0, 0.0, 2.0, 0.0],
+        [0.0; 6],
+        [1.0, 0.0, 0.0, 0.6, 0.8, 0.0],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let mut o = slice_with(2, 2, "1.2.3.24", vec![0; 4]);
+        put(&mut o, tags::IMAGE_ORIENTATION_PATIENT, VR::DS, ds(&iop));
+        let p = dir.path().join(format!("iop{k}.dcm"));
+        write(&p, o, EXPLICIT_LE);
+        let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+        assert!(
+            matches!(err, IoError::Geometry { .. })
+                && err.to_string().contains("ImageOrientationPatient"),
+            "{iop:?}: {err}"
+        );
+    }
+    let mut o = slice_with(2, 2, "1.2.3.25", vec![0; 4]);
+    put(
+        &mut o,
+        tags::IMAGE_ORIENTATION_PATIENT,
+        VR::DS,
+        ds(&[1.000001, 0.0, 0.0, 0.0, 0.999999, 0.0]),
+    );
+    let p = dir.path().join("rounded.dcm");
+    write(&p, o, EXPLICIT_LE);
+    let v = glint_io::read_volume(&p, &ReadOptions::default()).unwrap();
+    // PixelSpacing (0.5 row, 0.75 column), one slice of 1 mm assumed; unit directions.
+    for (got, want) in v.spacing.iter().zip([0.75, 0.5, 1.0]) {
+        assert!((got - want).abs() < 1e-12, "{:?}", v.spacing);
+    }
+}
+
+/// Review defect 7: slices whose PixelSpacing differs are not one volume.
+#[test]
+fn pixel_spacing_must_agree_across_slices() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, sp) in [[0.5, 0.75], [0.5, 0.8]].into_iter().enumerate() {
+        let mut o = slice_with(2, 2, "1.2.3.26", vec![0; 4]);
+        put(&mut o, tags::PIXEL_SPACING, VR::DS, ds(&sp));
+        put(
+            &mut o,
+            tags::IMAGE_POSITION_PATIENT,
+            VR::DS,
+            ds(&[0.0, 0.0, k as f64]),
+        );
+        write(&dir.path().join(format!("{k}.dcm")), o, EXPLICIT_LE);
+    }
+    let err = glint_io::read_volume(dir.path(), &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, IoError::MixedSeries { .. }) && err.to_string().contains("PixelSpacing"),
+        "{err}"
+    );
+}

@@ -347,3 +347,125 @@ fn fsaverage5_sulcal_depth_is_not_a_surface() {
     assert!(matches!(err, IoError::Invalid { .. }), "{err}");
     assert!(err.to_string().contains("NIFTI_INTENT_SHAPE"), "{err}");
 }
+
+/// A binary STL of one triangle with the given corners.
+fn stl_binary(corners: [[f32; 3]; 3]) -> Vec<u8> {
+    let mut b = vec![0u8; 80];
+    b.extend(1u32.to_le_bytes());
+    b.extend([0u8; 12]);
+    for c in corners {
+        for x in c {
+            b.extend(x.to_le_bytes());
+        }
+    }
+    b.extend([0u8; 2]);
+    b
+}
+
+/// Review defect 5: non-finite positions and normals are refused by every mesh format
+/// (binary STL and OBJ used to accept them and report infinite bounds).
+#[test]
+fn non_finite_vertices_refused_in_every_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+        property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    let tri = "ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\"";
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        (
+            "nan.stl",
+            stl_binary([[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        ),
+        (
+            "inf.stl",
+            stl_binary([[0.0, 0.0, 0.0], [f32::INFINITY, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        ),
+        (
+            "nan.obj",
+            b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(),
+        ),
+        (
+            "nrm.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 inf\nf 1//1 2//1 3//1\n".to_vec(),
+        ),
+        ("nan.ply", {
+            // Binary: ASCII PLY has no spelling of NaN that ply-rs parses.
+            let mut b = ply_head
+                .replace("ascii", "binary_little_endian")
+                .into_bytes();
+            for x in [0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 1.0, 0.0f32] {
+                b.extend(x.to_le_bytes());
+            }
+            b.push(3);
+            for i in [0i32, 1, 2] {
+                b.extend(i.to_le_bytes());
+            }
+            b
+        }),
+        (
+            "inf.gii",
+            gifti_doc((ASCII_ROW, "0 0 0 inf 0 0 0 1 0"), (tri, "0 1 2")).into_bytes(),
+        ),
+    ];
+    for (name, bytes) in cases {
+        let err = expect_err(&dir, name, bytes);
+        assert!(
+            matches!(err, IoError::Invalid { .. }) && err.to_string().contains("non-finite"),
+            "{name}: {err}"
+        );
+    }
+    let mut m = tetra();
+    m.normals.as_mut().unwrap()[2][1] = f32::NAN;
+    assert!(matches!(m.validate(), Err(IoError::Inconsistent(_))));
+    let p = dir.path().join("out.stl");
+    assert!(mesh::write_stl(&p, &m).is_err());
+    assert!(!p.exists());
+}
+
+/// Review defect 3: a small gzipped GIFTI inflating to far more XML than its arrays can
+/// hold (a decompression bomb) is refused without inflating it all, and `<Data>` text
+/// beyond what the dimensions announce is refused instead of being copied.
+#[test]
+fn gifti_decompression_bomb_and_oversized_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = "ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\"";
+    // 80 MB of blanks after nine numbers: valid XML, about 80 kB gzipped (ratio ~1000).
+    let pad = " ".repeat(80 << 20);
+    let doc = gifti_doc(
+        (ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")),
+        (tri, "0 1 2"),
+    );
+    let gz = common::gzip(doc.as_bytes());
+    assert!(gz.len() < 1 << 20);
+    let err = expect_err(&dir, "bomb.gii.gz", gz);
+    assert!(matches!(err, IoError::TooLarge { .. }), "{err}");
+    // Uncompressed: 200 kB of blanks in the Data of a 3x3 array.
+    let pad = " ".repeat(200_000);
+    let doc = gifti_doc(
+        (ASCII_ROW, &format!("0 0 0 1 0 0 0 1 0{pad}")),
+        (tri, "0 1 2"),
+    );
+    let err = expect_err(&dir, "padded.gii", doc);
+    assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
+    // Modest padding is fine.
+    let doc = gifti_doc((ASCII_ROW, "\n 0 0 0\n 1 0 0\n 0 1 0\n"), (tri, "0 1 2"));
+    let f = glint_io::open_mesh(&file(&dir, "ok.gii", doc)).unwrap();
+    assert_eq!(f.mesh.positions.len(), 3);
+}
+
+/// Review defect 10: a one-dimensional VECTOR array is not per-vertex normals; it used
+/// to fail the whole read, now it is skipped.
+#[test]
+fn gifti_one_dimensional_vector_array_is_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = "ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"2\" Dim0=\"1\" Dim1=\"3\" Encoding=\"ASCII\" Endian=\"LittleEndian\"";
+    let vec1 = "<DataArray Intent=\"NIFTI_INTENT_VECTOR\" DataType=\"NIFTI_TYPE_FLOAT32\" \
+        ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"1\" Dim0=\"3\" Encoding=\"ASCII\" \
+        Endian=\"LittleEndian\"><Data>1 2 3</Data></DataArray>\n</GIFTI>";
+    let doc = gifti_doc((ASCII_ROW, "0 0 0 1 0 0 0 1 0"), (tri, "0 1 2"))
+        .replace("NumberOfDataArrays=\"2\"", "NumberOfDataArrays=\"3\"")
+        .replace("</GIFTI>", vec1);
+    let f = glint_io::open_mesh(&file(&dir, "vec1.gii", doc)).unwrap();
+    assert_eq!(f.mesh.positions.len(), 3);
+    assert_eq!(f.mesh.triangles, vec![[0, 1, 2]]);
+    assert!(f.mesh.normals.is_none());
+}

@@ -242,3 +242,32 @@ fn missing_detached_data_file() {
         "{err}"
     );
 }
+
+/// Review defect 8: a color axis is reported as a non-spatial axis (it used to fail as
+/// "voxel spacing NaN"), and a space origin given with plain spacings is used.
+#[test]
+fn non_spatial_kinds_and_origin_with_spacings() {
+    let head = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 2 2\n\
+                kinds: RGB-color domain domain\nspacings: nan 1 1\nencoding: raw\n\n";
+    let mut bytes = head.as_bytes().to_vec();
+    bytes.extend([0u8; 12]);
+    let err = expect_err(&bytes, "rgb.nrrd", &ReadOptions::default());
+    assert!(
+        matches!(err, IoError::Unsupported { .. }) && err.to_string().contains("non-spatial"),
+        "{err}"
+    );
+    let head = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nspace: RAS\n\
+                kinds: domain domain domain\nspacings: 1 2 3\nspace origin: (5,6,7)\nencoding: raw\n\n";
+    let mut bytes = head.as_bytes().to_vec();
+    bytes.extend([0u8; 8]);
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(&dir, "origin.nrrd", &bytes);
+    let v = glint_io::read_volume(&p, &ReadOptions::default()).unwrap();
+    let want = [
+        [1.0, 0.0, 0.0, 5.0],
+        [0.0, 2.0, 0.0, 6.0],
+        [0.0, 0.0, 3.0, 7.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    assert_eq!(v.affine, want);
+}

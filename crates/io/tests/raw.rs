@@ -126,3 +126,20 @@ fn scalar_type_names() {
     }
     assert!("complex".parse::<ScalarType>().is_err());
 }
+
+/// Review defect 9: positive spacings whose voxel volume underflows to zero
+/// (1e-300 mm cubed) are a degenerate geometry, not a volume.
+#[test]
+fn degenerate_tiny_spacing() {
+    let mut opts = options([2, 2, 2], ScalarType::U8, Endian::Little, 0);
+    opts.raw.as_mut().unwrap().spacing = [1e-300; 3];
+    let err = expect_err(&[0; 8], &opts);
+    assert!(matches!(err, IoError::Geometry { .. }), "{err}");
+    // Small but sane voxels (1 micrometre) are still read.
+    opts.raw.as_mut().unwrap().spacing = [1e-3; 3];
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("v.raw");
+    std::fs::write(&p, [0u8; 8]).unwrap();
+    let v = glint_io::read_volume(&p, &opts).unwrap();
+    assert_eq!(v.spacing, [1e-3; 3]);
+}

@@ -247,6 +247,13 @@ fn num(x: f64) -> String {
     if !x.is_finite() {
         return format!("{x}");
     }
+    if x != 0.0 && x.abs() < 5e-5 {
+        // Too small for four decimals: four significant digits instead of "0".
+        let s = format!("{x:.3e}");
+        let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        return format!("{mantissa}e{exp}");
+    }
     let s = format!("{x:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" {
@@ -287,6 +294,10 @@ mod tests {
         assert_eq!(num(0.5), "0.5");
         assert_eq!(num(-0.0), "0");
         assert_eq!(num(1.23456), "1.2346");
+        // Review defect 9: tiny values keep their significant digits instead of "0".
+        assert_eq!(num(1e-300), "1e-300");
+        assert_eq!(num(-2.5e-6), "-2.5e-6");
+        assert_eq!(num(1.23456e-5), "1.235e-5");
     }
 
     #[test]
