@@ -89,8 +89,7 @@ pub fn read(path: &Path) -> Result<MeshFile, IoError> {
     let max_xml = if gz {
         file_len
             .saturating_mul(MAX_GZIP_RATIO)
-            .max(MIN_XML_CAP)
-            .min(MAX_XML_BYTES)
+            .clamp(MIN_XML_CAP, MAX_XML_BYTES)
     } else {
         MAX_XML_BYTES
     };
