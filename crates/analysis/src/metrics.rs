@@ -154,42 +154,9 @@ pub(crate) fn maximise(g: &dyn Fn(f64) -> f64, grid: &[f64], lo: f64, hi: f64) -
     for i in candidates {
         let l = xs[i.saturating_sub(1)];
         let h = xs[(i + 1).min(last)];
-        let found = golden_max(g, l, h, (xs[i], ys[i]));
+        let found = glint_lobe::golden_max(g, l, h, xs[i], ys[i]);
         if found.1 > best.1 {
             best = found;
-        }
-    }
-    best
-}
-
-/// Golden-section maximisation of `g` on `[lo, hi]`, never worse than `start`.
-fn golden_max(g: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64, start: (f64, f64)) -> (f64, f64) {
-    const INV_PHI: f64 = 0.618_033_988_749_894_8;
-    let mut best = start;
-    let mut x1 = hi - INV_PHI * (hi - lo);
-    let mut x2 = lo + INV_PHI * (hi - lo);
-    let (mut g1, mut g2) = (g(x1), g(x2));
-    for _ in 0..100 {
-        if hi - lo <= 1e-14 {
-            break;
-        }
-        if g1 < g2 {
-            lo = x1;
-            x1 = x2;
-            g1 = g2;
-            x2 = lo + INV_PHI * (hi - lo);
-            g2 = g(x2);
-        } else {
-            hi = x2;
-            x2 = x1;
-            g2 = g1;
-            x1 = hi - INV_PHI * (hi - lo);
-            g1 = g(x1);
-        }
-    }
-    for cand in [(x1, g1), (x2, g2)] {
-        if cand.1 > best.1 {
-            best = cand;
         }
     }
     best

@@ -88,8 +88,17 @@ fn signed_peaks(f: &dyn Fn(f64) -> f64, n: f64, kinks: &[f64]) -> (ErrorPeak, Er
 }
 
 /// Maximises `g` on `[lo, hi]` by golden-section search, never returning worse than
-/// the starting point `(t0, g0)`.
-fn golden_max(g: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, t0: f64, g0: f64) -> (f64, f64) {
+/// the starting point `(t0, g0)`; returns `(t, g(t))`.
+///
+/// For a unimodal `g` (smooth or kinked) the bracket shrinks to ~1e-15. Shared by the
+/// minimax search here and the error metrics of `glint-analysis`.
+pub fn golden_max(
+    g: impl Fn(f64) -> f64,
+    mut lo: f64,
+    mut hi: f64,
+    t0: f64,
+    g0: f64,
+) -> (f64, f64) {
     const INV_PHI: f64 = 0.618_033_988_749_894_8;
     let (mut best_t, mut best) = (t0, g0);
     let mut x1 = hi - INV_PHI * (hi - lo);

@@ -31,7 +31,7 @@ mod lobe;
 pub use batch::measure;
 pub use batch::{eval_slice_with, pow_slice, BatchError, KernelPath};
 pub use coefficient::{
-    energy_fit_coefficient, max_abs_error, minimax_coefficient, power_lobe_integral,
+    energy_fit_coefficient, golden_max, max_abs_error, minimax_coefficient, power_lobe_integral,
     slope_fit_coefficient, ErrorPeak,
 };
 pub use geometry::{blinn_cos, phong_cos, reflect, Geometry};
