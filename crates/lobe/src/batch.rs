@@ -368,11 +368,11 @@ fn power_elem(a: f32, v: u32, c: f32) -> f32 {
     b
 }
 
-/// Schlick's `c / (n - n c + c)` for `c > 0`, else 0, with the operations of `eval`.
+/// Schlick's `c / (n(1 - c) + c)` for `c > 0`, else 0, with the operations of `eval`.
 #[inline(always)]
 fn schlick(n: f32, c: f32) -> f32 {
     let c = clamp_lo(clamp_hi(c));
-    let y = c / (n - n * c + c);
+    let y = c / (n * (1.0 - c) + c);
     let y = if c > 0.0 { y } else { 0.0 };
     // eval's final clamp to [0, 1] (y >= 0 already).
     if 1.0 < y {

@@ -39,7 +39,8 @@ pub enum LobeKind {
     EnergyFit,
     /// The slope fit G_v (Lyon 1993): `a = n/2^v`.
     SlopeFit,
-    /// Schlick's rational form `c / (n - n·c + c)` for `c > 0`, else 0.
+    /// Schlick's rational form `c / (n - n·c + c)` for `c > 0`, else 0 (evaluated as
+    /// `c / (n(1 - c) + c)`, which does not cancel).
     Schlick,
     /// The spherical-Gaussian form `exp(n·(c - 1))`.
     Gauss,
@@ -224,7 +225,9 @@ impl<T: Real> Lobe<T> {
             }
             Form::Schlick { n } => {
                 if c > zero {
-                    c / (n - n * c + c)
+                    // n(1 - c) rather than n - n c: 1 - c is exact for c >= 1/2
+                    // (Sterbenz), while n - n c cancels and loses ~log2(n) bits.
+                    c / (n * (one - c) + c)
                 } else {
                     zero
                 }
