@@ -13,6 +13,9 @@ use crate::math::Vec3;
 use crate::shading::{RayLighting, Shader};
 use crate::tf::{Lut, TransferFunction};
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+
 /// How samples along a ray make a pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Mode {
@@ -54,8 +57,9 @@ const ISO_REFINE_STEPS: u32 = 8;
 /// Macro cells per edge of the coarse blocks empty-space skipping leaps first.
 const COARSE: usize = 4;
 
-/// Rows per parallel task: each task renders a band of rows.
-const BAND_ROWS: usize = 8;
+/// Edge of the square image tiles rendered as parallel tasks (a tile's rays read a
+/// compact block of the volume that stays in the core's L2 cache).
+const TILE: usize = 16;
 
 /// What to render and how.
 #[derive(Clone, Debug)]
@@ -74,6 +78,21 @@ pub struct RenderSettings {
     pub background: [f32; 3],
     /// Empty-space skipping on (it never changes the image, only the speed).
     pub skip_empty: bool,
+    /// Which compositing loop runs.
+    pub kernel: Kernel,
+}
+
+/// The compositing loop a render uses. Both give the same image: bit-identical for
+/// every lobe but `exact` and `gauss`, whose vectorised pow/exp differ from libm by at
+/// most 2 ulp.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Kernel {
+    /// The SIMD loop (eight samples at a time) when the CPU has AVX2 and FMA, else
+    /// the scalar loop.
+    #[default]
+    Auto,
+    /// The portable scalar loop, one sample at a time (the reference).
+    Scalar,
 }
 
 impl Default for RenderSettings {
@@ -86,6 +105,7 @@ impl Default for RenderSettings {
             camera: CameraSpec::default(),
             background: [0.0; 3],
             skip_empty: true,
+            kernel: Kernel::Auto,
         }
     }
 }
@@ -239,6 +259,8 @@ struct Caster<'a> {
     coarse_dims: [usize; 3],
     /// Step in mm.
     dt: f32,
+    /// Run the AVX2 compositing loop.
+    simd: bool,
 }
 
 /// Renders `field` classified by `tf` and lit by `shader`. `progress` is called with
@@ -284,36 +306,50 @@ pub fn render(
         camera,
         active,
         dt: (settings.step * field.min_spacing()) as f32,
+        simd: settings.kernel == Kernel::Auto && simd_supported(),
     };
     let (w, h) = (settings.width as usize, settings.height as usize);
+    let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
+        .into_par_iter()
+        .map(|t| {
+            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let n = (x1 - x0) * (y1 - y0);
+            let mut rgb = Vec::with_capacity(n);
+            let mut alpha = Vec::with_capacity(n);
+            let mut stats = RenderStats::default();
+            let bg = settings.background;
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let (c, op) = caster.cast(x as f32, y as f32, &mut stats);
+                    rgb.push([
+                        c[0] + (1.0 - op) * bg[0],
+                        c[1] + (1.0 - op) * bg[1],
+                        c[2] + (1.0 - op) * bg[2],
+                    ]);
+                    alpha.push(op);
+                }
+            }
+            progress(n as u64);
+            (rgb, alpha, stats)
+        })
+        .collect();
     let mut rgb = vec![[0.0f32; 3]; w * h];
     let mut alpha = vec![0.0f32; w * h];
-    let stats = rgb
-        .par_chunks_mut(w * BAND_ROWS)
-        .zip(alpha.par_chunks_mut(w * BAND_ROWS))
-        .enumerate()
-        .map(|(band, (rgb, alpha))| {
-            let y0 = band * BAND_ROWS;
-            let mut stats = RenderStats::default();
-            for (idx, (px, a)) in rgb.iter_mut().zip(alpha.iter_mut()).enumerate() {
-                let (x, y) = (idx % w, y0 + idx / w);
-                let (c, op) = caster.cast(x as f32, y as f32, &mut stats);
-                let bg = settings.background;
-                *px = [
-                    c[0] + (1.0 - op) * bg[0],
-                    c[1] + (1.0 - op) * bg[1],
-                    c[2] + (1.0 - op) * bg[2],
-                ];
-                *a = op;
-            }
-            progress(rgb.len() as u64);
-            stats
-        })
-        .reduce(RenderStats::default, |a, b| RenderStats {
-            samples: a.samples + b.samples,
-            shaded: a.shaded + b.shaded,
-            skips: a.skips + b.skips,
-        });
+    let mut stats = RenderStats::default();
+    for (t, (trgb, talpha, tstats)) in tiles.into_iter().enumerate() {
+        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+        let tw = (x0 + TILE).min(w) - x0;
+        for (r, (crow, arow)) in trgb.chunks(tw).zip(talpha.chunks(tw)).enumerate() {
+            let o = (y0 + r) * w + x0;
+            rgb[o..o + tw].copy_from_slice(crow);
+            alpha[o..o + tw].copy_from_slice(arow);
+        }
+        stats.samples += tstats.samples;
+        stats.shaded += tstats.shaded;
+        stats.skips += tstats.skips;
+    }
     Ok(Image {
         width: settings.width,
         height: settings.height,
@@ -321,6 +357,18 @@ pub fn render(
         alpha,
         stats,
     })
+}
+
+/// Whether the CPU runs the SIMD compositing loop.
+fn simd_supported() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        avx2::supported()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
 }
 
 /// Work counts of one render (for tests and tuning; not timing).
@@ -387,7 +435,15 @@ impl Caster<'_> {
         // for orthographic rays it is the same for all.
         let view = -dir;
         match s.mode {
-            Mode::Composite => self.composite(&ray, view, stats),
+            Mode::Composite => {
+                let lighting = self.shader.for_ray(view);
+                #[cfg(target_arch = "x86_64")]
+                if self.simd {
+                    // SAFETY: `simd` is set only when avx2::supported() is true.
+                    return unsafe { avx2::composite(self, &ray, &lighting, stats) };
+                }
+                self.composite(&ray, &lighting, stats)
+            }
             Mode::Iso { threshold } => self.iso(&ray, view, threshold),
             Mode::Mip => self.mip(&ray),
         }
@@ -444,8 +500,13 @@ impl Caster<'_> {
         }
     }
 
-    fn composite(&self, ray: &Ray, view: Vec3, stats: &mut RenderStats) -> ([f32; 3], f32) {
-        let lighting: RayLighting = self.shader.for_ray(view);
+    /// Front-to-back compositing, one sample at a time (the reference loop).
+    fn composite(
+        &self,
+        ray: &Ray,
+        lighting: &RayLighting,
+        stats: &mut RenderStats,
+    ) -> ([f32; 3], f32) {
         let mut color = [0.0f32; 3];
         let mut alpha = 0.0f32;
         let mut k = ray.k0;
@@ -471,7 +532,7 @@ impl Caster<'_> {
                 let e = self.lut.entry_at(li);
                 stats.shaded += 1;
                 let g = self.field.gradient_at(&loc);
-                let rgb = self.shader.shade([e[0], e[1], e[2]], g, &lighting);
+                let rgb = self.shader.shade([e[0], e[1], e[2]], g, lighting);
                 let w = (1.0 - alpha) * e[3];
                 color[0] += w * rgb[0];
                 color[1] += w * rgb[1];

@@ -305,7 +305,7 @@ pub struct Lut {
     /// `[r, g, b, alpha']` per entry, colour linear.
     pub(crate) entries: Vec<[f32; 4]>,
     /// The opacities alone (16 KiB, stays in L1 for the per-sample test).
-    alphas: Vec<f32>,
+    pub(crate) alphas: Vec<f32>,
     /// `nonzero[i]` = number of entries below `i` with alpha' > 0, for O(1) range tests.
     nonzero: Vec<u32>,
 }

@@ -8,7 +8,7 @@ use anyhow::{bail, Context};
 use glint_io::{read_volume, ReadOptions};
 use glint_lobe::{Geometry, LobeKind};
 use glint_render::{
-    camera_for, phantom, preset, render, CameraSpec, Depth, Field, Light, Mode, Projection,
+    camera_for, phantom, preset, render, CameraSpec, Depth, Field, Kernel, Light, Mode, Projection,
     RenderSettings, Shader, TransferFunction, View,
 };
 
@@ -130,6 +130,9 @@ struct Options {
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     no_skip: bool,
+    /// Benchmarking: composite with the portable scalar loop instead of the SIMD one.
+    #[arg(long, hide = true)]
+    scalar: bool,
     /// Benchmarking: write the resolved scene (camera, transfer function, material,
     /// step, volume) as JSON, so scripts/bench-vtk can set VTK up identically.
     #[arg(long, hide = true, value_name = "FILE")]
@@ -259,6 +262,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         background: [0.0; 3],
         skip_empty: !args.no_skip,
+        kernel: if args.scalar { Kernel::Scalar } else { Kernel::Auto },
     };
     settings.validate()?;
     let camera = camera_for(&field, &tf, &settings)?;
