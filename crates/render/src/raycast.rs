@@ -360,74 +360,108 @@ fn simd_supported() -> bool {
 
 /// Chessboard (L-infinity) distance from every macro cell to the nearest `active` one,
 /// in cells, saturating at 255: the exact two-pass chamfer transform with the 26
-/// neighbours (Rosenfeld and Pfaltz 1966), O(cells).
+/// neighbours (Rosenfeld and Pfaltz 1966), O(cells). Each row takes the minimum over
+/// its 12 neighbours in earlier (later) rows in one vectorisable sweep, then the one
+/// along the row in a short serial sweep.
 fn chessboard_distance(active: &[bool], dims: [usize; 3]) -> Vec<u8> {
-    let [cx, cy, cz] = dims;
-    let mut d: Vec<u8> = active.iter().map(|&a| if a { 0 } else { u8::MAX }).collect();
-    let idx = |x: usize, y: usize, z: usize| x + cx * (y + cy * z);
-    // Forward pass: the 13 neighbours before a cell in raster order; backward: the
-    // 13 after it.
-    let mut pass = |forward: bool| {
-        for zi in 0..cz {
-            let z = if forward { zi } else { cz - 1 - zi };
-            for yi in 0..cy {
-                let y = if forward { yi } else { cy - 1 - yi };
-                for xi in 0..cx {
-                    let x = if forward { xi } else { cx - 1 - xi };
-                    let here = idx(x, y, z);
-                    if d[here] == 0 {
-                        continue;
-                    }
-                    let mut best = d[here];
-                    for (ox, oy, oz) in CAUSAL {
-                        let (ox, oy, oz) = if forward {
-                            (ox, oy, oz)
-                        } else {
-                            (-ox, -oy, -oz)
-                        };
-                        let (nx, ny, nz) = (
-                            x as isize + ox,
-                            y as isize + oy,
-                            z as isize + oz,
-                        );
-                        if nx < 0
-                            || ny < 0
-                            || nz < 0
-                            || nx >= cx as isize
-                            || ny >= cy as isize
-                            || nz >= cz as isize
-                        {
-                            continue;
-                        }
-                        let n = d[idx(nx as usize, ny as usize, nz as usize)];
-                        best = best.min(n.saturating_add(1));
-                    }
-                    d[here] = best;
+    // Padded by one cell on every side (never active) so neighbours need no checks.
+    let [px, py, pz] = dims.map(|d| d + 2);
+    let row = |y: usize, z: usize| px * (y + py * z);
+    let mut d = vec![u8::MAX; px * py * pz];
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            let src = &active[dims[0] * (y + dims[1] * z)..][..dims[0]];
+            let dst = &mut d[row(y + 1, z + 1) + 1..][..dims[0]];
+            for (o, &a) in dst.iter_mut().zip(src) {
+                *o = if a { 0 } else { u8::MAX };
+            }
+        }
+    }
+    // Minimum of row `r` at x-1, x, x+1 into `m[x-1]` for x = 1..px-1.
+    let min3 = |m: &mut [u8], r: &[u8]| {
+        for (((o, &a), &b), &c) in m.iter_mut().zip(r).zip(&r[1..]).zip(&r[2..]) {
+            *o = (*o).min(a.min(b).min(c));
+        }
+    };
+    let mut m = vec![u8::MAX; px - 2];
+    for z in 1..pz - 1 {
+        for y in 1..py - 1 {
+            let start = row(y, z);
+            let (before, after) = d.split_at_mut(start);
+            m.fill(u8::MAX);
+            for ny in y - 1..=y + 1 {
+                min3(&mut m, &before[row(ny, z - 1)..][..px]);
+            }
+            min3(&mut m, &before[row(y - 1, z)..][..px]);
+            let cur = &mut after[..px];
+            for (c, &n) in cur[1..px - 1].iter_mut().zip(&m) {
+                *c = (*c).min(n.saturating_add(1));
+            }
+            for x in 1..px - 1 {
+                cur[x] = cur[x].min(cur[x - 1].saturating_add(1));
+            }
+        }
+    }
+    for z in (1..pz - 1).rev() {
+        for y in (1..py - 1).rev() {
+            let start = row(y, z);
+            let base = start + px;
+            let (before, after) = d.split_at_mut(base);
+            m.fill(u8::MAX);
+            for ny in y - 1..=y + 1 {
+                min3(&mut m, &after[row(ny, z + 1) - base..][..px]);
+            }
+            min3(&mut m, &after[row(y + 1, z) - base..][..px]);
+            let cur = &mut before[start..];
+            for (c, &n) in cur[1..px - 1].iter_mut().zip(&m) {
+                *c = (*c).min(n.saturating_add(1));
+            }
+            for x in (1..px - 1).rev() {
+                cur[x] = cur[x].min(cur[x + 1].saturating_add(1));
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(active.len());
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            out.extend_from_slice(&d[row(y + 1, z + 1) + 1..][..dims[0]]);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod distance_tests {
+    use super::chessboard_distance;
+
+    #[test]
+    fn chessboard_distance_matches_brute_force() {
+        let dims = [9, 7, 6];
+        let n = dims.iter().product::<usize>();
+        // Scattered active cells (a fixed pattern), then none at all.
+        let scattered: Vec<bool> = (0..n).map(|i| (i * 37) % 101 == 3).collect();
+        assert!(scattered.iter().filter(|a| **a).count() >= 3);
+        for act in [scattered, vec![false; n]] {
+            let d = chessboard_distance(&act, dims);
+            let cells: Vec<[usize; 3]> = (0..n)
+                .filter(|&i| act[i])
+                .map(|i| [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])])
+                .collect();
+            for i in 0..n {
+                let c = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+                let expect = cells
+                    .iter()
+                    .map(|a| (0..3).map(|k| c[k].abs_diff(a[k])).max().unwrap())
+                    .min();
+                match expect {
+                    Some(e) => assert_eq!(d[i] as usize, e, "cell {c:?}"),
+                    // Nothing active: every distance is at least the grid's extent.
+                    None => assert!(d[i] as usize >= dims[0], "cell {c:?}: {}", d[i]),
                 }
             }
         }
-    };
-    pass(true);
-    pass(false);
-    d
+    }
 }
-
-/// The 13 neighbour offsets that precede a cell in raster order (x fastest).
-const CAUSAL: [(isize, isize, isize); 13] = [
-    (-1, -1, -1),
-    (0, -1, -1),
-    (1, -1, -1),
-    (-1, 0, -1),
-    (0, 0, -1),
-    (1, 0, -1),
-    (-1, 1, -1),
-    (0, 1, -1),
-    (1, 1, -1),
-    (-1, -1, 0),
-    (0, -1, 0),
-    (1, -1, 0),
-    (-1, 0, 0),
-];
 
 /// Work counts of one render (for tests and tuning; not timing).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -497,6 +531,7 @@ impl Caster<'_> {
         let (lo_box, hi_box) = self.clip_box;
         let mut t0 = 0.0f64;
         let mut t1 = f64::INFINITY;
+        let inv_d = d.map(|x| 1.0 / x);
         for a in 0..3 {
             let (lo, hi) = (lo_box[a], hi_box[a]);
             if d[a].abs() < 1e-12 {
@@ -504,7 +539,7 @@ impl Caster<'_> {
                     return ([0.0; 3], 0.0);
                 }
             } else {
-                let inv = 1.0 / d[a];
+                let inv = inv_d[a];
                 let (ta, tb) = ((lo - o[a]) * inv, (hi - o[a]) * inv);
                 t0 = t0.max(ta.min(tb));
                 t1 = t1.min(ta.max(tb));
@@ -522,11 +557,7 @@ impl Caster<'_> {
         let ray = Ray {
             o: Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32),
             d: Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32),
-            inv_d: Vec3::new(
-                (1.0 / d[0]) as f32,
-                (1.0 / d[1]) as f32,
-                (1.0 / d[2]) as f32,
-            ),
+            inv_d: Vec3::new(inv_d[0] as f32, inv_d[1] as f32, inv_d[2] as f32),
             k0,
             k1,
             t0: t0 as f32,

@@ -115,6 +115,7 @@ pub(super) unsafe fn composite(
     let f = c.field;
     let [nx, ny, nz] = f.dims;
     let sxy = nx * ny;
+    let cd = f.cell_dims;
     let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
     let dt = _mm256_set1_ps(c.dt);
     let o = [ray.o.x, ray.o.y, ray.o.z].map(|x| _mm256_set1_ps(x));
@@ -139,22 +140,6 @@ pub(super) unsafe fn composite(
     let mut cached_cell = usize::MAX;
     let mut cached_active = false;
     while k <= ray.k1 {
-        // Empty-space skipping is decided by the chunk's first sample; the others
-        // need no test, since a sample in an inactive cell has zero opacity anyway.
-        let loc = f.locate(ray.at(k as f32 * c.dt));
-        let cell = f.cell_index(&loc);
-        if cell != cached_cell {
-            cached_cell = cell;
-            cached_active = c.active[cell];
-        }
-        if !cached_active {
-            stats.skips += 1;
-            k = c.skip_empty(ray, loc.ijk.map(|x| x / MACRO_CELL), k);
-            continue;
-        }
-        let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
-        stats.samples += n as u64;
-
         // Positions o + d t with t = k dt, as `Ray::at` computes them.
         let t = _mm256_mul_ps(_mm256_add_ps(_mm256_set1_ps(k as f32), lanes), dt);
         let p = [0, 1, 2].map(|a| _mm256_add_ps(o[a], _mm256_mul_ps(d[a], t)));
@@ -163,6 +148,21 @@ pub(super) unsafe fn composite(
         let ijk = [0, 1, 2].map(|a| {
             _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a]))
         });
+        // Empty-space skipping is decided by the chunk's first sample; the others
+        // need no test, since a sample in an inactive cell has zero opacity anyway.
+        let c0 = ijk.map(|v| _mm256_cvtsi256_si32(v) as usize / MACRO_CELL);
+        let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
+        if cell != cached_cell {
+            cached_cell = cell;
+            cached_active = c.active[cell];
+        }
+        if !cached_active {
+            stats.skips += 1;
+            k = c.skip_empty(ray, c0, k);
+            continue;
+        }
+        let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
+        stats.samples += n as u64;
         let fr = [0, 1, 2].map(|a| {
             let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
             _mm256_min_ps(_mm256_max_ps(t, zero), one)
