@@ -54,7 +54,6 @@ pub const TERMINATION_OPACITY: f32 = 0.99;
 /// Bisection steps refining an iso hit between two samples (2^-8 of a step).
 const ISO_REFINE_STEPS: u32 = 8;
 
-
 /// Edge of the square image tiles rendered as parallel tasks (a tile's rays read a
 /// compact block of the volume that stays in the core's L2 cache).
 const TILE: usize = 16;
@@ -445,10 +444,20 @@ mod distance_tests {
             let d = chessboard_distance(&act, dims);
             let cells: Vec<[usize; 3]> = (0..n)
                 .filter(|&i| act[i])
-                .map(|i| [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])])
+                .map(|i| {
+                    [
+                        i % dims[0],
+                        (i / dims[0]) % dims[1],
+                        i / (dims[0] * dims[1]),
+                    ]
+                })
                 .collect();
             for i in 0..n {
-                let c = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+                let c = [
+                    i % dims[0],
+                    (i / dims[0]) % dims[1],
+                    i / (dims[0] * dims[1]),
+                ];
                 let expect = cells
                     .iter()
                     .map(|a| (0..3).map(|k| c[k].abs_diff(a[k])).max().unwrap())

@@ -262,7 +262,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         background: [0.0; 3],
         skip_empty: !args.no_skip,
-        kernel: if args.scalar { Kernel::Scalar } else { Kernel::Auto },
+        kernel: if args.scalar {
+            Kernel::Scalar
+        } else {
+            Kernel::Auto
+        },
     };
     settings.validate()?;
     let camera = camera_for(&field, &tf, &settings)?;

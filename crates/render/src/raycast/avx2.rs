@@ -145,9 +145,8 @@ pub(super) unsafe fn composite(
         let p = [0, 1, 2].map(|a| _mm256_add_ps(o[a], _mm256_mul_ps(d[a], t)));
         // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
         // (max/min put 0 for NaN, as f32::max/min do).
-        let ijk = [0, 1, 2].map(|a| {
-            _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a]))
-        });
+        let ijk =
+            [0, 1, 2].map(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
         // Empty-space skipping is decided by the chunk's first sample; the others
         // need no test, since a sample in an inactive cell has zero opacity anyway.
         let c0 = ijk.map(|v| _mm256_cvtsi256_si32(v) as usize / MACRO_CELL);
@@ -367,7 +366,10 @@ unsafe fn light8(c: &Caster, chunk: &Chunk, mask: u32, ray: &RayLighting) -> Lig
     let spec = _mm256_mul_ps(_mm256_set1_ps(m.specular), specular);
     let w = if g0 > 0.0 {
         let g0v = _mm256_set1_ps(g0);
-        _mm256_min_ps(_mm256_div_ps(_mm256_sub_ps(gm, g0v), g0v), _mm256_set1_ps(1.0))
+        _mm256_min_ps(
+            _mm256_div_ps(_mm256_sub_ps(gm, g0v), g0v),
+            _mm256_set1_ps(1.0),
+        )
     } else {
         _mm256_set1_ps(1.0)
     };
