@@ -49,7 +49,7 @@ pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image};
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{
-    camera_for, render, Kernel, Mode, RenderSettings, RenderStats, MAX_IMAGE_SIDE,
+    camera_for, render, Classification, Kernel, Mode, RenderSettings, RenderStats, MAX_IMAGE_SIDE,
     TERMINATION_OPACITY,
 };
 pub use shading::{Light, Shader};

@@ -92,6 +92,13 @@ pub enum Kernel {
     Scalar,
 }
 
+impl Kernel {
+    /// Whether [`Kernel::Auto`] runs the SIMD loop on this CPU (AVX2 and FMA).
+    pub fn simd_available() -> bool {
+        simd_supported()
+    }
+}
+
 impl Default for RenderSettings {
     fn default() -> Self {
         RenderSettings {
@@ -183,77 +190,229 @@ fn active_bounds(field: &Field, active: &[bool]) -> Option<([f64; 3], [f64; 3])>
     (lo[0] != usize::MAX).then(|| (lo.map(|x| x as f64), hi.map(|x| x as f64)))
 }
 
+/// A field classified by a transfer function for one mode and sample step: the
+/// tabulated transfer function, the empty-space map (per macro cell, the chessboard
+/// distance to the nearest cell that can show a sample) and the boxes rays are clipped
+/// to and cameras framed on.
+///
+/// Building it reads every macro cell; rendering only reads it. An interactive viewer
+/// builds it once per transfer function and renders every frame that changes only the
+/// camera, lights, lobe or image size from it (VTK's ray-cast mapper likewise keeps its
+/// min-max volume until the transfer function changes).
+pub struct Classification<'a> {
+    field: &'a Field,
+    lut: Lut,
+    mode: Mode,
+    step: f64,
+    skip_empty: bool,
+    /// Per macro cell: 0 where a sample can contribute, else the chessboard distance in
+    /// cells to the nearest such cell (capped at 255); every cell closer than that is
+    /// empty. All 0 when skipping is off.
+    distance: Vec<u8>,
+    /// Index-space box of the cells that can show a sample (`None`: no such cell).
+    visible_box: Option<([f64; 3], [f64; 3])>,
+    /// Index-space box rays are clipped to.
+    clip_box: ([f64; 3], [f64; 3]),
+}
+
+impl<'a> Classification<'a> {
+    /// Classifies `field` by `tf` for the mode, step and empty-space skipping of
+    /// `settings` (its camera, size and background are not used).
+    pub fn new(
+        field: &'a Field,
+        tf: &TransferFunction,
+        settings: &RenderSettings,
+    ) -> Result<Classification<'a>, RenderError> {
+        settings.validate()?;
+        tf.validate()?;
+        let lut = lut_for(field, tf, settings);
+        let visible = visible_cells(field, &lut, settings.mode);
+        let visible_box = active_bounds(field, &visible);
+        let full_box = ([0.0; 3], field.dims.map(|d| (d - 1) as f64));
+        let (distance, clip_box) = if settings.skip_empty {
+            let clip_box = if settings.mode == Mode::Mip {
+                full_box
+            } else {
+                visible_box.unwrap_or(([0.0; 3], [-1.0; 3]))
+            };
+            (chessboard_distance(&visible, field.cell_dims), clip_box)
+        } else {
+            (vec![0; visible.len()], full_box)
+        };
+        Ok(Classification {
+            field,
+            lut,
+            mode: settings.mode,
+            step: settings.step,
+            skip_empty: settings.skip_empty,
+            distance,
+            visible_box,
+            clip_box,
+        })
+    }
+
+    /// The camera [`render`] uses for `settings`: it frames the bounding sphere of what
+    /// can be seen (the macro cells that can show a sample), or of the whole volume
+    /// when nothing can.
+    pub fn camera(&self, settings: &RenderSettings) -> Result<Camera, RenderError> {
+        settings.validate()?;
+        let field = self.field;
+        let (lo, hi) = self
+            .visible_box
+            .unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
+        let mut corners = Vec::with_capacity(8);
+        for n in 0..8 {
+            let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });
+            corners.push(field.index_to_world(p));
+        }
+        let mut wlo = [f64::INFINITY; 3];
+        let mut whi = [f64::NEG_INFINITY; 3];
+        for c in &corners {
+            for a in 0..3 {
+                wlo[a] = wlo[a].min(c[a]);
+                whi[a] = whi[a].max(c[a]);
+            }
+        }
+        let center = Vec3::new(
+            ((wlo[0] + whi[0]) / 2.0) as f32,
+            ((wlo[1] + whi[1]) / 2.0) as f32,
+            ((wlo[2] + whi[2]) / 2.0) as f32,
+        );
+        let radius = corners
+            .iter()
+            .map(|c| (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center).length())
+            .fold(0.0f32, f32::max);
+        // Place the camera for the bounding sphere, then tighten to the box's extent
+        // across the view (the sphere of a box's corners wastes much of the image),
+        // with a margin for perspective.
+        let (w, h) = (settings.width, settings.height);
+        let first = Camera::frame(&settings.camera, center, radius, w, h)?;
+        let aspect = w as f32 / h as f32;
+        let extent = corners
+            .iter()
+            .map(|c| {
+                let d = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center;
+                let (x, y) = (d.dot(first.right).abs(), d.dot(first.up).abs());
+                // In units of the shorter image side.
+                (x / aspect.max(1.0)).max(y * aspect.min(1.0))
+            })
+            .fold(0.0f32, f32::max);
+        let margin = match settings.camera.projection {
+            crate::camera::Projection::Perspective => 1.1,
+            crate::camera::Projection::Orthographic => 1.02,
+        };
+        Camera::frame(&settings.camera, center, extent * margin, w, h)
+    }
+
+    /// Renders the classified field lit by `shader` with the camera, size, background
+    /// and kernel of `settings`, whose mode, step and skipping must be the ones this
+    /// classification was built for. `progress` is called with the number of pixels
+    /// finished after each tile (from worker threads).
+    pub fn render(
+        &self,
+        shader: &Shader,
+        settings: &RenderSettings,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Image, RenderError> {
+        settings.validate()?;
+        if settings.mode != self.mode
+            || settings.step != self.step
+            || settings.skip_empty != self.skip_empty
+        {
+            return Err(RenderError::Parameter(
+                "the settings' mode, step or skipping differ from the classification's".into(),
+            ));
+        }
+        let camera = self.camera(settings)?;
+        let field = self.field;
+        let caster = Caster {
+            field,
+            lut: &self.lut,
+            distance: &self.distance,
+            clip_box: (
+                self.clip_box.0.map(|x| x as f32),
+                self.clip_box.1.map(|x| x as f32),
+            ),
+            rays: IndexRays::new(&camera, field, settings.width, settings.height),
+            shader,
+            settings,
+            dt: (settings.step * field.min_spacing()) as f32,
+            simd: settings.kernel == Kernel::Auto && simd_supported(),
+        };
+        let (w, h) = (settings.width as usize, settings.height as usize);
+        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
+            .into_par_iter()
+            .map(|t| {
+                let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let n = (x1 - x0) * (y1 - y0);
+                let mut rgb = Vec::with_capacity(n);
+                let mut alpha = Vec::with_capacity(n);
+                let mut stats = RenderStats::default();
+                #[cfg(target_arch = "x86_64")]
+                if caster.simd {
+                    // SAFETY: `simd` is set only when avx2::supported() is true.
+                    unsafe {
+                        caster.tile_avx2((x0, x1), (y0, y1), &mut rgb, &mut alpha, &mut stats)
+                    };
+                } else {
+                    caster.tile((x0, x1), (y0, y1), &mut rgb, &mut alpha, &mut stats);
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                caster.tile((x0, x1), (y0, y1), &mut rgb, &mut alpha, &mut stats);
+                progress(n as u64);
+                (rgb, alpha, stats)
+            })
+            .collect();
+        let mut rgb = vec![[0.0f32; 3]; w * h];
+        let mut alpha = vec![0.0f32; w * h];
+        let mut stats = RenderStats::default();
+        for (t, (trgb, talpha, tstats)) in tiles.into_iter().enumerate() {
+            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+            let tw = (x0 + TILE).min(w) - x0;
+            for (r, (crow, arow)) in trgb.chunks(tw).zip(talpha.chunks(tw)).enumerate() {
+                let o = (y0 + r) * w + x0;
+                rgb[o..o + tw].copy_from_slice(crow);
+                alpha[o..o + tw].copy_from_slice(arow);
+            }
+            stats.samples += tstats.samples;
+            stats.shaded += tstats.shaded;
+            stats.skips += tstats.skips;
+        }
+        Ok(Image {
+            width: settings.width,
+            height: settings.height,
+            rgb,
+            alpha,
+            stats,
+        })
+    }
+}
+
 /// The camera [`render`] uses for `field`, `tf` and `settings`: it frames the bounding
 /// sphere of what can be seen (the macro cells that can show a sample), or of the whole
-/// volume when nothing can.
+/// volume when nothing can. [`Classification::camera`] without re-classifying.
 pub fn camera_for(
     field: &Field,
     tf: &TransferFunction,
     settings: &RenderSettings,
 ) -> Result<Camera, RenderError> {
-    settings.validate()?;
-    let lut = lut_for(field, tf, settings);
-    let visible = visible_cells(field, &lut, settings.mode);
-    let (lo, hi) =
-        active_bounds(field, &visible).unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
-    let mut corners = Vec::with_capacity(8);
-    for n in 0..8 {
-        let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });
-        corners.push(field.index_to_world(p));
-    }
-    let mut wlo = [f64::INFINITY; 3];
-    let mut whi = [f64::NEG_INFINITY; 3];
-    for c in &corners {
-        for a in 0..3 {
-            wlo[a] = wlo[a].min(c[a]);
-            whi[a] = whi[a].max(c[a]);
-        }
-    }
-    let center = Vec3::new(
-        ((wlo[0] + whi[0]) / 2.0) as f32,
-        ((wlo[1] + whi[1]) / 2.0) as f32,
-        ((wlo[2] + whi[2]) / 2.0) as f32,
-    );
-    let radius = corners
-        .iter()
-        .map(|c| (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center).length())
-        .fold(0.0f32, f32::max);
-    // Place the camera for the bounding sphere, then tighten to the box's extent across
-    // the view (the sphere of a box's corners wastes much of the image), with a margin
-    // for perspective.
-    let (w, h) = (settings.width, settings.height);
-    let first = Camera::frame(&settings.camera, center, radius, w, h)?;
-    let aspect = w as f32 / h as f32;
-    let extent = corners
-        .iter()
-        .map(|c| {
-            let d = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center;
-            let (x, y) = (d.dot(first.right).abs(), d.dot(first.up).abs());
-            // In units of the shorter image side.
-            (x / aspect.max(1.0)).max(y * aspect.min(1.0))
-        })
-        .fold(0.0f32, f32::max);
-    let margin = match settings.camera.projection {
-        crate::camera::Projection::Perspective => 1.1,
-        crate::camera::Projection::Orthographic => 1.02,
-    };
-    Camera::frame(&settings.camera, center, extent * margin, w, h)
+    Classification::new(field, tf, settings)?.camera(settings)
 }
 
 /// Per-render state shared by all rays.
 struct Caster<'a> {
     field: &'a Field,
-    lut: Lut,
+    lut: &'a Lut,
+    /// [`Classification::distance`].
+    distance: &'a [u8],
+    /// [`Classification::clip_box`] in f32.
+    clip_box: ([f32; 3], [f32; 3]),
+    /// The camera's rays in index space.
+    rays: IndexRays,
     shader: &'a Shader,
     settings: &'a RenderSettings,
-    camera: Camera,
-    /// Per macro cell: may a sample there contribute?
-    active: Vec<bool>,
-    /// Index-space box rays are clipped to.
-    clip_box: ([f64; 3], [f64; 3]),
-    /// Per macro cell: chessboard distance in cells to the nearest active cell (0 for
-    /// active cells, capped at 255); every cell closer than that is empty.
-    distance: Vec<u8>,
     /// Step in mm.
     dt: f32,
     /// Run the AVX2 compositing loop.
@@ -261,7 +420,9 @@ struct Caster<'a> {
 }
 
 /// Renders `field` classified by `tf` and lit by `shader`. `progress` is called with
-/// the number of pixels finished after each band of rows (from worker threads).
+/// the number of pixels finished after each tile (from worker threads). For several
+/// frames of one transfer function, build a [`Classification`] once and call its
+/// [`render`](Classification::render).
 pub fn render(
     field: &Field,
     tf: &TransferFunction,
@@ -269,80 +430,7 @@ pub fn render(
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Image, RenderError> {
-    settings.validate()?;
-    tf.validate()?;
-    let camera = camera_for(field, tf, settings)?;
-    let lut = lut_for(field, tf, settings);
-    let active = if settings.skip_empty {
-        visible_cells(field, &lut, settings.mode)
-    } else {
-        vec![true; field.cells.len()]
-    };
-    let distance = chessboard_distance(&active, field.cell_dims);
-    let full_box = ([0.0; 3], field.dims.map(|d| (d - 1) as f64));
-    let clip_box = if settings.skip_empty && settings.mode != Mode::Mip {
-        active_bounds(field, &active).unwrap_or(([0.0; 3], [-1.0; 3]))
-    } else {
-        full_box
-    };
-    let caster = Caster {
-        field,
-        clip_box,
-        distance,
-        lut,
-        shader,
-        settings,
-        camera,
-        active,
-        dt: (settings.step * field.min_spacing()) as f32,
-        simd: settings.kernel == Kernel::Auto && simd_supported(),
-    };
-    let (w, h) = (settings.width as usize, settings.height as usize);
-    let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
-    let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
-        .into_par_iter()
-        .map(|t| {
-            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let n = (x1 - x0) * (y1 - y0);
-            let mut rgb = Vec::with_capacity(n);
-            let mut alpha = Vec::with_capacity(n);
-            let mut stats = RenderStats::default();
-            #[cfg(target_arch = "x86_64")]
-            if caster.simd {
-                // SAFETY: `simd` is set only when avx2::supported() is true.
-                unsafe { caster.tile_avx2((x0, x1), (y0, y1), &mut rgb, &mut alpha, &mut stats) };
-            } else {
-                caster.tile((x0, x1), (y0, y1), &mut rgb, &mut alpha, &mut stats);
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            caster.tile((x0, x1), (y0, y1), &mut rgb, &mut alpha, &mut stats);
-            progress(n as u64);
-            (rgb, alpha, stats)
-        })
-        .collect();
-    let mut rgb = vec![[0.0f32; 3]; w * h];
-    let mut alpha = vec![0.0f32; w * h];
-    let mut stats = RenderStats::default();
-    for (t, (trgb, talpha, tstats)) in tiles.into_iter().enumerate() {
-        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-        let tw = (x0 + TILE).min(w) - x0;
-        for (r, (crow, arow)) in trgb.chunks(tw).zip(talpha.chunks(tw)).enumerate() {
-            let o = (y0 + r) * w + x0;
-            rgb[o..o + tw].copy_from_slice(crow);
-            alpha[o..o + tw].copy_from_slice(arow);
-        }
-        stats.samples += tstats.samples;
-        stats.shaded += tstats.shaded;
-        stats.skips += tstats.skips;
-    }
-    Ok(Image {
-        width: settings.width,
-        height: settings.height,
-        rgb,
-        alpha,
-        stats,
-    })
+    Classification::new(field, tf, settings)?.render(shader, settings, progress)
 }
 
 /// Whether the CPU runs the SIMD compositing loop.
@@ -530,46 +618,46 @@ impl Caster<'_> {
     #[inline(always)]
     fn cast(&self, x: f32, y: f32, stats: &mut RenderStats) -> ([f32; 3], f32) {
         let s = self.settings;
-        let (origin, dir) = self.camera.ray(x, y, s.width, s.height);
-        let f = self.field;
-        let o = f.world_to_index([origin.x as f64, origin.y as f64, origin.z as f64]);
-        let d = f.direction_to_index([dir.x as f64, dir.y as f64, dir.z as f64]);
+        let (o, d, dir) = self.rays.ray(x, y);
         // Slab test against the box of voxel centres [0, dims-1], or the box of the
         // cells that can show a sample (samples outside it lie in inactive cells), t in
         // mm.
         let (lo_box, hi_box) = self.clip_box;
-        let mut t0 = 0.0f64;
-        let mut t1 = f64::INFINITY;
-        let inv_d = d.map(|x| 1.0 / x);
+        let mut t0 = 0.0f32;
+        let mut t1 = f32::INFINITY;
+        let mut inv_dk = [f32::INFINITY; 3];
+        let mut face_up = [true; 3];
         for a in 0..3 {
-            let (lo, hi) = (lo_box[a], hi_box[a]);
-            if d[a].abs() < 1e-12 {
-                if o[a] < lo || o[a] > hi {
+            let (lo, hi, oa, da) = (lo_box[a], hi_box[a], o.get(a), d.get(a));
+            if da.abs() < 1e-12 {
+                if oa < lo || oa > hi {
                     return ([0.0; 3], 0.0);
                 }
             } else {
-                let inv = inv_d[a];
-                let (ta, tb) = ((lo - o[a]) * inv, (hi - o[a]) * inv);
+                let inv = 1.0 / da;
+                let (ta, tb) = ((lo - oa) * inv, (hi - oa) * inv);
                 t0 = t0.max(ta.min(tb));
                 t1 = t1.min(ta.max(tb));
+                inv_dk[a] = inv / self.dt;
+                face_up[a] = da > 0.0;
             }
         }
         if t0 > t1 {
             return ([0.0; 3], 0.0);
         }
-        let dt = self.dt as f64;
-        let k0 = (t0 / dt).ceil() as i64;
-        let k1 = (t1 / dt).floor() as i64;
+        let k0 = ceil_i64(t0 / self.dt);
+        let k1 = floor_i64(t1 / self.dt);
         if k1 < k0 {
             return ([0.0; 3], 0.0);
         }
         let ray = Ray {
-            o: Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32),
-            d: Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32),
-            inv_d: Vec3::new(inv_d[0] as f32, inv_d[1] as f32, inv_d[2] as f32),
+            o,
+            d,
+            inv_dk,
+            face_up,
             k0,
             k1,
-            t0: t0 as f32,
+            t0,
         };
         // The view vector: from the sample towards the eye. Every sample of a ray lies
         // on the line through the eye, so -dir is exact for each (perspective-correct);
@@ -602,32 +690,28 @@ impl Caster<'_> {
         (c, c[0] + cd[0] * (c[1] + cd[1] * c[2]))
     }
 
-    /// Leaps over the empty region around inactive macro cell `c`: the cube of cells
-    /// within its chessboard distance to the nearest active cell (Cohen and Sheffer
-    /// 1994, "Proximity clouds"), so one leap crosses a whole empty region.
-    #[inline]
-    fn skip_empty(&self, ray: &Ray, c: [usize; 3], k: i64) -> i64 {
-        let cd = self.field.cell_dims;
-        let r = self.distance[c[0] + cd[0] * (c[1] + cd[1] * c[2])].max(1) as usize - 1;
-        let mut t_exit = f32::INFINITY;
+    /// Leaps over the empty region around inactive macro cell `c`, whose entry in the
+    /// distance map is `dist` (at least 1): the cube of cells closer than `dist` to it
+    /// holds no active cell (Cohen and Sheffer 1994, "Proximity clouds"), so one leap
+    /// crosses a whole empty region. Returns the first sample index past the cube,
+    /// or `k + 1`, whichever is later.
+    #[inline(always)]
+    fn leap(&self, ray: &Ray, c: [usize; 3], dist: u8, k: i64) -> i64 {
+        let r = dist as usize - 1;
+        let mut q = f32::INFINITY;
         for (a, &ca) in c.iter().enumerate() {
-            let da = ray.d.get(a);
-            if da.abs() > 1e-12 {
-                let face = if da > 0.0 {
-                    (ca + r + 1) * MACRO_CELL
-                } else {
-                    ca.saturating_sub(r) * MACRO_CELL
-                } as f32;
-                t_exit = t_exit.min((face - ray.o.get(a)) * ray.inv_d.get(a));
-            }
+            let face = if ray.face_up[a] {
+                (ca + r + 1) * MACRO_CELL
+            } else {
+                ca.saturating_sub(r) * MACRO_CELL
+            } as f32;
+            // In samples; an axis the ray does not move along gives +inf or NaN, which
+            // `min` ignores.
+            q = q.min((face - ray.o.get(a)) * ray.inv_dk[a]);
         }
-        // ceil without libm (baseline x86-64 has no rounding instruction).
-        let q = t_exit / self.dt;
-        let mut k_exit = q as i64;
-        if (k_exit as f32) < q {
-            k_exit += 1;
-        }
-        k_exit.max(k + 1)
+        // A sixty-fourth of a step short of the face: rounding can then never carry
+        // the leap past the first sample beyond it.
+        ceil_i64(q - 1.0 / 64.0).max(k + 1)
     }
 
     /// Front-to-back compositing, one sample at a time (the reference loop).
@@ -641,18 +725,18 @@ impl Caster<'_> {
         let mut alpha = 0.0f32;
         let mut k = ray.k0;
         let mut cached_cell = usize::MAX;
-        let mut cached_active = false;
+        let mut dist = 0;
         while k <= ray.k1 {
             let p = ray.at(k as f32 * self.dt);
             let loc = self.field.locate(p);
             let cell = self.field.cell_index(&loc);
             if cell != cached_cell {
                 cached_cell = cell;
-                cached_active = self.active[cell];
+                dist = self.distance[cell];
             }
-            if !cached_active {
+            if dist != 0 {
                 stats.skips += 1;
-                k = self.skip_empty(ray, loc.ijk.map(|x| x / MACRO_CELL), k);
+                k = self.leap(ray, loc.ijk.map(|x| x / MACRO_CELL), dist, k);
                 continue;
             }
             stats.samples += 1;
@@ -680,17 +764,17 @@ impl Caster<'_> {
     fn iso(&self, ray: &Ray, view: Vec3, threshold: f32) -> ([f32; 3], f32) {
         let mut k = ray.k0;
         let mut cached_cell = usize::MAX;
-        let mut cached_active = false;
+        let mut dist = 0;
         while k <= ray.k1 {
             let t = k as f32 * self.dt;
             let p = ray.at(t);
             let (c, cell) = self.cell_of(p);
             if cell != cached_cell {
                 cached_cell = cell;
-                cached_active = self.active[cell];
+                dist = self.distance[cell];
             }
-            if !cached_active {
-                k = self.skip_empty(ray, c, k);
+            if dist != 0 {
+                k = self.leap(ray, c, dist, k);
                 continue;
             }
             if self.field.value(p) >= threshold {
@@ -734,7 +818,7 @@ impl Caster<'_> {
                 let (c, cell) = self.cell_of(p);
                 // A cell whose maximum cannot beat the current best is skipped.
                 if self.field.cells[cell].1 <= best {
-                    k = self.skip_empty(ray, c, k);
+                    k = self.leap(ray, c, self.distance[cell].max(1), k);
                     continue;
                 }
             }
@@ -749,14 +833,93 @@ impl Caster<'_> {
     }
 }
 
+/// A camera's rays expressed in a field's index space: per pixel a few f32
+/// operations, instead of building the world ray and transforming it in f64.
+struct IndexRays {
+    /// Perspective: the eye; orthographic: the image centre (index units).
+    origin: Vec3,
+    /// The camera's forward, right and up axes in world units, and in index units.
+    world: [Vec3; 3],
+    index: [Vec3; 3],
+    perspective: bool,
+    /// Image-plane coordinate of pixel `(x, y)`: `u = u0 + x du`, `v = v0 + y dv`.
+    u0: f32,
+    du: f32,
+    v0: f32,
+    dv: f32,
+}
+
+impl IndexRays {
+    fn new(camera: &Camera, field: &Field, width: u32, height: u32) -> IndexRays {
+        let to_index = |v: Vec3| {
+            let d = field.direction_to_index([v.x as f64, v.y as f64, v.z as f64]);
+            Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32)
+        };
+        let e = camera.eye;
+        let o = field.world_to_index([e.x as f64, e.y as f64, e.z as f64]);
+        let world = [camera.forward, camera.right, camera.up];
+        // `Camera::ray`'s image plane: u = (2 (x + 0.5) / w - 1) h a.
+        let (w, h) = (width as f32, height as f32);
+        let (hh, aspect) = (camera.half_height, w / h);
+        IndexRays {
+            origin: Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32),
+            world,
+            index: world.map(to_index),
+            perspective: camera.projection == crate::camera::Projection::Perspective,
+            u0: (1.0 / w - 1.0) * hh * aspect,
+            du: 2.0 / w * hh * aspect,
+            v0: (1.0 - 1.0 / h) * hh,
+            dv: -2.0 / h * hh,
+        }
+    }
+
+    /// Index-space origin, index-space direction (index units per mm) and unit world
+    /// direction of the ray through pixel `(x, y)`.
+    #[inline(always)]
+    fn ray(&self, x: f32, y: f32) -> (Vec3, Vec3, Vec3) {
+        let (u, v) = (self.u0 + x * self.du, self.v0 + y * self.dv);
+        let [f, r, up] = self.index;
+        if self.perspective {
+            let [wf, wr, wu] = self.world;
+            let w = wf + wr * u + wu * v;
+            let inv = 1.0 / w.length();
+            (self.origin, (f + r * u + up * v) * inv, w * inv)
+        } else {
+            (self.origin + r * u + up * v, f, self.world[0])
+        }
+    }
+}
+
 /// A ray in index space with its sample range.
 struct Ray {
     o: Vec3,
+    /// Direction: index units per mm.
     d: Vec3,
-    inv_d: Vec3,
+    /// Per axis `1 / (d dt)` (samples per index unit), +inf where the ray does not
+    /// move along the axis.
+    inv_dk: [f32; 3],
+    /// Per axis: the ray moves towards higher indices (or not at all).
+    face_up: [bool; 3],
+    /// First and last sample index inside the clip box.
     k0: i64,
     k1: i64,
+    /// Where the ray enters the clip box, mm.
     t0: f32,
+}
+
+/// `ceil(x)` as an integer without libm (baseline x86-64 has no rounding
+/// instruction); `x` is finite or saturates.
+#[inline(always)]
+fn ceil_i64(x: f32) -> i64 {
+    let k = x as i64;
+    k + ((k as f32) < x) as i64
+}
+
+/// `floor(x)` as an integer without libm.
+#[inline(always)]
+fn floor_i64(x: f32) -> i64 {
+    let k = x as i64;
+    k - ((k as f32) > x) as i64
 }
 
 impl Ray {

@@ -5,8 +5,8 @@
 use glint_io::{Samples, Volume};
 use glint_lobe::{Geometry, Lobe, LobeKind};
 use glint_render::{
-    camera_for, phantom, preset, render, CameraSpec, Field, Light, Material, Mode, Projection,
-    RenderSettings, Shader, TransferFunction, View,
+    camera_for, phantom, preset, render, CameraSpec, Classification, Field, Kernel, Light,
+    Material, Mode, Projection, RenderSettings, Shader, TransferFunction, View,
 };
 
 fn ortho(view: View) -> CameraSpec {
@@ -342,4 +342,79 @@ fn progress_reports_every_pixel() {
     })
     .unwrap();
     assert_eq!(done.load(Ordering::Relaxed), 37 * 23);
+}
+
+#[test]
+fn simd_loop_gives_the_scalar_loops_image() {
+    // CI runs on x86-64 machines with AVX2 and FMA: there the SIMD loop must really run,
+    // or this test would compare the scalar loop with itself.
+    if std::env::var_os("CI").is_some() && cfg!(target_arch = "x86_64") {
+        assert!(
+            Kernel::simd_available(),
+            "no AVX2+FMA: the SIMD loop is not tested"
+        );
+    }
+    let field = Field::new(&phantom::shepp_logan(48).unwrap()).unwrap();
+    let p = preset("phantom").unwrap();
+    let tf = p.transfer_function(1.0).unwrap();
+    for projection in [Projection::Perspective, Projection::Orthographic] {
+        let settings = RenderSettings {
+            width: 48,
+            height: 40,
+            camera: CameraSpec {
+                azimuth: 33.0,
+                elevation: -21.0,
+                projection,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let class = Classification::new(&field, &tf, &settings).unwrap();
+        let cam = class.camera(&settings).unwrap();
+        let lights = vec![
+            (Light::HEADLIGHT.direction(&cam), 1.0),
+            (
+                Light {
+                    azimuth: 50.0,
+                    elevation: 30.0,
+                    intensity: 0.7,
+                }
+                .direction(&cam),
+                0.7,
+            ),
+        ];
+        let scalar = RenderSettings {
+            kernel: Kernel::Scalar,
+            ..settings.clone()
+        };
+        for kind in LobeKind::ALL {
+            for geometry in [Geometry::Phong, Geometry::Blinn] {
+                // A gate of 0.5 value/mm blends weak-gradient samples towards flat.
+                for gate in [0.0, 0.5] {
+                    let shader =
+                        Shader::new(kind, 60.0, 4, geometry, p.material(), lights.clone(), gate)
+                            .unwrap();
+                    let fast = class.render(&shader, &settings, &|_| {}).unwrap();
+                    let slow = class.render(&shader, &scalar, &|_| {}).unwrap();
+                    let what = format!("{kind} {geometry} gate {gate} {projection:?}");
+                    assert_eq!(fast.alpha, slow.alpha, "{what}");
+                    assert_eq!(fast.stats.shaded, slow.stats.shaded, "{what}");
+                    if matches!(kind, LobeKind::Exact | LobeKind::Gauss) {
+                        // Vectorised pow/exp: within 2 ulp of libm per lobe value.
+                        let worst = fast
+                            .rgb
+                            .iter()
+                            .flatten()
+                            .zip(slow.rgb.iter().flatten())
+                            .map(|(a, b)| (a - b).abs())
+                            .fold(0.0f32, f32::max);
+                        assert!(worst < 1e-5, "{what}: {worst}");
+                    } else {
+                        assert_eq!(fast.rgb, slow.rgb, "{what}");
+                    }
+                    assert!(fast.alpha.iter().any(|&a| a > 0.5), "{what}: empty image");
+                }
+            }
+        }
+    }
 }

@@ -8,7 +8,7 @@ use anyhow::{bail, Context};
 use glint_io::{read_volume, ReadOptions};
 use glint_lobe::{Geometry, LobeKind};
 use glint_render::{
-    camera_for, phantom, preset, render, CameraSpec, Depth, Field, Kernel, Light, Mode, Projection,
+    phantom, preset, CameraSpec, Classification, Depth, Field, Kernel, Light, Mode, Projection,
     RenderSettings, Shader, TransferFunction, View,
 };
 
@@ -269,7 +269,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
     };
     settings.validate()?;
-    let camera = camera_for(&field, &tf, &settings)?;
+    let classification = Classification::new(&field, &tf, &settings)?;
+    let camera = classification.camera(&settings)?;
     let mut lights = Vec::new();
     if !args.no_headlight {
         lights.push(Light::HEADLIGHT);
@@ -331,7 +332,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut image = None;
     let start = Instant::now();
     for _ in 0..args.repeat {
-        image = Some(render(&field, &tf, &shader, &settings, &progress)?);
+        image = Some(classification.render(&shader, &settings, &progress)?);
     }
     let elapsed = start.elapsed();
     if let Some(b) = &bar {

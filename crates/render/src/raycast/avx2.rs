@@ -124,7 +124,7 @@ pub(super) unsafe fn composite(
     let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
     // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
     let (nxv, sxyv) = (_mm256_set1_epi32(nx as i32), _mm256_set1_epi32(sxy as i32));
-    let lut = &c.lut;
+    let lut = c.lut;
     let (lut_lo, lut_scale) = (_mm256_set1_ps(lut.lo), _mm256_set1_ps(lut.scale));
     let (half, lut_max) = (
         _mm256_set1_ps(0.5),
@@ -138,7 +138,7 @@ pub(super) unsafe fn composite(
     let mut alpha = 0.0f32;
     let mut k = ray.k0;
     let mut cached_cell = usize::MAX;
-    let mut cached_active = false;
+    let mut dist = 0;
     while k <= ray.k1 {
         // Positions o + d t with t = k dt, as `Ray::at` computes them.
         let t = _mm256_mul_ps(_mm256_add_ps(_mm256_set1_ps(k as f32), lanes), dt);
@@ -153,11 +153,11 @@ pub(super) unsafe fn composite(
         let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
         if cell != cached_cell {
             cached_cell = cell;
-            cached_active = c.active[cell];
+            dist = c.distance[cell];
         }
-        if !cached_active {
+        if dist != 0 {
             stats.skips += 1;
-            k = c.skip_empty(ray, c0, k);
+            k = c.leap(ray, c0, dist, k);
             continue;
         }
         let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
@@ -206,16 +206,33 @@ pub(super) unsafe fn composite(
             mask |= ((lut.alpha_at(i as usize) > 0.0) as u32) << j;
         }
         if mask != 0 {
-            let shade = if m.shade {
-                Some(light8(c, &chunk, mask, lighting))
-            } else {
-                None
-            };
+            // Opacity first: it needs no shading, and it tells which of the visible
+            // samples the ray composites before it terminates (the others are never
+            // lit). The same operations in the same order as the reference loop.
+            let mut weight = [0.0f32; LANES];
+            let mut used = 0u32;
+            let mut a = alpha;
             while mask != 0 {
                 let j = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
+                let w = (1.0 - a) * lut.alpha_at(li[j] as usize);
+                weight[j] = w;
+                used |= 1 << j;
+                a += w;
+                if a >= TERMINATION_OPACITY {
+                    break;
+                }
+            }
+            let shade = if m.shade {
+                Some(light8(c, &chunk, used, lighting))
+            } else {
+                None
+            };
+            stats.shaded += u64::from(used.count_ones());
+            while used != 0 {
+                let j = used.trailing_zeros() as usize;
+                used &= used - 1;
                 let e = lut.entry_at(li[j] as usize);
-                stats.shaded += 1;
                 let rgb = match &shade {
                     None => [e[0], e[1], e[2]],
                     Some(s) if s.valid & (1 << j) == 0 => [e[0] * flat, e[1] * flat, e[2] * flat],
@@ -229,14 +246,14 @@ pub(super) unsafe fn composite(
                         out
                     }
                 };
-                let w = (1.0 - alpha) * e[3];
+                let w = weight[j];
                 color[0] += w * rgb[0];
                 color[1] += w * rgb[1];
                 color[2] += w * rgb[2];
-                alpha += w;
-                if alpha >= TERMINATION_OPACITY {
-                    return (color, alpha);
-                }
+            }
+            alpha = a;
+            if alpha >= TERMINATION_OPACITY {
+                return (color, alpha);
             }
         }
         k += n as i64;
