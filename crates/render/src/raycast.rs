@@ -530,30 +530,24 @@ mod distance_tests {
         assert!(scattered.iter().filter(|a| **a).count() >= 3);
         for act in [scattered, vec![false; n]] {
             let d = chessboard_distance(&act, dims);
-            let cells: Vec<[usize; 3]> = (0..n)
-                .filter(|&i| act[i])
-                .map(|i| {
-                    [
-                        i % dims[0],
-                        (i / dims[0]) % dims[1],
-                        i / (dims[0] * dims[1]),
-                    ]
-                })
-                .collect();
-            for i in 0..n {
-                let c = [
+            let coords = |i: usize| {
+                [
                     i % dims[0],
                     (i / dims[0]) % dims[1],
                     i / (dims[0] * dims[1]),
-                ];
+                ]
+            };
+            let cells: Vec<[usize; 3]> = (0..n).filter(|&i| act[i]).map(coords).collect();
+            for (i, &di) in d.iter().enumerate() {
+                let c = coords(i);
                 let expect = cells
                     .iter()
                     .map(|a| (0..3).map(|k| c[k].abs_diff(a[k])).max().unwrap())
                     .min();
                 match expect {
-                    Some(e) => assert_eq!(d[i] as usize, e, "cell {c:?}"),
+                    Some(e) => assert_eq!(di as usize, e, "cell {c:?}"),
                     // Nothing active: every distance is at least the grid's extent.
-                    None => assert!(d[i] as usize >= dims[0], "cell {c:?}: {}", d[i]),
+                    None => assert!(di as usize >= dims[0], "cell {c:?}: {di}"),
                 }
             }
         }
