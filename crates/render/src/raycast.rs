@@ -15,6 +15,11 @@ use crate::tf::{Lut, TransferFunction};
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(target_arch = "x86_64")]
+use avx2::Scratch;
+/// The SIMD loops' per-thread buffers (none without them).
+#[cfg(not(target_arch = "x86_64"))]
+type Scratch = ();
 
 /// How samples along a ray make a pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -527,7 +532,7 @@ impl<'a> Classification<'a> {
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
             .into_par_iter()
-            .map(|t| {
+            .map_init(Scratch::default, |_scratch, t| {
                 let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
                 let n = (x1 - x0) * (y1 - y0);
@@ -546,7 +551,7 @@ impl<'a> Classification<'a> {
                 #[cfg(target_arch = "x86_64")]
                 if caster.simd {
                     // SAFETY: `simd` is set only when avx2::supported() is true.
-                    unsafe { caster.tile_avx2(&px, &mut rgb, &mut alpha, &mut stats) };
+                    unsafe { caster.tile_avx2(&px, _scratch, &mut rgb, &mut alpha, &mut stats) };
                 } else {
                     caster.tile(&px, &mut rgb, &mut alpha, &mut stats);
                 }
@@ -906,8 +911,9 @@ impl Caster<'_> {
         }
     }
 
-    /// [`Caster::tile`] compiled for AVX2 and FMA (ray set-up and skipping use the
-    /// rounding instructions; no FMA contraction, so results are unchanged).
+    /// [`Caster::tile`] compiled for AVX2 and FMA, with composite rays marched and
+    /// lit by the SIMD loops of [`avx2`] (no FMA contraction anywhere, so results are
+    /// the scalar loop's).
     ///
     /// # Safety
     /// The CPU must support AVX2 and FMA.
@@ -916,21 +922,40 @@ impl Caster<'_> {
     unsafe fn tile_avx2(
         &self,
         px: &Pixels,
+        scratch: &mut Scratch,
         rgb: &mut Vec<[f32; 3]>,
         alpha: &mut Vec<f32>,
         stats: &mut RenderStats,
     ) {
-        self.tile(px, rgb, alpha, stats)
+        if self.settings.mode == Mode::Composite {
+            avx2::composite_tile(self, px, scratch, rgb, alpha, stats)
+        } else {
+            self.tile(px, rgb, alpha, stats)
+        }
     }
 
     /// Premultiplied colour and opacity of the ray through pixel `(x, y)`, whose
     /// samples before `start` (mm) cannot show.
     #[inline(always)]
     fn cast(&self, x: f32, y: f32, start: f32, stats: &mut RenderStats) -> ([f32; 3], f32) {
-        if start == f32::INFINITY {
+        let Some((ray, view)) = self.ray(x, y, start) else {
             return ([0.0; 3], 0.0);
+        };
+        match self.settings.mode {
+            Mode::Composite => self.composite(&ray, &self.shader.for_ray(view), stats),
+            Mode::Iso { threshold } => self.iso(&ray, view, threshold),
+            Mode::Mip => self.mip(&ray),
         }
-        let s = self.settings;
+    }
+
+    /// The ray through pixel `(x, y)` in index space with its sample range, and its
+    /// view vector (unit, world, towards the eye); `None` when it takes no sample.
+    /// Samples before `start` (mm) cannot show.
+    #[inline(always)]
+    fn ray(&self, x: f32, y: f32, start: f32) -> Option<(Ray, Vec3)> {
+        if start == f32::INFINITY {
+            return None;
+        }
         let (o, d, dir) = self.rays.ray(x, y);
         // Slab test against the box of voxel centres [0, dims-1], or the box of the
         // cells that can show a sample (samples outside it lie in inactive cells), t in
@@ -944,7 +969,7 @@ impl Caster<'_> {
             let (lo, hi, oa, da) = (lo_box[a], hi_box[a], o.get(a), d.get(a));
             if da.abs() < 1e-12 {
                 if oa < lo || oa > hi {
-                    return ([0.0; 3], 0.0);
+                    return None;
                 }
             } else {
                 let inv = 1.0 / da;
@@ -958,12 +983,12 @@ impl Caster<'_> {
         let t_entry = t0;
         let t0 = t0.max(start);
         if t0 > t1 {
-            return ([0.0; 3], 0.0);
+            return None;
         }
         let k0 = ceil_i64(t0 / self.dt);
         let k1 = floor_i64(t1 / self.dt);
         if k1 < k0 {
-            return ([0.0; 3], 0.0);
+            return None;
         }
         let ray = Ray {
             o,
@@ -978,20 +1003,7 @@ impl Caster<'_> {
         // The view vector: from the sample towards the eye. Every sample of a ray lies
         // on the line through the eye, so -dir is exact for each (perspective-correct);
         // for orthographic rays it is the same for all.
-        let view = -dir;
-        match s.mode {
-            Mode::Composite => {
-                let lighting = self.shader.for_ray(view);
-                #[cfg(target_arch = "x86_64")]
-                if self.simd {
-                    // SAFETY: `simd` is set only when avx2::supported() is true.
-                    return unsafe { avx2::composite(self, &ray, &lighting, stats) };
-                }
-                self.composite(&ray, &lighting, stats)
-            }
-            Mode::Iso { threshold } => self.iso(&ray, view, threshold),
-            Mode::Mip => self.mip(&ray),
-        }
+        Some((ray, -dir))
     }
 
     /// The macro cell holding index-space point `p`.

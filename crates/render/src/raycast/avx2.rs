@@ -1,17 +1,23 @@
-//! The composite loop on AVX2 + FMA: eight consecutive samples of a ray at a time.
+//! The composite loops on AVX2 + FMA, in two passes over a tile of rays.
 //!
-//! Per chunk of eight samples: positions, cell indices, trilinear values and transfer
-//! function indices in vector registers; when any of the eight is visible, gradients,
-//! normals, the lighting cosines and the lobe (through
-//! [`glint_lobe::Lobe::eval_slice`], glint-lobe's SIMD kernels) for the chunk; then
-//! the visible samples are composited front to back in order, with early termination
-//! at the same sample as the reference loop (`Caster::composite`).
+//! March: each ray takes eight consecutive samples at a time (positions, cell indices,
+//! trilinear values and transfer-function indices in vector registers) and composites
+//! their opacities front to back, stopping at the same sample as the reference loop
+//! (`Caster::composite`). Opacity needs no lighting, so the march only records the
+//! samples it keeps: where they are, their table entry and their weight.
+//!
+//! Light: the tile's kept samples, from all its rays, eight at a time: gradients,
+//! normals, the lighting cosines; one call of [`glint_lobe::Lobe::eval_slice`] (the
+//! lobe crate's SIMD kernels) for every sample and light of the tile; then each
+//! sample's colour, added to its ray's in sample order. Lighting rays together keeps
+//! every vector lane busy (a ray lights about five samples before it terminates) and
+//! gives the lobe kernel long slices instead of one short call per chunk.
 //!
 //! No gather instructions: on CPUs with Intel's Gather Data Sampling mitigation (the
-//! 2023 microcode for Skylake to Ice Lake, this project's CI machines among them) an
-//! eight-lane `vgatherdps` costs about 25 cycles, more than eight scalar loads. Corner
-//! pairs along i are adjacent in memory, so each sample's eight values come from four
-//! 64-bit loads, and its eight `[value, gradient]` records from four 256-bit loads.
+//! 2023 microcode for Skylake to Ice Lake) an eight-lane `vgatherdps` costs about 25
+//! cycles, more than eight scalar loads. Corner pairs along i are adjacent in memory,
+//! so each sample's eight values come from four 64-bit loads, and its eight
+//! `[value, gradient]` records from four 256-bit loads.
 //!
 //! Every operation is the reference loop's, in the same order and without FMA
 //! contraction, so positions, values, classification and shading are bit-identical to
@@ -21,26 +27,39 @@
 
 use std::arch::x86_64::*;
 
-use super::{Caster, Ray, RenderStats, TERMINATION_OPACITY};
+use super::{Caster, Pixels, Ray, RenderStats, TERMINATION_OPACITY};
 use crate::field::MACRO_CELL;
-use crate::shading::{RayLighting, MAX_LIGHTS};
+use crate::math::Vec3;
 use glint_lobe::Geometry;
+
+/// `[e(0), e(1), e(2)]` with `$a` bound to the axis: per-axis vector code written
+/// without closures, which `array::map` would call out of line (its generic body
+/// lacks this module's target features, so the intrinsics could not be inlined).
+macro_rules! axes {
+    (|$a:ident| $e:expr) => {
+        [
+            {
+                let $a = 0usize;
+                $e
+            },
+            {
+                let $a = 1usize;
+                $e
+            },
+            {
+                let $a = 2usize;
+                $e
+            },
+        ]
+    };
+}
 
 /// Samples per chunk (f32 lanes of an AVX2 register).
 const LANES: usize = 8;
 
-/// Whether this CPU can run [`composite`].
+/// Whether this CPU can run [`composite_tile`].
 pub(super) fn supported() -> bool {
     is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
-}
-
-/// Per-lane lighting terms of a chunk, as `Shader::shade` combines them.
-struct Lighting8 {
-    lit: [f32; LANES],
-    spec: [f32; LANES],
-    w: [f32; LANES],
-    /// Bit j set: lane j has a usable gradient (above the gate, finite).
-    valid: u32,
 }
 
 /// `a + t (b - a)`, rounded as the scalar code rounds it (no FMA).
@@ -93,34 +112,149 @@ unsafe fn dot(a: [__m256; 3], b: [__m256; 3]) -> __m256 {
     )
 }
 
-/// A chunk's samples located in the grid.
-struct Chunk {
-    /// Linear index of each sample's corner-000 voxel.
-    base: [i32; LANES],
+/// The samples a tile's rays keep, in ray order and, within a ray, sample order
+/// (structure of arrays, for vector loads).
+#[derive(Default)]
+struct Kept {
+    /// Linear index of the sample's corner-000 voxel.
+    base: Vec<i32>,
     /// Fractions inside the trilinear cell, per axis.
-    t: [__m256; 3],
+    t: [Vec<f32>; 3],
+    /// Transfer-function table index.
+    entry: Vec<u32>,
+    /// Front-to-back weight `(1 - alpha) alpha_sample`.
+    weight: Vec<f32>,
+    /// The ray's index in the tile.
+    ray: Vec<u32>,
 }
 
-/// Front-to-back compositing of `ray`: the same result as `Caster::composite`.
+impl Kept {
+    fn len(&self) -> usize {
+        self.base.len()
+    }
+
+    fn clear(&mut self) {
+        self.base.clear();
+        for t in &mut self.t {
+            t.clear();
+        }
+        self.entry.clear();
+        self.weight.clear();
+        self.ray.clear();
+    }
+
+    /// Pads to a whole number of vectors with copies of the first sample (lit, then
+    /// ignored).
+    fn pad(&mut self) {
+        while !self.len().is_multiple_of(LANES) {
+            self.base.push(self.base[0]);
+            for t in &mut self.t {
+                t.push(t[0]);
+            }
+        }
+    }
+}
+
+/// Per-thread buffers of [`composite_tile`], kept from tile to tile so a tile
+/// allocates nothing.
+#[derive(Default)]
+pub(super) struct Scratch {
+    views: Vec<Vec3>,
+    colors: Vec<[f32; 3]>,
+    kept: Kept,
+    light: LightBuffers,
+}
+
+/// [`light`]'s intermediate values.
+#[derive(Default)]
+struct LightBuffers {
+    /// Per sample: diffuse sum and gradient magnitude.
+    diffuse: Vec<f32>,
+    magnitude: Vec<f32>,
+    /// Per vector of samples: the lanes with a usable gradient.
+    valid: Vec<u8>,
+    /// Per light and sample: the lobe's cosine, then the lobe's value.
+    cos: Vec<f32>,
+    lobe: Vec<f32>,
+    /// Per light and vector: the lanes the light faces.
+    facing: Vec<u8>,
+}
+
+/// Resizes `v` to `n` copies of `x` without giving back its capacity.
+fn refill<T: Copy>(v: &mut Vec<T>, n: usize, x: T) {
+    v.clear();
+    v.resize(n, x);
+}
+
+/// Composites the rays of the tile `px` front to back: the same pixels as
+/// `Caster::tile`.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA ([`supported`]).
 #[target_feature(enable = "avx2,fma")]
-pub(super) unsafe fn composite(
+pub(super) unsafe fn composite_tile(
     c: &Caster,
-    ray: &Ray,
-    lighting: &RayLighting,
+    px: &Pixels,
+    scratch: &mut Scratch,
+    rgb: &mut Vec<[f32; 3]>,
+    alpha: &mut Vec<f32>,
     stats: &mut RenderStats,
-) -> ([f32; 3], f32) {
+) {
+    let (xs, ys) = (px.xs, px.ys);
+    let tw = xs.1 - xs.0;
+    let n = tw * (ys.1 - ys.0);
+    let Scratch {
+        views,
+        colors,
+        kept,
+        light: buffers,
+    } = scratch;
+    refill(views, n, Vec3::ZERO);
+    refill(colors, n, [0.0; 3]);
+    kept.clear();
+    let start = alpha.len();
+    for y in ys.0..ys.1 {
+        for x in xs.0..xs.1 {
+            let i = (y - ys.0) * tw + (x - xs.0);
+            let a = match c.ray(x as f32, y as f32, px.start[i]) {
+                Some((ray, view)) => {
+                    views[i] = view;
+                    march(c, &ray, i as u32, kept, stats)
+                }
+                None => 0.0,
+            };
+            alpha.push(a);
+        }
+    }
+    if kept.len() > 0 {
+        light(c, kept, views, colors, buffers);
+    }
+    let bg = c.settings.background;
+    for (col, &op) in colors.iter().zip(&alpha[start..]) {
+        rgb.push([
+            col[0] + (1.0 - op) * bg[0],
+            col[1] + (1.0 - op) * bg[1],
+            col[2] + (1.0 - op) * bg[2],
+        ]);
+    }
+}
+
+/// Marches `ray` (index `id` in its tile): records in `kept` the samples it
+/// composites and returns its opacity.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[target_feature(enable = "avx2,fma")]
+unsafe fn march(c: &Caster, ray: &Ray, id: u32, kept: &mut Kept, stats: &mut RenderStats) -> f32 {
     let f = c.field;
-    let [nx, ny, nz] = f.dims;
+    let [nx, ny, _] = f.dims;
     let sxy = nx * ny;
     let cd = f.cell_dims;
     let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
     let dt = _mm256_set1_ps(c.dt);
-    let o = [ray.o.x, ray.o.y, ray.o.z].map(|x| _mm256_set1_ps(x));
-    let d = [ray.d.x, ray.d.y, ray.d.z].map(|x| _mm256_set1_ps(x));
-    let hi = [nx, ny, nz].map(|n| _mm256_set1_ps((n - 2) as f32));
+    let o = axes!(|a| _mm256_set1_ps(ray.o.get(a)));
+    let d = axes!(|a| _mm256_set1_ps(ray.d.get(a)));
+    let hi = axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32));
     let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
     // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
     let (nxv, sxyv) = (_mm256_set1_epi32(nx as i32), _mm256_set1_epi32(sxy as i32));
@@ -131,10 +265,7 @@ pub(super) unsafe fn composite(
         _mm256_set1_ps((crate::tf::LUT_SIZE - 1) as f32),
     );
     let values = f.values.as_ptr();
-    let m = &c.shader.material;
-    let flat = m.ambient + m.diffuse;
 
-    let mut color = [0.0f32; 3];
     let mut alpha = 0.0f32;
     let mut k = ray.k0;
     let mut cached_cell = usize::MAX;
@@ -142,14 +273,13 @@ pub(super) unsafe fn composite(
     while k <= ray.k1 {
         // Positions o + d t with t = k dt, as `Ray::at` computes them.
         let t = _mm256_mul_ps(_mm256_add_ps(_mm256_set1_ps(k as f32), lanes), dt);
-        let p = [0, 1, 2].map(|a| _mm256_add_ps(o[a], _mm256_mul_ps(d[a], t)));
+        let p = axes!(|a| _mm256_add_ps(o[a], _mm256_mul_ps(d[a], t)));
         // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
         // (max/min put 0 for NaN, as f32::max/min do).
-        let ijk =
-            [0, 1, 2].map(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
+        let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
         // Empty-space skipping is decided by the chunk's first sample; the others
         // need no test, since a sample in an inactive cell has zero opacity anyway.
-        let c0 = ijk.map(|v| _mm256_cvtsi256_si32(v) as usize / MACRO_CELL);
+        let c0 = axes!(|a| _mm256_cvtsi256_si32(ijk[a]) as usize / MACRO_CELL);
         let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
         if cell != cached_cell {
             cached_cell = cell;
@@ -162,16 +292,13 @@ pub(super) unsafe fn composite(
         }
         let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
         stats.samples += n as u64;
-        let fr = [0, 1, 2].map(|a| {
+        let fr = axes!(|a| {
             let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
             _mm256_min_ps(_mm256_max_ps(t, zero), one)
         });
-        let mut chunk = Chunk {
-            base: [0; LANES],
-            t: fr,
-        };
+        let mut base = [0i32; LANES];
         _mm256_storeu_si256(
-            chunk.base.as_mut_ptr().cast(),
+            base.as_mut_ptr().cast(),
             _mm256_add_epi32(
                 ijk[0],
                 _mm256_add_epi32(
@@ -182,7 +309,13 @@ pub(super) unsafe fn composite(
         );
         // Trilinear values. SAFETY: the indices are clamped to [0, dims-2] above, so
         // base + sxy + nx + 1 < nx ny nz.
-        let at = |off: usize| chunk.base.map(|b| values.add(b as usize + off));
+        let at = |off: usize| {
+            let mut ptrs = [values; LANES];
+            for (p, &b) in ptrs.iter_mut().zip(&base) {
+                *p = values.add(b as usize + off);
+            }
+            ptrs
+        };
         let (c000, c100) = row(at(0));
         let (c010, c110) = row(at(nx));
         let (c001, c101) = row(at(sxy));
@@ -203,99 +336,67 @@ pub(super) unsafe fn composite(
         );
         let mut mask = 0u32;
         for (j, &i) in li.iter().enumerate().take(n) {
-            mask |= ((lut.alpha_at(i as usize) > 0.0) as u32) << j;
+            // SAFETY: `li` was clamped to [0, LUT_SIZE-1] before the conversion.
+            mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
         }
         if mask != 0 {
-            // Opacity first: it needs no shading, and it tells which of the visible
-            // samples the ray composites before it terminates (the others are never
-            // lit). The same operations in the same order as the reference loop.
-            let mut weight = [0.0f32; LANES];
-            let mut used = 0u32;
-            let mut a = alpha;
+            let mut t = [[0.0f32; LANES]; 3];
+            for (a, v) in fr.iter().enumerate() {
+                _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+            }
             while mask != 0 {
                 let j = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let w = (1.0 - a) * lut.alpha_at(li[j] as usize);
-                weight[j] = w;
-                used |= 1 << j;
-                a += w;
-                if a >= TERMINATION_OPACITY {
-                    break;
+                // The reference loop's `w` and `alpha`, in the same order.
+                // SAFETY: as above.
+                let w = (1.0 - alpha) * *lut.alphas.get_unchecked(li[j] as usize);
+                kept.base.push(base[j]);
+                for (kt, t) in kept.t.iter_mut().zip(&t) {
+                    kt.push(t[j]);
                 }
-            }
-            let shade = if m.shade {
-                Some(light8(c, &chunk, used, lighting))
-            } else {
-                None
-            };
-            stats.shaded += u64::from(used.count_ones());
-            while used != 0 {
-                let j = used.trailing_zeros() as usize;
-                used &= used - 1;
-                let e = lut.entry_at(li[j] as usize);
-                let rgb = match &shade {
-                    None => [e[0], e[1], e[2]],
-                    Some(s) if s.valid & (1 << j) == 0 => [e[0] * flat, e[1] * flat, e[2] * flat],
-                    Some(s) => {
-                        let mut out = [0.0f32; 3];
-                        for ch in 0..3 {
-                            let shaded = e[ch] * s.lit[j] + s.spec[j];
-                            let unshaded = e[ch] * flat;
-                            out[ch] = unshaded + s.w[j] * (shaded - unshaded);
-                        }
-                        out
-                    }
-                };
-                let w = weight[j];
-                color[0] += w * rgb[0];
-                color[1] += w * rgb[1];
-                color[2] += w * rgb[2];
-            }
-            alpha = a;
-            if alpha >= TERMINATION_OPACITY {
-                return (color, alpha);
+                kept.entry.push(li[j] as u32);
+                kept.weight.push(w);
+                kept.ray.push(id);
+                stats.shaded += 1;
+                alpha += w;
+                if alpha >= TERMINATION_OPACITY {
+                    return alpha;
+                }
             }
         }
         k += n as i64;
     }
-    (color, alpha)
+    alpha
 }
 
-/// Trilinear world gradients of the lanes in `mask` (zero in the others), as
+/// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
 /// `Field::gradient_at` computes them, in component order.
 ///
 /// # Safety
-/// AVX2 must be available; `chunk` must come from clamped positions.
-#[inline(always)]
-unsafe fn gradients(c: &Caster, chunk: &Chunk, mut mask: u32) -> [__m256; 3] {
+/// AVX2 must be available; the samples must come from clamped positions.
+#[target_feature(enable = "avx2,fma")]
+unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3] {
     let f = c.field;
     let [nx, ny, _] = f.dims;
     let sxy = nx * ny;
     let data = f.data.as_ptr().cast::<f32>();
-    let mut t = [[0.0f32; LANES]; 3];
-    for (a, v) in chunk.t.iter().enumerate() {
-        _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
-    }
     let mut g = [_mm_setzero_ps(); LANES];
-    while mask != 0 {
-        let j = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
+    for (j, gj) in g.iter_mut().enumerate() {
+        let r = r0 + j;
         // One 256-bit load holds voxels (i, i+1) of a row: [value, gx, gy, gz] twice.
-        // SAFETY: as for the values, with four f32 per voxel.
-        let p = data.add(4 * chunk.base[j] as usize);
+        // SAFETY: the base is clamped to [0, dims-2] per axis, so base + sxy + nx + 1
+        // is a voxel, with four f32 per voxel.
+        let p = data.add(4 * *kept.base.get_unchecked(r) as usize);
+        let tx = _mm_set1_ps(*kept.t[0].get_unchecked(r));
         let x = |off: usize| {
-            let r = _mm256_loadu_ps(p.add(4 * off));
-            lerp4(
-                _mm256_castps256_ps128(r),
-                _mm256_extractf128_ps::<1>(r),
-                _mm_set1_ps(t[0][j]),
-            )
+            let v = _mm256_loadu_ps(p.add(4 * off));
+            lerp4(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v), tx)
         };
         let (x00, x10, x01, x11) = (x(0), x(nx), x(sxy), x(sxy + nx));
-        let ty = _mm_set1_ps(t[1][j]);
+        let ty = _mm_set1_ps(*kept.t[1].get_unchecked(r));
         let y0 = lerp4(x00, x10, ty);
         let y1 = lerp4(x01, x11, ty);
-        g[j] = lerp4(y0, y1, _mm_set1_ps(t[2][j]));
+        *gj = lerp4(y0, y1, _mm_set1_ps(*kept.t[2].get_unchecked(r)));
     }
     // Transpose the eight [value, gx, gy, gz] records into gx, gy, gz vectors.
     let r = |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(g[a]), g[b]);
@@ -311,93 +412,167 @@ unsafe fn gradients(c: &Caster, chunk: &Chunk, mut mask: u32) -> [__m256; 3] {
     ]
 }
 
-/// Gradients and lighting of a chunk: `Shader::shade`'s terms for the lanes in `mask`.
+/// Lights the `kept` samples of a tile whose rays have the view vectors `views`, and
+/// adds each one's colour times its weight to its ray's entry of `colors`, in order:
+/// `Shader::shade` and the reference loop's compositing.
 ///
 /// # Safety
-/// AVX2 and FMA must be available; `chunk` must come from clamped positions.
+/// AVX2 and FMA must be available; the samples must come from clamped positions.
 #[target_feature(enable = "avx2,fma")]
-unsafe fn light8(c: &Caster, chunk: &Chunk, mask: u32, ray: &RayLighting) -> Lighting8 {
+unsafe fn light(
+    c: &Caster,
+    kept: &mut Kept,
+    views: &[Vec3],
+    colors: &mut [[f32; 3]],
+    buffers: &mut LightBuffers,
+) {
     let shader = c.shader;
     let m = &shader.material;
-    let grad = gradients(c, chunk, mask);
+    let lut = c.lut;
+    let flat = m.ambient + m.diffuse;
+    let n = kept.len();
+    if !m.shade {
+        for r in 0..n {
+            let e = lut.entry_at(kept.entry[r] as usize);
+            let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
+            for ch in 0..3 {
+                col[ch] += w * e[ch];
+            }
+        }
+        return;
+    }
+    kept.pad();
+    let padded = kept.len();
+    let lights = &shader.lights;
     let zero = _mm256_setzero_ps();
-    let gm2 = dot(grad, grad);
     let g0 = shader.gate;
-    let valid = _mm256_and_ps(
-        _mm256_cmp_ps::<_CMP_GT_OQ>(gm2, _mm256_set1_ps(g0 * g0)),
-        _mm256_cmp_ps::<_CMP_LT_OQ>(gm2, _mm256_set1_ps(f32::INFINITY)),
-    );
-    let gm = _mm256_sqrt_ps(gm2);
-    let inv = _mm256_div_ps(_mm256_set1_ps(-1.0), gm);
-    let mut n = grad.map(|g| _mm256_mul_ps(g, inv));
-    let view = [ray.view.x, ray.view.y, ray.view.z].map(|x| _mm256_set1_ps(x));
-    let mut n_dot_v = dot(n, view);
-    // Two-sided lighting: flip normals that face away from the viewer.
-    let sign = _mm256_set1_ps(-0.0);
-    let back = _mm256_cmp_ps::<_CMP_LT_OQ>(n_dot_v, zero);
-    let flip = _mm256_and_ps(back, sign);
-    n = n.map(|x| _mm256_xor_ps(x, flip));
-    n_dot_v = _mm256_xor_ps(n_dot_v, flip);
-
-    let count = ray.count;
-    let mut cos = [0.0f32; LANES * MAX_LIGHTS];
-    let mut lit_mask = [zero; MAX_LIGHTS];
-    let mut diffuse = zero;
-    for (i, &(l, intensity, l_dot_v, h)) in ray.lights[..count].iter().enumerate() {
-        let lv = [l.x, l.y, l.z].map(|x| _mm256_set1_ps(x));
-        let n_dot_l = dot(n, lv);
-        let facing = _mm256_cmp_ps::<_CMP_GT_OQ>(n_dot_l, zero);
-        let iv = _mm256_set1_ps(intensity);
-        diffuse = _mm256_blendv_ps(
-            diffuse,
-            _mm256_add_ps(diffuse, _mm256_mul_ps(iv, n_dot_l)),
-            facing,
+    // Per sample: diffuse sum, gradient magnitude; per vector: valid-gradient lanes;
+    // per light and sample: the cosine, and whether the light faces the surface.
+    let LightBuffers {
+        diffuse,
+        magnitude,
+        valid,
+        cos,
+        lobe,
+        facing,
+    } = buffers;
+    refill(diffuse, padded, 0.0);
+    refill(magnitude, padded, 0.0);
+    refill(valid, padded / LANES, 0);
+    refill(cos, padded * lights.len(), 0.0);
+    refill(facing, padded / LANES * lights.len(), 0);
+    for (b, r0) in (0..padded).step_by(LANES).enumerate() {
+        let grad = gradients(c, kept, r0);
+        let mut lane_views = [Vec3::ZERO; LANES];
+        for (j, v) in lane_views.iter_mut().enumerate() {
+            *v = views[*kept.ray.get_unchecked((r0 + j).min(n - 1)) as usize];
+        }
+        let view = axes!(|a| {
+            let v = &lane_views;
+            _mm256_setr_ps(
+                v[0].get(a),
+                v[1].get(a),
+                v[2].get(a),
+                v[3].get(a),
+                v[4].get(a),
+                v[5].get(a),
+                v[6].get(a),
+                v[7].get(a),
+            )
+        });
+        let gm2 = dot(grad, grad);
+        let ok = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(gm2, _mm256_set1_ps(g0 * g0)),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(gm2, _mm256_set1_ps(f32::INFINITY)),
         );
-        let cv = match shader.geometry {
-            Geometry::Phong => _mm256_sub_ps(
-                _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(2.0), n_dot_l), n_dot_v),
-                _mm256_set1_ps(l_dot_v),
-            ),
-            Geometry::Blinn => dot(n, [h.x, h.y, h.z].map(|x| _mm256_set1_ps(x))),
-        };
-        _mm256_storeu_ps(cos.as_mut_ptr().add(i * LANES), cv);
-        lit_mask[i] = facing;
-    }
-    let mut lobe = [0.0f32; LANES * MAX_LIGHTS];
-    shader
-        .lobe
-        .eval_slice(&cos[..count * LANES], &mut lobe[..count * LANES]);
-    let mut specular = zero;
-    for (i, &(_, intensity, _, _)) in ray.lights[..count].iter().enumerate() {
-        let s = _mm256_loadu_ps(lobe.as_ptr().add(i * LANES));
-        specular = _mm256_blendv_ps(
-            specular,
-            _mm256_add_ps(specular, _mm256_mul_ps(_mm256_set1_ps(intensity), s)),
-            lit_mask[i],
+        valid[b] = _mm256_movemask_ps(ok) as u8;
+        let gm = _mm256_sqrt_ps(gm2);
+        _mm256_storeu_ps(magnitude.as_mut_ptr().add(r0), gm);
+        // Normal points from high to low values; two-sided: flipped to face the viewer.
+        let inv = _mm256_div_ps(_mm256_set1_ps(-1.0), gm);
+        let mut nrm = axes!(|a| _mm256_mul_ps(grad[a], inv));
+        let mut n_dot_v = dot(nrm, view);
+        let flip = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(n_dot_v, zero),
+            _mm256_set1_ps(-0.0),
         );
+        nrm = axes!(|a| _mm256_xor_ps(nrm[a], flip));
+        n_dot_v = _mm256_xor_ps(n_dot_v, flip);
+        let mut dif = zero;
+        for (i, &(l, intensity)) in lights.iter().enumerate() {
+            let lv = axes!(|a| _mm256_set1_ps(l.get(a)));
+            let n_dot_l = dot(nrm, lv);
+            let faces = _mm256_cmp_ps::<_CMP_GT_OQ>(n_dot_l, zero);
+            dif = _mm256_blendv_ps(
+                dif,
+                _mm256_add_ps(dif, _mm256_mul_ps(_mm256_set1_ps(intensity), n_dot_l)),
+                faces,
+            );
+            // `Shader::for_ray`'s per-ray terms, per lane: L·V, or the half vector.
+            let cv = match shader.geometry {
+                Geometry::Phong => _mm256_sub_ps(
+                    _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(2.0), n_dot_l), n_dot_v),
+                    dot(lv, view),
+                ),
+                Geometry::Blinn => {
+                    let sum = axes!(|a| _mm256_add_ps(lv[a], view[a]));
+                    let len = _mm256_sqrt_ps(dot(sum, sum));
+                    // normalize_or_zero: finite and positive length, else zero.
+                    let usable = _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_GT_OQ>(len, zero),
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(len, _mm256_set1_ps(f32::INFINITY)),
+                    );
+                    let inv_len = _mm256_div_ps(_mm256_set1_ps(1.0), len);
+                    let h = axes!(|a| _mm256_and_ps(_mm256_mul_ps(sum[a], inv_len), usable));
+                    dot(nrm, h)
+                }
+            };
+            _mm256_storeu_ps(cos.as_mut_ptr().add(i * padded + r0), cv);
+            facing[i * (padded / LANES) + b] = _mm256_movemask_ps(faces) as u8;
+        }
+        _mm256_storeu_ps(diffuse.as_mut_ptr().add(r0), dif);
     }
-    let lit = _mm256_add_ps(
-        _mm256_set1_ps(m.ambient),
-        _mm256_mul_ps(_mm256_set1_ps(m.diffuse), diffuse),
-    );
-    let spec = _mm256_mul_ps(_mm256_set1_ps(m.specular), specular);
-    let w = if g0 > 0.0 {
-        let g0v = _mm256_set1_ps(g0);
-        _mm256_min_ps(
-            _mm256_div_ps(_mm256_sub_ps(gm, g0v), g0v),
-            _mm256_set1_ps(1.0),
-        )
-    } else {
-        _mm256_set1_ps(1.0)
-    };
-    let mut out = Lighting8 {
-        lit: [0.0; LANES],
-        spec: [0.0; LANES],
-        w: [0.0; LANES],
-        valid: _mm256_movemask_ps(valid) as u32,
-    };
-    _mm256_storeu_ps(out.lit.as_mut_ptr(), lit);
-    _mm256_storeu_ps(out.spec.as_mut_ptr(), spec);
-    _mm256_storeu_ps(out.w.as_mut_ptr(), w);
-    out
+    refill(lobe, cos.len(), 0.0);
+    shader.lobe.eval_slice(cos, lobe);
+    for (b, r0) in (0..padded).step_by(LANES).enumerate() {
+        let mut spec = [0.0f32; LANES];
+        for (i, &(_, intensity)) in lights.iter().enumerate() {
+            let f = facing[i * (padded / LANES) + b];
+            for (j, s) in spec.iter_mut().enumerate() {
+                if f & (1 << j) != 0 {
+                    *s += intensity * lobe[i * padded + r0 + j];
+                }
+            }
+        }
+        for (j, &specular) in spec.iter().enumerate() {
+            let r = r0 + j;
+            if r >= n {
+                break;
+            }
+            let e = lut.entry_at(kept.entry[r] as usize);
+            let rgb = if valid[b] & (1 << j) == 0 {
+                [e[0] * flat, e[1] * flat, e[2] * flat]
+            } else {
+                let lit = m.ambient + m.diffuse * diffuse[r];
+                let spec = m.specular * specular;
+                let gm = magnitude[r];
+                let w = if g0 > 0.0 {
+                    ((gm - g0) / g0).min(1.0)
+                } else {
+                    1.0
+                };
+                let mut out = [0.0f32; 3];
+                for ch in 0..3 {
+                    let shaded = e[ch] * lit + spec;
+                    let unshaded = e[ch] * flat;
+                    out[ch] = unshaded + w * (shaded - unshaded);
+                }
+                out
+            };
+            let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
+            col[0] += w * rgb[0];
+            col[1] += w * rgb[1];
+            col[2] += w * rgb[2];
+        }
+    }
 }
