@@ -16,8 +16,8 @@
 //! No gather instructions: on CPUs with Intel's Gather Data Sampling mitigation (the
 //! 2023 microcode for Skylake to Ice Lake) an eight-lane `vgatherdps` costs about 25
 //! cycles, more than eight scalar loads. Corner pairs along i are adjacent in memory,
-//! so each sample's eight values come from four 64-bit loads, and its eight
-//! `[value, gradient]` records from four 256-bit loads.
+//! so each sample's eight values come from four 64-bit loads, and its eight 16-bit
+//! gradients from four 128-bit loads.
 //!
 //! Every operation is the reference loop's, in the same order and without FMA
 //! contraction, so positions, values, classification and shading are bit-identical to
@@ -379,17 +379,19 @@ unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3] {
     let f = c.field;
     let [nx, ny, _] = f.dims;
     let sxy = nx * ny;
-    let data = f.data.as_ptr().cast::<f32>();
+    let data = f.gradients.as_ptr();
     let mut g = [_mm_setzero_ps(); LANES];
     for (j, gj) in g.iter_mut().enumerate() {
         let r = r0 + j;
-        // One 256-bit load holds voxels (i, i+1) of a row: [value, gx, gy, gz] twice.
+        // One 128-bit load holds voxels (i, i+1) of a row: [gx, gy, gz, 0] twice, as
+        // i16, converted exactly to f32.
         // SAFETY: the base is clamped to [0, dims-2] per axis, so base + sxy + nx + 1
-        // is a voxel, with four f32 per voxel.
-        let p = data.add(4 * *kept.base.get_unchecked(r) as usize);
+        // is a voxel.
+        let p = data.add(*kept.base.get_unchecked(r) as usize);
         let tx = _mm_set1_ps(*kept.t[0].get_unchecked(r));
         let x = |off: usize| {
-            let v = _mm256_loadu_ps(p.add(4 * off));
+            let v = _mm_loadu_si128(p.add(off).cast());
+            let v = _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(v));
             lerp4(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v), tx)
         };
         let (x00, x10, x01, x11) = (x(0), x(nx), x(sxy), x(sxy + nx));
@@ -398,17 +400,19 @@ unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3] {
         let y1 = lerp4(x01, x11, ty);
         *gj = lerp4(y0, y1, _mm_set1_ps(*kept.t[2].get_unchecked(r)));
     }
-    // Transpose the eight [value, gx, gy, gz] records into gx, gy, gz vectors.
+    // Transpose the eight [gx, gy, gz, 0] records into gx, gy, gz vectors, scaled as
+    // `Field::gradient_at` scales them.
     let r = |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(g[a]), g[b]);
     let (r0, r1, r2, r3) = (r(0, 4), r(1, 5), r(2, 6), r(3, 7));
-    let t0 = _mm256_unpacklo_ps(r0, r1); // v0 v1 gx0 gx1 | v4 v5 gx4 gx5
-    let t1 = _mm256_unpackhi_ps(r0, r1); // gy0 gy1 gz0 gz1 | ...
+    let t0 = _mm256_unpacklo_ps(r0, r1); // gx0 gx1 gy0 gy1 | gx4 gx5 gy4 gy5
+    let t1 = _mm256_unpackhi_ps(r0, r1); // gz0 gz1 0 0 | ...
     let t2 = _mm256_unpacklo_ps(r2, r3);
     let t3 = _mm256_unpackhi_ps(r2, r3);
+    let scale = _mm256_set1_ps(f.gradient_scale);
     [
-        _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2),
-        _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
-        _mm256_shuffle_ps::<0b11_10_11_10>(t1, t3),
+        _mm256_mul_ps(_mm256_shuffle_ps::<0b01_00_01_00>(t0, t2), scale),
+        _mm256_mul_ps(_mm256_shuffle_ps::<0b11_10_11_10>(t0, t2), scale),
+        _mm256_mul_ps(_mm256_shuffle_ps::<0b01_00_01_00>(t1, t3), scale),
     ]
 }
 
