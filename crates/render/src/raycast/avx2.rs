@@ -151,6 +151,9 @@ impl Kept {
             for t in &mut self.t {
                 t.push(t[0]);
             }
+            self.entry.push(self.entry[0]);
+            self.weight.push(self.weight[0]);
+            self.ray.push(self.ray[0]);
         }
     }
 }
@@ -538,45 +541,77 @@ unsafe fn light(
     }
     refill(lobe, cos.len(), 0.0);
     shader.lobe.eval_slice(cos, lobe);
+    // Lane j's bit of an eight-bit mask, as a vector mask.
+    let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let bits = |m: u8| {
+        let v = _mm256_and_si256(_mm256_set1_epi32(i32::from(m)), lane_bits);
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(v, lane_bits))
+    };
+    let (ambient, diffuse_k, specular_k) = (
+        _mm256_set1_ps(m.ambient),
+        _mm256_set1_ps(m.diffuse),
+        _mm256_set1_ps(m.specular),
+    );
+    let (flat_v, g0v, one) = (
+        _mm256_set1_ps(flat),
+        _mm256_set1_ps(g0),
+        _mm256_set1_ps(1.0),
+    );
+    let entries = lut.entries.as_ptr().cast::<f32>();
     for (b, r0) in (0..padded).step_by(LANES).enumerate() {
-        let mut spec = [0.0f32; LANES];
+        let mut specular = zero;
         for (i, &(_, intensity)) in lights.iter().enumerate() {
-            let f = facing[i * (padded / LANES) + b];
-            for (j, s) in spec.iter_mut().enumerate() {
-                if f & (1 << j) != 0 {
-                    *s += intensity * lobe[i * padded + r0 + j];
-                }
-            }
+            let s = _mm256_loadu_ps(lobe.as_ptr().add(i * padded + r0));
+            specular = _mm256_blendv_ps(
+                specular,
+                _mm256_add_ps(specular, _mm256_mul_ps(_mm256_set1_ps(intensity), s)),
+                bits(facing[i * (padded / LANES) + b]),
+            );
         }
-        for (j, &specular) in spec.iter().enumerate() {
-            let r = r0 + j;
-            if r >= n {
-                break;
-            }
-            let e = lut.entry_at(kept.entry[r] as usize);
-            let rgb = if valid[b] & (1 << j) == 0 {
-                [e[0] * flat, e[1] * flat, e[2] * flat]
-            } else {
-                let lit = m.ambient + m.diffuse * diffuse[r];
-                let spec = m.specular * specular;
-                let gm = magnitude[r];
-                let w = if g0 > 0.0 {
-                    ((gm - g0) / g0).min(1.0)
-                } else {
-                    1.0
-                };
-                let mut out = [0.0f32; 3];
-                for ch in 0..3 {
-                    let shaded = e[ch] * lit + spec;
-                    let unshaded = e[ch] * flat;
-                    out[ch] = unshaded + w * (shaded - unshaded);
-                }
-                out
-            };
-            let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
-            col[0] += w * rgb[0];
-            col[1] += w * rgb[1];
-            col[2] += w * rgb[2];
+        let lit = _mm256_add_ps(
+            ambient,
+            _mm256_mul_ps(diffuse_k, _mm256_loadu_ps(diffuse.as_ptr().add(r0))),
+        );
+        let spec = _mm256_mul_ps(specular_k, specular);
+        let w = if g0 > 0.0 {
+            let gm = _mm256_loadu_ps(magnitude.as_ptr().add(r0));
+            _mm256_min_ps(_mm256_div_ps(_mm256_sub_ps(gm, g0v), g0v), one)
+        } else {
+            one
+        };
+        // The eight samples' table entries [r, g, b, alpha], transposed to r, g, b.
+        // SAFETY: entry indices were clamped to [0, LUT_SIZE-1] when marching.
+        let e = |j: usize| {
+            let i = *kept.entry.get_unchecked(r0 + j) as usize;
+            _mm_loadu_ps(entries.add(4 * i))
+        };
+        let q = |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e(a)), e(b));
+        let (q0, q1, q2, q3) = (q(0, 4), q(1, 5), q(2, 6), q(3, 7));
+        let t0 = _mm256_unpacklo_ps(q0, q1); // r0 r1 g0 g1 | r4 r5 g4 g5
+        let t1 = _mm256_unpackhi_ps(q0, q1); // b0 b1 a0 a1 | ...
+        let t2 = _mm256_unpacklo_ps(q2, q3);
+        let t3 = _mm256_unpackhi_ps(q2, q3);
+        let base = [
+            _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2),
+            _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
+        ];
+        let usable = bits(valid[b]);
+        let weight = _mm256_loadu_ps(kept.weight.as_ptr().add(r0));
+        let mut add = [[0.0f32; LANES]; 3];
+        for (ch, out) in add.iter_mut().enumerate() {
+            let shaded = _mm256_add_ps(_mm256_mul_ps(base[ch], lit), spec);
+            let unshaded = _mm256_mul_ps(base[ch], flat_v);
+            let mixed = _mm256_add_ps(unshaded, _mm256_mul_ps(w, _mm256_sub_ps(shaded, unshaded)));
+            let rgb = _mm256_blendv_ps(unshaded, mixed, usable);
+            _mm256_storeu_ps(out.as_mut_ptr(), _mm256_mul_ps(weight, rgb));
+        }
+        // In sample order, as the reference loop adds them.
+        for j in 0..LANES.min(n - r0) {
+            let col = &mut colors[*kept.ray.get_unchecked(r0 + j) as usize];
+            col[0] += add[0][j];
+            col[1] += add[1][j];
+            col[2] += add[2][j];
         }
     }
 }
