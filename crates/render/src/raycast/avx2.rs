@@ -80,10 +80,11 @@ unsafe fn pair(p: *const f32) -> i64 {
     p.cast::<i64>().read_unaligned()
 }
 
-/// Corners `(i, i+1)` of one row for eight lanes whose row starts are `p[l]`: the
+/// Corners `(i, i+1)` of one row for eight lanes whose row starts are `p[l] + off`: the
 /// first corners in lane order, then the second.
 #[inline(always)]
-unsafe fn row(p: [*const f32; LANES]) -> (__m256, __m256) {
+unsafe fn row(p: [*const f32; LANES], off: usize) -> (__m256, __m256) {
+    let p = p.map(|q| q.add(off));
     // Lanes 0,1,4,5 and 2,3,6,7: the in-lane shuffles below then give lane order.
     let a = _mm256_castsi256_ps(_mm256_set_epi64x(
         pair(p[5]),
@@ -216,17 +217,41 @@ pub(super) unsafe fn composite_tile(
     refill(colors, n, [0.0; 3]);
     kept.clear();
     let start = alpha.len();
-    for y in ys.0..ys.1 {
-        for x in xs.0..xs.1 {
-            let i = (y - ys.0) * tw + (x - xs.0);
-            let a = match c.ray(x as f32, y as f32, px.start[i]) {
-                Some((ray, view)) => {
+    alpha.resize(start + n, 0.0);
+    // INTERLEAVE rays march side by side, one step each in turn: a ray's steps form
+    // a chain of dependent loads and branches, and the core overlaps the chains of
+    // independent rays.
+    let mut slots: [Option<Marcher>; INTERLEAVE] = [const { None }; INTERLEAVE];
+    let mut next = 0;
+    loop {
+        for slot in slots.iter_mut() {
+            while slot.is_none() && next < n {
+                let i = next;
+                next += 1;
+                let (x, y) = (xs.0 + i % tw, ys.0 + i / tw);
+                if let Some((ray, view)) = c.ray(x as f32, y as f32, px.start[i]) {
                     views[i] = view;
-                    march(c, &ray, i as u32, kept, stats)
+                    *slot = Some(Marcher {
+                        k: ray.k0,
+                        ray,
+                        id: i as u32,
+                        alpha: 0.0,
+                        cached_cell: usize::MAX,
+                        dist: 0,
+                    });
                 }
-                None => 0.0,
-            };
-            alpha.push(a);
+            }
+        }
+        if slots.iter().all(Option::is_none) {
+            break;
+        }
+        for slot in slots.iter_mut() {
+            if let Some(m) = slot {
+                if !step(c, m, kept, stats) {
+                    alpha[start + m.id as usize] = m.alpha;
+                    *slot = None;
+                }
+            }
         }
     }
     if kept.len() > 0 {
@@ -242,21 +267,37 @@ pub(super) unsafe fn composite_tile(
     }
 }
 
-/// Marches `ray` (index `id` in its tile): records in `kept` the samples it
-/// composites and returns its opacity.
+/// Rays marched side by side in a tile (on the MNI152 scene 2 gave 6% over 1, and 3
+/// or 4 no more than 2).
+const INTERLEAVE: usize = 2;
+
+/// A ray being marched: the reference loop's state.
+struct Marcher {
+    ray: Ray,
+    /// The ray's index in its tile.
+    id: u32,
+    /// Next sample.
+    k: i64,
+    alpha: f32,
+    /// The macro cell last looked up, and its distance-map entry.
+    cached_cell: usize,
+    dist: u8,
+}
+
+/// One step of the march of `m`: a leap over empty space, or a chunk of eight samples
+/// whose kept ones (those composited) go to `kept`. Returns whether the ray goes on.
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA.
-#[target_feature(enable = "avx2,fma")]
-unsafe fn march(c: &Caster, ray: &Ray, id: u32, kept: &mut Kept, stats: &mut RenderStats) -> f32 {
+/// The CPU must support AVX2 and FMA (inlined into [`composite_tile`]).
+#[inline(always)]
+unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderStats) -> bool {
     let f = c.field;
     let [nx, ny, _] = f.dims;
     let sxy = nx * ny;
     let cd = f.cell_dims;
+    let ray = &m.ray;
     let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
     let dt = _mm256_set1_ps(c.dt);
-    let o = axes!(|a| _mm256_set1_ps(ray.o.get(a)));
-    let d = axes!(|a| _mm256_set1_ps(ray.d.get(a)));
     let hi = axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32));
     let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
     // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
@@ -269,107 +310,102 @@ unsafe fn march(c: &Caster, ray: &Ray, id: u32, kept: &mut Kept, stats: &mut Ren
     );
     let values = f.values.as_ptr();
 
-    let mut alpha = 0.0f32;
-    let mut k = ray.k0;
-    let mut cached_cell = usize::MAX;
-    let mut dist = 0;
-    while k <= ray.k1 {
-        // Positions o + d t with t = k dt, as `Ray::at` computes them.
-        let t = _mm256_mul_ps(_mm256_add_ps(_mm256_set1_ps(k as f32), lanes), dt);
-        let p = axes!(|a| _mm256_add_ps(o[a], _mm256_mul_ps(d[a], t)));
-        // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
-        // (max/min put 0 for NaN, as f32::max/min do).
-        let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
-        // Empty-space skipping is decided by the chunk's first sample; the others
-        // need no test, since a sample in an inactive cell has zero opacity anyway.
-        let c0 = axes!(|a| _mm256_cvtsi256_si32(ijk[a]) as usize / MACRO_CELL);
-        let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
-        if cell != cached_cell {
-            cached_cell = cell;
-            dist = c.distance[cell];
-        }
-        if dist != 0 {
-            stats.skips += 1;
-            k = c.leap(ray, c0, dist, k);
-            continue;
-        }
-        let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
-        stats.samples += n as u64;
-        let fr = axes!(|a| {
-            let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
-            _mm256_min_ps(_mm256_max_ps(t, zero), one)
-        });
-        let mut base = [0i32; LANES];
-        _mm256_storeu_si256(
-            base.as_mut_ptr().cast(),
-            _mm256_add_epi32(
-                ijk[0],
-                _mm256_add_epi32(
-                    _mm256_mullo_epi32(ijk[1], nxv),
-                    _mm256_mullo_epi32(ijk[2], sxyv),
-                ),
-            ),
-        );
-        // Trilinear values. SAFETY: the indices are clamped to [0, dims-2] above, so
-        // base + sxy + nx + 1 < nx ny nz.
-        let at = |off: usize| {
-            let mut ptrs = [values; LANES];
-            for (p, &b) in ptrs.iter_mut().zip(&base) {
-                *p = values.add(b as usize + off);
-            }
-            ptrs
-        };
-        let (c000, c100) = row(at(0));
-        let (c010, c110) = row(at(nx));
-        let (c001, c101) = row(at(sxy));
-        let (c011, c111) = row(at(sxy + nx));
-        let x00 = lerp(c000, c100, fr[0]);
-        let x10 = lerp(c010, c110, fr[0]);
-        let x01 = lerp(c001, c101, fr[0]);
-        let x11 = lerp(c011, c111, fr[0]);
-        let y0 = lerp(x00, x10, fr[1]);
-        let y1 = lerp(x01, x11, fr[1]);
-        let v = lerp(y0, y1, fr[2]);
-        // `Lut::index`, then the opacities.
-        let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
-        let mut li = [0i32; LANES];
-        _mm256_storeu_si256(
-            li.as_mut_ptr().cast(),
-            _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max)),
-        );
-        let mut mask = 0u32;
-        for (j, &i) in li.iter().enumerate().take(n) {
-            // SAFETY: `li` was clamped to [0, LUT_SIZE-1] before the conversion.
-            mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
-        }
-        if mask != 0 {
-            let mut t = [[0.0f32; LANES]; 3];
-            for (a, v) in fr.iter().enumerate() {
-                _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
-            }
-            while mask != 0 {
-                let j = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                // The reference loop's `w` and `alpha`, in the same order.
-                // SAFETY: as above.
-                let w = (1.0 - alpha) * *lut.alphas.get_unchecked(li[j] as usize);
-                kept.base.push(base[j]);
-                for (kt, t) in kept.t.iter_mut().zip(&t) {
-                    kt.push(t[j]);
-                }
-                kept.entry.push(li[j] as u32);
-                kept.weight.push(w);
-                kept.ray.push(id);
-                stats.shaded += 1;
-                alpha += w;
-                if alpha >= TERMINATION_OPACITY {
-                    return alpha;
-                }
-            }
-        }
-        k += n as i64;
+    let k = m.k;
+    // Positions o + d t with t = k dt, as `Ray::at` computes them.
+    let t = _mm256_mul_ps(_mm256_add_ps(_mm256_set1_ps(k as f32), lanes), dt);
+    let p = axes!(|a| _mm256_add_ps(
+        _mm256_set1_ps(ray.o.get(a)),
+        _mm256_mul_ps(_mm256_set1_ps(ray.d.get(a)), t)
+    ));
+    // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
+    // (max/min put 0 for NaN, as f32::max/min do).
+    let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
+    // Empty-space skipping is decided by the chunk's first sample; the others need no
+    // test, since a sample in an inactive cell has zero opacity anyway.
+    let c0 = axes!(|a| _mm256_cvtsi256_si32(ijk[a]) as usize / MACRO_CELL);
+    let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
+    if cell != m.cached_cell {
+        m.cached_cell = cell;
+        m.dist = c.distance[cell];
     }
-    alpha
+    if m.dist != 0 {
+        stats.skips += 1;
+        m.k = c.leap(ray, c0, m.dist, k);
+        return m.k <= ray.k1;
+    }
+    let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
+    stats.samples += n as u64;
+    let fr = axes!(|a| {
+        let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
+        _mm256_min_ps(_mm256_max_ps(t, zero), one)
+    });
+    let mut base = [0i32; LANES];
+    _mm256_storeu_si256(
+        base.as_mut_ptr().cast(),
+        _mm256_add_epi32(
+            ijk[0],
+            _mm256_add_epi32(
+                _mm256_mullo_epi32(ijk[1], nxv),
+                _mm256_mullo_epi32(ijk[2], sxyv),
+            ),
+        ),
+    );
+    // Trilinear values. SAFETY: the indices are clamped to [0, dims-2] above, so
+    // base + sxy + nx + 1 < nx ny nz.
+    let mut ptrs = [values; LANES];
+    for (p, &b) in ptrs.iter_mut().zip(&base) {
+        *p = values.add(b as usize);
+    }
+    let (c000, c100) = row(ptrs, 0);
+    let (c010, c110) = row(ptrs, nx);
+    let (c001, c101) = row(ptrs, sxy);
+    let (c011, c111) = row(ptrs, sxy + nx);
+    let x00 = lerp(c000, c100, fr[0]);
+    let x10 = lerp(c010, c110, fr[0]);
+    let x01 = lerp(c001, c101, fr[0]);
+    let x11 = lerp(c011, c111, fr[0]);
+    let y0 = lerp(x00, x10, fr[1]);
+    let y1 = lerp(x01, x11, fr[1]);
+    let v = lerp(y0, y1, fr[2]);
+    // `Lut::index`, then the opacities.
+    let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
+    let mut li = [0i32; LANES];
+    _mm256_storeu_si256(
+        li.as_mut_ptr().cast(),
+        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max)),
+    );
+    let mut mask = 0u32;
+    for (j, &i) in li.iter().enumerate().take(n) {
+        // SAFETY: `li` was clamped to [0, LUT_SIZE-1] before the conversion.
+        mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
+    }
+    if mask != 0 {
+        let mut t = [[0.0f32; LANES]; 3];
+        for (a, v) in fr.iter().enumerate() {
+            _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+        }
+        while mask != 0 {
+            let j = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            // The reference loop's `w` and `alpha`, in the same order.
+            // SAFETY: as above.
+            let w = (1.0 - m.alpha) * *lut.alphas.get_unchecked(li[j] as usize);
+            kept.base.push(base[j]);
+            for (kt, t) in kept.t.iter_mut().zip(&t) {
+                kt.push(t[j]);
+            }
+            kept.entry.push(li[j] as u32);
+            kept.weight.push(w);
+            kept.ray.push(m.id);
+            stats.shaded += 1;
+            m.alpha += w;
+            if m.alpha >= TERMINATION_OPACITY {
+                return false;
+            }
+        }
+    }
+    m.k = k + n as i64;
+    m.k <= ray.k1
 }
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
