@@ -84,20 +84,10 @@ unsafe fn pair(p: *const f32) -> i64 {
 /// first corners in lane order, then the second.
 #[inline(always)]
 unsafe fn row(p: [*const f32; LANES], off: usize) -> (__m256, __m256) {
-    let p = p.map(|q| q.add(off));
+    let at = |l: usize| pair(p[l].add(off));
     // Lanes 0,1,4,5 and 2,3,6,7: the in-lane shuffles below then give lane order.
-    let a = _mm256_castsi256_ps(_mm256_set_epi64x(
-        pair(p[5]),
-        pair(p[4]),
-        pair(p[1]),
-        pair(p[0]),
-    ));
-    let b = _mm256_castsi256_ps(_mm256_set_epi64x(
-        pair(p[7]),
-        pair(p[6]),
-        pair(p[3]),
-        pair(p[2]),
-    ));
+    let a = _mm256_castsi256_ps(_mm256_set_epi64x(at(5), at(4), at(1), at(0)));
+    let b = _mm256_castsi256_ps(_mm256_set_epi64x(at(7), at(6), at(3), at(2)));
     (
         _mm256_shuffle_ps::<0b10_00_10_00>(a, b),
         _mm256_shuffle_ps::<0b11_01_11_01>(a, b),
