@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glint_lobe::{Geometry, LobeKind};
 use glint_render::{
-    camera_for, phantom, preset, render, CameraSpec, Field, Light, RenderSettings, Shader, View,
+    phantom, preset, CameraSpec, Classification, Field, Light, RenderSettings, Shader, View,
 };
 
 fn load() -> (glint_io::Volume, &'static str) {
@@ -45,7 +45,9 @@ fn bench(c: &mut Criterion) {
         },
         ..Default::default()
     };
-    let cam = camera_for(&field, &tf, &settings).unwrap();
+    // Classified once, as `glint render --repeat` and an interactive viewer do.
+    let class = Classification::new(&field, &tf, &settings).unwrap();
+    let cam = class.camera(&settings).unwrap();
     let lights = vec![(Light::HEADLIGHT.direction(&cam), 1.0)];
     let mut group = c.benchmark_group("render_mni152_512");
     group.sample_size(10);
@@ -62,7 +64,7 @@ fn bench(c: &mut Criterion) {
         )
         .unwrap();
         group.bench_function(kind.name(), |b| {
-            b.iter(|| render(&field, &tf, &shader, &settings, &|_| {}).unwrap())
+            b.iter(|| class.render(&shader, &settings, &|_| {}).unwrap())
         });
     }
     group.finish();

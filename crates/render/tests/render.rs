@@ -432,3 +432,98 @@ fn simd_loop_gives_the_scalar_loops_image() {
         }
     }
 }
+
+/// The MNI152 T1 template from scripts/fetch-samples, or `None` outside CI when it is
+/// missing (in CI, with CI set, a missing sample fails the test).
+fn mni152() -> Option<Volume> {
+    let dir = std::env::var_os("GLINT_DATA")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::PathBuf::from(std::env::var_os("HOME").unwrap_or_default())
+                .join(".cache/glint")
+        });
+    let path = dir.join("samples/mni152_t1_09a.nii.gz");
+    if !path.is_file() {
+        let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
+        assert!(
+            !ci,
+            "{} is missing in CI: run scripts/fetch-samples",
+            path.display()
+        );
+        eprintln!(
+            "skipping: {} is missing (run scripts/fetch-samples)",
+            path.display()
+        );
+        return None;
+    }
+    Some(glint_io::read_volume(&path, &glint_io::ReadOptions::default()).unwrap())
+}
+
+#[test]
+fn mni152_brain_renders_the_same_with_every_shortcut_off() {
+    // The benchmark scene at a small size: the SIMD loop against the scalar one, and
+    // skipping (leaps, start bounds) against none, on real data; then the picture:
+    // a brain filling much of the frame, shaded (not flat), with highlights.
+    let Some(volume) = mni152() else { return };
+    let field = Field::new(&volume).unwrap();
+    let p = preset("mr-t2-brain").unwrap();
+    let tf = p.transfer_function(field.range().1 as f64).unwrap();
+    let settings = RenderSettings {
+        width: 80,
+        height: 80,
+        camera: CameraSpec {
+            view: View::Left,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let class = Classification::new(&field, &tf, &settings).unwrap();
+    let cam = class.camera(&settings).unwrap();
+    let m = p.material();
+    let shader = Shader::new(
+        LobeKind::EnergyFit,
+        m.power as f64,
+        4,
+        Geometry::Phong,
+        m,
+        vec![(Light::HEADLIGHT.direction(&cam), 1.0)],
+        0.0,
+    )
+    .unwrap();
+    let fast = class.render(&shader, &settings, &|_| {}).unwrap();
+    let scalar = RenderSettings {
+        kernel: Kernel::Scalar,
+        ..settings.clone()
+    };
+    let reference = class.render(&shader, &scalar, &|_| {}).unwrap();
+    assert_eq!(fast.rgb, reference.rgb);
+    assert_eq!(fast.alpha, reference.alpha);
+    let no_skip = RenderSettings {
+        skip_empty: false,
+        ..settings.clone()
+    };
+    let slow = render(&field, &tf, &shader, &no_skip, &|_| {}).unwrap();
+    assert_eq!(fast.rgb, slow.rgb);
+    assert!(fast.stats.samples * 4 < slow.stats.samples);
+
+    let lum: Vec<f32> = fast
+        .rgb
+        .iter()
+        .zip(&fast.alpha)
+        .filter(|(_, &a)| a > 0.5)
+        .map(|(c, _)| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
+        .collect();
+    let covered = lum.len() as f32 / fast.alpha.len() as f32;
+    assert!(
+        (0.3..0.85).contains(&covered),
+        "brain covers {covered} of the frame"
+    );
+    let mean = lum.iter().sum::<f32>() / lum.len() as f32;
+    let sd = (lum.iter().map(|l| (l - mean).powi(2)).sum::<f32>() / lum.len() as f32).sqrt();
+    let max = lum.iter().cloned().fold(0.0, f32::max);
+    assert!(sd > 0.1 * mean, "flat shading: mean {mean}, sd {sd}");
+    assert!(
+        max > mean + 2.0 * sd,
+        "no highlight: mean {mean}, sd {sd}, max {max}"
+    );
+}
