@@ -269,7 +269,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
     };
     settings.validate()?;
+    let classify_start = Instant::now();
     let classification = Classification::new(&field, &tf, &settings)?;
+    let classify_time = classify_start.elapsed();
     let camera = classification.camera(&settings)?;
     let mut lights = Vec::new();
     if !args.no_headlight {
@@ -340,7 +342,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.repeat > 1 {
         if let Some(img) = &image {
-            eprintln!("glint render: per frame {:?}", img.stats);
+            eprintln!(
+                "glint render: classified once in {:.2} ms; per frame {:?}",
+                classify_time.as_secs_f64() * 1e3,
+                img.stats
+            );
         }
         println!(
             "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, step {})",
