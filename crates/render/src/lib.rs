@@ -28,7 +28,9 @@
 //! macro cells); a [`TransferFunction`] (from a [`preset`] or JSON) classifies samples;
 //! a [`Shader`] lights them (ambient + diffuse + lobe specular, Phong or Blinn
 //! geometry); [`render`] casts one ray per pixel, tiles in parallel, and returns a
-//! linear [`Image`] that [`Image::write_png`] writes as sRGB.
+//! linear [`Image`] that [`Image::write_png`] writes as sRGB. To render several frames
+//! of one transfer function (a moving camera, other lights or lobes), build a
+//! [`Classification`] once and call [`Classification::render`] per frame.
 
 #![warn(missing_docs)]
 
