@@ -220,13 +220,28 @@ impl Camera {
         })
     }
 
+    /// The image plane of a `width` x `height` image: pixel `(x, y)` (row 0 at the
+    /// top) has its centre at `u = u0 + x du` along `right` and `v = v0 + y dv` along
+    /// `up`; returns `[u0, du, v0, dv]`. Perspective: at unit distance from the eye;
+    /// orthographic: in mm from the image centre.
+    pub fn image_plane(&self, width: u32, height: u32) -> [f32; 4] {
+        let (w, h) = (width as f32, height as f32);
+        let (hh, aspect) = (self.half_height, w / h);
+        // u = (2 (x + 0.5) / w - 1) hh aspect, v = (1 - 2 (y + 0.5) / h) hh.
+        [
+            (1.0 / w - 1.0) * hh * aspect,
+            2.0 / w * hh * aspect,
+            (1.0 - 1.0 / h) * hh,
+            -2.0 / h * hh,
+        ]
+    }
+
     /// Origin and unit direction of the ray through pixel `(x, y)` (row 0 at the top)
     /// of a `width` x `height` image, through the pixel's centre.
     #[inline]
     pub fn ray(&self, x: f32, y: f32, width: u32, height: u32) -> (Vec3, Vec3) {
-        let aspect = width as f32 / height as f32;
-        let u = (2.0 * (x + 0.5) / width as f32 - 1.0) * self.half_height * aspect;
-        let v = (1.0 - 2.0 * (y + 0.5) / height as f32) * self.half_height;
+        let [u0, du, v0, dv] = self.image_plane(width, height);
+        let (u, v) = (u0 + x * du, v0 + y * dv);
         match self.projection {
             Projection::Perspective => {
                 let d = (self.forward + self.right * u + self.up * v).normalize_or_zero();

@@ -738,6 +738,46 @@ mod start_tests {
     }
 
     #[test]
+    fn index_rays_are_the_cameras_rays_in_index_space() {
+        let mut volume = crate::phantom::shepp_logan(20).unwrap();
+        // A sheared, anisotropic affine.
+        volume.affine[0][1] = 0.4;
+        volume.affine[2][2] *= 1.7;
+        let field = Field::new(&volume).unwrap();
+        for projection in [Projection::Perspective, Projection::Orthographic] {
+            let spec = CameraSpec {
+                view: View::Posterior,
+                azimuth: 25.0,
+                elevation: 40.0,
+                projection,
+                ..Default::default()
+            };
+            let camera = Camera::frame(&spec, Vec3::new(3.0, -2.0, 1.0), 30.0, 64, 48).unwrap();
+            let rays = IndexRays::new(&camera, &field, 64, 48);
+            for (x, y) in [(0.0, 0.0), (63.0, 0.0), (17.0, 29.0), (63.0, 47.0)] {
+                let (wo, wd) = camera.ray(x, y, 64, 48);
+                let o = field.world_to_index([wo.x as f64, wo.y as f64, wo.z as f64]);
+                let d = field.direction_to_index([wd.x as f64, wd.y as f64, wd.z as f64]);
+                let (io, id, dir) = rays.ray(x, y);
+                for a in 0..3 {
+                    assert!(
+                        (io.get(a) as f64 - o[a]).abs() < 1e-3,
+                        "{projection:?} origin"
+                    );
+                    assert!(
+                        (id.get(a) as f64 - d[a]).abs() < 1e-5,
+                        "{projection:?} direction"
+                    );
+                    assert!(
+                        (dir.get(a) - wd.get(a)).abs() < 1e-6,
+                        "{projection:?} world"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn start_bounds_never_pass_a_visible_block() {
         // A grid that is not a whole number of blocks, anisotropic spacing, and views
         // from several sides in both projections; every pixel's start bound must lie
@@ -1161,8 +1201,8 @@ impl Caster<'_> {
     }
 }
 
-/// A camera's rays expressed in a field's index space: per pixel a few f32
-/// operations, instead of building the world ray and transforming it in f64.
+/// A camera's rays ([`Camera::ray`]) expressed in a field's index space: per pixel a
+/// few f32 operations, instead of building the world ray and transforming it in f64.
 struct IndexRays {
     /// Perspective: the eye; orthographic: the image centre (index units).
     origin: Vec3,
@@ -1186,18 +1226,16 @@ impl IndexRays {
         let e = camera.eye;
         let o = field.world_to_index([e.x as f64, e.y as f64, e.z as f64]);
         let world = [camera.forward, camera.right, camera.up];
-        // `Camera::ray`'s image plane: u = (2 (x + 0.5) / w - 1) h a.
-        let (w, h) = (width as f32, height as f32);
-        let (hh, aspect) = (camera.half_height, w / h);
+        let [u0, du, v0, dv] = camera.image_plane(width, height);
         IndexRays {
             origin: Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32),
             world,
             index: world.map(to_index),
             perspective: camera.projection == crate::camera::Projection::Perspective,
-            u0: (1.0 / w - 1.0) * hh * aspect,
-            du: 2.0 / w * hh * aspect,
-            v0: (1.0 - 1.0 / h) * hh,
-            dv: -2.0 / h * hh,
+            u0,
+            du,
+            v0,
+            dv,
         }
     }
 
