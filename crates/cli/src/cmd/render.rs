@@ -102,7 +102,7 @@ struct Options {
     specular: Option<f32>,
     /// Extra directional light at AZ,EL degrees from the view direction (towards the
     /// image's right and top); repeatable. The headlight stays on.
-    #[arg(long = "light", value_name = "AZ,EL", allow_negative_numbers = true)]
+    #[arg(long = "light", value_name = "AZ,EL", allow_hyphen_values = true)]
     lights: Vec<String>,
     /// Turn the headlight off (then give at least one --light).
     #[arg(long)]
@@ -464,6 +464,20 @@ mod tests {
             assert!(!err.contains('\n'), "{extra:?}: one line expected: {err}");
             assert!(!left, "{extra:?} left a file");
         }
+    }
+
+    #[test]
+    fn negative_light_angles_are_values_not_flags() {
+        let (result, left, _dir) = run_in_tmp(&[
+            "--size",
+            "16x16",
+            "--phantom-size",
+            "16",
+            "--light",
+            "-60,-10",
+        ]);
+        result.unwrap();
+        assert!(left);
     }
 
     #[test]
