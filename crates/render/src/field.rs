@@ -32,9 +32,9 @@ pub(crate) struct Loc {
 /// per mm, RAS+), by central differences on the grid (one-sided at the faces) mapped
 /// through the inverse transpose of the affine's linear part. Gradients are stored as
 /// 16-bit integers times one scale for the volume (the largest component maps to
-/// 32767): half the memory traffic of f32 when shading, with a direction error below
-/// 1e-4 of the largest gradient (VTK's ray casters keep 16 bits for the whole
-/// direction and 8 for the magnitude).
+/// 32767): half the memory of f32 gradients (MNI152 template: peak RSS 195 -> 127 MB;
+/// frame time unchanged), with an error below 1e-4 of the largest gradient (VTK's
+/// ray casters keep 16 bits for the whole direction and 8 for the magnitude).
 pub struct Field {
     pub(crate) dims: [usize; 3],
     /// Values alone, for the classification test every sample makes (a quarter of the

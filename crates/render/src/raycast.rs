@@ -179,6 +179,15 @@ fn visible_cells(field: &Field, lut: &Lut, mode: Mode) -> Vec<bool> {
         .collect()
 }
 
+/// The `[i, j, k]` of linear index `idx` in a grid of `dims` (i fastest).
+fn grid_coords(idx: usize, dims: [usize; 3]) -> [usize; 3] {
+    [
+        idx % dims[0],
+        (idx / dims[0]) % dims[1],
+        idx / (dims[0] * dims[1]),
+    ]
+}
+
 /// World corners of every block of `START_BLOCK`^3 macro cells holding an `active`
 /// one. A block's box covers its cells' boxes (cell `c` spans voxels `4c ..= 4c + 4`),
 /// so every sample that can show lies inside some block's box.
@@ -187,14 +196,13 @@ fn visible_blocks(field: &Field, active: &[bool]) -> Vec<[Vec3; 8]> {
     let bd = cd.map(|c| c.div_ceil(START_BLOCK));
     let mut hit = vec![false; bd[0] * bd[1] * bd[2]];
     for (idx, _) in active.iter().enumerate().filter(|(_, v)| **v) {
-        let c = [idx % cd[0], (idx / cd[0]) % cd[1], idx / (cd[0] * cd[1])];
-        let b = c.map(|x| x / START_BLOCK);
+        let b = grid_coords(idx, cd).map(|x| x / START_BLOCK);
         hit[b[0] + bd[0] * (b[1] + bd[1] * b[2])] = true;
     }
     let span = (START_BLOCK * MACRO_CELL) as f64;
     let mut out = Vec::new();
     for (idx, _) in hit.iter().enumerate().filter(|(_, v)| **v) {
-        let b = [idx % bd[0], (idx / bd[0]) % bd[1], idx / (bd[0] * bd[1])];
+        let b = grid_coords(idx, bd);
         let lo = b.map(|x| x as f64 * span);
         let hi = [0, 1, 2].map(|a| (lo[a] + span).min((field.dims[a] - 1) as f64));
         out.push(std::array::from_fn(|n| {
@@ -236,7 +244,7 @@ impl StartBounds {
         };
         let splats: Vec<Splat> = blocks
             .par_iter()
-            .map(|corners| {
+            .filter_map(|corners| {
                 let center = corners.iter().fold(Vec3::ZERO, |a, &c| a + c) * 0.125;
                 let radius = corners
                     .iter()
@@ -265,7 +273,7 @@ impl StartBounds {
                         let z = r.dot(camera.forward);
                         // Behind or at the eye (or NaN): the footprint is unbounded.
                         if z.is_nan() || z <= 1e-3 {
-                            return full;
+                            return Some(full);
                         }
                         (u, v) = (u / z, v / z);
                     }
@@ -280,20 +288,15 @@ impl StartBounds {
                 let (y0, y1) = (py(vhi).floor() - 1.0, py(vlo).ceil() + 1.0);
                 if !(x1 >= 0.0 && y1 >= 0.0 && x0 <= (w - 1) as f32 && y0 <= (h - 1) as f32) {
                     // Off the image (or not finite): no ray meets it.
-                    return Splat {
-                        x: (1, 0),
-                        y: (1, 0),
-                        t,
-                    };
+                    return None;
                 }
                 let clamp = |a: f32, n: usize| a.clamp(0.0, (n - 1) as f32) as usize;
-                Splat {
+                Some(Splat {
                     x: (clamp(x0, w), clamp(x1, w)),
                     y: (clamp(y0, h), clamp(y1, h)),
                     t,
-                }
+                })
             })
-            .filter(|s| s.x.0 <= s.x.1 && s.y.0 <= s.y.1)
             .collect();
         // Bin by tile (counting sort).
         let tile_range = |s: &Splat| (s.x.0 / TILE..=s.x.1 / TILE, s.y.0 / TILE..=s.y.1 / TILE);
@@ -352,7 +355,7 @@ fn active_bounds(field: &Field, active: &[bool]) -> Option<([f64; 3], [f64; 3])>
     let mut lo = [usize::MAX; 3];
     let mut hi = [0usize; 3];
     for (idx, _) in active.iter().enumerate().filter(|(_, v)| **v) {
-        let c = [idx % cd[0], (idx / cd[0]) % cd[1], idx / (cd[0] * cd[1])];
+        let c = grid_coords(idx, cd);
         for a in 0..3 {
             lo[a] = lo[a].min(c[a] * MACRO_CELL);
             hi[a] = hi[a].max(((c[a] + 1) * MACRO_CELL).min(field.dims[a] - 1));
@@ -783,8 +786,7 @@ mod start_tests {
         // from several sides in both projections; every pixel's start bound must lie
         // at or before the exact entry into every visible block its ray meets, and be
         // +inf only for rays that meet none.
-        let volume = crate::phantom::shepp_logan(45).unwrap();
-        let mut volume = volume;
+        let mut volume = crate::phantom::shepp_logan(45).unwrap();
         volume.affine[2][2] *= 1.5;
         let field = Field::new(&volume).unwrap();
         let tf = crate::presets::preset("phantom")
@@ -878,7 +880,7 @@ mod start_tests {
 
 #[cfg(test)]
 mod distance_tests {
-    use super::chessboard_distance;
+    use super::{chessboard_distance, grid_coords};
 
     #[test]
     fn chessboard_distance_matches_brute_force() {
@@ -889,13 +891,7 @@ mod distance_tests {
         assert!(scattered.iter().filter(|a| **a).count() >= 3);
         for act in [scattered, vec![false; n]] {
             let d = chessboard_distance(&act, dims);
-            let coords = |i: usize| {
-                [
-                    i % dims[0],
-                    (i / dims[0]) % dims[1],
-                    i / (dims[0] * dims[1]),
-                ]
-            };
+            let coords = |i: usize| grid_coords(i, dims);
             let cells: Vec<[usize; 3]> = (0..n).filter(|&i| act[i]).map(coords).collect();
             for (i, &di) in d.iter().enumerate() {
                 let c = coords(i);
