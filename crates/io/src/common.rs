@@ -354,8 +354,16 @@ pub(crate) fn diagonal_affine(spacing: [f64; 3], origin: [f64; 3]) -> [[f64; 4];
 }
 
 /// Writes a file atomically: into a temporary file in the same directory, renamed into
-/// place only when complete, so a failure leaves no partial output.
-pub(crate) fn write_atomic(
+/// place only when complete, so a failure leaves no partial output. The one atomic
+/// writer of the workspace (volumes, meshes, PNGs, ROM files).
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("hello.txt");
+/// glint_io::write_atomic(&path, |w| w.write_all(b"hello")).unwrap();
+/// assert_eq!(std::fs::read(&path).unwrap(), b"hello");
+/// ```
+pub fn write_atomic(
     path: &Path,
     body: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), IoError> {

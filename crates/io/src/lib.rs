@@ -46,7 +46,7 @@ pub mod nrrd;
 pub mod raw;
 mod types;
 
-pub use common::{Endian, ParseScalarTypeError, ScalarType};
+pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
 pub use types::{IoError, Mesh, Samples, Volume};
 
 use std::path::Path;

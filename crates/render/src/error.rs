@@ -34,12 +34,7 @@ pub enum RenderError {
     /// The lobe parameters were rejected by glint-lobe.
     #[error(transparent)]
     Lobe(#[from] glint_lobe::LobeError),
-    /// Writing the image failed.
-    #[error("{path}: {what}")]
-    Write {
-        /// The output file.
-        path: PathBuf,
-        /// What went wrong.
-        what: String,
-    },
+    /// Writing the image failed (the io error names the file).
+    #[error(transparent)]
+    Write(glint_io::IoError),
 }

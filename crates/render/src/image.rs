@@ -1,6 +1,5 @@
 //! Rendered images and PNG output (8- or 16-bit sRGB, written atomically).
 
-use std::io::{BufWriter, Write};
 use std::path::Path;
 
 use crate::error::RenderError;
@@ -56,40 +55,23 @@ impl Image {
         }
     }
 
-    /// Writes an sRGB PNG to `path` atomically: to a temporary file in the same
-    /// directory, renamed over `path` only when complete.
+    /// Writes an sRGB PNG to `path` atomically ([`glint_io::write_atomic`]): a failure
+    /// leaves no partial file.
     pub fn write_png(&self, path: &Path, depth: Depth) -> Result<(), RenderError> {
-        let err = |what: String| RenderError::Write {
-            path: path.to_path_buf(),
-            what,
-        };
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        let tmp = tempfile::Builder::new()
-            .prefix(".glint-render-")
-            .suffix(".png.tmp")
-            .tempfile_in(dir)
-            .map_err(|e| err(format!("cannot create a file in {}: {e}", dir.display())))?;
-        {
-            let mut out = BufWriter::new(tmp.as_file());
-            let mut enc = png::Encoder::new(&mut out, self.width, self.height);
+        glint_io::write_atomic(path, |out| {
+            let mut enc = png::Encoder::new(out, self.width, self.height);
             enc.set_color(png::ColorType::Rgb);
             enc.set_depth(match depth {
                 Depth::Eight => png::BitDepth::Eight,
                 Depth::Sixteen => png::BitDepth::Sixteen,
             });
             enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-            let mut writer = enc.write_header().map_err(|e| err(e.to_string()))?;
+            let mut writer = enc.write_header().map_err(std::io::Error::other)?;
             writer
                 .write_image_data(&self.encode_srgb(depth))
-                .map_err(|e| err(e.to_string()))?;
-            writer.finish().map_err(|e| err(e.to_string()))?;
-            out.flush().map_err(|e| err(e.to_string()))?;
-        }
-        tmp.as_file().sync_all().map_err(|e| err(e.to_string()))?;
-        tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
-        Ok(())
+                .map_err(std::io::Error::other)?;
+            writer.finish().map_err(std::io::Error::other)
+        })
+        .map_err(RenderError::Write)
     }
 }

@@ -220,25 +220,9 @@ fn check_exhaustive_size(cfg: &Config, max: u64) -> anyhow::Result<()> {
     )
 }
 
-/// Writes `text` to `path` through a temporary file in the same directory, so a failed
-/// run leaves no partial file.
-fn write_atomically(path: &Path, text: &str) -> anyhow::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)
-        .with_context(|| format!("creating a temporary file in {}", dir.display()))?;
-    tmp.write_all(text.as_bytes())
-        .with_context(|| format!("writing {}", path.display()))?;
-    tmp.persist(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
-}
-
 fn rom(args: RomArgs) -> anyhow::Result<()> {
     let rom = Rom::new(args.coef, args.v, args.n_bits, args.coef_bits, args.round)?;
-    write_atomically(&args.output, &rom.to_readmemh())?;
+    glint_io::write_atomic(&args.output, |w| w.write_all(rom.to_readmemh().as_bytes()))?;
     eprintln!(
         "wrote {} words of {} bits (UQ{}.{}, {} coefficients, v = {}) to {}",
         rom.words().len(),
