@@ -26,6 +26,12 @@ try {
   page.on("pageerror", (e) => { console.error(`page error: ${e.message}`); process.exitCode = 1; });
   await page.goto(url);
   await page.waitForFunction(() => window.glint && window.glint.full >= 1, null, { timeout: 120000 });
+  if (process.env.GLINT_VIEW) {
+    // Start from a named view (the benchmark's scene).
+    await page.click(`#views button:text-is("${process.env.GLINT_VIEW}")`);
+    const full = await page.evaluate(() => window.glint.full);
+    await page.waitForFunction((n) => window.glint.full > n, full, { timeout: 120000 });
+  }
   const box = await page.locator("#frame").boundingBox();
   const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
   const pixels = () => page.evaluate(() => document.getElementById("frame").toDataURL());
