@@ -34,6 +34,9 @@ pub enum RenderError {
     /// The lobe parameters were rejected by glint-lobe.
     #[error(transparent)]
     Lobe(#[from] glint_lobe::LobeError),
+    /// Encoding the image as PNG failed.
+    #[error("cannot encode the PNG")]
+    Encode(#[source] png::EncodingError),
     /// Writing the image failed (the io error names the file).
     #[error(transparent)]
     Write(glint_io::IoError),

@@ -52,6 +52,8 @@ pub struct Field {
     pub(crate) to_index: Mat3,
     pub(crate) min_spacing: f64,
     pub(crate) range: (f32, f32),
+    /// [`Field::robust_range`].
+    pub(crate) robust: (f32, f32),
     /// Macro-cell grid dimensions and per-cell (min, max) of the values a sample in
     /// the cell can interpolate.
     pub(crate) cell_dims: [usize; 3],
@@ -107,7 +109,7 @@ impl Field {
             .collect();
         let min_spacing = spacing.iter().cloned().fold(f64::INFINITY, f64::min);
 
-        let mut values = volume.to_f32();
+        let mut values = physical_values(volume);
         let mut lo = f32::INFINITY;
         let mut hi = f32::NEG_INFINITY;
         for &v in &values {
@@ -126,6 +128,9 @@ impl Field {
                 *v = lo;
             }
         });
+        let robust = glint_io::robust_range(values.len(), |i| values[i] as f64)
+            .map(|(a, b)| (a as f32, b as f32))
+            .unwrap_or((lo, hi));
 
         // Gradient in index space g_idx; world gradient = A^-T g_idx (chain rule on
         // f(x) = f_idx(A^-1 (x - o))).
@@ -213,6 +218,7 @@ impl Field {
             to_index,
             min_spacing,
             range: (lo, hi),
+            robust,
             cell_dims,
             cells,
         })
@@ -231,6 +237,13 @@ impl Field {
     /// Minimum and maximum finite value.
     pub fn range(&self) -> (f32, f32) {
         self.range
+    }
+
+    /// The 0.5th and 99.5th percentiles of the values ([`glint_io::robust_range`], on a
+    /// regular subsample): a range that a few outlier voxels cannot stretch, for scaling
+    /// presets and ramps. Within [`Field::range`].
+    pub fn robust_range(&self) -> (f32, f32) {
+        self.robust
     }
 
     /// World position (mm) of a continuous voxel index.
@@ -383,6 +396,31 @@ impl Field {
     }
 }
 
+/// The volume's physical values as f32 (slope and intercept applied), converted in
+/// parallel: [`Volume::to_f32`] on one thread took 4% of a one-shot MNI152 render.
+fn physical_values(volume: &Volume) -> Vec<f32> {
+    use glint_io::Samples;
+    fn convert<T: Copy + Into<f64> + Sync>(v: &[T], s: f64, b: f64) -> Vec<f32> {
+        let mut out = Vec::new();
+        v.par_iter()
+            .with_min_len(1 << 16)
+            .map(|&x| (s * x.into() + b) as f32)
+            .collect_into_vec(&mut out);
+        out
+    }
+    let (s, b) = (volume.slope, volume.intercept);
+    match &volume.samples {
+        Samples::U8(v) => convert(v, s, b),
+        Samples::I8(v) => convert(v, s, b),
+        Samples::U16(v) => convert(v, s, b),
+        Samples::I16(v) => convert(v, s, b),
+        Samples::U32(v) => convert(v, s, b),
+        Samples::I32(v) => convert(v, s, b),
+        Samples::F32(v) => convert(v, s, b),
+        Samples::F64(v) => convert(v, s, b),
+    }
+}
+
 /// World gradient at voxel `ijk` of `values` (dimensions `dims`): central differences
 /// (one-sided at the faces) in index space, mapped by `to_world_gradient` (the inverse
 /// transpose of the affine's linear part).
@@ -467,5 +505,19 @@ mod tests {
         assert!(Field::new(&singular).is_err());
         let nan = Volume::new([2, 2, 2], [1.0; 3], Samples::F32(vec![f32::NAN; 8])).unwrap();
         assert!(Field::new(&nan).is_err());
+    }
+
+    #[test]
+    fn robust_range_ignores_outlier_voxels() {
+        // 4096 voxels 0..=4095, one replaced by -1.5e37 (the corrupt voxel):
+        // the 0.5th and 99.5th percentiles of 4096 values are ranks 20 and 4075 (of
+        // 0..=4095), i.e. the values 20 and 4075 once the outlier takes rank 0 from
+        // the value 0 it replaced.
+        let mut v: Vec<f32> = (0..4096).map(|i| i as f32).collect();
+        v[0] = -1.5e37;
+        let vol = Volume::new([16, 16, 16], [1.0; 3], Samples::F32(v)).unwrap();
+        let f = Field::new(&vol).unwrap();
+        assert_eq!(f.range(), (-1.5e37, 4095.0));
+        assert_eq!(f.robust_range(), (20.0, 4075.0));
     }
 }

@@ -44,11 +44,12 @@ pub mod presets;
 mod raycast;
 mod shading;
 mod tf;
+mod timings;
 
 pub use camera::{Camera, CameraSpec, Projection, View};
 pub use error::RenderError;
 pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
-pub use image::{Depth, Image};
+pub use image::{Depth, Image, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA};
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{
     camera_for, render, Classification, Kernel, Mode, RenderSettings, RenderStats, MAX_IMAGE_SIDE,
@@ -58,3 +59,4 @@ pub use shading::{Light, Shader};
 pub use tf::{
     linear_to_srgb, srgb_to_linear, Lut, Material, MaterialOverrides, TransferFunction, LUT_SIZE,
 };
+pub use timings::Timings;
