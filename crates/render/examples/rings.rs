@@ -98,7 +98,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         classify.as_secs_f64() * 1e3,
     );
     if let Some(out) = args.get(5) {
-        image.write_png(out.as_ref(), Depth::Eight)?;
+        let mut t = glint_render::Timings::default();
+        let bytes = t.time("encode", || image.encode_png(Depth::Eight))?;
+        t.time("write", || {
+            glint_render::Image::write_png_bytes(out.as_ref(), &bytes)
+        })?;
+        t.extend(field.timings());
+        eprintln!("{t}");
     }
     Ok(())
 }
