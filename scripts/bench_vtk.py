@@ -12,6 +12,9 @@ ScalarOpacityUnitDistance = the smallest spacing (glint's opacity unit is one vo
 the renderer's default headlight, offscreen rendering (EGL with the PyPI wheel).
 
 Usage: bench_vtk.py SCENE.json FRAMES [OUT.png]
+
+FRAMES 0 is the end-to-end mode: read the file, render the first frame, write the PNG
+and exit, timed from outside as a fresh process (scripts/bench-vtk).
 """
 
 import json
@@ -102,14 +105,8 @@ def main():
     # First frame: the mapper builds its gradient tables and min/max volume (glint's
     # equivalent, building the Field, is outside its timed loop too).
     win.Render()
-    start = time.perf_counter()
-    for _ in range(frames):
-        win.Render()
-    ms = (time.perf_counter() - start) * 1e3 / frames
-    print(f"vtk: {ms:.2f} ms/frame ({frames} frames, {scene['size'][0]}x{scene['size'][1]}, "
-          f"vtkFixedPointVolumeRayCastMapper, {mapper.GetNumberOfThreads()} threads, VTK "
-          f"{vtk.vtkVersion.GetVTKVersion()})")
-
+    if frames > 0:
+        report(win, mapper, scene, frames)
     if out_png:
         grab = vtk.vtkWindowToImageFilter()
         grab.SetInput(win)
@@ -118,6 +115,17 @@ def main():
         writer.SetFileName(out_png)
         writer.SetInputConnection(grab.GetOutputPort())
         writer.Write()
+
+
+def report(win, mapper, scene, frames):
+    """Times FRAMES more frames and prints ms per frame."""
+    start = time.perf_counter()
+    for _ in range(frames):
+        win.Render()
+    ms = (time.perf_counter() - start) * 1e3 / frames
+    print(f"vtk: {ms:.2f} ms/frame ({frames} frames, {scene['size'][0]}x{scene['size'][1]}, "
+          f"vtkFixedPointVolumeRayCastMapper, {mapper.GetNumberOfThreads()} threads, VTK "
+          f"{vtk.vtkVersion.GetVTKVersion()})")
 
 
 if __name__ == "__main__":

@@ -44,9 +44,11 @@ pub mod mesh;
 pub mod nifti;
 pub mod nrrd;
 pub mod raw;
+mod robust;
 mod types;
 
 pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
+pub use robust::{robust_range, ROBUST_PERCENTILES, ROBUST_SAMPLES};
 pub use types::{IoError, Mesh, Samples, Volume};
 
 use std::path::Path;

@@ -51,8 +51,8 @@ pub enum RenderError {
     /// The operating system refused (the caller names the file).
     #[error(transparent)]
     Io(#[from] std::io::Error),
-    /// Encoding the image failed.
-    #[error("PNG encoding failed")]
+    /// Encoding the image as PNG failed.
+    #[error("cannot encode the PNG")]
     Encode(#[source] png::EncodingError),
     /// Writing the image failed (the io error names the file).
     #[error(transparent)]

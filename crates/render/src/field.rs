@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::error::RenderError;
 use crate::math::{inverse3, linear_part, mul3, transpose3, Mat3, Vec3};
+use crate::timings::Timings;
 
 /// Largest voxel count the caster accepts: it keeps 12 bytes per voxel, so this is
 /// 3 GiB, far above clinical CT (512 x 512 x 2000 = 2^29 would need 6 GiB).
@@ -52,10 +53,14 @@ pub struct Field {
     pub(crate) to_index: Mat3,
     pub(crate) min_spacing: f64,
     pub(crate) range: (f32, f32),
+    /// [`Field::robust_range`].
+    pub(crate) robust: (f32, f32),
     /// Macro-cell grid dimensions and per-cell (min, max) of the values a sample in
     /// the cell can interpolate.
     pub(crate) cell_dims: [usize; 3],
     pub(crate) cells: Vec<(f32, f32)>,
+    /// How long each step of [`Field::new`] took.
+    timings: Timings,
 }
 
 impl Field {
@@ -107,7 +112,8 @@ impl Field {
             .collect();
         let min_spacing = spacing.iter().cloned().fold(f64::INFINITY, f64::min);
 
-        let mut values = volume.to_f32();
+        let mut timings = Timings::default();
+        let mut values = timings.time("field: values", || physical_values(volume));
         let mut lo = f32::INFINITY;
         let mut hi = f32::NEG_INFINITY;
         for &v in &values {
@@ -126,6 +132,12 @@ impl Field {
                 *v = lo;
             }
         });
+        let robust = timings.time("field: robust range", || {
+            glint_io::robust_range(values.len(), |i| values[i] as f64)
+                .map(|(a, b)| (a as f32, b as f32))
+                .unwrap_or((lo, hi))
+        });
+        let gradients_start = std::time::Instant::now();
 
         // Gradient in index space g_idx; world gradient = A^-T g_idx (chain rule on
         // f(x) = f_idx(A^-1 (x - o))).
@@ -134,20 +146,20 @@ impl Field {
         let [nx, ny, nz] = dims;
         // Two passes over the central differences (cheap next to the memory a stored
         // f32 copy would take at the size limit): the largest component, then the
-        // quantised gradients.
+        // quantised gradients; a row at a time, interior rows without bounds checks.
         let largest = (0..nz)
             .into_par_iter()
-            .map(|k| {
-                let mut m = 0.0f32;
-                for j in 0..ny {
-                    for i in 0..nx {
-                        m = world_gradient(&values, dims, &g, [i, j, k])
-                            .iter()
-                            .fold(m, |m, x| m.max(x.abs()));
+            .map_init(
+                || vec![[0.0f32; 3]; nx],
+                |row, k| {
+                    let mut m = 0.0f32;
+                    for j in 0..ny {
+                        row_gradients(&values, dims, &g, j, k, row);
+                        m = row.iter().flatten().fold(m, |m, x| m.max(x.abs()));
                     }
-                }
-                m
-            })
+                    m
+                },
+            )
             .reduce(|| 0.0, f32::max);
         let gradient_scale = if largest > 0.0 && largest.is_finite() {
             largest / 32767.0
@@ -156,25 +168,27 @@ impl Field {
         };
         let inv_scale = 1.0 / gradient_scale;
         let mut gradients = vec![[0i16; 4]; count];
-        gradients
-            .par_chunks_mut(nx * ny)
-            .enumerate()
-            .for_each(|(k, slab)| {
+        gradients.par_chunks_mut(nx * ny).enumerate().for_each_init(
+            || vec![[0.0f32; 3]; nx],
+            |row, (k, slab)| {
                 for j in 0..ny {
-                    for i in 0..nx {
-                        let w = world_gradient(&values, dims, &g, [i, j, k]);
-                        // Rounded half away from zero (without libm's roundf, a call
-                        // per component on baseline x86-64); |x| * inv_scale <= 32767
-                        // up to rounding, and `as` saturates.
-                        let q = |x: f32| {
-                            let y = x * inv_scale;
-                            (y + 0.5f32.copysign(y)) as i16
-                        };
-                        slab[i + nx * j] = [q(w[0]), q(w[1]), q(w[2]), 0];
+                    row_gradients(&values, dims, &g, j, k, row);
+                    // Rounded half away from zero (without libm's roundf, a call
+                    // per component on baseline x86-64); |x| * inv_scale <= 32767
+                    // up to rounding, and `as` saturates.
+                    let q = |x: f32| {
+                        let y = x * inv_scale;
+                        (y + 0.5f32.copysign(y)) as i16
+                    };
+                    for (o, w) in slab[nx * j..][..nx].iter_mut().zip(row.iter()) {
+                        *o = [q(w[0]), q(w[1]), q(w[2]), 0];
                     }
                 }
-            });
+            },
+        );
 
+        timings.record("field: gradients", gradients_start.elapsed());
+        let cells_start = std::time::Instant::now();
         // Macro cells: cell c covers voxels c*B ..= c*B + B (one voxel of overlap, so
         // every trilinear sample inside the cell's box reads only voxels it covers).
         let cell_dims = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
@@ -203,7 +217,9 @@ impl Field {
                 }
             });
 
+        timings.record("field: macro cells", cells_start.elapsed());
         Ok(Field {
+            timings,
             dims,
             values,
             gradients,
@@ -213,9 +229,16 @@ impl Field {
             to_index,
             min_spacing,
             range: (lo, hi),
+            robust,
             cell_dims,
             cells,
         })
+    }
+
+    /// How long the steps of [`Field::new`] took (values, robust range, gradients,
+    /// macro cells), for `--timings` reports.
+    pub fn timings(&self) -> &Timings {
+        &self.timings
     }
 
     /// Samples along i, j, k.
@@ -231,6 +254,13 @@ impl Field {
     /// Minimum and maximum finite value.
     pub fn range(&self) -> (f32, f32) {
         self.range
+    }
+
+    /// The 0.5th and 99.5th percentiles of the values ([`glint_io::robust_range`], on a
+    /// regular subsample): a range that a few outlier voxels cannot stretch, for scaling
+    /// presets and ramps. Within [`Field::range`].
+    pub fn robust_range(&self) -> (f32, f32) {
+        self.robust
     }
 
     /// World position (mm) of a continuous voxel index.
@@ -383,6 +413,71 @@ impl Field {
     }
 }
 
+/// The volume's physical values as f32 (slope and intercept applied), converted in
+/// parallel: [`Volume::to_f32`] on one thread took 4% of a one-shot MNI152 render.
+fn physical_values(volume: &Volume) -> Vec<f32> {
+    use glint_io::Samples;
+    fn convert<T: Copy + Into<f64> + Sync>(v: &[T], s: f64, b: f64) -> Vec<f32> {
+        let mut out = Vec::new();
+        v.par_iter()
+            .with_min_len(1 << 16)
+            .map(|&x| (s * x.into() + b) as f32)
+            .collect_into_vec(&mut out);
+        out
+    }
+    let (s, b) = (volume.slope, volume.intercept);
+    match &volume.samples {
+        Samples::U8(v) => convert(v, s, b),
+        Samples::I8(v) => convert(v, s, b),
+        Samples::U16(v) => convert(v, s, b),
+        Samples::I16(v) => convert(v, s, b),
+        Samples::U32(v) => convert(v, s, b),
+        Samples::I32(v) => convert(v, s, b),
+        Samples::F32(v) => convert(v, s, b),
+        Samples::F64(v) => convert(v, s, b),
+    }
+}
+
+/// [`world_gradient`] for every voxel of row `(j, k)` into `out` (length `nx`):
+/// interior rows take their neighbours from five row slices, with no clamping, in the
+/// same operations (so the same results) as [`world_gradient`].
+fn row_gradients(
+    values: &[f32],
+    dims: [usize; 3],
+    g: &[[f32; 3]; 3],
+    j: usize,
+    k: usize,
+    out: &mut [[f32; 3]],
+) {
+    let [nx, ny, nz] = dims;
+    if nx < 3 || j == 0 || k == 0 || j + 1 >= ny || k + 1 >= nz {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = world_gradient(values, dims, g, [i, j, k]);
+        }
+        return;
+    }
+    let row = |jj: usize, kk: usize| &values[nx * (jj + ny * kk)..][..nx];
+    let (c, jm, jp, km, kp) = (
+        row(j, k),
+        row(j - 1, k),
+        row(j + 1, k),
+        row(j, k - 1),
+        row(j, k + 1),
+    );
+    out[0] = world_gradient(values, dims, g, [0, j, k]);
+    out[nx - 1] = world_gradient(values, dims, g, [nx - 1, j, k]);
+    for i in 1..nx - 1 {
+        let gi = (c[i + 1] - c[i - 1]) / 2.0;
+        let gj = (jp[i] - jm[i]) / 2.0;
+        let gk = (kp[i] - km[i]) / 2.0;
+        out[i] = [
+            g[0][0] * gi + g[0][1] * gj + g[0][2] * gk,
+            g[1][0] * gi + g[1][1] * gj + g[1][2] * gk,
+            g[2][0] * gi + g[2][1] * gj + g[2][2] * gk,
+        ];
+    }
+}
+
 /// World gradient at voxel `ijk` of `values` (dimensions `dims`): central differences
 /// (one-sided at the faces) in index space, mapped by `to_world_gradient` (the inverse
 /// transpose of the affine's linear part).
@@ -467,5 +562,39 @@ mod tests {
         assert!(Field::new(&singular).is_err());
         let nan = Volume::new([2, 2, 2], [1.0; 3], Samples::F32(vec![f32::NAN; 8])).unwrap();
         assert!(Field::new(&nan).is_err());
+    }
+
+    #[test]
+    fn robust_range_ignores_outlier_voxels() {
+        // 4096 voxels 0..=4095, one replaced by -1.5e37 (the corrupt voxel):
+        // the 0.5th and 99.5th percentiles of 4096 values are ranks 20 and 4075 (of
+        // 0..=4095), i.e. the values 20 and 4075 once the outlier takes rank 0 from
+        // the value 0 it replaced.
+        let mut v: Vec<f32> = (0..4096).map(|i| i as f32).collect();
+        v[0] = -1.5e37;
+        let vol = Volume::new([16, 16, 16], [1.0; 3], Samples::F32(v)).unwrap();
+        let f = Field::new(&vol).unwrap();
+        assert_eq!(f.range(), (-1.5e37, 4095.0));
+        assert_eq!(f.robust_range(), (20.0, 4075.0));
+    }
+
+    #[test]
+    fn row_gradients_equal_the_per_voxel_gradients() {
+        // A non-linear field on a sheared grid: the fast interior rows must give
+        // exactly the per-voxel central differences.
+        let dims = [7, 6, 5];
+        let v: Vec<f32> = (0..7 * 6 * 5)
+            .map(|i| ((i * 37 % 11) as f32).sin() * 3.0)
+            .collect();
+        let g = [[0.5, 0.1, 0.0], [0.0, 1.0, -0.2], [0.3, 0.0, 2.0]];
+        let mut row = vec![[0.0f32; 3]; 7];
+        for k in 0..5 {
+            for j in 0..6 {
+                row_gradients(&v, dims, &g, j, k, &mut row);
+                for (i, r) in row.iter().enumerate() {
+                    assert_eq!(*r, world_gradient(&v, dims, &g, [i, j, k]), "{i} {j} {k}");
+                }
+            }
+        }
     }
 }

@@ -48,11 +48,12 @@ mod raycast;
 mod scene;
 mod shading;
 mod tf;
+mod timings;
 
 pub use camera::{Camera, CameraSpec, Projection, View};
 pub use error::RenderError;
 pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
-pub use image::{Depth, Image};
+pub use image::{Depth, Image, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA};
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{
@@ -60,11 +61,12 @@ pub use raycast::{
     TERMINATION_OPACITY,
 };
 pub use scene::{
-    Derived, Input, LobeSpec, RenderMode, Rendered, Renderer, Resolved, Scene, Timings,
-    DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
+    Derived, Input, LobeSpec, RenderMode, Rendered, Renderer, Resolved, Scene, DEFAULT_SHININESS,
+    MAX_SCENE_BYTES, SCENE_VERSION,
 };
 pub use shading::{Light, Shader, MAX_LIGHTS};
 pub use tf::{
     linear_to_srgb, srgb_to_linear, Lut, Material, MaterialOverrides, TransferFunction,
     TransferFunctionFile, LUT_SIZE,
 };
+pub use timings::Timings;

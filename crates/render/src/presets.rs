@@ -96,6 +96,23 @@ pub const PRESETS: &[Preset] = &[
         true,
         false
     ),
+    // glint's own, for the `head` phantom (values 0..0.85): scalp a faint haze, the
+    // skull glassy ivory, cerebrospinal fluid clear, the brain's surface opaque and
+    // pink with a strong highlight; ventricles hidden inside it.
+    preset!(
+        "head",
+        [
+            0.0, 0.0, 0.04, 0.0, 0.08, 0.006, 0.14, 0.006, 0.2, 0.08, 0.3, 0.08, 0.33, 0.0, 0.42,
+            0.0, 0.52, 0.8, 1.0, 0.8
+        ],
+        [
+            0.0, 0.8, 0.62, 0.52, 0.14, 0.8, 0.62, 0.52, 0.2, 0.95, 0.92, 0.84, 0.3, 0.95, 0.92,
+            0.84, 0.42, 0.93, 0.6, 0.56, 1.0, 0.93, 0.6, 0.56
+        ],
+        [0.12, 0.75, 0.5, 30.0],
+        true,
+        false
+    ),
     preset!(
         "ct-aaa",
         [

@@ -9,7 +9,7 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use glint_io::{read_volume, ReadOptions, Volume};
 use glint_lobe::{Geometry, LobeKind};
@@ -24,6 +24,7 @@ use crate::presets::preset;
 use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel, Mode};
 use crate::shading::{Light, Shader, MAX_LIGHTS};
 use crate::tf::{Material, MaterialOverrides, TransferFunction};
+use crate::timings::Timings;
 
 /// The scene schema version this build reads and writes.
 pub const SCENE_VERSION: u32 = 1;
@@ -141,11 +142,11 @@ pub enum Input {
 }
 
 impl Default for Input {
-    /// The default phantom at 128^3.
+    /// The default phantom at its default size.
     fn default() -> Self {
         Input::Phantom {
             name: Phantom::default(),
-            size: 128,
+            size: Phantom::DEFAULT_SIZE,
         }
     }
 }
@@ -357,7 +358,10 @@ impl Scene {
     pub fn resolve_for(&self, field: &Field) -> Result<Resolved, RenderError> {
         let mut scene = self.clone();
         scene.derived = None;
-        let (lo, hi) = field.range();
+        // Presets, the MIP ramp, the default iso value and the gate follow the robust
+        // range (0.5th-99.5th percentile), so a few outlier voxels cannot black out
+        // the image.
+        let (lo, hi) = field.robust_range();
         let (tf, base, power) = scene.resolve_classification(lo, hi)?;
         let material = scene.material.apply(base);
         scene.material = MaterialOverrides {
@@ -449,7 +453,7 @@ impl Scene {
         }
         let name = match (&self.preset, &self.input) {
             (Some(p), _) => p.clone(),
-            (None, Input::Phantom { .. }) => "phantom".into(),
+            (None, Input::Phantom { name, .. }) => name.preset().into(),
             // Hounsfield units reach air at -1000: CT.
             (None, Input::Path(_)) if lo < -500.0 => "ct-bone".into(),
             (None, Input::Path(_)) => "mr-t2-brain".into(),
@@ -474,19 +478,6 @@ impl Scene {
     }
 }
 
-/// How long each stage of a render took.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Timings {
-    /// Reading (and decompressing) the input, or building the phantom.
-    pub read: Duration,
-    /// Building the field: values, gradients, macro cells.
-    pub field: Duration,
-    /// Classifying (zero when the classification was reused).
-    pub classify: Duration,
-    /// Casting the rays of the frame.
-    pub frame: Duration,
-}
-
 /// A rendered image and the resolved scene that made it.
 #[derive(Clone, Debug)]
 pub struct Rendered {
@@ -494,7 +485,8 @@ pub struct Rendered {
     pub image: Image,
     /// The scene with every default written in, and [`Scene::derived`] filled.
     pub scene: Scene,
-    /// Stage times (read and field from [`Renderer::open`]).
+    /// Stage times: `read` and the field's stages from [`Renderer::open`], then
+    /// `classify` (when the classification was built) and `frame`.
     pub timings: Timings,
 }
 
@@ -512,26 +504,22 @@ pub struct Renderer {
 impl Renderer {
     /// Reads `input` and builds its field.
     pub fn open(input: &Input) -> Result<Renderer, RenderError> {
-        let start = Instant::now();
-        let volume = input.open()?;
-        let read = start.elapsed();
+        let mut read = Timings::default();
+        let volume = read.time("read", || input.open())?;
         let mut renderer = Renderer::from_volume(&volume)?;
-        renderer.opened.read = read;
+        read.extend(&renderer.opened);
+        renderer.opened = read;
         Ok(renderer)
     }
 
     /// A renderer of a volume already in memory.
     pub fn from_volume(volume: &Volume) -> Result<Renderer, RenderError> {
-        let start = Instant::now();
         let field = Arc::new(Field::new(volume)?);
         Ok(Renderer {
+            opened: field.timings().clone(),
             field,
             classification: None,
             kernel: Kernel::Auto,
-            opened: Timings {
-                field: start.elapsed(),
-                ..Timings::default()
-            },
         })
     }
 
@@ -600,27 +588,22 @@ impl Renderer {
         resolved: Resolved,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Rendered, RenderError> {
+        let mut timings = self.opened.clone();
         let start = Instant::now();
         let (class, built) = self.classification(&resolved.tf, &resolved.classify)?;
-        let classify = if built {
-            start.elapsed()
-        } else {
-            Duration::ZERO
-        };
-        let start = Instant::now();
-        let image = class.render(&resolved.shader, &resolved.frame, progress)?;
-        let frame = start.elapsed();
+        if built {
+            timings.record("classify", start.elapsed());
+        }
+        let image = timings.time("frame", || {
+            class.render(&resolved.shader, &resolved.frame, progress)
+        })?;
         let camera = class.camera(&resolved.frame)?;
         let mut scene = resolved.scene;
         scene.derived = Some(derived(&camera, &self.field, &resolved.tf, scene.step));
         Ok(Rendered {
             image,
             scene,
-            timings: Timings {
-                classify,
-                frame,
-                ..self.opened
-            },
+            timings,
         })
     }
 }
@@ -774,8 +757,9 @@ mod tests {
     fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
         let scene = small();
         let mut r = Renderer::open(&scene.input).unwrap();
+        let classified = |t: &Timings| t.stages().iter().any(|(s, _)| *s == "classify");
         let first = r.render(&scene, &|_| {}).unwrap();
-        assert!(first.timings.classify > Duration::ZERO);
+        assert!(classified(&first.timings));
         // Another view and lobe: same classification.
         let moved = Scene {
             camera: CameraSpec {
@@ -789,7 +773,7 @@ mod tests {
             ..scene.clone()
         };
         let second = r.render(&moved, &|_| {}).unwrap();
-        assert_eq!(second.timings.classify, Duration::ZERO);
+        assert!(!classified(&second.timings));
         assert_ne!(second.image.rgb, first.image.rgb);
         // Another step: classified again, and the image equals a fresh renderer's.
         let finer = Scene {
@@ -797,7 +781,7 @@ mod tests {
             ..scene.clone()
         };
         let third = r.render(&finer, &|_| {}).unwrap();
-        assert!(third.timings.classify > Duration::ZERO);
+        assert!(classified(&third.timings));
         let fresh = Renderer::open(&scene.input)
             .unwrap()
             .render(&finer, &|_| {})

@@ -401,8 +401,8 @@ fn dump_scene(path: &Path, scene: &Scene) -> anyhow::Result<()> {
 fn print_repeat(args: &Options, rendered: &Rendered, elapsed: Duration) {
     let frames = args.repeat - 1;
     eprintln!(
-        "glint render: classified once in {:.2} ms; per frame {:?}",
-        rendered.timings.classify.as_secs_f64() * 1e3,
+        "glint render: first frame (classified once): {:?}; per frame {:?}",
+        rendered.timings.stages(),
         rendered.image.stats
     );
     let s = &rendered.scene;
@@ -417,21 +417,12 @@ fn print_repeat(args: &Options, rendered: &Rendered, elapsed: Duration) {
     );
 }
 
+/// `--timings`: every stage of the one-shot render, then the total.
 fn print_timings(rendered: &Rendered, encode: Duration, write: Duration) {
-    let t = rendered.timings;
-    let ms = |d: Duration| d.as_secs_f64() * 1e3;
-    let total = t.read + t.field + t.classify + t.frame + encode + write;
-    eprintln!(
-        "glint render: read {:.1} ms, field {:.1} ms, classify {:.1} ms, frame {:.1} ms, \
-         encode {:.1} ms, write {:.1} ms, total {:.1} ms",
-        ms(t.read),
-        ms(t.field),
-        ms(t.classify),
-        ms(t.frame),
-        ms(encode),
-        ms(write),
-        ms(total)
-    );
+    let mut t = rendered.timings.clone();
+    t.record("encode", encode);
+    t.record("write", write);
+    eprintln!("{t}");
 }
 
 #[cfg(test)]

@@ -301,8 +301,14 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
     let values = f.values.as_ptr();
 
     let k = m.k;
-    // Positions o + d t with t = k dt, as `Ray::at` computes them.
-    let t = _mm256_mul_ps(_mm256_add_ps(_mm256_set1_ps(k as f32), lanes), dt);
+    // Positions o + d t with t = (k + j) dt, as `Ray::t` and `Ray::at` compute them.
+    let t = _mm256_mul_ps(
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_set1_ps(k as f32), lanes),
+            _mm256_set1_ps(ray.j),
+        ),
+        dt,
+    );
     let p = axes!(|a| _mm256_add_ps(
         _mm256_set1_ps(ray.o.get(a)),
         _mm256_mul_ps(_mm256_set1_ps(ray.d.get(a)), t)
