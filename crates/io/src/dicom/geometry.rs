@@ -113,6 +113,15 @@ fn position(
     let stack = |origin: [f64; 3], s: f64| std::array::from_fn(|a| origin[a] + k as f64 * s * normal[a]);
     Ok(match (h.positions[k], h.positions[0]) {
         (Some(p), _) => p,
+        (None, Some(p0)) if h.frame_offsets.is_some() => {
+            // RT Dose: offsets along the normal, relative to the position when the first
+            // is 0 (the only form glint reads; PS3.3 C.8.8.3.2).
+            let off = h.frame_offsets.as_deref().unwrap_or_default();
+            if off[0] != 0.0 {
+                return Err(refuse("GridFrameOffsetVector does not start at 0 (absolute offsets)"));
+            }
+            std::array::from_fn(|a| p0[a] + off[k] * normal[a])
+        }
         (None, Some(p0)) if h.frames > 1 => {
             // Classic multi-frame: frames stacked along the normal from the one given
             // position, by SpacingBetweenSlices (or SliceThickness).

@@ -2,7 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
-use dicom_dictionary_std::tags;
+use dicom_core::dictionary::{DataDictionary, DataDictionaryEntry, UidDictionary};
+use dicom_core::VR;
+use dicom_dictionary_std::{tags, StandardDataDictionary, StandardSopClassDictionary};
 use dicom_encoding::TransferSyntaxIndex;
 use dicom_object::mem::InMemElement;
 use dicom_object::InMemDicomObject;
@@ -41,29 +43,69 @@ pub(super) struct Header {
     pub slice_step: Option<f64>,
     /// SpacingBetweenSlices only (what a stack of frames without positions uses).
     pub spacing_between_slices: Option<f64>,
+    /// GridFrameOffsetVector (RT Dose, PS3.3 C.8.8.3.2): frame offsets in mm along the
+    /// normal from ImagePositionPatient, one per frame.
+    pub frame_offsets: Option<Vec<f64>>,
     pub modality: Option<String>,
     pub rescale_type: Option<String>,
     /// What was assumed to open the file (no preamble, no meta group).
     pub notes: Vec<String>,
 }
 
+/// The dictionary VR of an element stored as UN (some exporters write known attributes
+/// as UN in explicit VR; pydicom reads them by their dictionary VR, PS3.5 6.2.2).
+fn un_vr(e: &InMemElement) -> Option<VR> {
+    (e.vr() == VR::UN)
+        .then(|| StandardDataDictionary.by_tag(e.header().tag))
+        .flatten()
+        .map(|d| d.vr().relaxed())
+}
+
+/// The value of a UN element as text, when its dictionary VR is a text VR.
+fn un_text(e: &InMemElement) -> Option<String> {
+    let bytes = e.to_bytes().ok()?;
+    Some(String::from_utf8_lossy(&bytes).into_owned())
+}
+
 fn floats(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<Vec<f64>> {
-    obj.get(tag).and_then(|e| e.to_multi_float64().ok())
+    let e = obj.get(tag)?;
+    match un_vr(e) {
+        Some(VR::DS) => un_text(e)?
+            .trim_end_matches(['\0', ' '])
+            .split('\\')
+            .map(|x| x.trim().parse().ok())
+            .collect(),
+        Some(_) => None,
+        None => e.to_multi_float64().ok(),
+    }
 }
 
 fn float(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<f64> {
-    obj.get(tag).and_then(|e| e.to_float64().ok())
+    floats(obj, tag).and_then(|v| v.first().copied())
 }
 
 fn string(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<String> {
-    obj.get(tag)
-        .and_then(|e| e.to_str().ok())
-        .map(|s| s.trim().trim_end_matches('\0').to_string())
-        .filter(|s| !s.is_empty())
+    let e = obj.get(tag)?;
+    let s = match un_vr(e) {
+        Some(_) => un_text(e)?,
+        None => e.to_str().ok()?.into_owned(),
+    };
+    Some(s.trim().trim_end_matches('\0').to_string()).filter(|s| !s.is_empty())
 }
 
 fn int(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<i64> {
-    obj.get(tag).and_then(|e| e.to_int::<i64>().ok())
+    let e = obj.get(tag)?;
+    match un_vr(e) {
+        // UN values are little endian: UN only occurs in explicit VR little endian
+        // files (big endian files get theirs converted by dicom-rs).
+        Some(VR::US) => {
+            let b = e.to_bytes().ok()?;
+            Some(i64::from(u16::from_le_bytes(b.get(..2)?.try_into().ok()?)))
+        }
+        Some(VR::IS) => un_text(e)?.trim_end_matches(['\0', ' ']).trim().parse().ok(),
+        Some(_) => None,
+        None => e.to_int::<i64>().ok(),
+    }
 }
 
 /// The first item of a sequence.
@@ -131,7 +173,10 @@ fn image_size(
     let bits_stored = int(obj, tags::BITS_STORED).unwrap_or(bits_allocated);
     let signed = int(obj, tags::PIXEL_REPRESENTATION).unwrap_or(0) == 1;
     let spp = int(obj, tags::SAMPLES_PER_PIXEL).unwrap_or(1);
-    let frames = int(obj, tags::NUMBER_OF_FRAMES).unwrap_or(1);
+    let frames = match string(obj, tags::NUMBER_OF_FRAMES) {
+        None => 1,
+        Some(_) => need(tags::NUMBER_OF_FRAMES, "NumberOfFrames")?,
+    };
     if rows < 1 || cols < 1 || frames < 1 || rows > 65535 || cols > 65535 {
         return Err(invalid(
             path,
@@ -341,6 +386,7 @@ fn header_of(
         rescale,
         slice_step,
         spacing_between_slices,
+        frame_offsets: floats(obj, tags::GRID_FRAME_OFFSET_VECTOR).filter(|v| v.len() == frames),
         modality: string(obj, tags::MODALITY),
         rescale_type: string(obj, tags::RESCALE_TYPE),
         notes: Vec::new(),
@@ -356,6 +402,23 @@ pub(super) fn open_header(path: &Path, max_voxels: u64, strict: bool) -> Result<
         .transfer_syntax()
         .trim_end_matches(['\0', ' '])
         .to_string();
+    if !loaded.has_pixels {
+        let class = loaded
+            .obj
+            .get(tags::SOP_CLASS_UID)
+            .and_then(|e| e.to_str().ok())
+            .map(|s| s.trim_end_matches(['\0', ' ']).to_string());
+        let name = class
+            .as_deref()
+            .and_then(|uid| StandardSopClassDictionary.by_uid(uid))
+            .map(|u| u.name.to_string())
+            .or(class)
+            .unwrap_or_else(|| "no SOPClassUID".into());
+        return Err(IoError::Unsupported {
+            path: path.into(),
+            what: format!("no PixelData: not an image ({})", one_line(&name)),
+        });
+    }
     let mut h = header_of(path, &loaded.obj, &ts, loaded.data_len, max_voxels)?;
     h.notes = loaded.notes;
     Ok(h)

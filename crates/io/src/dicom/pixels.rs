@@ -221,6 +221,19 @@ fn check_codestream(path: &Path, ts: &str, data: &[u8], limit: usize) -> Result<
                 if height * width * comps > limit as u64 {
                     return Err(too_big("JPEG", width, height, comps));
                 }
+                // jpeg-decoder 0.3 decodes 8-bit DCT and 2-16-bit lossless (SOF3) frames
+                // only; extended 12-bit DCT (process 4) is refused by name.
+                if sof[0] != 8 && w[1] != 0xC3 {
+                    return Err(IoError::Unsupported {
+                        path: path.into(),
+                        what: format!(
+                            "{}-bit lossy JPEG (transfer syntax {}): the JPEG decoder reads \
+                             8-bit lossy and lossless JPEG only",
+                            sof[0],
+                            ts_name(ts)
+                        ),
+                    });
+                }
             }
         }
     } else if ts.starts_with("1.2.840.10008.1.2.4.9") || ts.starts_with("1.2.840.10008.1.2.4.20")

@@ -120,10 +120,14 @@ pub(crate) struct Loaded {
     /// Bytes in the file, or in the inflated data set of a deflated file: what any
     /// pixel data must fit in.
     pub data_len: u64,
+    /// Whether the data set has PixelData at its top level.
+    pub has_pixels: bool,
 }
 
 /// Reads, checks and parses a DICOM file; stops before the pixel data unless `pixels`.
-/// `strict` refuses files without the preamble or the meta group.
+/// `strict` refuses what is otherwise read with a note: no preamble, no meta group, no
+/// TransferSyntaxUID, an implicit-VR data set under an explicit-VR syntax, a meta group
+/// dicom-rs cannot parse.
 pub(crate) fn load(path: &Path, pixels: bool, strict: bool) -> Result<Loaded, IoError> {
     let bytes = std::fs::read(path).map_err(|e| IoError::Os {
         path: path.into(),
@@ -131,20 +135,47 @@ pub(crate) fn load(path: &Path, pixels: bool, strict: bool) -> Result<Loaded, Io
     })?;
     let layout = layout(path, &bytes, strict)?;
     let mut notes = Vec::new();
-    let (data_start, ts) = match layout {
-        Layout::Part10 | Layout::NoPreamble => {
-            let start = if layout == Layout::Part10 { 132 } else { 4 };
-            if layout == Layout::NoPreamble {
-                notes.push("no 128-byte preamble before \"DICM\"".into());
-            }
-            walk_meta(path, &bytes, start)?
+    let lenient = |what: String, notes: &mut Vec<String>| {
+        if strict {
+            return Err(IoError::Invalid {
+                path: path.into(),
+                what: format!("{what} (--strict)"),
+            });
+        }
+        notes.push(what);
+        Ok(())
+    };
+    let (data_start, declared) = match layout {
+        Layout::Part10 => walk_meta(path, &bytes, 132)?,
+        Layout::NoPreamble => {
+            notes.push("no 128-byte preamble before \"DICM\"".into());
+            walk_meta(path, &bytes, 4)?
         }
         Layout::Bare(ts) => {
             notes.push(format!(
                 "no preamble and no file meta group: read as a bare data set in {}",
                 ts_name(ts)
             ));
-            (0, ts.to_string())
+            (0, Some(ts.to_string()))
+        }
+    };
+    let data = &bytes[data_start..];
+    // Parse with dicom-rs's own Part 10 reader unless the meta group needs help.
+    let mut own_parse = matches!(layout, Layout::Bare(_));
+    let ts = match declared {
+        Some(ts) => ts,
+        None => {
+            let guess = guess_bare(data)
+                .ok_or_else(|| invalid(path, "the file meta group has no TransferSyntaxUID"))?;
+            lenient(
+                format!(
+                    "no TransferSyntaxUID in the file meta group: {} guessed from the data set",
+                    ts_name(guess)
+                ),
+                &mut notes,
+            )?;
+            own_parse = true;
+            guess.to_string()
         }
     };
     if TransferSyntaxRegistry.get(&ts).is_none() {
@@ -153,54 +184,98 @@ pub(crate) fn load(path: &Path, pixels: bool, strict: bool) -> Result<Loaded, Io
             what: format!("unknown transfer syntax {}", one_line(&ts)),
         });
     }
-    let data = &bytes[data_start..];
-    let data_len = if ts == DEFLATED {
+    // The encoding the data set is parsed with: the syntax's, except that an explicit
+    // little endian syntax over an implicit-VR data set (no valid VR after the first
+    // tag) is read as implicit VR, as pydicom does.
+    let mut encoding = encoding_uid(&ts);
+    if encoding == EXPLICIT_LE && ts != DEFLATED && guess_bare(data) == Some(IMPLICIT_LE) {
+        lenient(
+            format!(
+                "transfer syntax {} but an implicit VR data set: read as implicit VR",
+                ts_name(&ts)
+            ),
+            &mut notes,
+        )?;
+        encoding = IMPLICIT_LE;
+        own_parse = true;
+    }
+    let (data_len, has_pixels) = if ts == DEFLATED {
         let inflated = inflate(path, data)?;
-        walk(path, &inflated, Encoding::of(EXPLICIT_LE))?;
-        inflated.len() as u64
+        let has = walk(path, &inflated, Encoding::of(EXPLICIT_LE))?;
+        (inflated.len() as u64, has)
     } else {
-        walk(path, data, Encoding::of(&ts))?;
-        bytes.len() as u64
+        let has = walk(path, data, Encoding::of(encoding))?;
+        (bytes.len() as u64, has)
     };
-    let obj = parse(path, &bytes, layout, pixels)?;
+    let obj = if own_parse {
+        parse_data_set(path, data, &ts, encoding)?
+    } else {
+        match parse_part10(&bytes, layout, pixels) {
+            Err(e @ dicom_object::ReadError::ParseMetaDataSet { .. }) if !strict => {
+                notes.push(format!(
+                    "file meta group not parsed ({}): data set read as {}",
+                    one_line(&super::chain(&e)),
+                    ts_name(&ts)
+                ));
+                parse_data_set(path, data, &ts, encoding)?
+            }
+            other => other.map_err(|e| super::open_error(path, e))?,
+        }
+    };
     Ok(Loaded {
         obj,
         notes,
         data_len,
+        has_pixels,
     })
 }
 
-fn parse(
-    path: &Path,
+/// The UID of the native syntax a transfer syntax's data set is encoded in.
+fn encoding_uid(ts: &str) -> &'static str {
+    match ts {
+        IMPLICIT_LE => IMPLICIT_LE,
+        EXPLICIT_BE => EXPLICIT_BE,
+        _ => EXPLICIT_LE,
+    }
+}
+
+fn parse_part10(
     bytes: &[u8],
     layout: Layout,
     pixels: bool,
-) -> Result<FileDicomObject<InMemDicomObject>, IoError> {
-    let err = |e| super::open_error(path, e);
-    match layout {
-        Layout::Part10 | Layout::NoPreamble => {
-            let mut o = OpenFileOptions::new().read_preamble(if layout == Layout::Part10 {
-                ReadPreamble::Always
-            } else {
-                ReadPreamble::Never
-            });
-            if !pixels {
-                o = o.read_until(tags::PIXEL_DATA);
-            }
-            o.from_reader(bytes).map_err(err)
-        }
-        Layout::Bare(uid) => {
-            let ts = TransferSyntaxRegistry
-                .get(uid)
-                .expect("the three native syntaxes are registered");
-            let obj = InMemDicomObject::read_dataset_with_ts(bytes, ts).map_err(err)?;
-            let meta = FileMetaTableBuilder::new()
-                .transfer_syntax(uid)
-                .media_storage_sop_class_uid("1.2.840.10008.5.1.4.1.1.7")
-                .media_storage_sop_instance_uid("2.25.0");
-            obj.with_meta(meta).map_err(|e| invalid(path, one_line(&e.to_string())))
-        }
+) -> Result<FileDicomObject<InMemDicomObject>, dicom_object::ReadError> {
+    let mut o = OpenFileOptions::new().read_preamble(if layout == Layout::Part10 {
+        ReadPreamble::Always
+    } else {
+        ReadPreamble::Never
+    });
+    if !pixels {
+        o = o.read_until(tags::PIXEL_DATA);
     }
+    o.from_reader(bytes)
+}
+
+/// Parses a data set in `encoding` and gives it a meta group naming `ts` (the syntax
+/// its pixel data is decoded with).
+fn parse_data_set(
+    path: &Path,
+    data: &[u8],
+    ts: &str,
+    encoding: &str,
+) -> Result<FileDicomObject<InMemDicomObject>, IoError> {
+    let syntax = TransferSyntaxRegistry
+        .get(encoding)
+        .expect("the native syntaxes are registered");
+    let obj = InMemDicomObject::read_dataset_with_ts(data, syntax)
+        .map_err(|e| super::open_error(path, e))?;
+    let meta = FileMetaTableBuilder::new()
+        .transfer_syntax(ts)
+        // Placeholders, replaced by the data set's SOPClassUID and SOPInstanceUID when
+        // it has them (with_meta); 1.2.840.10008.5.1.4.1.1.7 is Secondary Capture.
+        .media_storage_sop_class_uid("1.2.840.10008.5.1.4.1.1.7")
+        .media_storage_sop_instance_uid("2.25.0");
+    obj.with_meta(meta)
+        .map_err(|e| invalid(path, one_line(&super::chain(&e))))
 }
 
 /// The file's layout; without the preamble or the meta group, the encoding is guessed
@@ -273,8 +348,12 @@ fn too_long(path: &Path, tag: Tag, declared: u64, left: usize) -> IoError {
 }
 
 /// Walks the file meta group (explicit VR little endian, group 0002); returns where the
-/// data set starts and the transfer syntax UID.
-fn walk_meta(path: &Path, bytes: &[u8], start: usize) -> Result<(usize, String), IoError> {
+/// data set starts and the transfer syntax UID, if given.
+fn walk_meta(
+    path: &Path,
+    bytes: &[u8],
+    start: usize,
+) -> Result<(usize, Option<String>), IoError> {
     let le = Encoding::of(EXPLICIT_LE);
     let mut pos = start;
     let mut ts = None;
@@ -296,8 +375,7 @@ fn walk_meta(path: &Path, bytes: &[u8], start: usize) -> Result<(usize, String),
         }
         pos += len as usize;
     }
-    let ts = ts.ok_or_else(|| invalid(path, "the file meta group has no TransferSyntaxUID"))?;
-    Ok((pos, ts))
+    Ok((pos, ts.filter(|t| !t.is_empty())))
 }
 
 fn truncated(path: &Path, what: &str) -> IoError {
@@ -338,10 +416,12 @@ fn element_header(bytes: &[u8], pos: usize, enc: Encoding) -> Option<(Tag, VR, u
 /// Walks every element header of a data set, entering sequences and items, and refuses
 /// a length beyond the end of the bytes or a nesting deeper than [`MAX_NESTING`].
 /// Iterative: open sequences and items live on an explicit stack (their end offset, or
-/// `None` for an undefined length closed by a delimiter).
-fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<(), IoError> {
+/// `None` for an undefined length closed by a delimiter). Returns whether the data set
+/// has PixelData at its top level.
+fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<bool, IoError> {
     let mut open: Vec<Option<usize>> = Vec::new();
     let mut pos = 0usize;
+    let mut has_pixels = false;
     loop {
         while let Some(Some(end)) = open.last() {
             if pos < *end {
@@ -351,9 +431,10 @@ fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<(), IoError> {
         }
         // dicom-rs ends the data set where no further tag can be read.
         let Some((tag, vr, len, header)) = element_header(data, pos, enc) else {
-            return Ok(());
+            return Ok(has_pixels);
         };
         pos += header;
+        has_pixels |= tag == tags::PIXEL_DATA && open.is_empty();
         let left = data.len() - pos;
         let defined = len != UNDEFINED;
         if defined && len as usize > left {
