@@ -548,7 +548,11 @@ fn rle_compressed_series() {
     for (k, z) in zs.into_iter().enumerate() {
         let px: Vec<u16> = (0..6).map(|p| 1000 * k as u16 + p * 257).collect();
         let o = compressed_slice(2, 3, z, rle16(&px));
-        write(&dir.path().join(format!("{k}.dcm")), o, "1.2.840.10008.1.2.5");
+        write(
+            &dir.path().join(format!("{k}.dcm")),
+            o,
+            "1.2.840.10008.1.2.5",
+        );
     }
     let f = glint_io::open_volume(dir.path(), &ReadOptions::default()).unwrap();
     let v = &f.volume;
@@ -558,10 +562,18 @@ fn rle_compressed_series() {
     for (k, src) in [1u16, 2, 0].into_iter().enumerate() {
         for p in 0..6u16 {
             let (i, j) = (usize::from(p % 3), usize::from(p / 3));
-            assert_eq!(v.value(i, j, k), f64::from(1000 * src + p * 257), "{i} {j} {k}");
+            assert_eq!(
+                v.value(i, j, k),
+                f64::from(1000 * src + p * 257),
+                "{i} {j} {k}"
+            );
         }
     }
-    assert!(f.notes.iter().any(|n| n.contains("RLE Lossless")), "{:?}", f.notes);
+    assert!(
+        f.notes.iter().any(|n| n.contains("RLE Lossless")),
+        "{:?}",
+        f.notes
+    );
 }
 
 #[test]
@@ -601,7 +613,8 @@ fn undecodable_compressed_data_names_the_transfer_syntax() {
     );
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
-        matches!(err, IoError::Unsupported { .. }) && err.to_string().contains("1.2.840.10008.1.2.4.100"),
+        matches!(err, IoError::Unsupported { .. })
+            && err.to_string().contains("1.2.840.10008.1.2.4.100"),
         "{err}"
     );
 }
@@ -619,7 +632,11 @@ fn jpeg2000_codestream_larger_than_the_image_is_refused() {
     cs.extend([0x00, 0x01, 0x0F, 0x01, 0x01, 0xFF, 0xD9]);
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("j2k.dcm");
-    write(&p, compressed_slice(2, 2, 0.0, cs), "1.2.840.10008.1.2.4.90");
+    write(
+        &p,
+        compressed_slice(2, 2, 0.0, cs),
+        "1.2.840.10008.1.2.4.90",
+    );
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
         err.to_string()
@@ -671,7 +688,9 @@ fn unknown_vr_with_a_huge_length_is_refused_before_parsing() {
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
         matches!(err, IoError::Truncated { .. })
-            && err.to_string().contains("(0010,0010) declares 4026531840 bytes, only 0"),
+            && err
+                .to_string()
+                .contains("(0010,0010) declares 4026531840 bytes, only 0"),
         "{err}"
     );
 }
@@ -700,9 +719,10 @@ fn deeply_nested_sequences_are_refused_before_parsing() {
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
         matches!(err, IoError::Invalid { .. })
-            && err
-                .to_string()
-                .contains(&format!("nested more than {} levels", glint_io::dicom::MAX_NESTING)),
+            && err.to_string().contains(&format!(
+                "nested more than {} levels",
+                glint_io::dicom::MAX_NESTING
+            )),
         "{err}"
     );
     // Ten levels (20 with items) inside a real image are fine.
@@ -761,25 +781,42 @@ fn lenient_reading_and_strict_refusal() {
         ..ReadOptions::default()
     };
     let p = dir.path().join("full.dcm");
-    write(&p, slice_with(2, 2, "1.2.3.42", vec![1, 2, 3, 4]), EXPLICIT_LE);
+    write(
+        &p,
+        slice_with(2, 2, "1.2.3.42", vec![1, 2, 3, 4]),
+        EXPLICIT_LE,
+    );
     let full = std::fs::read(&p).unwrap();
     // The meta group's length is the value of (0002,0000) at bytes 140..144.
     let meta_end = 144 + u32::from_le_bytes(full[140..144].try_into().unwrap()) as usize;
     for (name, bytes, note) in [
         ("nopre.dcm", full[128..].to_vec(), "no 128-byte preamble"),
-        ("nometa.dcm", full[meta_end..].to_vec(), "no file meta group"),
+        (
+            "nometa.dcm",
+            full[meta_end..].to_vec(),
+            "no file meta group",
+        ),
     ] {
         let p = dir.path().join(name);
         std::fs::write(&p, bytes).unwrap();
         let f = glint_io::open_volume(&p, &ReadOptions::default()).unwrap();
         assert_eq!(f.volume.samples, Samples::U16(vec![1, 2, 3, 4]), "{name}");
-        assert!(f.notes.iter().any(|n| n.contains(note)), "{name}: {:?}", f.notes);
+        assert!(
+            f.notes.iter().any(|n| n.contains(note)),
+            "{name}: {:?}",
+            f.notes
+        );
         let err = glint_io::read_volume(&p, &strict).unwrap_err();
         assert!(matches!(err, IoError::BadMagic { .. }), "{name}: {err}");
     }
     // Three frames, no position at all, SpacingBetweenSlices 2.5.
     let mut o = image(1, 2, "1.2.3.43", 1, false);
-    put(&mut o, tags::NUMBER_OF_FRAMES, VR::IS, dicom_value!(Str, "3"));
+    put(
+        &mut o,
+        tags::NUMBER_OF_FRAMES,
+        VR::IS,
+        dicom_value!(Str, "3"),
+    );
     put(&mut o, tags::SPACING_BETWEEN_SLICES, VR::DS, ds(&[2.5]));
     put(
         &mut o,

@@ -49,7 +49,11 @@ pub(super) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// The in-plane axes of the first header (the series shares them).
-pub(super) fn plane(path: &Path, first: &Header, notes: &mut Vec<String>) -> Result<Plane, IoError> {
+pub(super) fn plane(
+    path: &Path,
+    first: &Header,
+    notes: &mut Vec<String>,
+) -> Result<Plane, IoError> {
     let orientation = first.orientation.unwrap_or_else(|| {
         notes.push("geometry assumed: no ImageOrientationPatient, axial".into());
         [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
@@ -110,7 +114,8 @@ fn position(
         what: what.into(),
     };
     let positive = |s: Option<f64>| s.filter(|s| s.is_finite() && *s > 0.0);
-    let stack = |origin: [f64; 3], s: f64| std::array::from_fn(|a| origin[a] + k as f64 * s * normal[a]);
+    let stack =
+        |origin: [f64; 3], s: f64| std::array::from_fn(|a| origin[a] + k as f64 * s * normal[a]);
     Ok(match (h.positions[k], h.positions[0]) {
         (Some(p), _) => p,
         (None, Some(p0)) if h.frame_offsets.is_some() => {
@@ -118,7 +123,9 @@ fn position(
             // is 0 (the only form glint reads; PS3.3 C.8.8.3.2).
             let off = h.frame_offsets.as_deref().unwrap_or_default();
             if off[0] != 0.0 {
-                return Err(refuse("GridFrameOffsetVector does not start at 0 (absolute offsets)"));
+                return Err(refuse(
+                    "GridFrameOffsetVector does not start at 0 (absolute offsets)",
+                ));
             }
             std::array::from_fn(|a| p0[a] + off[k] * normal[a])
         }
@@ -128,7 +135,9 @@ fn position(
             let s = match positive(h.slice_step) {
                 Some(s) => s,
                 None if strict => {
-                    return Err(refuse("multi-frame without per-frame positions or slice spacing"))
+                    return Err(refuse(
+                        "multi-frame without per-frame positions or slice spacing",
+                    ))
                 }
                 None => {
                     if k == 1 {

@@ -102,7 +102,11 @@ fn int(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<i64> {
             let b = e.to_bytes().ok()?;
             Some(i64::from(u16::from_le_bytes(b.get(..2)?.try_into().ok()?)))
         }
-        Some(VR::IS) => un_text(e)?.trim_end_matches(['\0', ' ']).trim().parse().ok(),
+        Some(VR::IS) => un_text(e)?
+            .trim_end_matches(['\0', ' '])
+            .trim()
+            .parse()
+            .ok(),
         Some(_) => None,
         None => e.to_int::<i64>().ok(),
     }
@@ -147,12 +151,8 @@ fn fixed<const N: usize>(
 ) -> Result<Option<[f64; N]>, IoError> {
     obj.and_then(|o| floats(o, tag))
         .map(|v| {
-            <[f64; N]>::try_from(v).map_err(|v| {
-                invalid(
-                    path,
-                    format!("{name} has {} values, expected {N}", v.len()),
-                )
-            })
+            <[f64; N]>::try_from(v)
+                .map_err(|v| invalid(path, format!("{name} has {} values, expected {N}", v.len())))
         })
         .transpose()
 }
@@ -224,7 +224,10 @@ fn check_transfer_syntax(path: &Path, ts: &str) -> Result<bool, IoError> {
         what,
     };
     let Some(syntax) = TransferSyntaxRegistry.get(ts) else {
-        return Err(unsupported(format!("unknown transfer syntax {}", one_line(ts))));
+        return Err(unsupported(format!(
+            "unknown transfer syntax {}",
+            one_line(ts)
+        )));
     };
     if JPEG_LS.contains(&ts) {
         return Err(unsupported(format!(
@@ -257,7 +260,12 @@ fn frame_table(
         )
     };
     let pos3 = |o: Option<&InMemDicomObject>| {
-        fixed::<3>(path, o, tags::IMAGE_POSITION_PATIENT, "ImagePositionPatient")
+        fixed::<3>(
+            path,
+            o,
+            tags::IMAGE_POSITION_PATIENT,
+            "ImagePositionPatient",
+        )
     };
     let shared_rescale = find(
         obj,

@@ -137,7 +137,11 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         "{} slice(s) from {} file(s), modality {}",
         frames.len(),
         headers.len(),
-        first.modality.as_deref().map(one_line).unwrap_or("unknown".into())
+        first
+            .modality
+            .as_deref()
+            .map(one_line)
+            .unwrap_or("unknown".into())
     ));
     if first.encapsulated {
         notes.push(format!("decoded {}", scan::ts_name(&first.ts)));

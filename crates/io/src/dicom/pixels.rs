@@ -156,7 +156,10 @@ fn decode(
     let Value::PixelSequence(seq) = elem.value() else {
         return Err(invalid(
             path,
-            format!("native pixel data in the compressed transfer syntax {}", ts_name(&h.ts)),
+            format!(
+                "native pixel data in the compressed transfer syntax {}",
+                ts_name(&h.ts)
+            ),
         ));
     };
     let limit = h.rows * h.cols;
@@ -236,8 +239,7 @@ fn check_codestream(path: &Path, ts: &str, data: &[u8], limit: usize) -> Result<
                 }
             }
         }
-    } else if ts.starts_with("1.2.840.10008.1.2.4.9") || ts.starts_with("1.2.840.10008.1.2.4.20")
-    {
+    } else if ts.starts_with("1.2.840.10008.1.2.4.9") || ts.starts_with("1.2.840.10008.1.2.4.20") {
         // JPEG 2000: SOC (FF4F) then SIZ (FF51): Lsiz, Rsiz, Xsiz, Ysiz, XOsiz, YOsiz,
         // XTsiz, YTsiz, XTOsiz, YTOsiz, Csiz (ISO 15444-1 A.5.1).
         let Some(at) = data.windows(4).position(|w| w == [0xFF, 0x4F, 0xFF, 0x51]) else {
@@ -249,7 +251,12 @@ fn check_codestream(path: &Path, ts: &str, data: &[u8], limit: usize) -> Result<
         let Some(siz) = data.get(at + 4..at + 4 + 38) else {
             return Err(invalid(path, "a JPEG 2000 codestream header cut short"));
         };
-        let (x, y, x0, y0) = (be32(&siz[4..]), be32(&siz[8..]), be32(&siz[12..]), be32(&siz[16..]));
+        let (x, y, x0, y0) = (
+            be32(&siz[4..]),
+            be32(&siz[8..]),
+            be32(&siz[12..]),
+            be32(&siz[16..]),
+        );
         let comps = be16(&siz[36..]);
         let (w, h) = (x.saturating_sub(x0), y.saturating_sub(y0));
         if comps != 1 {

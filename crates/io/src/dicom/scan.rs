@@ -349,11 +349,7 @@ fn too_long(path: &Path, tag: Tag, declared: u64, left: usize) -> IoError {
 
 /// Walks the file meta group (explicit VR little endian, group 0002); returns where the
 /// data set starts and the transfer syntax UID, if given.
-fn walk_meta(
-    path: &Path,
-    bytes: &[u8],
-    start: usize,
-) -> Result<(usize, Option<String>), IoError> {
+fn walk_meta(path: &Path, bytes: &[u8], start: usize) -> Result<(usize, Option<String>), IoError> {
     let le = Encoding::of(EXPLICIT_LE);
     let mut pos = start;
     let mut ts = None;
@@ -472,7 +468,12 @@ fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<bool, IoError> {
 
 /// Walks the fragments of encapsulated pixel data from `pos`; returns the offset after
 /// the sequence delimiter (or the end of the data).
-fn walk_fragments(path: &Path, data: &[u8], mut pos: usize, enc: Encoding) -> Result<usize, IoError> {
+fn walk_fragments(
+    path: &Path,
+    data: &[u8],
+    mut pos: usize,
+    enc: Encoding,
+) -> Result<usize, IoError> {
     while let Some(b) = data.get(pos..pos + 8) {
         let (tag, len) = (Tag(enc.u16(b), enc.u16(&b[2..])), enc.u32(&b[4..]));
         pos += 8;
