@@ -576,6 +576,39 @@ fn rle_compressed_series() {
     );
 }
 
+/// Found by fuzzing: an RLE segment that decodes to fewer bytes than Rows x Columns
+/// made dicom-rs index past its buffer (a panic); now refused before decoding.
+#[test]
+fn short_rle_segment_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("rle.dcm");
+    // Four samples for a 2x3 image.
+    write(
+        &p,
+        compressed_slice(2, 3, 0.0, rle16(&[1, 2, 3, 4])),
+        "1.2.840.10008.1.2.5",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("segment 0 decodes to 4 bytes, Rows x Columns is 6"),
+        "{err}"
+    );
+    // A segment offset past the end of the frame.
+    let mut frame = rle16(&[1; 6]);
+    frame[8..12].copy_from_slice(&9999u32.to_le_bytes());
+    write(
+        &p,
+        compressed_slice(2, 3, 0.0, frame),
+        "1.2.840.10008.1.2.5",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string().contains("RLE Lossless: segment 0 spans"),
+        "{err}"
+    );
+}
+
 #[test]
 fn undecodable_compressed_data_names_the_transfer_syntax() {
     let dir = tempfile::tempdir().unwrap();

@@ -15,6 +15,7 @@ use super::{invalid, one_line};
 use crate::{IoError, Samples};
 
 const EXPLICIT_BE: &str = "1.2.840.10008.1.2.2";
+const RLE_LOSSLESS: &str = "1.2.840.10008.1.2.5";
 
 /// Reads a file's pixel data and splits it into frames of `frame_len` samples.
 pub(super) fn read_pixels(
@@ -164,7 +165,11 @@ fn decode(
     };
     let limit = h.rows * h.cols;
     for fragment in seq.fragments() {
-        check_codestream(path, &h.ts, fragment, limit)?;
+        if h.ts == RLE_LOSSLESS {
+            check_rle(path, fragment, usize::from(h.bits_allocated / 8), limit)?;
+        } else {
+            check_codestream(path, &h.ts, fragment, limit)?;
+        }
     }
     // Backstop for decoder panics the checks above do not foresee (found by fuzzing or
     // not): a malformed file is an error, not an abort. The buffers are dropped on
@@ -194,6 +199,59 @@ fn decode(
         false,
         total,
     ))
+}
+
+/// Checks that an RLE Lossless frame (PS3.5 Annex G) has a segment for every byte of a
+/// sample and that each decodes to at least `pixels` bytes: dicom-rs 0.10 indexes the
+/// decoded segment up to Rows x Columns and unwraps read errors, so a short or cut
+/// segment panics there (found by fuzzing). The PackBits walk (G.3.1) only counts.
+fn check_rle(path: &Path, frame: &[u8], bytes: usize, pixels: usize) -> Result<(), IoError> {
+    let bad = |what: String| invalid(path, format!("RLE Lossless: {what}"));
+    let le32 = |i: usize| u32::from_le_bytes([frame[i], frame[i + 1], frame[i + 2], frame[i + 3]]);
+    if frame.len() < 64 {
+        return Err(bad(format!(
+            "a {}-byte frame has no 64-byte header",
+            frame.len()
+        )));
+    }
+    let n = le32(0) as usize;
+    if !(bytes..=15).contains(&n) {
+        return Err(bad(format!("{n} segments for {bytes}-byte samples")));
+    }
+    for seg in 0..bytes {
+        let start = le32(4 + 4 * seg) as usize;
+        let end = if seg + 1 < n {
+            le32(8 + 4 * seg) as usize
+        } else {
+            frame.len()
+        };
+        let Some(data) = frame.get(start..end) else {
+            return Err(bad(format!(
+                "segment {seg} spans bytes {start}..{end} of {}",
+                frame.len()
+            )));
+        };
+        let (mut i, mut out) = (0usize, 0usize);
+        while out < pixels {
+            let Some(&c) = data.get(i) else {
+                return Err(bad(format!(
+                    "segment {seg} decodes to {out} bytes, Rows x Columns is {pixels}"
+                )));
+            };
+            let c = c as i8;
+            let (take, produce) = match c {
+                0..=127 => (1 + c as usize, 1 + c as usize),
+                -128 => (0, 0),
+                _ => (1, 1 + c.unsigned_abs() as usize),
+            };
+            if i + 1 + take > data.len() {
+                return Err(bad(format!("segment {seg} ends inside a run")));
+            }
+            i += 1 + take;
+            out += produce;
+        }
+    }
+    Ok(())
 }
 
 /// Checks the image size a JPEG (SOF marker) or JPEG 2000 (SIZ marker) codestream
