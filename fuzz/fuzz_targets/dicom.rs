@@ -20,7 +20,10 @@ fuzz_target!(|data: &[u8]| {
         };
         if let Err(e) = glint_io::dicom::read(path, &options) {
             let msg = e.to_string();
-            assert!(!msg.contains('\n') && !msg.contains('\r'), "multi-line error: {msg:?}");
+            assert!(
+                !msg.contains('\n') && !msg.contains('\r'),
+                "multi-line error: {msg:?}"
+            );
         }
     });
 });
