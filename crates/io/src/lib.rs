@@ -28,7 +28,7 @@
 //! | --- | --- | --- | --- |
 //! | NIfTI-1 `.nii`, `.nii.gz` | [`nifti`] | yes | yes |
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
-//! | DICOM file or directory | [`dicom`] | uncompressed | no |
+//! | DICOM file or directory | [`dicom`] | native, deflate, JPEG, JPEG 2000, RLE | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
 //! | OBJ | [`mesh`] | yes | yes |
@@ -143,6 +143,9 @@ pub struct ReadOptions {
     pub max_voxels: u64,
     /// Read the file as raw samples with these parameters, whatever its extension.
     pub raw: Option<RawParams>,
+    /// Refuse what lenient readers accept with a note: DICOM files without the 128-byte
+    /// preamble or the file meta group, multi-frame DICOM without frame positions.
+    pub strict: bool,
 }
 
 impl Default for ReadOptions {
@@ -151,6 +154,7 @@ impl Default for ReadOptions {
         ReadOptions {
             max_voxels: 1 << 31,
             raw: None,
+            strict: false,
         }
     }
 }

@@ -498,28 +498,384 @@ fn nan_spacing_and_degenerate_orientation() {
     assert!(matches!(err, IoError::Geometry { .. }), "{err}");
 }
 
-#[test]
-fn compressed_pixel_data_is_unsupported() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut o = image(2, 2, "1.2.3.14", 1, false);
+/// A one-slice image whose pixel data is one encapsulated fragment.
+fn compressed_slice(rows: u16, cols: u16, z: f64, fragment: Vec<u8>) -> InMemDicomObject {
+    let mut o = image(rows, cols, "1.2.3.14", z as u32, false);
     put(
         &mut o,
         tags::IMAGE_POSITION_PATIENT,
         VR::DS,
-        ds(&[0.0, 0.0, 0.0]),
+        ds(&[0.0, 0.0, z]),
     );
     o.put(DataElement::new(
         tags::PIXEL_DATA,
         VR::OB,
-        Value::PixelSequence(PixelFragmentSequence::new(
-            vec![],
-            vec![vec![0xFF, 0xD8, 0xFF, 0xD9]],
-        )),
+        Value::PixelSequence(PixelFragmentSequence::new(vec![], vec![fragment])),
     ));
-    let p = dir.path().join("jpeg.dcm");
-    write(&p, o, "1.2.840.10008.1.2.4.50");
+    o
+}
+
+/// RLE Lossless (PS3.5 Annex G) of 16-bit samples, encoded here by hand: a 64-byte
+/// header (segment count, segment offsets), then one segment of high bytes and one of
+/// low bytes, each a single PackBits literal run (control byte n - 1), padded to an even
+/// length with the no-op control byte 0x80.
+fn rle16(samples: &[u16]) -> Vec<u8> {
+    assert!(samples.len() <= 128);
+    let segment = |bytes: Vec<u8>| {
+        let mut s = vec![(bytes.len() - 1) as u8];
+        s.extend(bytes);
+        if s.len() % 2 == 1 {
+            s.push(0x80);
+        }
+        s
+    };
+    let hi = segment(samples.iter().map(|x| (x >> 8) as u8).collect());
+    let lo = segment(samples.iter().map(|x| *x as u8).collect());
+    let mut out = vec![0u8; 64];
+    out[0..4].copy_from_slice(&2u32.to_le_bytes());
+    out[4..8].copy_from_slice(&64u32.to_le_bytes());
+    out[8..12].copy_from_slice(&(64 + hi.len() as u32).to_le_bytes());
+    out.extend(hi);
+    out.extend(lo);
+    out
+}
+
+/// A series of RLE-compressed slices reads like an uncompressed one.
+#[test]
+fn rle_compressed_series() {
+    let dir = tempfile::tempdir().unwrap();
+    let zs = [4.0, 0.0, 2.0];
+    for (k, z) in zs.into_iter().enumerate() {
+        let px: Vec<u16> = (0..6).map(|p| 1000 * k as u16 + p * 257).collect();
+        let o = compressed_slice(2, 3, z, rle16(&px));
+        write(
+            &dir.path().join(format!("{k}.dcm")),
+            o,
+            "1.2.840.10008.1.2.5",
+        );
+    }
+    let f = glint_io::open_volume(dir.path(), &ReadOptions::default()).unwrap();
+    let v = &f.volume;
+    assert_eq!(v.dims, [3, 2, 3]);
+    assert_eq!(v.spacing, [0.75, 0.5, 2.0]);
+    // Sorted by z: 0 (file 1), 2 (file 2), 4 (file 0).
+    for (k, src) in [1u16, 2, 0].into_iter().enumerate() {
+        for p in 0..6u16 {
+            let (i, j) = (usize::from(p % 3), usize::from(p / 3));
+            assert_eq!(
+                v.value(i, j, k),
+                f64::from(1000 * src + p * 257),
+                "{i} {j} {k}"
+            );
+        }
+    }
+    assert!(
+        f.notes.iter().any(|n| n.contains("RLE Lossless")),
+        "{:?}",
+        f.notes
+    );
+}
+
+/// Found by fuzzing: an RLE segment that decodes to fewer bytes than Rows x Columns
+/// made dicom-rs index past its buffer (a panic); now refused before decoding.
+#[test]
+fn short_rle_segment_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("rle.dcm");
+    // Four samples for a 2x3 image.
+    write(
+        &p,
+        compressed_slice(2, 3, 0.0, rle16(&[1, 2, 3, 4])),
+        "1.2.840.10008.1.2.5",
+    );
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
-    assert!(matches!(err, IoError::Unsupported { .. }), "{err}");
+    assert!(
+        err.to_string()
+            .contains("segment 0 decodes to 4 bytes, Rows x Columns is 6"),
+        "{err}"
+    );
+    // A segment offset past the end of the frame.
+    let mut frame = rle16(&[1; 6]);
+    frame[8..12].copy_from_slice(&9999u32.to_le_bytes());
+    write(
+        &p,
+        compressed_slice(2, 3, 0.0, frame),
+        "1.2.840.10008.1.2.5",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string().contains("RLE Lossless: segment 0 spans"),
+        "{err}"
+    );
+}
+
+#[test]
+fn undecodable_compressed_data_names_the_transfer_syntax() {
+    let dir = tempfile::tempdir().unwrap();
+    // An empty JPEG stream (SOI, EOI) under JPEG Baseline.
+    let p = dir.path().join("jpeg.dcm");
+    write(
+        &p,
+        compressed_slice(2, 2, 0.0, vec![0xFF, 0xD8, 0xFF, 0xD9]),
+        "1.2.840.10008.1.2.4.50",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, IoError::Invalid { .. }) && err.to_string().contains("JPEG Baseline"),
+        "{err}"
+    );
+    // JPEG-LS: no CharLS in this build, refused before decoding, by name.
+    let p = dir.path().join("jpegls.dcm");
+    write(
+        &p,
+        compressed_slice(2, 2, 0.0, vec![0xFF, 0xD8, 0xFF, 0xD9]),
+        "1.2.840.10008.1.2.4.80",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, IoError::Unsupported { .. })
+            && err.to_string().contains("JPEG-LS not supported"),
+        "{err}"
+    );
+    // A transfer syntax dicom-rs knows but cannot decode (MPEG2).
+    let p = dir.path().join("mpeg.dcm");
+    write(
+        &p,
+        compressed_slice(2, 2, 0.0, vec![0; 4]),
+        "1.2.840.10008.1.2.4.100",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, IoError::Unsupported { .. })
+            && err.to_string().contains("1.2.840.10008.1.2.4.100"),
+        "{err}"
+    );
+}
+
+/// A JPEG 2000 codestream declaring more samples than Rows x Columns is refused before
+/// the decoder allocates for it (and before dicom-rs copies it into a 2x2 buffer).
+#[test]
+fn jpeg2000_codestream_larger_than_the_image_is_refused() {
+    // SOC, SIZ: Lsiz 41, Rsiz 0, Xsiz = Ysiz = 60000, offsets 0, tiles 60000, 1 component
+    // (ISO 15444-1 A.5.1), then the component's Ssiz, XRsiz, YRsiz.
+    let mut cs = vec![0xFF, 0x4F, 0xFF, 0x51, 0x00, 41, 0x00, 0x00];
+    for v in [60000u32, 60000, 0, 0, 60000, 60000, 0, 0] {
+        cs.extend(v.to_be_bytes());
+    }
+    cs.extend([0x00, 0x01, 0x0F, 0x01, 0x01, 0xFF, 0xD9]);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("j2k.dcm");
+    write(
+        &p,
+        compressed_slice(2, 2, 0.0, cs),
+        "1.2.840.10008.1.2.4.90",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("declares 60000 x 60000 x 1 samples, more than Rows x Columns = 4"),
+        "{err}"
+    );
+}
+
+/// Issue 17: a 184-byte file whose element has the unknown VR "XX" and a length of
+/// 0xF0000000 made dicom-rs allocate and fill 3.9 GB (it reads unknown VRs as UN, with
+/// a 32-bit length). Built here byte by byte (PS3.10 7.1, PS3.5 7.1.2), with `first`
+/// before the bad element.
+fn unknown_vr_file(first: &[u8]) -> Vec<u8> {
+    let mut b = vec![0u8; 128];
+    b.extend(b"DICM");
+    let ts = b"1.2.840.10008.1.2.1\0";
+    // (0002,0000) UL 4: the length of the rest of the meta group.
+    b.extend([0x02, 0x00, 0x00, 0x00, b'U', b'L', 4, 0]);
+    b.extend((8 + ts.len() as u32).to_le_bytes());
+    // (0002,0010) UI: explicit VR little endian.
+    b.extend([0x02, 0x00, 0x10, 0x00, b'U', b'I', ts.len() as u8, 0]);
+    b.extend(ts);
+    b.extend(first);
+    // (0010,0010) "XX", two reserved bytes, length 0xF0000000.
+    b.extend([0x10, 0x00, 0x10, 0x00, b'X', b'X', 0, 0]);
+    b.extend(0xF000_0000u32.to_le_bytes());
+    b
+}
+
+#[test]
+fn unknown_vr_with_a_huge_length_is_refused_before_parsing() {
+    let dir = tempfile::tempdir().unwrap();
+    // As the issue found it: the bad element first in the data set, which (no valid VR
+    // after the first tag) is then read as implicit VR, as pydicom does: the "XX" bytes
+    // become the length.
+    let bytes = unknown_vr_file(&[]);
+    assert_eq!(bytes.len(), 184);
+    let p = dir.path().join("xx.dcm");
+    std::fs::write(&p, &bytes).unwrap();
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, IoError::Truncated { .. })
+            && err.to_string().contains("(0010,0010) declares 22616 bytes"),
+        "{err}"
+    );
+    // After a valid element, (0008,0060) CS "CT": "XX" is read as UN, as dicom-rs does.
+    let bytes = unknown_vr_file(&[0x08, 0x00, 0x60, 0x00, b'C', b'S', 2, 0, b'C', b'T']);
+    std::fs::write(&p, &bytes).unwrap();
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, IoError::Truncated { .. })
+            && err
+                .to_string()
+                .contains("(0010,0010) declares 4026531840 bytes, only 0"),
+        "{err}"
+    );
+}
+
+/// Issue 17: 10,000 nested undefined-length sequences (160 kB in implicit VR: each level
+/// a sequence header and an item header of 8 bytes) overflowed the stack in dicom-rs's
+/// recursive parser. Refused by the nesting bound before parsing; the test runs on the
+/// test harness's 2 MB thread stack, so any recursion per level would still overflow.
+#[test]
+fn deeply_nested_sequences_are_refused_before_parsing() {
+    let mut b = vec![0u8; 128];
+    b.extend(b"DICM");
+    let ts = b"1.2.840.10008.1.2\0";
+    b.extend([0x02, 0x00, 0x00, 0x00, b'U', b'L', 4, 0]);
+    b.extend((8 + ts.len() as u32).to_le_bytes());
+    b.extend([0x02, 0x00, 0x10, 0x00, b'U', b'I', ts.len() as u8, 0]);
+    b.extend(ts);
+    for _ in 0..10_000 {
+        // (0008,1115) ReferencedSeriesSequence, undefined length; an undefined-length item.
+        b.extend([0x08, 0x00, 0x15, 0x11, 0xFF, 0xFF, 0xFF, 0xFF]);
+        b.extend([0xFE, 0xFF, 0x00, 0xE0, 0xFF, 0xFF, 0xFF, 0xFF]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("nested.dcm");
+    std::fs::write(&p, &b).unwrap();
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, IoError::Invalid { .. })
+            && err.to_string().contains(&format!(
+                "nested more than {} levels",
+                glint_io::dicom::MAX_NESTING
+            )),
+        "{err}"
+    );
+    // Ten levels (20 with items) inside a real image are fine.
+    let mut inner = InMemDicomObject::new_empty();
+    for _ in 0..10 {
+        let mut item = InMemDicomObject::new_empty();
+        item.put(DataElement::new(
+            tags::REFERENCED_SERIES_SEQUENCE,
+            VR::SQ,
+            Value::from(DataSetSequence::from(vec![inner])),
+        ));
+        inner = item;
+    }
+    let mut o = slice_with(2, 2, "1.2.3.40", vec![3; 4]);
+    o.put(DataElement::new(
+        tags::REFERENCED_SERIES_SEQUENCE,
+        VR::SQ,
+        Value::from(DataSetSequence::from(vec![inner])),
+    ));
+    let p = dir.path().join("ten.dcm");
+    write(&p, o, IMPLICIT_LE);
+    let v = glint_io::read_volume(&p, &ReadOptions::default()).unwrap();
+    assert_eq!(v.samples, Samples::U16(vec![3; 4]));
+}
+
+/// Whatever bytes an error quotes (here a transfer syntax UID with a newline and a
+/// carriage return), the message is one line.
+#[test]
+fn error_messages_are_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("ts.dcm");
+    write(&p, slice_with(2, 2, "1.2.3.41", vec![0; 4]), EXPLICIT_LE);
+    let mut bytes = std::fs::read(&p).unwrap();
+    let at = find_bytes(&bytes, EXPLICIT_LE.as_bytes());
+    bytes[at + 5] = b'\n';
+    bytes[at + 9] = b'\r';
+    std::fs::write(&p, &bytes).unwrap();
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        matches!(err, IoError::Unsupported { .. })
+            && !msg.contains('\n')
+            && !msg.contains('\r')
+            && msg.contains("unknown transfer syntax 1.2.8\\n0.1\\r008"),
+        "{msg:?}"
+    );
+}
+
+/// Lenient like pydicom's force=True, GDCM and DCMTK: no preamble, no meta group, and
+/// a multi-frame file without positions are read with a note; --strict refuses them.
+#[test]
+fn lenient_reading_and_strict_refusal() {
+    let dir = tempfile::tempdir().unwrap();
+    let strict = ReadOptions {
+        strict: true,
+        ..ReadOptions::default()
+    };
+    let p = dir.path().join("full.dcm");
+    write(
+        &p,
+        slice_with(2, 2, "1.2.3.42", vec![1, 2, 3, 4]),
+        EXPLICIT_LE,
+    );
+    let full = std::fs::read(&p).unwrap();
+    // The meta group's length is the value of (0002,0000) at bytes 140..144.
+    let meta_end = 144 + u32::from_le_bytes(full[140..144].try_into().unwrap()) as usize;
+    for (name, bytes, note) in [
+        ("nopre.dcm", full[128..].to_vec(), "no 128-byte preamble"),
+        (
+            "nometa.dcm",
+            full[meta_end..].to_vec(),
+            "no file meta group",
+        ),
+    ] {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let f = glint_io::open_volume(&p, &ReadOptions::default()).unwrap();
+        assert_eq!(f.volume.samples, Samples::U16(vec![1, 2, 3, 4]), "{name}");
+        assert!(
+            f.notes.iter().any(|n| n.contains(note)),
+            "{name}: {:?}",
+            f.notes
+        );
+        let err = glint_io::read_volume(&p, &strict).unwrap_err();
+        assert!(matches!(err, IoError::BadMagic { .. }), "{name}: {err}");
+    }
+    // Three frames, no position at all, SpacingBetweenSlices 2.5.
+    let mut o = image(1, 2, "1.2.3.43", 1, false);
+    put(
+        &mut o,
+        tags::NUMBER_OF_FRAMES,
+        VR::IS,
+        dicom_value!(Str, "3"),
+    );
+    put(&mut o, tags::SPACING_BETWEEN_SLICES, VR::DS, ds(&[2.5]));
+    put(
+        &mut o,
+        tags::PIXEL_DATA,
+        VR::OW,
+        PrimitiveValue::U16(vec![1, 2, 3, 4, 5, 6].into()),
+    );
+    let p = dir.path().join("frames.dcm");
+    write(&p, o, EXPLICIT_LE);
+    let f = glint_io::open_volume(&p, &ReadOptions::default()).unwrap();
+    assert_eq!(f.volume.dims, [2, 1, 3]);
+    assert_eq!(f.volume.spacing, [0.75, 0.5, 2.5]);
+    // Frame order kept.
+    assert_eq!(f.volume.samples, Samples::U16(vec![1, 2, 3, 4, 5, 6]));
+    assert!(
+        f.notes
+            .iter()
+            .any(|n| n.starts_with("geometry assumed:") && n.contains("SpacingBetweenSlices")),
+        "{:?}",
+        f.notes
+    );
+    let err = glint_io::read_volume(&p, &strict).unwrap_err();
+    assert!(
+        matches!(err, IoError::Geometry { .. }) && err.to_string().contains("--strict"),
+        "{err}"
+    );
 }
 
 /// A one-slice 16-bit image at the origin with `px` as its pixel data.

@@ -45,6 +45,10 @@ pub struct Args {
     /// Bytes to skip at the start of a raw file.
     #[arg(long, default_value_t = 0, requires = "raw_dims")]
     raw_offset: u64,
+    /// Refuse what is otherwise read with a note: DICOM files without the 128-byte
+    /// preamble or the file meta group, multi-frame DICOM without frame positions.
+    #[arg(long)]
+    strict: bool,
 }
 
 /// Runs `glint info`.
@@ -57,6 +61,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 fn report(args: &Args) -> anyhow::Result<String> {
     let mut options = ReadOptions {
         max_voxels: args.max_voxels,
+        strict: args.strict,
         ..ReadOptions::default()
     };
     if !args.raw_dims.is_empty() {
@@ -96,6 +101,14 @@ fn report(args: &Args) -> anyhow::Result<String> {
         }
     } else {
         let file = glint_io::open_volume(&args.file, &options)?;
+        // Assumed geometry is worth a warning even when the output goes to a script.
+        for n in file
+            .notes
+            .iter()
+            .filter(|n| n.starts_with("geometry assumed"))
+        {
+            eprintln!("glint: {}: {n}", args.file.display());
+        }
         if args.json {
             out = serde_json::to_string_pretty(&volume_json(args, &file))? + "\n";
         } else {
@@ -397,6 +410,48 @@ mod tests {
             text.contains("bounds:    (0, 0, -1) .. (2, 3, 0) mm"),
             "{text}"
         );
+    }
+
+    /// A bare DICOM data set (no preamble, no meta group) in explicit VR little endian,
+    /// written element by element (PS3.5 7.1.2): Modality, Rows 1, Columns 2, 8 bits,
+    /// PixelData 5, 7.
+    fn bare_dicom() -> Vec<u8> {
+        let mut b = Vec::new();
+        let mut el = |g: u16, e: u16, vr: &[u8; 2], v: &[u8]| {
+            b.extend(g.to_le_bytes());
+            b.extend(e.to_le_bytes());
+            b.extend(vr);
+            if vr == b"OB" {
+                b.extend([0, 0]);
+                b.extend((v.len() as u32).to_le_bytes());
+            } else {
+                b.extend((v.len() as u16).to_le_bytes());
+            }
+            b.extend(v);
+        };
+        el(0x0008, 0x0060, b"CS", b"OT");
+        el(0x0028, 0x0010, b"US", &1u16.to_le_bytes());
+        el(0x0028, 0x0011, b"US", &2u16.to_le_bytes());
+        el(0x0028, 0x0100, b"US", &8u16.to_le_bytes());
+        el(0x7FE0, 0x0010, b"OB", &[5, 7]);
+        b
+    }
+
+    #[test]
+    fn strict_refuses_a_bare_dicom_data_set() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bare.dcm");
+        std::fs::write(&p, bare_dicom()).unwrap();
+        let path = p.to_str().unwrap();
+        let text = run(&[path]).unwrap();
+        assert!(text.contains("dims:     2 x 1 x 1"), "{text}");
+        assert!(text.contains("range:    5 .. 7"), "{text}");
+        assert!(
+            text.contains("note:     no preamble and no file meta group"),
+            "{text}"
+        );
+        let err = run(&[path, "--strict"]).unwrap_err().to_string();
+        assert!(err.contains("--strict"), "{err}");
     }
 
     #[test]
