@@ -47,6 +47,7 @@ pub mod raw;
 mod types;
 
 pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
+pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
 pub use types::{IoError, Mesh, Samples, Volume};
 
 use std::path::Path;

@@ -294,8 +294,9 @@ fn gifti_size_mismatch_and_unsupported() {
     );
     assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
     let ext = ASCII_ROW.replace("\"ASCII\"", "\"ExternalFileBinary\"");
+    // External files are read now (tests/gifti.rs), but this one names no file.
     let err = expect_err(&dir, "ext.gii", gifti_doc((&ext, ""), (tri, "0 1 2")));
-    assert!(matches!(err, IoError::Unsupported { .. }), "{err}");
+    assert!(matches!(err, IoError::Invalid { .. }), "{err}");
     let f64t = gifti_doc((ASCII_ROW, "0 0 0 1 0 0 0 1 0"), (tri, "0 1 2")).replacen(
         "NIFTI_TYPE_FLOAT32",
         "NIFTI_TYPE_COMPLEX64",
