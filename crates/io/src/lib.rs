@@ -56,7 +56,7 @@ use std::path::Path;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Format {
-    /// NIfTI-1 (`.nii`, `.nii.gz`).
+    /// NIfTI-1 or NIfTI-2 (`.nii`, `.nii.gz`), or a `.hdr`/`.img` pair (NIfTI or ANALYZE 7.5).
     Nifti,
     /// NRRD (`.nrrd`, `.nhdr` + data file).
     Nrrd,
@@ -78,7 +78,7 @@ impl Format {
     /// The format's usual name.
     pub fn name(self) -> &'static str {
         match self {
-            Format::Nifti => "NIfTI-1",
+            Format::Nifti => "NIfTI",
             Format::Nrrd => "NRRD",
             Format::Dicom => "DICOM",
             Format::Raw => "raw",
@@ -107,7 +107,7 @@ impl Format {
         let name = name.strip_suffix(".gz").unwrap_or(&name);
         let ext = name.rsplit_once('.').map(|(_, e)| e).unwrap_or("");
         Some(match ext {
-            "nii" => Format::Nifti,
+            "nii" | "hdr" => Format::Nifti,
             "nrrd" | "nhdr" => Format::Nrrd,
             "dcm" | "dicom" | "ima" => Format::Dicom,
             "raw" | "bin" | "img" => Format::Raw,
