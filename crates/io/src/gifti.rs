@@ -604,7 +604,10 @@ fn values(path: &Path, a: &DataArray) -> Result<Vec<f64>, IoError> {
             let raw = base64::engine::general_purpose::STANDARD
                 .decode(&compact)
                 .map_err(|e| invalid(path, format!("{} array: bad base64: {e}", a.intent)))?;
-            if matches!(a.encoding.as_str(), "GZipBase64Binary" | "GIFTI_ENCODING_B64GZ") {
+            if matches!(
+                a.encoding.as_str(),
+                "GZipBase64Binary" | "GIFTI_ENCODING_B64GZ"
+            ) {
                 let dec = flate2::read::ZlibDecoder::new(raw.as_slice());
                 let mut out = Vec::new();
                 dec.take(count as u64 * size as u64 + 1)
@@ -680,7 +683,10 @@ fn external(path: &Path, a: &DataArray, nbytes: usize) -> Result<Vec<u8>, IoErro
         )),
     };
     if name.is_empty() {
-        return Err(invalid(path, "an ExternalFileBinary array has no ExternalFileName"));
+        return Err(invalid(
+            path,
+            "an ExternalFileBinary array has no ExternalFileName",
+        ));
     }
     let rel = Path::new(name);
     if rel
@@ -705,9 +711,12 @@ fn external(path: &Path, a: &DataArray, nbytes: usize) -> Result<Vec<u8>, IoErro
     let offset: u64 = if offset.is_empty() {
         0
     } else {
-        offset
-            .parse()
-            .map_err(|_| invalid(path, format!("ExternalFileOffset '{offset}' is not a byte offset")))?
+        offset.parse().map_err(|_| {
+            invalid(
+                path,
+                format!("ExternalFileOffset '{offset}' is not a byte offset"),
+            )
+        })?
     };
     let mut file = open(&full)?;
     let len = file.metadata().map_err(os)?.len();

@@ -275,7 +275,10 @@ impl PropertyAccess for PlyItem {
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        if let Some(k) = ["x", "y", "z", "nx", "ny", "nz"].iter().position(|&n| n == name) {
+        if let Some(k) = ["x", "y", "z", "nx", "ny", "nz"]
+            .iter()
+            .position(|&n| n == name)
+        {
             self.coords[k] = property.to_f32_lossy();
         } else if let Some(k) = PLY_SCALAR_NAMES.iter().position(|&n| n == name) {
             if let Some(v) = property.to_f32_lossy() {
@@ -324,8 +327,7 @@ fn ply_error(path: &Path, e: ply_rs_bw::parser::ParseError) -> IoError {
         .unwrap_or_default()
         .trim()
         .to_string();
-    if msg.to_ascii_lowercase().contains("magic") || msg.contains("ply") && msg.contains("line 1")
-    {
+    if msg.to_ascii_lowercase().contains("magic") || msg.contains("ply") && msg.contains("line 1") {
         IoError::BadMagic {
             path: path.into(),
             format: "PLY",

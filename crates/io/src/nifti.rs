@@ -138,9 +138,7 @@ fn parse_header(
             return Err(IoError::BadMagic {
                 path: path.into(),
                 format: "NIfTI",
-                what: format!(
-                    "header size field is {n}, expected 348 (NIfTI-1) or 540 (NIfTI-2)"
-                ),
+                what: format!("header size field is {n}, expected 348 (NIfTI-1) or 540 (NIfTI-2)"),
             })
         }
     };
@@ -615,7 +613,11 @@ pub fn write_nifti2(
     put(&mut h, 348, &2i32.to_le_bytes()); // sform_code NIFTI_XFORM_ALIGNED_ANAT
     for r in 0..3 {
         for c in 0..4 {
-            put(&mut h, 400 + 32 * r + 8 * c, &volume.affine[r][c].to_le_bytes());
+            put(
+                &mut h,
+                400 + 32 * r + 8 * c,
+                &volume.affine[r][c].to_le_bytes(),
+            );
         }
     }
     put(&mut h, 500, &2i32.to_le_bytes()); // xyzt_units NIFTI_UNITS_MM

@@ -106,17 +106,7 @@ fn external_file_outside_the_directory_is_refused() {
         "./../secret.dat".to_string(),
     ] {
         let ext = format!("ExternalFileName=\"{name}\" ExternalFileOffset=\"0\"");
-        let d = doc(
-            &[array(
-                "NIFTI_INTENT_SHAPE",
-                F32,
-                &[9],
-                enc,
-                &ext,
-                "",
-            )],
-            "",
-        );
+        let d = doc(&[array("NIFTI_INTENT_SHAPE", F32, &[9], enc, &ext, "")], "");
         let p = file(&dir, "evil.gii", d);
         let err = read_surface_data(&p).unwrap_err();
         assert!(matches!(err, IoError::Unsupported { .. }), "{name}: {err}");
@@ -152,17 +142,33 @@ fn label_and_time_series_arrays() {
     let labels = "<LabelTable>\n<Label Key=\"0\" Red=\"1\" Green=\"1\" Blue=\"1\" Alpha=\"0\">\
         <![CDATA[???]]></Label>\n<Label Key=\"7\" Red=\"0.5\" Green=\"0\" Blue=\"0.25\" \
         Alpha=\"1\"><![CDATA[precentral]]></Label>\n</LabelTable>\n";
-    let shape = array("NIFTI_INTENT_SHAPE", F32, &[3], "ASCII", "", "0.5 -1 2")
-        .replace("<Data>", "<MetaData><MD><Name>Name</Name><Value>thickness</Value></MD></MetaData><Data>");
+    let shape = array("NIFTI_INTENT_SHAPE", F32, &[3], "ASCII", "", "0.5 -1 2").replace(
+        "<Data>",
+        "<MetaData><MD><Name>Name</Name><Value>thickness</Value></MD></MetaData><Data>",
+    );
     let d = doc(
         &[
-            array("NIFTI_INTENT_POINTSET", F32, &[3, 3], "ASCII", "", "0 0 0 1 0 0 0 1 0"),
+            array(
+                "NIFTI_INTENT_POINTSET",
+                F32,
+                &[3, 3],
+                "ASCII",
+                "",
+                "0 0 0 1 0 0 0 1 0",
+            ),
             array("NIFTI_INTENT_TRIANGLE", I32, &[1, 3], "ASCII", "", "0 1 2"),
             shape,
             array("NIFTI_INTENT_LABEL", I32, &[3], "ASCII", "", "7 0 7"),
             // Column-major 3 x 2: the columns (time points) are 1 2 3 and 4 5 6.
-            array("NIFTI_INTENT_TIME_SERIES", F32, &[3, 2], "ASCII", "", "1 2 3 4 5 6")
-                .replace("RowMajorOrder", "ColumnMajorOrder"),
+            array(
+                "NIFTI_INTENT_TIME_SERIES",
+                F32,
+                &[3, 2],
+                "ASCII",
+                "",
+                "1 2 3 4 5 6",
+            )
+            .replace("RowMajorOrder", "ColumnMajorOrder"),
             // Not per-vertex (4 values for 3 vertices): skipped.
             array("NIFTI_INTENT_SHAPE", F32, &[4], "ASCII", "", "1 2 3 4"),
         ],
@@ -228,7 +234,10 @@ fn fsaverage5_sulcal_depth_matches_nibabel() {
     assert_eq!(f64::from(v[814]), -1.4937248229980469);
     let lo = v.iter().copied().fold(f32::INFINITY, f32::min);
     let hi = v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-    assert_eq!((f64::from(lo), f64::from(hi)), (-1.4937248229980469, 1.8069095611572266));
+    assert_eq!(
+        (f64::from(lo), f64::from(hi)),
+        (-1.4937248229980469, 1.8069095611572266)
+    );
     let sum: f64 = v.iter().map(|&x| f64::from(x)).sum();
     assert!((sum - 304.6656569574261).abs() < 1e-9, "{sum}");
 }

@@ -9,7 +9,9 @@ use common::assert_affine_eq;
 use glint_io::{nifti, Endian, IoError, ReadOptions, Samples, Volume};
 
 fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
 }
 
 /// The stored values the script wrote, i fastest.
@@ -43,7 +45,11 @@ fn nifti2_from_nibabel_every_variant() {
         assert_affine_eq(&v.affine, &AFFINE, 0.0);
         // The script sets slope 2, intercept 1; nibabel rewrote the byte-swapped copy's
         // scaling to 1, 0 (bytes 176..192 of the files, read with Python's struct).
-        let scaling = if name == "n2_big.nii" { (1.0, 0.0) } else { (2.0, 1.0) };
+        let scaling = if name == "n2_big.nii" {
+            (1.0, 0.0)
+        } else {
+            (2.0, 1.0)
+        };
         assert_eq!((v.slope, v.intercept), scaling, "{name}");
         assert_eq!(v.spacing, [1.5, 2.0, 2.5], "{name}");
         assert!(f.notes.iter().any(|n| n == "NIfTI-2"), "{:?}", f.notes);
@@ -123,7 +129,9 @@ fn nifti2_writer_layout_and_large_dims() {
     let gz = dir.path().join("wide.nii.gz");
     nifti::write_nifti2(&gz, &vol, true, Endian::Little).unwrap();
     assert_eq!(
-        glint_io::read_volume(&gz, &ReadOptions::default()).unwrap().samples,
+        glint_io::read_volume(&gz, &ReadOptions::default())
+            .unwrap()
+            .samples,
         vol.samples
     );
 }
