@@ -451,8 +451,8 @@ fn affine_of(path: &Path, h: &Header) -> Result<([[f64; 4]; 4], &'static str), I
                     row[col] = rrow[col] * scale[col];
                 }
             }
-            for i in 0..3 {
-                a[i][3] = h.quatern[3 + i];
+            for (row, offset) in a.iter_mut().zip(&h.quatern[3..]) {
+                row[3] = *offset;
             }
             source = "qform";
         } else {
