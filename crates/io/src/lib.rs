@@ -26,14 +26,14 @@
 //!
 //! | format | module | read | write |
 //! | --- | --- | --- | --- |
-//! | NIfTI-1 `.nii`, `.nii.gz` | [`nifti`] | yes | yes |
+//! | NIfTI-1, NIfTI-2 `.nii`, `.nii.gz`; `.hdr`/`.img` (also ANALYZE 7.5) | [`nifti`] | yes | `.nii` |
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
 //! | DICOM file or directory | [`dicom`] | uncompressed | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
 //! | OBJ | [`mesh`] | yes | yes |
 //! | PLY | [`mesh`] | ASCII, binary | ASCII, binary |
-//! | GIFTI `.gii`, `.gii.gz` | [`gifti`] | ASCII, Base64, GZipBase64 | same |
+//! | GIFTI `.gii`, `.gii.gz` (+ per-vertex data: [`read_surface_data`]) | [`gifti`] | ASCII, Base64, GZipBase64, external file | ASCII, Base64, GZipBase64 |
 
 #![warn(missing_docs)]
 
