@@ -4,16 +4,21 @@
 //! No maintained Rust crate reads GIFTI, so this module walks the XML with quick-xml
 //! and decodes the data arrays with base64 and flate2, following the GIFTI 1.0 spec
 //! (<https://www.nitrc.org/projects/gifti/>, "GIFTI Surface Data Format Version 1.0").
-//! Encodings: ASCII, Base64Binary, GZipBase64Binary (zlib-compressed, then base64);
-//! external-file arrays are refused.
+//! Encodings: ASCII, Base64Binary, GZipBase64Binary (zlib-compressed, then base64), the
+//! legacy `GIFTI_ENCODING_*` spellings of these (nibabel's `gifti_encoding_codes`), and
+//! ExternalFileBinary when the external file sits in the GIFTI's own directory.
+//!
+//! Besides surfaces ([`read`]), the per-vertex arrays users overlay on a surface
+//! (curvature, sulcal depth, thickness, parcellations, time series) are read by
+//! [`read_surface_data`].
 
-use std::io::{Read, Write};
+use std::io::{Read, Seek, Write};
 use std::path::Path;
 
 use base64::Engine;
 use quick_xml::events::Event;
 
-use crate::common::{is_gzip, open, os_or_invalid, write_atomic};
+use crate::common::{is_gzip, open, os_or_invalid, read_exact_growing, write_atomic};
 use crate::mesh::check_indices;
 use crate::{Format, IoError, Mesh, MeshFile};
 
@@ -31,6 +36,9 @@ const MIN_XML_CAP: u64 = 64 << 20;
 const DATA_CHARS_PER_VALUE: usize = 32;
 const DATA_SLACK: usize = 1 << 16;
 
+/// Characters of file text quoted in an error message at most.
+const MAX_QUOTED_CHARS: usize = 200;
+
 /// GIFTI data encodings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Encoding {
@@ -42,9 +50,51 @@ pub enum Encoding {
     GzipBase64,
 }
 
+/// One per-vertex array of a GIFTI file (see [`read_surface_data`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexData {
+    /// The array's `Name` metadata, else its intent and position (`NIFTI_INTENT_SHAPE #0`);
+    /// a column of a 2-D array gets ` [t]` appended.
+    pub name: String,
+    /// The array's intent, e.g. `NIFTI_INTENT_SHAPE`, `NIFTI_INTENT_LABEL`,
+    /// `NIFTI_INTENT_TIME_SERIES`.
+    pub intent: String,
+    /// One value per vertex.
+    pub values: VertexValues,
+}
+
+/// The values of a [`VertexData`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum VertexValues {
+    /// Measurements (shape, statistics, time points), as f32.
+    Scalars(Vec<f32>),
+    /// Label keys (a parcellation), with the file's label table.
+    Labels {
+        /// The key of each vertex.
+        keys: Vec<i32>,
+        /// The file's `LabelTable`.
+        table: Vec<Label>,
+    },
+}
+
+/// An entry of a GIFTI `LabelTable`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Label {
+    /// The key vertices carry.
+    pub key: i32,
+    /// The label's name.
+    pub name: String,
+    /// Red, green, blue, alpha in 0..1 (0 where the file gives none).
+    pub rgba: [f32; 4],
+}
+
 #[derive(Default, Debug)]
 struct DataArray {
     intent: String,
+    /// `ExternalFileName` and `ExternalFileOffset` (for ExternalFileBinary).
+    external: (String, String),
+    /// `<MetaData>` name/value pairs.
+    meta: Vec<(String, String)>,
     data_type: String,
     column_major: bool,
     dims: Vec<usize>,
@@ -69,17 +119,113 @@ impl DataArray {
     }
 }
 
+/// An Invalid error, kept to one line whatever text it quotes (issue 17: XML errors
+/// quoted the broken text verbatim, newlines included).
 fn invalid(path: &Path, what: impl Into<String>) -> IoError {
     IoError::Invalid {
         path: path.into(),
-        what: what.into(),
+        what: one_line(&what.into()),
     }
+}
+
+/// `s` with control characters (newlines, tabs, ...) escaped, at most 200 characters.
+fn one_line(s: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i == MAX_QUOTED_CHARS {
+            out.push_str("...");
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_debug());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 /// Reads a GIFTI surface: the POINTSET array gives the positions, the TRIANGLE array
 /// the faces; a VECTOR array with one row per vertex becomes the normals and the first
 /// one-value-per-vertex array the scalars.
 pub fn read(path: &Path) -> Result<MeshFile, IoError> {
+    let (arrays, _) = load(path)?;
+    surface(path, &arrays)
+}
+
+/// Reads the per-vertex arrays of a GIFTI file: every array other than POINTSET,
+/// TRIANGLE and N x 3 VECTOR whose first dimension is the vertex count (the POINTSET's
+/// rows, or when the file has no surface, the first such array's). A 1-D array (or
+/// N x 1) is one [`VertexData`]; an N x T array (a time series) gives T of them, one a
+/// column. LABEL arrays come with the file's label table.
+///
+/// ```no_run
+/// # use glint_io::gifti::{read_surface_data, VertexValues};
+/// for d in read_surface_data("lh.sulc.gii".as_ref()).unwrap() {
+///     if let VertexValues::Scalars(v) = &d.values {
+///         println!("{} ({}): {} values", d.name, d.intent, v.len());
+///     }
+/// }
+/// ```
+pub fn read_surface_data(path: &Path) -> Result<Vec<VertexData>, IoError> {
+    let (arrays, table) = load(path)?;
+    let geometry = |a: &DataArray| {
+        matches!(
+            a.intent.as_str(),
+            "NIFTI_INTENT_POINTSET" | "NIFTI_INTENT_TRIANGLE"
+        ) || a.intent == "NIFTI_INTENT_VECTOR" && a.dims.len() == 2 && a.dims[1] == 3
+    };
+    let n = arrays
+        .iter()
+        .find(|a| a.intent == "NIFTI_INTENT_POINTSET")
+        .or_else(|| arrays.iter().find(|a| !geometry(a)))
+        .map(|a| a.dims[0]);
+    let mut out = Vec::new();
+    for (i, a) in arrays.iter().enumerate() {
+        if geometry(a) || Some(a.dims[0]) != n || a.dims.len() > 2 {
+            continue;
+        }
+        let name = a
+            .meta
+            .iter()
+            .find(|(k, _)| k == "Name")
+            .map(|(_, v)| v.clone())
+            .filter(|v| !v.is_empty())
+            .unwrap_or_else(|| format!("{} #{i}", a.intent));
+        let v = values(path, a)?;
+        let (rows, cols) = (a.dims[0], a.dims.get(1).copied().unwrap_or(1));
+        for c in 0..cols {
+            let column = (0..rows).map(|r| {
+                if a.column_major {
+                    v[c * rows + r]
+                } else {
+                    v[r * cols + c]
+                }
+            });
+            let values = if a.intent == "NIFTI_INTENT_LABEL" {
+                VertexValues::Labels {
+                    keys: column.map(|x| x as i32).collect(),
+                    table: table.clone(),
+                }
+            } else {
+                VertexValues::Scalars(column.map(|x| x as f32).collect())
+            };
+            out.push(VertexData {
+                name: if cols > 1 {
+                    format!("{name} [{c}]")
+                } else {
+                    name.clone()
+                },
+                intent: a.intent.clone(),
+                values,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The data arrays and the label table of a GIFTI file, not yet decoded.
+fn load(path: &Path) -> Result<(Vec<DataArray>, Vec<Label>), IoError> {
     let gz = is_gzip(path)?;
     let file = open(path)?;
     let file_len = file.metadata().map_err(|e| os_or_invalid(path, e))?.len();
@@ -119,8 +265,11 @@ pub fn read(path: &Path) -> Result<MeshFile, IoError> {
         });
     }
     let text = String::from_utf8(text).map_err(|_| invalid(path, "the XML is not UTF-8"))?;
-    let arrays = parse_xml(path, &text)?;
+    parse_xml(path, &text)
+}
 
+/// The surface of the arrays: POINTSET, TRIANGLE, normals and the first scalars.
+fn surface(path: &Path, arrays: &[DataArray]) -> Result<MeshFile, IoError> {
     let mut mesh = Mesh::default();
     let mut coordinate_system = None;
     let mut notes = Vec::new();
@@ -206,12 +355,21 @@ pub fn read(path: &Path) -> Result<MeshFile, IoError> {
     })
 }
 
-fn parse_xml(path: &Path, text: &str) -> Result<Vec<DataArray>, IoError> {
+/// What the XML walk has collected so far.
+#[derive(Default)]
+struct Collect {
+    arrays: Vec<DataArray>,
+    labels: Vec<Label>,
+    current: Option<DataArray>,
+    /// The innermost open elements, for attaching text.
+    stack: Vec<String>,
+    /// The `<Name>` and `<Value>` of the `<MD>` being read.
+    md: (String, String),
+}
+
+fn parse_xml(path: &Path, text: &str) -> Result<(Vec<DataArray>, Vec<Label>), IoError> {
     let mut reader = quick_xml::Reader::from_str(text);
-    let mut arrays = Vec::new();
-    let mut current: Option<DataArray> = None;
-    // The innermost open element, for attaching text.
-    let mut stack: Vec<String> = Vec::new();
+    let mut c = Collect::default();
     let mut saw_root = false;
     loop {
         let event = reader.read_event().map_err(|e| {
@@ -222,51 +380,18 @@ fn parse_xml(path: &Path, text: &str) -> Result<Vec<DataArray>, IoError> {
         })?;
         match event {
             Event::Start(ref e) | Event::Empty(ref e) if e.local_name().as_ref() == "DataArray" => {
-                let empty = matches!(event, Event::Empty(_));
-                let mut a = DataArray::default();
-                let mut dims = [None; 6];
-                let mut dimensionality = None;
-                for attr in e.attributes() {
-                    let attr = attr.map_err(|e| invalid(path, format!("XML attribute: {e}")))?;
-                    let value = attr
-                        .normalized_value(quick_xml::XmlVersion::Implicit1_0)
-                        .map_err(|e| invalid(path, format!("XML attribute: {e}")))?
-                        .trim()
-                        .to_string();
-                    match attr.key.local_name().as_ref() {
-                        "Intent" => a.intent = value,
-                        "DataType" => a.data_type = value,
-                        "ArrayIndexingOrder" => a.column_major = value == "ColumnMajorOrder",
-                        "Encoding" => a.encoding = value,
-                        "Endian" => a.big_endian = value == "BigEndian",
-                        "Dimensionality" => dimensionality = Some(parse_usize(path, &value)?),
-                        k if k.len() == 4
-                            && k.starts_with("Dim")
-                            && k.as_bytes()[3].is_ascii_digit() =>
-                        {
-                            let i = (k.as_bytes()[3] - b'0') as usize;
-                            if i < 6 {
-                                dims[i] = Some(parse_usize(path, &value)?);
-                            }
-                        }
-                        _ => {}
-                    }
-                }
-                let nd = dimensionality
-                    .ok_or_else(|| invalid(path, "a DataArray lacks Dimensionality"))?;
-                if !(1..=6).contains(&nd) {
-                    return Err(invalid(path, format!("Dimensionality {nd} is not 1..6")));
-                }
-                a.dims = (0..nd)
-                    .map(|i| {
-                        dims[i].ok_or_else(|| invalid(path, format!("a DataArray lacks Dim{i}")))
-                    })
-                    .collect::<Result<_, _>>()?;
-                if empty {
-                    arrays.push(a);
+                let a = data_array(path, e)?;
+                if matches!(event, Event::Empty(_)) {
+                    c.arrays.push(a);
                 } else {
-                    current = Some(a);
-                    stack.push("DataArray".into());
+                    c.current = Some(a);
+                    c.stack.push("DataArray".into());
+                }
+            }
+            Event::Start(ref e) | Event::Empty(ref e) if e.local_name().as_ref() == "Label" => {
+                c.labels.push(label(path, e)?);
+                if matches!(event, Event::Start(_)) {
+                    c.stack.push("Label".into());
                 }
             }
             Event::Start(e) => {
@@ -274,24 +399,25 @@ fn parse_xml(path: &Path, text: &str) -> Result<Vec<DataArray>, IoError> {
                 if name == "GIFTI" {
                     saw_root = true;
                 }
-                stack.push(name);
+                if name == "MD" {
+                    c.md = Default::default();
+                }
+                c.stack.push(name);
             }
             Event::End(e) => {
-                if e.local_name().as_ref() == "DataArray" {
-                    if let Some(a) = current.take() {
-                        arrays.push(a);
+                match e.local_name().as_ref() {
+                    "DataArray" => c.arrays.extend(c.current.take()),
+                    "MD" => {
+                        if let Some(a) = c.current.as_mut() {
+                            a.meta.push(std::mem::take(&mut c.md));
+                        }
                     }
+                    _ => {}
                 }
-                stack.pop();
+                c.stack.pop();
             }
-            Event::Text(t) => {
-                let s = t.xml10_content();
-                add_text(&mut current, &stack, &s);
-            }
-            Event::CData(t) => {
-                let s = t.xml10_content();
-                add_text(&mut current, &stack, &s);
-            }
+            Event::Text(t) => add_text(&mut c, &t.xml10_content()),
+            Event::CData(t) => add_text(&mut c, &t.xml10_content()),
             Event::Eof => break,
             _ => {}
         }
@@ -303,12 +429,97 @@ fn parse_xml(path: &Path, text: &str) -> Result<Vec<DataArray>, IoError> {
             what: "no <GIFTI> root element".into(),
         });
     }
-    Ok(arrays)
+    Ok((c.arrays, c.labels))
 }
 
-fn add_text(current: &mut Option<DataArray>, stack: &[String], s: &str) {
-    let Some(a) = current.as_mut() else { return };
-    match stack.last().map(String::as_str) {
+/// The attributes of an element as (local name, trimmed normalised value).
+fn attributes(
+    path: &Path,
+    e: &quick_xml::events::BytesStart,
+) -> Result<Vec<(String, String)>, IoError> {
+    e.attributes()
+        .map(|attr| {
+            let attr = attr.map_err(|e| invalid(path, format!("XML attribute: {e}")))?;
+            let value = attr
+                .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                .map_err(|e| invalid(path, format!("XML attribute: {e}")))?
+                .trim()
+                .to_string();
+            let key = attr.key.local_name().as_ref().to_string();
+            Ok((key, value))
+        })
+        .collect()
+}
+
+/// A `<DataArray>`'s attributes.
+fn data_array(path: &Path, e: &quick_xml::events::BytesStart) -> Result<DataArray, IoError> {
+    let mut a = DataArray::default();
+    let mut dims = [None; 6];
+    let mut dimensionality = None;
+    for (key, value) in attributes(path, e)? {
+        match key.as_str() {
+            "Intent" => a.intent = value,
+            "DataType" => a.data_type = value,
+            "ArrayIndexingOrder" => a.column_major = value == "ColumnMajorOrder",
+            "Encoding" => a.encoding = value,
+            "Endian" => a.big_endian = value == "BigEndian",
+            "ExternalFileName" => a.external.0 = value,
+            "ExternalFileOffset" => a.external.1 = value,
+            "Dimensionality" => dimensionality = Some(parse_usize(path, &value)?),
+            k if k.len() == 4 && k.starts_with("Dim") && k.as_bytes()[3].is_ascii_digit() => {
+                let i = (k.as_bytes()[3] - b'0') as usize;
+                if i < 6 {
+                    dims[i] = Some(parse_usize(path, &value)?);
+                }
+            }
+            _ => {}
+        }
+    }
+    let nd = dimensionality.ok_or_else(|| invalid(path, "a DataArray lacks Dimensionality"))?;
+    if !(1..=6).contains(&nd) {
+        return Err(invalid(path, format!("Dimensionality {nd} is not 1..6")));
+    }
+    a.dims = (0..nd)
+        .map(|i| dims[i].ok_or_else(|| invalid(path, format!("a DataArray lacks Dim{i}"))))
+        .collect::<Result<_, _>>()?;
+    Ok(a)
+}
+
+/// A `<Label>`'s attributes (its name is the element's text, added later).
+fn label(path: &Path, e: &quick_xml::events::BytesStart) -> Result<Label, IoError> {
+    let mut l = Label {
+        key: 0,
+        name: String::new(),
+        rgba: [0.0; 4],
+    };
+    for (key, value) in attributes(path, e)? {
+        let channel = ["Red", "Green", "Blue", "Alpha"]
+            .iter()
+            .position(|&c| c == key);
+        if key == "Key" || key == "Index" {
+            l.key = value
+                .parse()
+                .map_err(|_| invalid(path, format!("label key '{value}' is not an integer")))?;
+        } else if let Some(i) = channel {
+            l.rgba[i] = value
+                .parse()
+                .map_err(|_| invalid(path, format!("label colour '{value}' is not a number")))?;
+        }
+    }
+    Ok(l)
+}
+
+fn add_text(c: &mut Collect, s: &str) {
+    let top = c.stack.last().map(String::as_str);
+    if top == Some("Label") {
+        if let Some(l) = c.labels.last_mut() {
+            l.name.push_str(s.trim());
+        }
+        return;
+    }
+    let in_md = c.stack.len() >= 2 && c.stack[c.stack.len() - 2] == "MD";
+    let Some(a) = c.current.as_mut() else { return };
+    match top {
         Some("Data") => {
             if a.data.len().saturating_add(s.len()) > a.data_cap() {
                 a.overflow = true;
@@ -316,6 +527,8 @@ fn add_text(current: &mut Option<DataArray>, stack: &[String], s: &str) {
                 a.data.push_str(s);
             }
         }
+        Some("Name") if in_md => c.md.0.push_str(s.trim()),
+        Some("Value") if in_md => c.md.1.push_str(s.trim()),
         Some("DataSpace") => a.data_space = Some(s.trim().to_string()),
         Some("TransformedSpace") => a.transformed_space = Some(s.trim().to_string()),
         Some("MatrixData") => a.matrix.get_or_insert_with(String::new).push_str(s),
@@ -356,12 +569,12 @@ fn values(path: &Path, a: &DataArray) -> Result<Vec<f64>, IoError> {
         t => {
             return Err(IoError::Unsupported {
                 path: path.into(),
-                what: format!("GIFTI data type '{t}'"),
+                what: one_line(&format!("GIFTI data type '{t}'")),
             })
         }
     };
     let bytes = match a.encoding.as_str() {
-        "ASCII" => {
+        "ASCII" | "GIFTI_ENCODING_ASCII" => {
             let v: Vec<f64> = a
                 .data
                 .split_whitespace()
@@ -382,7 +595,7 @@ fn values(path: &Path, a: &DataArray) -> Result<Vec<f64>, IoError> {
             }
             return Ok(v);
         }
-        "Base64Binary" | "GZipBase64Binary" => {
+        "Base64Binary" | "GZipBase64Binary" | "GIFTI_ENCODING_B64BIN" | "GIFTI_ENCODING_B64GZ" => {
             let compact: Vec<u8> = a
                 .data
                 .bytes()
@@ -391,7 +604,10 @@ fn values(path: &Path, a: &DataArray) -> Result<Vec<f64>, IoError> {
             let raw = base64::engine::general_purpose::STANDARD
                 .decode(&compact)
                 .map_err(|e| invalid(path, format!("{} array: bad base64: {e}", a.intent)))?;
-            if a.encoding == "GZipBase64Binary" {
+            if matches!(
+                a.encoding.as_str(),
+                "GZipBase64Binary" | "GIFTI_ENCODING_B64GZ"
+            ) {
                 let dec = flate2::read::ZlibDecoder::new(raw.as_slice());
                 let mut out = Vec::new();
                 dec.take(count as u64 * size as u64 + 1)
@@ -404,12 +620,7 @@ fn values(path: &Path, a: &DataArray) -> Result<Vec<f64>, IoError> {
                 raw
             }
         }
-        "ExternalFileBinary" => {
-            return Err(IoError::Unsupported {
-                path: path.into(),
-                what: "GIFTI arrays in external files".into(),
-            })
-        }
+        "ExternalFileBinary" | "GIFTI_ENCODING_EXTBIN" => external(path, a, count * size)?,
         e => return Err(invalid(path, format!("unknown GIFTI encoding '{e}'"))),
     };
     if bytes.len() != count * size {
@@ -457,6 +668,69 @@ fn values(path: &Path, a: &DataArray) -> Result<Vec<f64>, IoError> {
             .collect(),
     };
     Ok(v)
+}
+
+/// The `nbytes` of an ExternalFileBinary array: raw samples at ExternalFileOffset in
+/// ExternalFileName, which must be inside the GIFTI's directory (a relative path without
+/// `..`, and no symlink leading out), so a downloaded file cannot make glint read
+/// arbitrary files.
+fn external(path: &Path, a: &DataArray, nbytes: usize) -> Result<Vec<u8>, IoError> {
+    let (name, offset) = &a.external;
+    let outside = |why: &str| IoError::Unsupported {
+        path: path.into(),
+        what: one_line(&format!(
+            "external file '{name}' {why}: only files in the GIFTI's own directory are read"
+        )),
+    };
+    if name.is_empty() {
+        return Err(invalid(
+            path,
+            "an ExternalFileBinary array has no ExternalFileName",
+        ));
+    }
+    let rel = Path::new(name);
+    if rel
+        .components()
+        .any(|c| !matches!(c, std::path::Component::Normal(_)))
+    {
+        return Err(outside("is absolute or contains '..'"));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let full = dir.join(rel);
+    let os = |e| IoError::Os {
+        path: full.clone(),
+        source: e,
+    };
+    let canonical = full.canonicalize().map_err(os)?;
+    if !canonical.starts_with(dir.canonicalize().map_err(os)?) {
+        return Err(outside("leads out of the directory through a symlink"));
+    }
+    let offset: u64 = if offset.is_empty() {
+        0
+    } else {
+        offset.parse().map_err(|_| {
+            invalid(
+                path,
+                format!("ExternalFileOffset '{offset}' is not a byte offset"),
+            )
+        })?
+    };
+    let mut file = open(&full)?;
+    let len = file.metadata().map_err(os)?.len();
+    if len < offset.saturating_add(nbytes as u64) {
+        return Err(IoError::SizeMismatch {
+            path: path.into(),
+            what: one_line(&format!(
+                "{} array: {nbytes} bytes at offset {offset} of '{name}', which has {len}",
+                a.intent
+            )),
+        });
+    }
+    file.seek(std::io::SeekFrom::Start(offset)).map_err(os)?;
+    read_exact_growing(&full, file, nbytes, "external GIFTI array")
 }
 
 /// An N x 3 array as rows.

@@ -26,14 +26,14 @@
 //!
 //! | format | module | read | write |
 //! | --- | --- | --- | --- |
-//! | NIfTI-1 `.nii`, `.nii.gz` | [`nifti`] | yes | yes |
+//! | NIfTI-1, NIfTI-2 `.nii`, `.nii.gz`; `.hdr`/`.img` (also ANALYZE 7.5) | [`nifti`] | yes | `.nii` |
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
 //! | DICOM file or directory | [`dicom`] | native, deflate, JPEG, JPEG 2000, RLE | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
 //! | OBJ | [`mesh`] | yes | yes |
 //! | PLY | [`mesh`] | ASCII, binary | ASCII, binary |
-//! | GIFTI `.gii`, `.gii.gz` | [`gifti`] | ASCII, Base64, GZipBase64 | same |
+//! | GIFTI `.gii`, `.gii.gz` (+ per-vertex data: [`read_surface_data`]) | [`gifti`] | ASCII, Base64, GZipBase64, external file | ASCII, Base64, GZipBase64 |
 
 #![warn(missing_docs)]
 
@@ -48,6 +48,7 @@ mod robust;
 mod types;
 
 pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
+pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
 pub use robust::{robust_range, ROBUST_PERCENTILES, ROBUST_SAMPLES};
 pub use types::{IoError, Mesh, Samples, Volume};
 
@@ -57,7 +58,7 @@ use std::path::Path;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Format {
-    /// NIfTI-1 (`.nii`, `.nii.gz`).
+    /// NIfTI-1 or NIfTI-2 (`.nii`, `.nii.gz`), or a `.hdr`/`.img` pair (NIfTI or ANALYZE 7.5).
     Nifti,
     /// NRRD (`.nrrd`, `.nhdr` + data file).
     Nrrd,
@@ -79,7 +80,7 @@ impl Format {
     /// The format's usual name.
     pub fn name(self) -> &'static str {
         match self {
-            Format::Nifti => "NIfTI-1",
+            Format::Nifti => "NIfTI",
             Format::Nrrd => "NRRD",
             Format::Dicom => "DICOM",
             Format::Raw => "raw",
@@ -108,7 +109,7 @@ impl Format {
         let name = name.strip_suffix(".gz").unwrap_or(&name);
         let ext = name.rsplit_once('.').map(|(_, e)| e).unwrap_or("");
         Some(match ext {
-            "nii" => Format::Nifti,
+            "nii" | "hdr" => Format::Nifti,
             "nrrd" | "nhdr" => Format::Nrrd,
             "dcm" | "dicom" | "ima" => Format::Dicom,
             "raw" | "bin" | "img" => Format::Raw,

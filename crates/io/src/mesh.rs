@@ -1,12 +1,13 @@
 //! STL (stl_io), OBJ (tobj) and PLY (ply-rs-bw, the maintained fork of ply-rs) surfaces,
 //! and the index check every mesh reader ends with.
 
-use std::io::{BufReader, Read, Seek};
+use std::io::{BufRead, BufReader, Read, Seek};
 use std::path::Path;
 
+use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
-    Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType,
-    ScalarType as PlyScalar,
+    Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyAccess,
+    PropertyAccessResult, PropertyDef, PropertyType, ScalarType as PlyScalar,
 };
 
 use crate::common::{open, os_or_invalid, write_atomic};
@@ -246,114 +247,294 @@ pub fn write_obj(path: &Path, mesh: &Mesh) -> Result<(), IoError> {
     })
 }
 
-/// Names PLY files use for a per-vertex scalar.
+/// Names PLY files use for a per-vertex scalar, in order of preference.
 const PLY_SCALAR_NAMES: [&str; 5] = ["scalar", "value", "quality", "intensity", "confidence"];
+
+/// Largest PLY header read (comments included) before `end_header`.
+const PLY_MAX_HEADER: u64 = 1 << 20;
+
+/// Fewest bytes an ASCII PLY value takes: one digit and one separator.
+const PLY_ASCII_MIN_VALUE: u64 = 2;
+
+/// One PLY element read through ply-rs-bw's typed [`PropertyAccess`] interface: only
+/// what a [`Mesh`] keeps, so no per-element map of names is built (the generic
+/// `DefaultElement` took ~35x the file size in memory, issue 17).
+#[derive(Default)]
+struct PlyItem {
+    /// x, y, z, nx, ny, nz.
+    coords: [Option<f32>; 6],
+    /// The scalar, with its rank in [`PLY_SCALAR_NAMES`] (lower wins).
+    scalar: Option<(usize, f32)>,
+    /// `vertex_indices` (or `vertex_index`); `Err(())` when an index is negative.
+    indices: Option<Result<Vec<u32>, ()>>,
+}
+
+impl PropertyAccess for PlyItem {
+    fn new() -> Self {
+        PlyItem::default()
+    }
+
+    fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        if let Some(k) = ["x", "y", "z", "nx", "ny", "nz"]
+            .iter()
+            .position(|&n| n == name)
+        {
+            self.coords[k] = property.to_f32_lossy();
+        } else if let Some(k) = PLY_SCALAR_NAMES.iter().position(|&n| n == name) {
+            if let Some(v) = property.to_f32_lossy() {
+                if self.scalar.is_none_or(|(r, _)| k < r) {
+                    self.scalar = Some((k, v));
+                }
+            }
+        } else if name == "vertex_indices" || name == "vertex_index" {
+            self.indices = Some(property.to_u32_list().ok_or(()));
+        } else {
+            return PropertyAccessResult::Ignored;
+        }
+        PropertyAccessResult::Set
+    }
+}
+
+/// Bytes of a binary PLY scalar.
+fn ply_scalar_size(t: &PlyScalar) -> u64 {
+    match t {
+        PlyScalar::Char | PlyScalar::UChar => 1,
+        PlyScalar::Short | PlyScalar::UShort => 2,
+        PlyScalar::Int | PlyScalar::UInt | PlyScalar::Float => 4,
+        PlyScalar::Double => 8,
+    }
+}
+
+/// The fewest payload bytes one element of `def` can take (lists may be empty).
+fn ply_min_element_size(def: &ElementDef, encoding: Encoding) -> u64 {
+    def.properties
+        .values()
+        .map(|p| match (encoding, &p.data_type) {
+            (Encoding::Ascii, _) => PLY_ASCII_MIN_VALUE,
+            (_, PropertyType::Scalar(t)) => ply_scalar_size(t),
+            (_, PropertyType::List(count, _)) => ply_scalar_size(count),
+        })
+        .sum()
+}
+
+/// One line from a ply-rs-bw error (its messages span lines: the offending text, the
+/// parser state), mapped to the error kind the user should see.
+fn ply_error(path: &Path, e: ply_rs_bw::parser::ParseError) -> IoError {
+    let msg = e
+        .to_string()
+        .lines()
+        .next()
+        .unwrap_or_default()
+        .trim()
+        .to_string();
+    if msg.to_ascii_lowercase().contains("magic") || msg.contains("ply") && msg.contains("line 1") {
+        IoError::BadMagic {
+            path: path.into(),
+            format: "PLY",
+            what: msg,
+        }
+    } else if matches!(e.kind(), std::io::ErrorKind::UnexpectedEof) {
+        IoError::Truncated {
+            path: path.into(),
+            what: msg,
+        }
+    } else {
+        IoError::Invalid {
+            path: path.into(),
+            what: format!("not a valid PLY: {msg}"),
+        }
+    }
+}
+
+/// Reads the header text up to `end_header` (at most [`PLY_MAX_HEADER`] bytes) and
+/// refuses an element declared twice: ply-rs-bw keeps elements in a map by name, where
+/// the second declaration would silently replace the first and misalign the payload.
+/// Returns the header's length in bytes.
+fn ply_header_scan(path: &Path) -> Result<u64, IoError> {
+    let mut head = Vec::new();
+    open(path)?
+        .take(PLY_MAX_HEADER)
+        .read_to_end(&mut head)
+        .map_err(|e| os_or_invalid(path, e))?;
+    let mut names = std::collections::HashSet::new();
+    let mut at = 0usize;
+    for line in head.split(|&b| b == b'\n') {
+        at += line.len() + 1;
+        let text = String::from_utf8_lossy(line);
+        let mut words = text.split_whitespace();
+        match words.next() {
+            Some("end_header") => return Ok(at.min(head.len()) as u64),
+            Some("element") => {
+                let name = words.next().unwrap_or_default().to_string();
+                if !names.insert(name.clone()) {
+                    return Err(IoError::Invalid {
+                        path: path.into(),
+                        what: format!("element '{}' is declared twice", name.escape_debug()),
+                    });
+                }
+            }
+            _ => {}
+        }
+    }
+    Err(IoError::Invalid {
+        path: path.into(),
+        what: format!("no end_header in the first {PLY_MAX_HEADER} bytes"),
+    })
+}
 
 /// Reads a PLY file, ASCII or binary: `vertex` elements with x, y, z (and nx, ny, nz, and
 /// a scalar named one of `scalar`, `value`, `quality`, `intensity`, `confidence`, when
 /// present), `face` elements with a `vertex_indices` (or `vertex_index`) list; polygons
 /// are split into triangle fans.
+///
+/// Memory: elements are read one at a time into the mesh (a few times the file size at
+/// most), and the element counts of the header are checked against the bytes the file
+/// holds before anything is allocated for them.
 pub fn read_ply(path: &Path) -> Result<MeshFile, IoError> {
+    let header_len = ply_header_scan(path)?;
     let file = open(path)?;
-    let mut reader = BufReader::new(file);
-    let parser = ply_rs_bw::parser::Parser::<DefaultElement>::new();
-    let ply = parser.read_ply(&mut reader).map_err(|e| {
-        // ply-rs-bw's messages span lines (the offending text, the parser state): keep
-        // the first, so the user gets one line.
-        let msg = e
-            .to_string()
-            .lines()
-            .next()
-            .unwrap_or_default()
-            .trim()
-            .to_string();
-        if msg.to_ascii_lowercase().contains("magic")
-            || msg.contains("ply") && msg.contains("line 1")
-        {
-            IoError::BadMagic {
+    let file_len = file.metadata().map_err(|e| os_or_invalid(path, e))?.len();
+    let mut reader = Reader::new(BufReader::new(file));
+    let parser = Parser::<PlyItem>::new();
+    let header = parser
+        .read_header(&mut reader)
+        .map_err(|e| ply_error(path, e))?;
+    let mut remaining = file_len.saturating_sub(header_len);
+    if header.encoding == Encoding::Ascii {
+        // The last value needs no separator when the file lacks a final newline.
+        remaining += 1;
+    }
+    let mut need = 0u64;
+    for def in header.elements.values() {
+        let min = ply_min_element_size(def, header.encoding);
+        need = need.saturating_add(min.saturating_mul(def.count as u64));
+        if need > remaining {
+            return Err(IoError::SizeMismatch {
                 path: path.into(),
-                format: "PLY",
-                what: msg,
-            }
-        } else if matches!(e.kind(), std::io::ErrorKind::UnexpectedEof) {
-            IoError::Truncated {
-                path: path.into(),
-                what: msg,
-            }
-        } else {
-            IoError::Invalid {
-                path: path.into(),
-                what: format!("not a valid PLY: {msg}"),
-            }
+                what: format!(
+                    "the header announces {} '{}' elements, which with the elements before \
+                     them need at least {need} bytes; the file has {remaining} after the header",
+                    def.count,
+                    def.name.escape_debug()
+                ),
+            });
         }
-    })?;
-    let invalid = |what: String| IoError::Invalid {
-        path: path.into(),
-        what,
-    };
-    let vertices = ply
-        .payload
-        .get("vertex")
-        .ok_or_else(|| invalid("no 'vertex' element".into()))?;
-    let get = |v: &DefaultElement, k: &str| v.get(k).and_then(Property::to_f32_lossy);
+    }
+    if !header.elements.contains_key("vertex") {
+        return Err(IoError::Invalid {
+            path: path.into(),
+            what: "no 'vertex' element".into(),
+        });
+    }
     let mut mesh = Mesh::default();
-    for (i, v) in vertices.iter().enumerate() {
-        match (get(v, "x"), get(v, "y"), get(v, "z")) {
-            (Some(x), Some(y), Some(z)) => mesh.positions.push([x, y, z]),
-            _ => return Err(invalid(format!("vertex {i} lacks numeric x, y, z"))),
-        }
-    }
-    if vertices.first().is_some_and(|v| v.contains_key("nx")) {
-        mesh.normals = Some(
-            vertices
-                .iter()
-                .map(|v| [get(v, "nx"), get(v, "ny"), get(v, "nz")])
-                .map(|n| match n {
-                    [Some(x), Some(y), Some(z)] => Ok([x, y, z]),
-                    _ => Err(invalid("a vertex lacks numeric nx, ny, nz".into())),
-                })
-                .collect::<Result<_, _>>()?,
-        );
-    }
-    if let Some(name) = vertices
-        .first()
-        .and_then(|v| PLY_SCALAR_NAMES.into_iter().find(|k| v.contains_key(*k)))
-    {
-        mesh.scalars = Some(
-            vertices
-                .iter()
-                .map(|v| get(v, name).ok_or_else(|| invalid(format!("a vertex lacks '{name}'"))))
-                .collect::<Result<_, _>>()?,
-        );
-    }
-    let n = mesh.positions.len();
-    if let Some(faces) = ply.payload.get("face") {
-        for (k, f) in faces.iter().enumerate() {
-            let list = f
-                .get("vertex_indices")
-                .or_else(|| f.get("vertex_index"))
-                .ok_or_else(|| invalid(format!("face {k} has no vertex_indices list")))?;
-            let idx = list.to_u32_list().ok_or_else(|| IoError::BadIndex {
-                path: path.into(),
-                what: format!("face {k} has negative or non-integer indices"),
-            })?;
-            if let Some(&bad) = idx.iter().find(|&&i| i as usize >= n) {
-                return Err(IoError::BadIndex {
-                    path: path.into(),
-                    what: format!("face {k} refers to vertex {bad}, past the {n} vertices"),
-                });
+    for def in header.elements.values() {
+        let keep = def.name == "vertex" || def.name == "face";
+        let mut line = String::new();
+        for k in 0..def.count {
+            let item = match header.encoding {
+                Encoding::Ascii => {
+                    line.clear();
+                    let got = reader
+                        .get_mut()
+                        .read_line(&mut line)
+                        .map_err(|e| os_or_invalid(path, e))?;
+                    if got == 0 {
+                        return Err(IoError::Truncated {
+                            path: path.into(),
+                            what: format!(
+                                "the file ends at '{}' element {k} of {}",
+                                def.name.escape_debug(),
+                                def.count
+                            ),
+                        });
+                    }
+                    parser.read_ascii_element(&line, def)
+                }
+                Encoding::BinaryLittleEndian => {
+                    parser.read_little_endian_element(reader.get_mut(), def)
+                }
+                Encoding::BinaryBigEndian => parser.read_big_endian_element(reader.get_mut(), def),
             }
-            for j in 1..idx.len().saturating_sub(1) {
-                mesh.triangles.push([idx[0], idx[j], idx[j + 1]]);
+            .map_err(|e| ply_error(path, e))?;
+            if keep {
+                ply_add(path, &mut mesh, &def.name, k, item, def.count)?;
             }
         }
     }
-    let encoding = match ply.header.encoding {
+    let encoding = match header.encoding {
         Encoding::Ascii => "ASCII PLY",
         Encoding::BinaryLittleEndian => "binary little-endian PLY",
         Encoding::BinaryBigEndian => "binary big-endian PLY",
     };
     mesh_file(path, mesh, Format::Ply, vec![encoding.into()])
+}
+
+/// Adds element `k` of `vertex` or `face` to the mesh. Normals and scalars are kept
+/// when the first vertex has them, and then required of every vertex.
+fn ply_add(
+    path: &Path,
+    mesh: &mut Mesh,
+    element: &str,
+    k: usize,
+    item: PlyItem,
+    count: usize,
+) -> Result<(), IoError> {
+    let invalid = |what: String| IoError::Invalid {
+        path: path.into(),
+        what,
+    };
+    if element == "vertex" {
+        let [x, y, z, nx, ny, nz] = item.coords;
+        let (Some(x), Some(y), Some(z)) = (x, y, z) else {
+            return Err(invalid(format!("vertex {k} lacks numeric x, y, z")));
+        };
+        if k == 0 {
+            // The count passed the size check against the file: at least 3 bytes a
+            // vertex, so these are at most 4 (12 / 3) times the file size each.
+            mesh.positions.reserve_exact(count);
+            if nx.is_some() {
+                mesh.normals = Some(Vec::with_capacity(count));
+            }
+            if item.scalar.is_some() {
+                mesh.scalars = Some(Vec::with_capacity(count));
+            }
+        }
+        mesh.positions.push([x, y, z]);
+        if let Some(normals) = &mut mesh.normals {
+            match (nx, ny, nz) {
+                (Some(x), Some(y), Some(z)) => normals.push([x, y, z]),
+                _ => return Err(invalid(format!("vertex {k} lacks numeric nx, ny, nz"))),
+            }
+        }
+        if let Some(scalars) = &mut mesh.scalars {
+            let (_, v) = item
+                .scalar
+                .ok_or_else(|| invalid(format!("vertex {k} lacks a scalar")))?;
+            scalars.push(v);
+        }
+        return Ok(());
+    }
+    let idx = match item.indices {
+        None => return Err(invalid(format!("face {k} has no vertex_indices list"))),
+        Some(Err(())) => {
+            return Err(IoError::BadIndex {
+                path: path.into(),
+                what: format!("face {k} has negative or non-integer indices"),
+            })
+        }
+        Some(Ok(idx)) => idx,
+    };
+    let n = mesh.positions.len();
+    if let Some(&bad) = idx.iter().find(|&&i| i as usize >= n) {
+        return Err(IoError::BadIndex {
+            path: path.into(),
+            what: format!("face {k} refers to vertex {bad}, past the {n} vertices"),
+        });
+    }
+    for j in 1..idx.len().saturating_sub(1) {
+        mesh.triangles.push([idx[0], idx[j], idx[j + 1]]);
+    }
+    Ok(())
 }
 
 /// PLY payload encodings for [`write_ply`].

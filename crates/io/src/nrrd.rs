@@ -152,6 +152,14 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         if l.starts_with('#') || l.contains(":=") {
             continue; // comment or key/value pair
         }
+        // A carriage return or other control character inside a field would be quoted
+        // into an error message over several lines (found by fuzzing, issue 17).
+        if l.chars().any(|c| c.is_control() && c != '\t') {
+            return Err(invalid(
+                path,
+                format!("header line {:?} contains control characters", truncate(l)),
+            ));
+        }
         let (k, v) = l.split_once(": ").ok_or_else(|| {
             invalid(
                 path,

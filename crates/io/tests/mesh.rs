@@ -294,8 +294,9 @@ fn gifti_size_mismatch_and_unsupported() {
     );
     assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
     let ext = ASCII_ROW.replace("\"ASCII\"", "\"ExternalFileBinary\"");
+    // External files are read now (tests/gifti.rs), but this one names no file.
     let err = expect_err(&dir, "ext.gii", gifti_doc((&ext, ""), (tri, "0 1 2")));
-    assert!(matches!(err, IoError::Unsupported { .. }), "{err}");
+    assert!(matches!(err, IoError::Invalid { .. }), "{err}");
     let f64t = gifti_doc((ASCII_ROW, "0 0 0 1 0 0 0 1 0"), (tri, "0 1 2")).replacen(
         "NIFTI_TYPE_FLOAT32",
         "NIFTI_TYPE_COMPLEX64",
@@ -468,4 +469,78 @@ fn gifti_one_dimensional_vector_array_is_skipped() {
     assert_eq!(f.mesh.positions.len(), 3);
     assert_eq!(f.mesh.triangles, vec![[0, 1, 2]]);
     assert!(f.mesh.normals.is_none());
+}
+
+/// Issue 17: a binary PLY header declaring `element face` twice, the second with
+/// 1,000,000,000 faces and no data, aborted on a 4.5 GB allocation. Now refused before
+/// any allocation: the duplicate name, and (without it) the counts the file cannot hold.
+#[test]
+fn ply_duplicate_element_with_a_billion_faces_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
+        property float y\nproperty float z\nelement face 1\n\
+        property list uchar int vertex_indices\n";
+    let mut bytes = format!(
+        "{head}element face 1000000000\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    .into_bytes();
+    for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+        bytes.extend(v.to_le_bytes());
+    }
+    let err = expect_err(&dir, "twice.ply", &bytes);
+    assert!(matches!(err, IoError::Invalid { .. }), "{err}");
+    assert!(err.to_string().contains("declared twice"), "{err}");
+    // One face element of a billion faces: each takes at least its 1-byte list count,
+    // which the 36 bytes after the header cannot hold.
+    let mut bytes =
+        format!("{head}end_header\n").replace("element face 1\n", "element face 1000000000\n");
+    let mut bytes = std::mem::take(&mut bytes).into_bytes();
+    for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+        bytes.extend(v.to_le_bytes());
+    }
+    let err = expect_err(&dir, "billion.ply", &bytes);
+    assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
+    assert!(err.to_string().contains("1000000000 'face'"), "{err}");
+    // ASCII: at least two characters a value.
+    let err = expect_err(
+        &dir,
+        "billion_ascii.ply",
+        "ply\nformat ascii 1.0\nelement vertex 1000000000\nproperty float x\n\
+         property float y\nproperty float z\nend_header\n0 0 0\n",
+    );
+    assert!(matches!(err, IoError::SizeMismatch { .. }), "{err}");
+}
+
+/// Every PLY error is one line, whatever the parser quotes.
+#[test]
+fn ply_errors_are_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = expect_err(
+        &dir,
+        "badline.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nend_header\n0 0 0\n1 zero 2 3 4 5 6\n0 0 0\n",
+    );
+    let msg = err.to_string();
+    assert!(!msg.contains('\n'), "{msg:?}");
+    assert!(matches!(err, IoError::Invalid { .. }), "{err}");
+}
+
+/// The scalar of a PLY vertex is taken by name preference (`scalar` before `quality`),
+/// properties of other types are converted, and unknown ones ignored.
+#[test]
+fn ply_typed_reader_properties() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty short x\nproperty uchar y\n\
+        property double z\nproperty float quality\nproperty uchar red\nproperty float scalar\n\
+        element face 1\nproperty list uchar int vertex_index\nend_header\n\
+        -1 2 0.5 9 255 0.25\n3 4 1.5 9 0 0.5\n5 6 2.5 9 7 0.75\n3 0 1 2\n";
+    let m = glint_io::read_mesh(&file(&dir, "typed.ply", text)).unwrap();
+    assert_eq!(
+        m.positions,
+        vec![[-1.0, 2.0, 0.5], [3.0, 4.0, 1.5], [5.0, 6.0, 2.5]]
+    );
+    assert_eq!(m.scalars, Some(vec![0.25, 0.5, 0.75]));
+    assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    assert!(m.normals.is_none());
 }

@@ -271,3 +271,15 @@ fn non_spatial_kinds_and_origin_with_spacings() {
     ];
     assert_eq!(v.affine, want);
 }
+
+/// Fuzzing (issue 17, `fuzz/fuzz_targets/nrrd.rs`): a header field with carriage
+/// returns inside was quoted into a multi-line error. Every error is one line now.
+#[test]
+fn fuzz_crash_control_characters_in_a_field_give_a_one_line_error() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/fuzz/nrrd-crash-3ebbf80b.nrrd");
+    let err = glint_io::read_volume(&path, &glint_io::ReadOptions::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(!msg.contains('\n') && !msg.contains('\r'), "{msg:?}");
+    assert!(msg.contains("control characters"), "{msg}");
+}

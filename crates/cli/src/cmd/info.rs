@@ -5,7 +5,10 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::bail;
-use glint_io::{Endian, Format, MeshFile, RawParams, ReadOptions, ScalarType, VolumeFile};
+use glint_io::{
+    Endian, Format, MeshFile, RawParams, ReadOptions, ScalarType, VertexData, VertexValues,
+    VolumeFile,
+};
 use serde_json::{json, Value};
 
 /// Arguments of `glint info`.
@@ -93,11 +96,44 @@ fn report(args: &Args) -> anyhow::Result<String> {
     }
     let mut out = String::new();
     if is_mesh {
-        let file = glint_io::open_mesh(&args.file)?;
-        if args.json {
-            out = serde_json::to_string_pretty(&mesh_json(args, &file))? + "\n";
+        let overlays = if Format::guess(&args.file) == Some(Format::Gifti) {
+            glint_io::read_surface_data(&args.file)?
         } else {
-            print_mesh(&mut out, args, &file)?;
+            Vec::new()
+        };
+        let file = match glint_io::open_mesh(&args.file) {
+            Ok(f) => Some(f),
+            // A GIFTI of per-vertex data only (sulcal depth, a parcellation): no surface,
+            // just the overlays.
+            Err(glint_io::IoError::Invalid { what, .. })
+                if !overlays.is_empty() && what.contains("no NIFTI_INTENT_POINTSET") =>
+            {
+                None
+            }
+            Err(e) => return Err(e.into()),
+        };
+        if args.json {
+            let mut v = match &file {
+                Some(f) => mesh_json(args, f),
+                None => json!({
+                    "file": args.file.display().to_string(),
+                    "kind": "vertex data",
+                    "format": "GIFTI",
+                }),
+            };
+            v["overlays"] = overlays.iter().map(overlay_json).collect();
+            out = serde_json::to_string_pretty(&v)? + "\n";
+        } else {
+            match &file {
+                Some(f) => print_mesh(&mut out, args, f)?,
+                None => {
+                    writeln!(out, "file:      {}", args.file.display())?;
+                    writeln!(out, "format:    GIFTI per-vertex data (no surface)")?;
+                }
+            }
+            for o in &overlays {
+                writeln!(out, "overlay:   {}", overlay_line(o))?;
+            }
         }
     } else {
         let file = glint_io::open_volume(&args.file, &options)?;
@@ -255,6 +291,59 @@ fn print_mesh(out: &mut String, args: &Args, f: &MeshFile) -> std::fmt::Result {
     Ok(())
 }
 
+/// The finite range of some values, `None` if there are none.
+fn finite_range(v: &[f32]) -> Option<(f32, f32)> {
+    v.iter()
+        .filter(|x| x.is_finite())
+        .fold(None, |r, &x| match r {
+            None => Some((x, x)),
+            Some((a, b)) => Some((a.min(x), b.max(x))),
+        })
+}
+
+/// The distinct label keys in use.
+fn keys_used(keys: &[i32]) -> usize {
+    keys.iter().collect::<std::collections::BTreeSet<_>>().len()
+}
+
+/// One line about a per-vertex array: name, intent, count and range or labels.
+fn overlay_line(o: &VertexData) -> String {
+    match &o.values {
+        VertexValues::Scalars(v) => {
+            let range = finite_range(v)
+                .map(|(lo, hi)| format!(", {} .. {}", num(lo.into()), num(hi.into())))
+                .unwrap_or_default();
+            format!("{} ({}): {} values{range}", o.name, o.intent, v.len())
+        }
+        VertexValues::Labels { keys, table } => format!(
+            "{} ({}): {} values, {} labels used of {} in the table",
+            o.name,
+            o.intent,
+            keys.len(),
+            keys_used(keys),
+            table.len()
+        ),
+    }
+}
+
+fn overlay_json(o: &VertexData) -> Value {
+    match &o.values {
+        VertexValues::Scalars(v) => json!({
+            "name": o.name,
+            "intent": o.intent,
+            "values": v.len(),
+            "range": finite_range(v).map(|(lo, hi)| json!([lo, hi])),
+        }),
+        VertexValues::Labels { keys, table } => json!({
+            "name": o.name,
+            "intent": o.intent,
+            "values": keys.len(),
+            "labels_used": keys_used(keys),
+            "label_table": table.iter().map(|l| json!({"key": l.key, "name": l.name, "rgba": l.rgba})).collect::<Vec<_>>(),
+        }),
+    }
+}
+
 /// A number with at most 4 decimals and no trailing zeros.
 fn num(x: f64) -> String {
     if !x.is_finite() {
@@ -324,7 +413,7 @@ mod tests {
         glint_io::nifti::write(&p, &vol, true, Endian::Little).unwrap();
         let path = p.to_str().unwrap();
         let text = run(&[path]).unwrap();
-        assert!(text.contains("format:   NIfTI-1 volume"), "{text}");
+        assert!(text.contains("format:   NIfTI volume"), "{text}");
         assert!(text.contains("dims:     4 x 3 x 2 (24 voxels)"), "{text}");
         // Column norms of the affine: (0,0,1) -> 1, (0,1,0) -> 1, (-2.5,0,0) -> 2.5.
         assert!(text.contains("spacing:  1 x 1 x 2.5 mm"), "{text}");
@@ -452,6 +541,34 @@ mod tests {
         );
         let err = run(&[path, "--strict"]).unwrap_err().to_string();
         assert!(err.contains("--strict"), "{err}");
+    }
+
+    /// Issue 17: `glint info` lists a GIFTI's per-vertex arrays, also for a file that
+    /// has no surface (fsaverage5 sulcal depth; range from nibabel 5.4.2 via
+    /// scripts/gifti-reference.py: -1.4937248 .. 1.8069096).
+    #[test]
+    fn gifti_overlays_listed() {
+        let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
+        let home = std::env::var_os("HOME").unwrap_or_default();
+        let p =
+            std::path::Path::new(&home).join(".cache/glint/samples/fsaverage5_sulc_left.gii.gz");
+        if !p.is_file() {
+            assert!(!ci, "sample {} missing in CI", p.display());
+            eprintln!("skipping: {} missing (scripts/fetch-samples)", p.display());
+            return;
+        }
+        let text = run(&[p.to_str().unwrap()]).unwrap();
+        assert!(
+            text.contains("format:    GIFTI per-vertex data (no surface)"),
+            "{text}"
+        );
+        assert!(
+            text.contains("(NIFTI_INTENT_SHAPE): 10242 values, -1.4937 .. 1.8069\n"),
+            "{text}"
+        );
+        let v = json(&[p.to_str().unwrap()]);
+        assert_eq!(v["overlays"][0]["values"], 10242);
+        assert_eq!(v["overlays"][0]["intent"], "NIFTI_INTENT_SHAPE");
     }
 
     #[test]

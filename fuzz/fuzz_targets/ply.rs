@@ -1,0 +1,11 @@
+//! Fuzzes the ply reader: any bytes must give a volume/mesh or a one-line error, never a
+//! panic, an abort or an allocation beyond the input's size times a small factor.
+#![no_main]
+
+#[path = "common.rs"]
+mod common;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    let path = common::input_file(data, "ply");
+    common::check_error(glint_io::mesh::read_ply(&path));
+});
