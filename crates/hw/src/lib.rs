@@ -42,6 +42,7 @@ mod fixed;
 mod pipeline;
 mod rom;
 mod sweep;
+mod table;
 mod unit;
 
 pub use accuracy::{measure, within, ErrorsAtN, Measurement, Reference, Worst, BOUND_SLACK_LSB};
@@ -54,6 +55,7 @@ pub use rom::{coefficient_int_bits, real_coefficients, Rom};
 pub use sweep::{
     format_ranges, markdown_table, mask_ranges, sweep_row, SweepRow, Target, Widths, START_FRAC,
 };
+pub use table::CosTableError;
 pub use unit::{Formats, Input, Output, Unit};
 
 /// Why a configuration or an input was rejected.

@@ -27,6 +27,7 @@ mod batch;
 mod coefficient;
 mod geometry;
 mod lobe;
+mod table;
 
 pub use batch::measure;
 pub use batch::{eval_slice_with, pow_slice, BatchError, KernelPath};
@@ -36,3 +37,4 @@ pub use coefficient::{
 };
 pub use geometry::{blinn_cos, phong_cos, reflect, Geometry};
 pub use lobe::{Lobe, LobeError, LobeKind, Real, MAX_N, MAX_V};
+pub use table::{CosTable, Specular, TableError, MAX_TABLE_FRAC_BITS};

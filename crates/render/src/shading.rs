@@ -1,8 +1,9 @@
 //! Lights and the per-sample lighting model: ambient + diffuse + specular, the
-//! specular term a [`glint_lobe::Lobe`] evaluated at the cosine of a
+//! specular term a [`glint_lobe::Specular`] (a closed-form lobe or a table over the
+//! quantised cosine, e.g. a hardware unit's) evaluated at the cosine of a
 //! [`glint_lobe::Geometry`].
 
-use glint_lobe::{Geometry, Lobe, LobeKind};
+use glint_lobe::{Geometry, Lobe, LobeKind, Specular};
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
@@ -75,7 +76,7 @@ impl Light {
 /// Everything the lighting of one sample needs that does not change along a ray.
 #[derive(Clone, Debug)]
 pub struct Shader {
-    pub(crate) lobe: Lobe<f32>,
+    pub(crate) specular: Specular,
     pub(crate) geometry: Geometry,
     pub(crate) material: Material,
     /// The lights, relative to the camera.
@@ -113,11 +114,24 @@ impl Shader {
         lights: Vec<Light>,
         gate: f32,
     ) -> Result<Shader, RenderError> {
+        let lobe = Lobe::<f32>::new(kind, n, v)?;
+        Shader::with_specular(lobe.into(), geometry, material, lights, gate)
+    }
+
+    /// A shader whose specular term is `specular`: a closed-form lobe or a table over
+    /// the quantised cosine (e.g. `glint_hw::Unit::cos_table`); otherwise as
+    /// [`Shader::new`].
+    pub fn with_specular(
+        specular: Specular,
+        geometry: Geometry,
+        material: Material,
+        lights: Vec<Light>,
+        gate: f32,
+    ) -> Result<Shader, RenderError> {
         material.validate()?;
         for light in &lights {
             light.validate()?;
         }
-        let lobe = Lobe::<f32>::new(kind, n, v)?;
         if lights.len() > MAX_LIGHTS {
             return Err(RenderError::Parameter(format!(
                 "{} lights: at most {MAX_LIGHTS}",
@@ -130,7 +144,7 @@ impl Shader {
             )));
         }
         Ok(Shader {
-            lobe,
+            specular,
             geometry,
             material,
             relative: lights,
@@ -151,9 +165,20 @@ impl Shader {
         }
     }
 
-    /// The lobe.
-    pub fn lobe(&self) -> &Lobe<f32> {
-        &self.lobe
+    /// The specular term.
+    pub fn specular(&self) -> &Specular {
+        &self.specular
+    }
+
+    /// The closed-form lobe, `None` for a table.
+    pub fn lobe(&self) -> Option<&Lobe<f32>> {
+        self.specular.lobe()
+    }
+
+    /// Replaces the specular term (e.g. by a hardware unit's table for the same `n`),
+    /// keeping the geometry, material, lights and gate.
+    pub fn set_specular(&mut self, specular: Specular) {
+        self.specular = specular;
     }
 
     pub(crate) fn for_ray(&self, view: Vec3) -> RayLighting {
@@ -209,7 +234,7 @@ impl Shader {
             if n_dot_l > 0.0 {
                 diffuse += intensity * n_dot_l;
                 let c = self.cos(n_dot_l, n_dot_v, l_dot_v, n, h);
-                specular += intensity * self.lobe.eval(c);
+                specular += intensity * self.specular.eval(c);
             }
         }
         let lit = m.ambient + m.diffuse * diffuse;
@@ -286,6 +311,66 @@ mod tests {
             intensity: 1.0,
         };
         assert!((side.direction(&cam) - cam.right).length() < 1e-6);
+    }
+
+    #[test]
+    fn table_specular_is_the_units_output_per_sample() {
+        // Normal along the view (0, 0, 1) and a light l with l·view = l.z: Phong's
+        // cosine 2(N·L)(N·V) - L·V is exactly l.z in f32, so each sample's specular
+        // is material.specular times the unit's output for cos_code(l.z), which
+        // `Unit::eval` gives independently of the table.
+        use glint_hw::{Config, Input, Unit};
+        for config in [
+            Config::default(),
+            Config {
+                out_bits: 12,
+                ..Config::default()
+            },
+        ] {
+            let unit = Unit::new(config).unwrap();
+            let n = 60;
+            let m = Material::default();
+            let full = unit.full_scale();
+            let one = unit.cos_one() as f32;
+            let table = unit.cos_table(n).unwrap();
+            let mut distinct = std::collections::BTreeSet::new();
+            // Every code in (0.75, 1] and the cosines halfway between codes.
+            for k in (1..=(one as i32) / 2).rev() {
+                let c = (2.0 * one - k as f32) / (2.0 * one);
+                for c in [c, c.next_up(), c.next_down()] {
+                    let light = Vec3::new((1.0 - c * c).sqrt(), 0.0, c);
+                    let shader = Shader::with_specular(
+                        Specular::from(table.clone()),
+                        Geometry::Phong,
+                        m,
+                        vec![],
+                        0.0,
+                    )
+                    .unwrap();
+                    // The light in world space, as `placed` would put it.
+                    let shader = Shader {
+                        lights: vec![(light, 1.0)],
+                        ..shader
+                    };
+                    let ray = shader.for_ray(Vec3::new(0.0, 0.0, 1.0));
+                    // Black base colour: the shaded colour is the specular term alone.
+                    let got = shader.shade([0.0; 3], Vec3::new(0.0, 0.0, -2.0), &ray);
+                    let code = unit.cos_code(f64::from(c)).unwrap();
+                    let out = unit
+                        .eval(&Input {
+                            cos: code,
+                            n,
+                            ks: [full; 3],
+                        })
+                        .unwrap();
+                    let value = (out.rgb[0] as f64 / full as f64) as f32;
+                    assert_eq!(got, [m.specular * value; 3], "c = {c}, code {code}");
+                    distinct.insert(out.rgb[0]);
+                }
+            }
+            // Not vacuous: the unit's output takes many values over this range.
+            assert!(distinct.len() > 50, "{} output codes", distinct.len());
+        }
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! samples it keeps: where they are, their table entry and their weight.
 //!
 //! Light: the tile's kept samples, from all its rays, eight at a time: gradients,
-//! normals, the lighting cosines; one call of [`glint_lobe::Lobe::eval_slice`] (the
+//! normals, the lighting cosines; one call of [`glint_lobe::Specular::eval_slice`] (the
 //! lobe crate's SIMD kernels) for every sample and light of the tile; then each
 //! sample's colour, added to its ray's in sample order. Lighting rays together keeps
 //! every vector lane busy (a ray lights about five samples before it terminates) and
@@ -572,7 +572,7 @@ unsafe fn light(
         _mm256_storeu_ps(diffuse.as_mut_ptr().add(r0), dif);
     }
     refill(lobe, cos.len(), 0.0);
-    shader.lobe.eval_slice(cos, lobe);
+    shader.specular.eval_slice(cos, lobe);
     // Lane j's bit of an eight-bit mask, as a vector mask.
     let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
     let bits = |m: u8| {
