@@ -39,6 +39,7 @@
 mod accuracy;
 mod config;
 mod fixed;
+pub mod hdl;
 mod pipeline;
 mod rom;
 mod sweep;
@@ -100,6 +101,9 @@ pub enum HwError {
     /// A configuration file or name could not be parsed.
     #[error("invalid configuration: {0}")]
     Parse(String),
+    /// A comparison unit (see [`hdl`]) is not designed for these interface widths.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
     /// An input does not fit its register.
     #[error("invalid input: {0}")]
     Input(String),
