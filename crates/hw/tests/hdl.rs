@@ -4,7 +4,9 @@
 //! Tests that need iverilog or verilator FAIL when the tool is missing and the
 //! environment variable CI is set; otherwise they print a note and pass.
 
-use glint_hw::hdl::{cosim, lint, stimulus, HdlUnit, KvUnit, Ports, PowerUnit, SchlickUnit, ToolError};
+use glint_hw::hdl::{
+    cosim, lint, stimulus, HdlUnit, KvUnit, Ports, PowerUnit, SchlickUnit, ToolError,
+};
 use glint_hw::{Config, Input, Unit};
 
 /// Vectors per unit in the ordinary test run (`glint hw cosim` runs 1e6); override
@@ -20,7 +22,11 @@ fn vectors() -> usize {
 
 fn ports() -> Ports {
     let c = Config::default();
-    Ports { cos_bits: c.cos_bits, n_bits: c.n_bits, out_bits: c.out_bits }
+    Ports {
+        cos_bits: c.cos_bits,
+        n_bits: c.n_bits,
+        out_bits: c.out_bits,
+    }
 }
 
 /// `Ok(None)` if the tool is missing outside CI (skip), the result otherwise.
@@ -117,7 +123,10 @@ fn schlick_model_is_schlicks_formula() {
             let c = cos as f64 / 16384.0;
             let s = c / (n as f64 - n as f64 * c + c);
             let code = u.lobe_code(cos, n) as f64 / 4096.0;
-            assert!((code - s).abs() <= 0.5 / 4096.0 + 1e-12, "n {n} cos {c}: {code} vs {s}");
+            assert!(
+                (code - s).abs() <= 0.5 / 4096.0 + 1e-12,
+                "n {n} cos {c}: {code} vs {s}"
+            );
         }
     }
     // n = 0 is 1 everywhere in [0, 1], 0^0 included; negative cos is clamped to 0.

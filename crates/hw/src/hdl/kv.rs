@@ -92,7 +92,15 @@ impl KvUnit {
         );
         // Stage 2: MUL.
         let mut body = product("mul_full", "a1", a_w, "t1", c);
-        body += &requantize("p_next", mb, "mul_full", a_w + c, f.coef_frac + cf, m, cfg.mul_round);
+        body += &requantize(
+            "p_next",
+            mb,
+            "mul_full",
+            a_w + c,
+            f.coef_frac + cf,
+            m,
+            cfg.mul_round,
+        );
         let _ = writeln!(
             s,
             "    // Stage 2: MUL p = round(a * t) ({}), UQ{}.{m}.\n{}\
@@ -122,7 +130,13 @@ impl KvUnit {
             let to = f.square_frac[k as usize];
             let stage = 4 + k;
             let name = format!("s{stage}");
-            let mut body = product(&format!("sq{stage}_full"), &prev.0, prev.1 + 1, &prev.0, prev.1 + 1);
+            let mut body = product(
+                &format!("sq{stage}_full"),
+                &prev.0,
+                prev.1 + 1,
+                &prev.0,
+                prev.1 + 1,
+            );
             body += &requantize(
                 &format!("sq{stage}_next"),
                 to + 1,
@@ -211,6 +225,7 @@ impl HdlUnit for KvUnit {
 
     fn max_error_vs_power(&self) -> f64 {
         let m = crate::measure(&self.unit);
-        m.worst_power(0..=super::mask(self.unit.config().n_bits) as u32).error
+        m.worst_power(0..=super::mask(self.unit.config().n_bits) as u32)
+            .error
     }
 }

@@ -24,12 +24,12 @@
 //! clock edge) and compares `out_valid` on every clock and R, G, B whenever it is high.
 
 mod kv;
-mod vlog;
 mod power;
 mod schlick;
 mod stimulus;
 mod synth;
 mod tools;
+mod vlog;
 
 use std::path::{Path, PathBuf};
 
@@ -113,7 +113,9 @@ pub enum ToolError {
         source: std::io::Error,
     },
     /// An external program is not installed.
-    #[error("{tool} is not installed (Debian package {package}; scripts/install-deps installs it)")]
+    #[error(
+        "{tool} is not installed (Debian package {package}; scripts/install-deps installs it)"
+    )]
     Missing {
         /// The program.
         tool: &'static str,
@@ -168,5 +170,7 @@ pub fn write_files(dir: &Path, files: &[HdlFile]) -> Result<(), ToolError> {
 
 /// `2^bits - 1`.
 pub(crate) fn mask(bits: u32) -> u64 {
-    u64::MAX.checked_shr(64u32.saturating_sub(bits)).unwrap_or(0)
+    u64::MAX
+        .checked_shr(64u32.saturating_sub(bits))
+        .unwrap_or(0)
 }

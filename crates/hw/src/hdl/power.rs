@@ -71,7 +71,9 @@ impl PowerUnit {
             )));
         }
         let table = |count: u32, frac: u32, f: &dyn Fn(f64) -> f64| -> Vec<(u64, u64)> {
-            let q = |i: u32| (f(f64::from(i) / f64::from(count)) * 2f64.powi(frac as i32)).round() as u64;
+            let q = |i: u32| {
+                (f(f64::from(i) / f64::from(count)) * 2f64.powi(frac as i32)).round() as u64
+            };
             (0..count).map(|i| (q(i), q(i) - q(i + 1))).collect()
         };
         Ok(PowerUnit {
@@ -212,7 +214,15 @@ impl PowerUnit {
             ls - 1
         );
         body += &product("dr", "d_tab", ls, "r2", low);
-        body += &requantize("dr_round", lf + 1, "dr", ls + low, low, 0, Rounding::Nearest);
+        body += &requantize(
+            "dr_round",
+            lf + 1,
+            "dr",
+            ls + low,
+            low,
+            0,
+            Rounding::Nearest,
+        );
         let _ = write!(
             s,
             "    // Stage 3: g = G - round(D r / 2^{low}), L = e - 1 + g = -log2(x), UQ4.{lf}.\n{}\
@@ -286,7 +296,15 @@ impl PowerUnit {
             es - 1
         );
         body += &product("dw", "de_tab", es, "w5", wbits);
-        body += &requantize("dw_round", ef + 1, "dw", es + wbits, wbits, 0, Rounding::Nearest);
+        body += &requantize(
+            "dw_round",
+            ef + 1,
+            "dw",
+            es + wbits,
+            wbits,
+            0,
+            Rounding::Nearest,
+        );
         let _ = write!(
             s,
             "    // Stage 6: 2^(-u) = E - round(DE w / 2^{wbits}), shifted right by k; 1 if n = 0,\n\
@@ -326,9 +344,14 @@ impl HdlUnit for PowerUnit {
     fn eval(&self, input: &Input) -> Output {
         let lobe = self.lobe_code(input.cos, input.n);
         Output {
-            rgb: input
-                .ks
-                .map(|k| rq(u128::from(lobe) * u128::from(k), EXP_FRAC, 0, Rounding::Nearest) as u64),
+            rgb: input.ks.map(|k| {
+                rq(
+                    u128::from(lobe) * u128::from(k),
+                    EXP_FRAC,
+                    0,
+                    Rounding::Nearest,
+                ) as u64
+            }),
         }
     }
 
@@ -345,11 +368,21 @@ impl HdlUnit for PowerUnit {
             },
             HdlFile {
                 name: format!("{}_log.hex", Self::MODULE),
-                text: self.hex(&self.log, LOG_FRAC + 1, LOG_SLOPE_BITS, "g(m) = 1 - log2(1 + m), m = i/512, UQ1.20"),
+                text: self.hex(
+                    &self.log,
+                    LOG_FRAC + 1,
+                    LOG_SLOPE_BITS,
+                    "g(m) = 1 - log2(1 + m), m = i/512, UQ1.20",
+                ),
             },
             HdlFile {
                 name: format!("{}_exp.hex", Self::MODULE),
-                text: self.hex(&self.exp, EXP_FRAC + 1, EXP_SLOPE_BITS, "2^(-u), u = j/256, UQ1.16"),
+                text: self.hex(
+                    &self.exp,
+                    EXP_FRAC + 1,
+                    EXP_SLOPE_BITS,
+                    "2^(-u), u = j/256, UQ1.16",
+                ),
             },
         ]
     }

@@ -129,7 +129,6 @@ impl SchlickUnit {
     reg [{qw1}:0] q{st};\n\
     always @(posedge clk) q{st} <= {{q{prev}, bit_{st}}};\n",
                 k + 1,
-                dw1 = dw - 1,
                 qw1 = qw - 1,
             );
             if k < QF {

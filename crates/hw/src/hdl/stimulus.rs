@@ -59,10 +59,27 @@ impl Stimulus {
 fn corners(ports: Ports, v: u32) -> Vec<Input> {
     let f = ports.cos_bits - 2;
     let one = 1i64 << f;
-    let (lo, hi) = (-(1i64 << (ports.cos_bits - 1)), (1i64 << (ports.cos_bits - 1)) - 1);
+    let (lo, hi) = (
+        -(1i64 << (ports.cos_bits - 1)),
+        (1i64 << (ports.cos_bits - 1)) - 1,
+    );
     let nmax = mask(ports.n_bits) as u32;
     let fs = mask(ports.out_bits);
-    let cos_codes = [lo, -one - 1, -one, -one + 1, -1, 0, 1, 2, one - 2, one - 1, one, one + 1, hi];
+    let cos_codes = [
+        lo,
+        -one - 1,
+        -one,
+        -one + 1,
+        -1,
+        0,
+        1,
+        2,
+        one - 2,
+        one - 1,
+        one,
+        one + 1,
+        hi,
+    ];
     let p = 1u32 << v;
     let mut ns = vec![0, 1, 2, p.saturating_sub(1), p, p + 1, nmax - 1, nmax];
     ns.retain(|&n| n <= nmax);
@@ -80,7 +97,11 @@ fn corners(ports: Ports, v: u32) -> Vec<Input> {
         let t = ((one as i128) * i128::from(p + 1) / i128::from(n + 1)) as i64;
         for d in -ZERO_CROSSING_STEPS..=ZERO_CROSSING_STEPS {
             let cos = (one - t + d).clamp(lo, hi);
-            out.push(Input { cos, n, ks: [fs, fs, fs] });
+            out.push(Input {
+                cos,
+                n,
+                ks: [fs, fs, fs],
+            });
         }
     }
     out
@@ -184,7 +205,13 @@ pub(crate) fn max_error_vs_power<U: HdlUnit + ?Sized>(unit: &U) -> f64 {
         .map(|n| {
             let mut worst = 0.0f64;
             for cos in 0..=one {
-                let out = unit.eval(&Input { cos, n, ks: [fs; 3] }).rgb[0];
+                let out = unit
+                    .eval(&Input {
+                        cos,
+                        n,
+                        ks: [fs; 3],
+                    })
+                    .rgb[0];
                 let exact = fs as f64 * (cos as f64 / one as f64).powi(n as i32);
                 worst = worst.max((out as f64 - exact).abs());
             }

@@ -91,7 +91,16 @@ pub fn synth<U: HdlUnit + ?Sized>(unit: &U, dir: &Path) -> Result<SynthReport, T
         "read_verilog {v}; synth -flatten -top {m} -run :fine; opt -fast -full; techmap; \
          opt -fast; abc -fast; opt -fast; stat -tech cmos"
     );
-    let log = run("yosys", "yosys", dir, &["-q", "-p", &format!("{generic}; tee -o {m}_generic.txt stat -tech cmos")])?;
+    let log = run(
+        "yosys",
+        "yosys",
+        dir,
+        &[
+            "-q",
+            "-p",
+            &format!("{generic}; tee -o {m}_generic.txt stat -tech cmos"),
+        ],
+    )?;
     let text = std::fs::read_to_string(dir.join(format!("{m}_generic.txt")))
         .map_err(|e| ToolError::io(&dir.join(format!("{m}_generic.txt")), e))?;
     let parse = |what: &'static str, x: Option<u64>| {
@@ -107,9 +116,8 @@ pub fn synth<U: HdlUnit + ?Sized>(unit: &U, dir: &Path) -> Result<SynthReport, T
         number_after(&text, "Estimated number of transistors:"),
     )?;
     let json = format!("{m}_ice40.json");
-    let ice = format!(
-        "read_verilog {v}; synth_ice40 -top {m} -json {json}; tee -o {m}_ice40.txt stat"
-    );
+    let ice =
+        format!("read_verilog {v}; synth_ice40 -top {m} -json {json}; tee -o {m}_ice40.txt stat");
     run("yosys", "yosys", dir, &["-q", "-p", &ice])?;
     let text = std::fs::read_to_string(dir.join(format!("{m}_ice40.txt")))
         .map_err(|e| ToolError::io(&dir.join(format!("{m}_ice40.txt")), e))?;
@@ -214,7 +222,10 @@ mod tests {
         assert_eq!(count_cells(stat, "SB_LUT4"), 1);
         assert_eq!(count_cells(stat, "SB_MAC16"), 0);
         assert_eq!(number_after(stat, "Number of cells:"), Some(7));
-        assert_eq!(number_after(stat, "Estimated number of transistors:"), Some(1234));
+        assert_eq!(
+            number_after(stat, "Estimated number of transistors:"),
+            Some(1234)
+        );
         let report = r#"{"fmax": {"clk$SB_IO_IN_$glb_clk": {"achieved": 61.5, "constraint": 100.0},
                           "other": {"achieved": 80.0, "constraint": 12.0}}, "utilization": {}}"#;
         assert_eq!(fmax_from_report(report), Some(61.5));

@@ -46,7 +46,11 @@ pub(crate) fn requantize(
             Rounding::Nearest => {
                 let w = src_w - k + 1;
                 (
-                    format!("{{1'b0, {hi}}} + {{{{{}{{1'b0}}}}, {src}[{}]}}", w - 1, k - 1),
+                    format!(
+                        "{{1'b0, {hi}}} + {{{{{}{{1'b0}}}}, {src}[{}]}}",
+                        w - 1,
+                        k - 1
+                    ),
                     w,
                 )
             }
@@ -55,7 +59,12 @@ pub(crate) fn requantize(
     let mut s = String::new();
     let _ = writeln!(s, "    wire [{}:0] {out}_full = {expr};", w - 1);
     if out_w < w {
-        let _ = writeln!(s, "    wire [{}:0] {out} = {out}_full[{}:0];", out_w - 1, out_w - 1);
+        let _ = writeln!(
+            s,
+            "    wire [{}:0] {out} = {out}_full[{}:0];",
+            out_w - 1,
+            out_w - 1
+        );
     } else if out_w > w {
         let _ = writeln!(
             s,
@@ -155,7 +164,15 @@ pub(crate) fn rgb_stage(lobe: &str, frac: u32, stage: u32, p: Ports, round: Roun
         let lo = ob * (2 - i as u32);
         body += &format!("    wire [{}:0] ks_{ch} = ks{stage}[{hi}:{lo}];\n", ob - 1);
         body += &product(&format!("prod_{ch}"), lobe, lw, &format!("ks_{ch}"), ob);
-        body += &requantize(&format!("{ch}_next"), ob, &format!("prod_{ch}"), lw + ob, frac, 0, round);
+        body += &requantize(
+            &format!("{ch}_next"),
+            ob,
+            &format!("prod_{ch}"),
+            lw + ob,
+            frac,
+            0,
+            round,
+        );
     }
     format!(
         "    // RGB multipliers: round(lobe * k_s*I), U{ob} (lobe <= 1, so the result <= k_s*I).\n\
