@@ -60,11 +60,8 @@ impl SchlickUnit {
         let one = 1u64 << COS_FRAC;
         let x = cos.clamp(0, one as i64) as u64;
         let den = u64::from(n) * (one - x) + x;
-        let q = if den == 0 {
-            (1 << (QF + 2)) - 1
-        } else {
-            (x << (QF + 1)) / den
-        };
+        // den = 0 only for x = 0, n = 0: the divider then gives all ones.
+        let q = (x << (QF + 1)).checked_div(den).unwrap_or((1 << (QF + 2)) - 1);
         ((q + 1) >> 1).min(1 << QF)
     }
 
