@@ -39,7 +39,9 @@
 mod accuracy;
 mod config;
 mod fixed;
+pub mod hdl;
 mod pipeline;
+mod report;
 mod rom;
 mod sweep;
 mod table;
@@ -51,6 +53,7 @@ pub use config::{
 };
 pub use fixed::requantize;
 pub use pipeline::{BaseReg, MulReg, Pipeline, Registers, RomSm1Reg, SquareReg, Trace};
+pub use report::{TraceRow, TraceTable};
 pub use rom::{coefficient_int_bits, real_coefficients, Rom};
 pub use sweep::{
     format_ranges, markdown_table, mask_ranges, sweep_row, SweepRow, Target, Widths, START_FRAC,
@@ -102,6 +105,12 @@ pub enum HwError {
     /// A configuration file or name could not be parsed.
     #[error("invalid configuration: {0}")]
     Parse(String),
+    /// A comparison unit (see [`hdl`]) is not designed for these interface widths.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    /// The model disagrees with itself (a bug, reported rather than hidden).
+    #[error("internal error: {0}")]
+    Internal(String),
     /// An input does not fit its register.
     #[error("invalid input: {0}")]
     Input(String),

@@ -6,9 +6,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context};
+use glint_hw::hdl::{self, HdlUnit, KvUnit, PowerUnit, SchlickUnit};
 use glint_hw::{
     format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, HwError,
-    Input, Pipeline, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
+    Input, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
 };
 
 /// Subcommands of `glint hw`.
@@ -37,6 +38,92 @@ pub enum Command {
                       glint hw check --config unit.json"
     )]
     Check(CheckArgs),
+    /// Write the Verilog of a unit, its self-checking testbench and test vectors.
+    #[command(
+        after_help = "Examples:\n  glint hw verilog -o rtl\n  glint hw verilog --config unit.json -o rtl --vectors 100000\n  \
+                      glint hw verilog --unit all -o rtl\n\n\
+                      Then, in DIR: iverilog -g2005 -o sim glint_kv_tb.v glint_kv.v && vvp -n sim"
+    )]
+    Verilog(VerilogArgs),
+    /// Co-simulate the Verilog against the Rust model with Icarus Verilog, and lint it
+    /// with Verilator.
+    #[command(
+        after_help = "Examples:\n  glint hw cosim\n  glint hw cosim --unit kv --vectors 100000 --keep rtl"
+    )]
+    Cosim(CosimArgs),
+    /// Synthesise the units (yosys, nextpnr-ice40) and print their cost table.
+    #[command(
+        after_help = "Examples:\n  glint hw synth\n  glint hw synth --config unit.json --keep synth"
+    )]
+    Synth(SynthArgs),
+}
+
+/// Which Verilog unit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum HdlChoice {
+    /// The K_v unit of the configuration.
+    Kv,
+    /// The exact cos^n unit (log2/exp2 tables).
+    Pow,
+    /// The Schlick unit (pipelined divider).
+    Schlick,
+    /// All three.
+    All,
+}
+
+/// Arguments of `glint hw verilog`.
+#[derive(clap::Args)]
+pub struct VerilogArgs {
+    /// Configuration file of the K_v unit (JSON) [default: built-in].
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Which unit.
+    #[arg(long, value_enum, default_value_t = HdlChoice::Kv)]
+    unit: HdlChoice,
+    /// Output directory (created if missing).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Test vectors to write for the testbench (corners first, then random).
+    #[arg(long, default_value_t = 10_000)]
+    vectors: usize,
+    /// Seed of the random vectors.
+    #[arg(long, default_value_t = 14)]
+    seed: u64,
+}
+
+/// Arguments of `glint hw cosim`.
+#[derive(clap::Args)]
+pub struct CosimArgs {
+    /// Configuration file of the K_v unit (JSON) [default: built-in].
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Which unit.
+    #[arg(long, value_enum, default_value_t = HdlChoice::All)]
+    unit: HdlChoice,
+    /// Test vectors per unit.
+    #[arg(long, default_value_t = 1_000_000)]
+    vectors: usize,
+    /// Seed of the random vectors.
+    #[arg(long, default_value_t = 14)]
+    seed: u64,
+    /// Keep the design, vectors and simulation in this directory instead of a
+    /// temporary one.
+    #[arg(long)]
+    keep: Option<PathBuf>,
+}
+
+/// Arguments of `glint hw synth`.
+#[derive(clap::Args)]
+pub struct SynthArgs {
+    /// Configuration file of the K_v unit (JSON) [default: built-in].
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Which unit.
+    #[arg(long, value_enum, default_value_t = HdlChoice::All)]
+    unit: HdlChoice,
+    /// Keep the synthesis files in this directory instead of a temporary one.
+    #[arg(long)]
+    keep: Option<PathBuf>,
 }
 
 /// Arguments of `glint hw rom`.
@@ -140,6 +227,9 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Sweep(args) => sweep(args),
         Command::Eval(args) => eval(args),
         Command::Check(args) => check(args),
+        Command::Verilog(args) => verilog(args),
+        Command::Cosim(args) => cosim(args),
+        Command::Synth(args) => synth(args),
     }
 }
 
@@ -329,36 +419,8 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
         n: args.n,
         ks: [args.ks_rgb[0], args.ks_rgb[1], args.ks_rgb[2]],
     };
-    let trace = unit.trace(&input)?;
-    // The functional model must agree with the pipeline; say so if it ever does not.
-    let functional = unit.eval(&input)?;
-    if functional != trace.output {
-        bail!(
-            "internal error: functional model {functional:?} != pipeline {:?}",
-            trace.output
-        );
-    }
-    // Also stream it through a busy pipeline (neighbours on both sides) as a check.
-    let mut pipe = Pipeline::new(&unit);
-    let neighbour = Input { n: 0, ..input };
-    pipe.clock(Some(neighbour))?;
-    pipe.clock(Some(input))?;
-    let mut busy = None;
-    for _ in 0..unit.latency() {
-        busy = pipe.clock(Some(neighbour))?;
-    }
-    if busy != Some(trace.output) {
-        bail!(
-            "internal error: busy pipeline {busy:?} != {:?}",
-            trace.output
-        );
-    }
-
-    let f = unit.formats();
+    let table = unit.trace_table(&input)?;
     let cfg = unit.config();
-    let c = unit.cos_value(cos);
-    let hex = |x: u64, bits: u32| format!("0x{:0w$x}", x, w = bits.div_ceil(4) as usize);
-    let val = |x: u64, frac: u32| x as f64 / 2f64.powi(frac as i32);
     println!(
         "# glint hw eval: v = {}, coefficients = {}, latency = {} clocks, one input per clock",
         cfg.v,
@@ -369,107 +431,14 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
         "{:<12} {:<18} {:>22} {:>18}  value",
         "stage", "format", "code", "hex"
     );
-    let row = |stage: &str, fmt: String, code: String, hexs: String, value: String| {
-        println!("{stage:<12} {fmt:<18} {code:>22} {hexs:>18}  {value}");
-    };
-    row(
-        "RG1 cos",
-        format!("Q1.{} signed", f.cos_frac),
-        cos.to_string(),
-        hex(cos as u64 & full_scale(cfg.cos_bits), cfg.cos_bits),
-        format!("{c:.12}"),
-    );
-    row(
-        "RG2 n",
-        format!("U{}", cfg.n_bits),
-        input.n.to_string(),
-        hex(input.n as u64, cfg.n_bits),
-        input.n.to_string(),
-    );
-    let r1 = trace.rom_sm1;
-    row(
-        "ROM1 a(n)",
-        format!("UQ{}.{}", f.coef_int, f.coef_frac),
-        r1.a.to_string(),
-        hex(r1.a, cfg.coef_bits),
-        format!(
-            "{:.12} (exact {:.12})",
-            val(r1.a, f.coef_frac),
-            unit.rom().exact()[input.n as usize]
-        ),
-    );
-    row(
-        "Sm1 1-cos",
-        format!("UQ2.{}", f.t_frac),
-        r1.t.to_string(),
-        hex(r1.t, f.t_frac + 2),
-        format!("{:.12}", val(r1.t, f.t_frac)),
-    );
-    row(
-        "MUL a(1-cos)",
-        format!("UQ{}.{}", f.mul_int, f.mul_frac),
-        trace.mul.p.to_string(),
-        hex(trace.mul.p, f.mul_bits()),
-        format!("{:.12}", val(trace.mul.p, f.mul_frac)),
-    );
-    row(
-        "Sm2 1-p",
-        format!("Q{}.{} signed", f.mul_int, f.mul_frac),
-        trace.base.diff.to_string(),
-        hex(
-            trace.base.diff as u64 & full_scale(f.sm2_bits()),
-            f.sm2_bits(),
-        ),
-        format!(
-            "{:.12}",
-            trace.base.diff as f64 / 2f64.powi(f.mul_frac as i32)
-        ),
-    );
-    row(
-        "SW base",
-        format!("UQ1.{}", f.mul_frac),
-        trace.base.b.to_string(),
-        hex(trace.base.b, f.mul_frac + 1),
-        format!("{:.12}", val(trace.base.b, f.mul_frac)),
-    );
-    for (k, sq) in trace.squares.iter().enumerate() {
-        let fr = f.square_frac[k];
-        row(
-            &format!("BMUL^{}", 1u64 << (k + 1)),
-            format!("UQ1.{fr}"),
-            sq.s.to_string(),
-            hex(sq.s, fr + 1),
-            format!("{:.12}", val(sq.s, fr)),
+    for r in &table.rows {
+        println!(
+            "{:<12} {:<18} {:>22} {:>18}  {}",
+            r.stage, r.format, r.code, r.hex, r.value
         );
     }
-    let a = unit.rom().exact()[input.n as usize];
-    let base = 1.0 - a * (1.0 - c);
-    let lobe = if base <= 0.0 {
-        0.0
-    } else {
-        base.powi(1 << cfg.v)
-    };
-    let power = c.max(0.0).powf(input.n as f64);
-    for (k, name) in ["R", "G", "B"].iter().enumerate() {
-        let ks = input.ks[k] as f64;
-        row(
-            &format!("MUL{} {name}", k + 1),
-            format!("U{}", cfg.out_bits),
-            trace.output.rgb[k].to_string(),
-            hex(trace.output.rgb[k], cfg.out_bits),
-            format!(
-                "exact lobe·ks {:.4} (err {:+.4} LSB), cos^n·ks {:.4} (err {:+.4} LSB)",
-                lobe * ks,
-                trace.output.rgb[k] as f64 - lobe * ks,
-                power * ks,
-                trace.output.rgb[k] as f64 - power * ks
-            ),
-        );
-    }
-    println!(
-        "# output R,G,B = {},{},{}",
-        trace.output.rgb[0], trace.output.rgb[1], trace.output.rgb[2]
-    );
+    let rgb = table.output.rgb;
+    println!("# output R,G,B = {},{},{}", rgb[0], rgb[1], rgb[2]);
     Ok(())
 }
 
@@ -543,6 +512,143 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
             format_ranges(&ranges)
         );
     }
+    Ok(())
+}
+
+/// Largest number of test vectors a command writes (~40 bytes a line: 4 GB of text).
+const MAX_VECTORS: usize = 100_000_000;
+
+/// The chosen units: the K_v unit of the configuration, and the comparison units at
+/// its interface widths.
+fn hdl_units(
+    choice: HdlChoice,
+    config: Option<&Path>,
+) -> anyhow::Result<(Vec<Box<dyn HdlUnit>>, u32)> {
+    let cfg = load_config(config)?;
+    let kv = KvUnit::new(build_unit(cfg, config)?);
+    let ports = kv.ports();
+    let v = kv.unit().config().v;
+    let mut units: Vec<Box<dyn HdlUnit>> = Vec::new();
+    if matches!(choice, HdlChoice::Kv | HdlChoice::All) {
+        units.push(Box::new(kv));
+    }
+    if matches!(choice, HdlChoice::Pow | HdlChoice::All) {
+        units.push(Box::new(PowerUnit::new(ports)?));
+    }
+    if matches!(choice, HdlChoice::Schlick | HdlChoice::All) {
+        units.push(Box::new(SchlickUnit::new(ports)?));
+    }
+    Ok((units, v))
+}
+
+fn check_vectors(n: usize) -> anyhow::Result<()> {
+    if n == 0 || n > MAX_VECTORS {
+        bail!("invalid --vectors {n}: expected 1..={MAX_VECTORS}");
+    }
+    Ok(())
+}
+
+/// A working directory: `keep` (created), or a temporary one removed on drop.
+fn work_dir(keep: Option<&Path>) -> anyhow::Result<(PathBuf, Option<tempfile::TempDir>)> {
+    match keep {
+        Some(d) => {
+            std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+            Ok((d.to_path_buf(), None))
+        }
+        None => {
+            let t = tempfile::tempdir().context("creating a temporary directory")?;
+            Ok((t.path().to_path_buf(), Some(t)))
+        }
+    }
+}
+
+fn verilog(args: VerilogArgs) -> anyhow::Result<()> {
+    check_vectors(args.vectors)?;
+    let (units, v) = hdl_units(args.unit, args.config.as_deref())?;
+    for u in &units {
+        let mut files = u.files();
+        files.push(hdl::testbench(u.as_ref()));
+        hdl::write_files(&args.output, &files)?;
+        let stim = hdl::stimulus(u.ports(), v, args.vectors, args.seed);
+        let name = format!("{}_vectors.txt", u.module());
+        let clocks = hdl::write_vectors(u.as_ref(), &stim, &args.output.join(&name))?;
+        let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
+        eprintln!(
+            "{}: wrote {} and {name} ({} vectors, {clocks} clocks) to {}",
+            u.module(),
+            names.join(", "),
+            stim.vectors(),
+            args.output.display()
+        );
+    }
+    Ok(())
+}
+
+fn cosim(args: CosimArgs) -> anyhow::Result<()> {
+    check_vectors(args.vectors)?;
+    let (units, v) = hdl_units(args.unit, args.config.as_deref())?;
+    let (dir, _tmp) = work_dir(args.keep.as_deref())?;
+    let mut failed = Vec::new();
+    for u in &units {
+        let r = hdl::cosim(u.as_ref(), args.vectors, args.seed, v, &dir)?;
+        println!(
+            "{}: {} of {} vectors passed, {} mismatches, {} clocks (latency {}, valid checked on every clock); model {:.1} s, iverilog {:.1} s",
+            r.module,
+            r.passed,
+            r.vectors,
+            r.mismatches,
+            r.clocks,
+            u.latency(),
+            r.model_secs,
+            r.sim_secs
+        );
+        for line in &r.first_mismatches {
+            println!("  {line}");
+        }
+        if !r.ok() {
+            failed.push(r.module);
+        }
+        match hdl::lint(u.as_ref(), &dir) {
+            Ok(()) => println!("{}: verilator --lint-only -Wall: clean", u.module()),
+            Err(e) => {
+                println!("{}: {e}", u.module());
+                failed.push(u.module());
+            }
+        }
+    }
+    if !failed.is_empty() {
+        bail!("co-simulation or lint failed for {}", failed.join(", "));
+    }
+    Ok(())
+}
+
+fn synth(args: SynthArgs) -> anyhow::Result<()> {
+    let (units, _) = hdl_units(args.unit, args.config.as_deref())?;
+    let (dir, _tmp) = work_dir(args.keep.as_deref())?;
+    let mut rows = Vec::new();
+    for u in &units {
+        let started = Instant::now();
+        let synth = hdl::synth(u.as_ref(), &dir)?;
+        eprintln!(
+            "{}: synthesised, placed and routed in {:.0} s",
+            u.module(),
+            started.elapsed().as_secs_f64()
+        );
+        rows.push(hdl::CostRow {
+            unit: format!("{} ({})", u.module(), u.describe()),
+            synth,
+            rom_bits: u.rom_bits(),
+            latency: u.latency(),
+            error_vs_power: u.max_error_vs_power(),
+        });
+    }
+    println!(
+        "# glint hw synth: yosys synth + stat -tech cmos (generic), synth_ice40 + nextpnr-ice40 --{} --package {} (no DSPs on this part: multipliers are LUTs); one result per clock",
+        hdl::ICE40_DEVICE,
+        hdl::ICE40_PACKAGE
+    );
+    println!("# max err vs cos^n: exhaustive over every cos code in [0,1] x every n, k_s·I at full scale, from the Rust models");
+    print!("{}", hdl::cost_table(&rows));
     Ok(())
 }
 
