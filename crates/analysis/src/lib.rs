@@ -26,6 +26,7 @@
 
 mod curves;
 mod error;
+pub mod image;
 mod map;
 mod metrics;
 mod output;
