@@ -59,7 +59,7 @@ impl Srgb8Image {
 
     /// An image from packed RGB bytes (3 per pixel, as `Image::encode_srgb` gives them).
     pub fn from_bytes(width: u32, height: u32, bytes: &[u8]) -> Result<Self, AnalysisError> {
-        if bytes.len() % 3 != 0 {
+        if !bytes.len().is_multiple_of(3) {
             return Err(AnalysisError::ImageSize {
                 width,
                 height,
