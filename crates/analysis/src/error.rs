@@ -27,6 +27,9 @@ pub enum AnalysisError {
     /// The error tolerance is not a positive finite number.
     #[error("invalid tolerance {0}: expected a positive finite number")]
     InvalidTolerance(f64),
+    /// The top of a colour scale is not a positive finite number.
+    #[error("invalid colour scale maximum {0}: expected a positive finite number")]
+    InvalidScale(f64),
     /// The output location cannot be used.
     #[error("cannot write to {path}: {reason}")]
     Output {

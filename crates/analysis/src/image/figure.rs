@@ -1,7 +1,6 @@
 //! The comparison picture (reference | test | ΔE heat map with a colour bar, one row
 //! per compared image) and the sweep plot (mean and p99 ΔE against n).
 
-use std::io::Write;
 use std::path::Path;
 
 use plotters::coord::Shift;
@@ -176,17 +175,13 @@ where
     Ok(())
 }
 
-/// Writes the comparison picture as PNG to `path` (atomically: a temporary file in the
-/// same directory renamed into place). Each row shows reference | compared | ΔE heat
-/// map (viridis, 0 to `scale_max`, values above drawn as `scale_max`), with a labelled
-/// colour bar on the right; all rows must have images of one size.
-pub fn comparison_figure(
-    path: &Path,
-    rows: &[ComparisonRow],
-    scale_max: f64,
-) -> Result<(), AnalysisError> {
+/// The comparison picture as an 8-bit RGB PNG (write it with `glint_io::write_atomic`).
+/// Each row shows reference | compared | ΔE heat map (viridis, 0 to `scale_max`,
+/// values above drawn as `scale_max`), with a labelled colour bar on the right; all
+/// rows must have images of one size.
+pub fn comparison_png(rows: &[ComparisonRow], scale_max: f64) -> Result<Vec<u8>, AnalysisError> {
     if !(scale_max.is_finite() && scale_max > 0.0) {
-        return Err(AnalysisError::InvalidTolerance(scale_max));
+        return Err(AnalysisError::InvalidScale(scale_max));
     }
     let lay = Layout::of(rows)?;
     let mut buf = vec![255u8; lay.w as usize * lay.h as usize * 3];
@@ -204,7 +199,7 @@ pub fn comparison_figure(
         blit(&mut buf, lay.w, lay.panel(r, 2), lay.img_w, heat_px);
     }
     register_font();
-    let file = path.display().to_string();
+    let file = "comparison picture".to_string();
     let plot_err = |e: Box<dyn std::error::Error>| AnalysisError::Plot {
         file: file.clone(),
         message: e.to_string(),
@@ -214,42 +209,24 @@ pub fn comparison_figure(
         draw_labels(&area, &lay, rows, scale_max).map_err(plot_err)?;
         area.present().map_err(|e| plot_err(Box::new(e)))?;
     }
-    write_png_rgb(path, lay.w, lay.h, &buf)
+    encode_png(lay.w, lay.h, &buf)
 }
 
-/// Writes an 8-bit RGB PNG atomically.
-fn write_png_rgb(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), AnalysisError> {
-    let io = |what: &'static str| {
-        let path = path.to_path_buf();
-        move |source| AnalysisError::Io { what, path, source }
+/// An 8-bit RGB PNG of `rgb`, tagged sRGB.
+fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>, AnalysisError> {
+    let mut out = Vec::new();
+    let err = |e: png::EncodingError| AnalysisError::Plot {
+        file: "comparison picture".into(),
+        message: e.to_string(),
     };
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".glint-figure-")
-        .tempfile_in(dir)
-        .map_err(io("creating a temporary file beside"))?;
-    {
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(tmp.as_file_mut()), w, h);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut writer = enc
-            .write_header()
-            .map_err(|e| io("writing")(std::io::Error::other(e)))?;
-        writer
-            .write_image_data(rgb)
-            .map_err(|e| io("writing")(std::io::Error::other(e)))?;
-        writer
-            .finish()
-            .map_err(|e| io("writing")(std::io::Error::other(e)))?;
-    }
-    tmp.as_file_mut().flush().map_err(io("writing"))?;
-    tmp.persist(path)
-        .map_err(|e| io("renaming into")(e.error))?;
-    Ok(())
+    let mut enc = png::Encoder::new(&mut out, w, h);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    let mut writer = enc.write_header().map_err(err)?;
+    writer.write_image_data(rgb).map_err(err)?;
+    writer.finish().map_err(err)?;
+    Ok(out)
 }
 
 /// One line of the sweep plot: a lobe at one v, its ΔE summary at each n.
@@ -370,8 +347,8 @@ pub fn sweep_plot(
 mod tests {
     use super::*;
 
-    fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
-        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    fn read_png(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
+        let dec = png::Decoder::new(std::io::Cursor::new(bytes));
         let mut r = dec.read_info().unwrap();
         let mut buf = vec![0; r.output_buffer_size().unwrap()];
         let info = r.next_frame(&mut buf).unwrap();
@@ -382,7 +359,6 @@ mod tests {
 
     #[test]
     fn comparison_figure_holds_both_images_and_the_heat_map() {
-        let dir = tempfile::tempdir().unwrap();
         let (w, h) = (30u32, 20u32);
         let a = Srgb8Image::new(w, h, vec![[200, 30, 40]; 600]).unwrap();
         let b = Srgb8Image::new(w, h, vec![[20, 30, 240]; 600]).unwrap();
@@ -401,9 +377,7 @@ mod tests {
                 delta_e: &[0.0; 600],
             },
         ];
-        let path = dir.path().join("cmp.png");
-        comparison_figure(&path, &rows, DELTA_E_SCALE_MAX).unwrap();
-        let (fw, fh, px) = read_png(&path);
+        let (fw, fh, px) = read_png(&comparison_png(&rows, DELTA_E_SCALE_MAX).unwrap());
         let lay = Layout::of(&rows).unwrap();
         assert_eq!((fw, fh), (lay.w, lay.h));
         let at = |(x, y): (u32, u32), dx: u32, dy: u32| {
@@ -418,14 +392,10 @@ mod tests {
         let top = at(lay.panel(0, 2), 29, 19);
         assert!(top[0] > 240 && top[1] > 220 && top[2] < 60, "{top:?}");
         assert_eq!(at(lay.panel(1, 1), 29, 19), [200, 30, 40]);
-        // No temporary file is left beside it.
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[test]
-    fn bad_figure_input_is_an_error_and_writes_nothing() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("cmp.png");
+    fn bad_figure_input_is_an_error() {
         let a = Srgb8Image::new(4, 4, vec![[0; 3]; 16]).unwrap();
         let b = Srgb8Image::new(4, 2, vec![[0; 3]; 8]).unwrap();
         let row = |t| ComparisonRow {
@@ -434,15 +404,14 @@ mod tests {
             test: t,
             delta_e: &[0.0; 16],
         };
-        assert!(comparison_figure(&path, &[], 5.0).is_err());
-        assert!(comparison_figure(&path, &[row(&b)], 5.0).is_err());
-        assert!(comparison_figure(&path, &[row(&a)], f64::NAN).is_err());
+        assert!(comparison_png(&[], 5.0).is_err());
+        assert!(comparison_png(&[row(&b)], 5.0).is_err());
+        assert!(comparison_png(&[row(&a)], f64::NAN).is_err());
         let short = ComparisonRow {
             delta_e: &[0.0; 3],
             ..row(&a)
         };
-        assert!(comparison_figure(&path, &[short], 5.0).is_err());
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        assert!(comparison_png(&[short], 5.0).is_err());
     }
 
     #[test]
@@ -462,7 +431,7 @@ mod tests {
         assert_eq!(files, ["sweep.png", "sweep.svg"]);
         let svg = std::fs::read_to_string(dir.path().join("sweep.svg")).unwrap();
         assert!(svg.contains("K_4") && svg.contains("G_4") && svg.contains("JND"));
-        let (w, h, _) = read_png(&dir.path().join("sweep.png"));
+        let (w, h, _) = read_png(&std::fs::read(dir.path().join("sweep.png")).unwrap());
         assert_eq!((w, h), (1300, 560));
         let bad = [SweepSeries {
             label: "x".into(),

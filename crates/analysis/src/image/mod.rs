@@ -25,7 +25,7 @@ mod ssim;
 
 pub use compare::{compare, highlight_mask, ImageMetrics, HIGHLIGHT_FRACTION};
 pub use delta_e::{delta_e_map, lab_of, DeltaEStats, JND_DELTA_E, PERCENTILE};
-pub use figure::{comparison_figure, sweep_plot, ComparisonRow, SweepSeries, DELTA_E_SCALE_MAX};
+pub use figure::{comparison_png, sweep_plot, ComparisonRow, SweepSeries, DELTA_E_SCALE_MAX};
 pub use flip::{flip, flip_map, mean_flip};
 pub use psnr::psnr;
 pub use ssim::{ssim, ssim_map, SsimMap, SSIM_C1, SSIM_C2, SSIM_SIGMA, SSIM_WINDOW};

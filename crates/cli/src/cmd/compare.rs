@@ -8,8 +8,8 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use glint_analysis::image::{
-    compare, comparison_figure, delta_e_map, highlight_mask, sweep_plot, ComparisonRow,
-    ImageMetrics, Srgb8Image, SweepSeries, DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION,
+    compare, comparison_png, delta_e_map, highlight_mask, sweep_plot, ComparisonRow, ImageMetrics,
+    Srgb8Image, SweepSeries, DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION,
 };
 use glint_analysis::{fmt_num, lobe_label, Staging};
 use glint_lobe::{Geometry, LobeKind};
@@ -122,6 +122,9 @@ struct Options {
     /// The v of --sweep, comma-separated.
     #[arg(long, value_delimiter = ',', requires = "sweep")]
     sweep_v: Vec<u32>,
+    /// Top of the heat map's ΔE scale (larger values get the top colour).
+    #[arg(long, default_value_t = DELTA_E_SCALE_MAX)]
+    scale_max: f64,
     /// No progress messages on stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -292,6 +295,9 @@ fn compare_lobe(
 /// Runs `glint compare`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let o = *args.opts;
+    if !(o.scale_max.is_finite() && o.scale_max > 0.0) {
+        bail!("--scale-max {}: expected a positive number", o.scale_max);
+    }
     let scene = build_scene(&o)?;
     if o.sweep {
         return run_sweep(&o, scene);
@@ -311,14 +317,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for &kind in &lobes {
         rows.push(compare_lobe(&mut renderer, &reference, kind, v)?);
     }
-    write_figure(&output, &reference, &rows)?;
+    write_figure(&output, &reference, &rows, o.scale_max)?;
     if o.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&json_report(&reference, &rows)?)?
-        );
+        let doc = json_report(&reference, &dark, &rows)?;
+        println!("{}", serde_json::to_string_pretty(&doc)?);
     } else {
-        print!("{}", text_report(&reference, &rows));
+        print!("{}", text_report(&reference, &dark, &rows));
     }
     if !o.quiet {
         eprintln!("glint: wrote {}", output.display());
@@ -361,7 +365,12 @@ fn lobe_title(kind: LobeKind, n: f64, v: u32) -> String {
     }
 }
 
-fn write_figure(path: &Path, reference: &Reference, rows: &[Comparison]) -> anyhow::Result<()> {
+fn write_figure(
+    path: &Path,
+    reference: &Reference,
+    rows: &[Comparison],
+    scale_max: f64,
+) -> anyhow::Result<()> {
     let titles: Vec<String> = rows
         .iter()
         .map(|c| {
@@ -388,7 +397,8 @@ fn write_figure(path: &Path, reference: &Reference, rows: &[Comparison]) -> anyh
             delta_e: &c.delta_e,
         })
         .collect();
-    comparison_figure(path, &fig, DELTA_E_SCALE_MAX)?;
+    let png = comparison_png(&fig, scale_max)?;
+    glint_io::write_atomic(path, |w| w.write_all(&png))?;
     Ok(())
 }
 
@@ -429,7 +439,8 @@ fn table_row(c: &Comparison, scope: &str, m: &ImageMetrics) -> String {
     )
 }
 
-fn text_report(reference: &Reference, rows: &[Comparison]) -> String {
+/// The table on stdout; the classification time is the first render's (`dark`).
+fn text_report(reference: &Reference, dark: &Rendered, rows: &[Comparison]) -> String {
     let r = &reference.shot.rendered;
     let s = &r.scene;
     let hl = reference.mask.iter().filter(|&&m| m).count();
@@ -444,7 +455,7 @@ fn text_report(reference: &Reference, rows: &[Comparison]) -> String {
         s.size[1],
         fmt_num(s.lobe.n.unwrap_or_default()),
         s.lobe.geometry,
-        ms(r.timings.classify),
+        ms(dark.timings.classify),
         ms(r.timings.frame),
         100.0 * hl as f64 / reference.mask.len().max(1) as f64,
         fmt_num(100.0 * HIGHLIGHT_FRACTION),
@@ -480,7 +491,11 @@ fn metrics_json(m: &ImageMetrics) -> Value {
     })
 }
 
-fn json_report(reference: &Reference, rows: &[Comparison]) -> anyhow::Result<Value> {
+fn json_report(
+    reference: &Reference,
+    dark: &Rendered,
+    rows: &[Comparison],
+) -> anyhow::Result<Value> {
     let r = &reference.shot.rendered;
     let comparisons: Vec<Value> = rows
         .iter()
@@ -497,7 +512,7 @@ fn json_report(reference: &Reference, rows: &[Comparison]) -> anyhow::Result<Val
         .collect();
     Ok(json!({
         "scene": serde_json::to_value(&r.scene)?,
-        "exact": { "classify_ms": ms(r.timings.classify), "render_ms": ms(r.timings.frame) },
+        "exact": { "classify_ms": ms(dark.timings.classify), "render_ms": ms(r.timings.frame) },
         "highlight": {
             "fraction_of_max": HIGHLIGHT_FRACTION,
             "pixels": reference.mask.iter().filter(|&&m| m).count(),
@@ -595,9 +610,16 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
 }
 
 fn sweep_title(s: &Scene) -> String {
+    let input = match &s.input {
+        Input::Path(p) => p.file_name().map_or_else(
+            || p.display().to_string(),
+            |f| f.to_string_lossy().into_owned(),
+        ),
+        other => input_name(other),
+    };
     format!(
         "CIEDE2000 ΔE against exact cosⁿ: {}, {}",
-        input_name(&s.input),
+        input,
         s.preset.as_deref().unwrap_or("custom")
     )
 }
