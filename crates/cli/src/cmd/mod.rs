@@ -8,3 +8,4 @@ pub mod eval;
 pub mod hw;
 pub mod info;
 pub mod render;
+pub mod view;
