@@ -27,6 +27,9 @@ pub enum AnalysisError {
     /// The error tolerance is not a positive finite number.
     #[error("invalid tolerance {0}: expected a positive finite number")]
     InvalidTolerance(f64),
+    /// The top of a colour scale is not a positive finite number.
+    #[error("invalid colour scale maximum {0}: expected a positive finite number")]
+    InvalidScale(f64),
     /// The output location cannot be used.
     #[error("cannot write to {path}: {reason}")]
     Output {
@@ -52,6 +55,38 @@ pub enum AnalysisError {
         file: String,
         /// The plotting library's message.
         message: String,
+    },
+    /// An image's pixel buffer does not match its size, or the size is zero or absurd.
+    #[error("invalid image: {width}x{height} with {pixels} pixels (expected width*height, both 1..={max})", max = crate::image::MAX_SIDE)]
+    ImageSize {
+        /// The stated width.
+        width: u32,
+        /// The stated height.
+        height: u32,
+        /// How many pixels the buffer holds.
+        pixels: usize,
+    },
+    /// Two images (or an image and a mask) to compare differ in size.
+    #[error("sizes differ: {a_width}x{a_height} against {b_width}x{b_height}")]
+    SizeMismatch {
+        /// Width of the first.
+        a_width: u32,
+        /// Height of the first.
+        a_height: u32,
+        /// Width of the second.
+        b_width: u32,
+        /// Height of the second.
+        b_height: u32,
+    },
+    /// An image is smaller than the SSIM window.
+    #[error("image {width}x{height} is smaller than the {window}x{window} SSIM window")]
+    TooSmall {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// The window side.
+        window: usize,
     },
     /// Building a lobe failed (should not happen after validation).
     #[error(transparent)]

@@ -26,6 +26,7 @@
 
 mod curves;
 mod error;
+pub mod image;
 mod map;
 mod metrics;
 mod output;
@@ -44,6 +45,7 @@ pub use metrics::{
     LobeMetrics, Peak, BLOOM_FLOOR, CUTOFF_LEVEL, EPICENTRE_LEVEL, RELATIVE_FLOOR,
 };
 pub use output::Staging;
+pub use plot::lobe_label;
 pub use report::write_report;
 pub use summary::{summary_markdown, summary_rows, write_summary_csv, SUMMARY_COLUMNS};
 pub use tolerance::{cheapest_v, Cheapest, TOLERANCE_FITS};

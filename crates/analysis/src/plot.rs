@@ -21,12 +21,12 @@ use crate::metrics::{level_angle, CUTOFF_LEVEL};
 /// A line: legend label, colour, points.
 type Series = (String, RGBColor, Vec<(f64, f64)>);
 
-type DrawResult = Result<(), Box<dyn Error>>;
+pub(crate) type DrawResult = Result<(), Box<dyn Error>>;
 
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Registers the embedded font once per process.
-fn register_font() {
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // DejaVu Sans is a valid font: registering it cannot fail.
@@ -214,6 +214,8 @@ macro_rules! render_both {
         Ok::<Vec<String>, AnalysisError>(files)
     }};
 }
+
+pub(crate) use render_both;
 
 fn error_series(c: &Curves, kinds: &[LobeKind]) -> Vec<Series> {
     kinds

@@ -20,6 +20,8 @@ struct Cli {
 enum Command {
     /// Render a volume (or the built-in phantom) to a PNG.
     Render(cmd::render::Args),
+    /// Render a scene with exact cos^n and with cheaper lobes; image metrics and a picture.
+    Compare(cmd::compare::Args),
     /// Evaluate lobes at given angles or cosines.
     Eval(cmd::eval::Args),
     /// Accuracy of the lobes against cos^n: tables, CSVs and plots.
@@ -43,6 +45,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => cmd::render::run(args),
+        Command::Compare(args) => cmd::compare::run(args),
         Command::Eval(args) => cmd::eval::run(args),
         Command::Analyze(args) => cmd::analyze::run(args),
         Command::Bench(args) => cmd::bench::run(args),

@@ -3,6 +3,7 @@
 pub mod analyze;
 pub mod bench;
 pub mod choice;
+pub mod compare;
 pub mod eval;
 pub mod hw;
 pub mod info;
