@@ -20,6 +20,8 @@ struct Cli {
 enum Command {
     /// Render a volume (or the built-in phantom) to a PNG.
     Render(cmd::render::Args),
+    /// Extract the isosurface of a volume as an STL, PLY or OBJ mesh.
+    Mesh(cmd::mesh::Args),
     /// Evaluate lobes at given angles or cosines.
     Eval(cmd::eval::Args),
     /// Accuracy of the lobes against cos^n: tables, CSVs and plots.
@@ -41,6 +43,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => cmd::render::run(args),
+        Command::Mesh(args) => cmd::mesh::run(args),
         Command::Eval(args) => cmd::eval::run(args),
         Command::Analyze(args) => cmd::analyze::run(args),
         Command::Bench(args) => cmd::bench::run(args),

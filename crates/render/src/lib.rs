@@ -35,21 +35,26 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+mod colormap;
 mod error;
 mod field;
 mod image;
 pub mod math;
 pub mod phantom;
+pub mod isosurface;
 pub mod presets;
+mod raster;
 mod raycast;
 mod shading;
 mod tf;
 
 pub use camera::{Camera, CameraSpec, Projection, View};
+pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
 pub use error::RenderError;
 pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image};
 pub use presets::{preset, Preset, PRESETS};
+pub use raster::{vertex_normals, SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
 pub use raycast::{
     camera_for, render, Classification, Kernel, Mode, RenderSettings, RenderStats, MAX_IMAGE_SIDE,
     TERMINATION_OPACITY,

@@ -5,4 +5,5 @@ pub mod bench;
 pub mod eval;
 pub mod hw;
 pub mod info;
+pub mod mesh;
 pub mod render;
