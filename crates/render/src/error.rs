@@ -38,6 +38,26 @@ pub enum RenderError {
     /// scalars that do not match the vertices, no triangles).
     #[error("mesh cannot be rendered")]
     Mesh(#[source] glint_io::IoError),
+    /// Reading the input volume failed.
+    #[error(transparent)]
+    Read(#[from] glint_io::IoError),
+    /// A scene is malformed (bad JSON, unknown field, unsupported version).
+    #[error("{0}")]
+    Scene(String),
+    /// A scene file could not be used.
+    #[error("{}: {source}", path.display())]
+    SceneFile {
+        /// The file.
+        path: PathBuf,
+        /// What was wrong.
+        source: Box<RenderError>,
+    },
+    /// The operating system refused (the caller names the file).
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// Encoding the image failed.
+    #[error("PNG encoding failed")]
+    Encode(#[source] png::EncodingError),
     /// Writing the image failed (the io error names the file).
     #[error(transparent)]
     Write(glint_io::IoError),

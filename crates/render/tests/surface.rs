@@ -39,7 +39,7 @@ fn uv_sphere(center: [f32; 3], r: f32, nlat: u32, nlon: u32) -> Mesh {
     mesh
 }
 
-fn shader(material: Material, lights: Vec<(Vec3, f32)>, n: f64) -> Shader {
+fn shader(material: Material, lights: Vec<Light>, n: f64) -> Shader {
     Shader::new(LobeKind::Exact, n, 4, Geometry::Phong, material, lights, 0.0).unwrap()
 }
 
@@ -61,14 +61,12 @@ fn rasterised_sphere_matches_analytic_shading() {
         color: [0.8, 0.6, 0.4],
     };
     let camera = surfaces.camera(&settings).unwrap();
-    let lights: Vec<(Vec3, f32)> = [Light::HEADLIGHT, Light { azimuth: 40.0, elevation: 30.0, intensity: 0.7 }]
-        .iter()
-        .map(|l| (l.direction(&camera), l.intensity))
-        .collect();
+    let relative = vec![Light::HEADLIGHT, Light { azimuth: 40.0, elevation: 30.0, intensity: 0.7 }];
+    let lights: Vec<(Vec3, f32)> = relative.iter().map(|l| (l.direction(&camera), l.intensity)).collect();
     let m = Material { specular: 0.6, ..Material::default() };
     let n = 20.0;
     let image = surfaces
-        .render(&camera, &shader(m, lights.clone(), n), &settings, None)
+        .render(&camera, &shader(m, relative, n), &settings, None)
         .unwrap();
     let (mut hits, mut misses, mut worst) = (0, 0, 0.0f32);
     for y in (2..80).step_by(5) {
@@ -121,7 +119,7 @@ fn supersampling_blends_the_silhouette() {
     for (ssaa, partial_expected) in [(1, false), (4, true)] {
         let settings = SurfaceSettings { width: 64, height: 64, ssaa, ..Default::default() };
         let camera = surfaces.camera(&settings).unwrap();
-        let s = shader(Material::default(), vec![(-camera.forward, 1.0)], 10.0);
+        let s = shader(Material::default(), vec![Light::HEADLIGHT], 10.0);
         let image = surfaces.render(&camera, &s, &settings, None).unwrap();
         let partial = image.alpha.iter().filter(|&&a| a > 0.0 && a < 1.0).count();
         assert_eq!(partial > 0, partial_expected, "ssaa {ssaa}: {partial} partial pixels");
@@ -203,7 +201,7 @@ fn bad_meshes_fail_clearly_and_degenerate_triangles_render() {
         let settings = SurfaceSettings { width: 40, height: 30, ssaa, camera: CameraSpec { view: View::Superior, ..Default::default() }, ..Default::default() };
         let camera = surfaces.camera(&settings).unwrap();
         let image = surfaces
-            .render(&camera, &shader(Material::default(), vec![(-camera.forward, 1.0)], 10.0), &settings, None)
+            .render(&camera, &shader(Material::default(), vec![Light::HEADLIGHT], 10.0), &settings, None)
             .unwrap();
         assert!(image.rgb.iter().flatten().all(|c| c.is_finite()));
         assert!(image.alpha.iter().any(|&a| a > 0.0), "the real triangle shows");

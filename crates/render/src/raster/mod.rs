@@ -182,7 +182,8 @@ impl Surfaces {
         Camera::frame(&settings.camera, self.center, self.radius, settings.width, settings.height)
     }
 
-    /// Renders the meshes seen by `camera` (from [`Surfaces::camera`]), lit by `shader`,
+    /// Renders the meshes seen by `camera` (from [`Surfaces::camera`]), lit by `shader`
+    /// (its lights placed relative to `camera`),
     /// vertices with scalars coloured by `colors` (others get `settings.color`). The
     /// image's RGB is over the background; its alpha is the covered fraction of each
     /// pixel.
@@ -194,6 +195,7 @@ impl Surfaces {
         colors: Option<&ScalarColors>,
     ) -> Result<Image, RenderError> {
         settings.validate()?;
+        let shader = &shader.placed(camera);
         let frame = Frame::new(self, camera, settings);
         let bins = frame.bin(self);
         let tiles: Vec<(usize, TileOut)> = (0..frame.tiles_x * frame.tiles_y)

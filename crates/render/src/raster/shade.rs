@@ -57,8 +57,8 @@ mod tests {
         let n = Vec3::new(0.1, 0.0, 1.0).normalize_or_zero();
         let m = Material::default();
         for geometry in [Geometry::Phong, Geometry::Blinn] {
-            let shader = Shader::new(LobeKind::Exact, 20.0, 4, geometry, m, vec![(l, 1.0)], 0.0)
-                .unwrap();
+            let mut shader = Shader::new(LobeKind::Exact, 20.0, 4, geometry, m, vec![], 0.0).unwrap();
+            shader.lights = vec![(l, 1.0)];
             let c = geometry.cos(n.to_array(), l.to_array(), v.to_array());
             let want = m.ambient + m.diffuse * n.dot(l) + m.specular * c.max(0.0).powf(20.0);
             let got = shader.shade_surface([1.0; 3], n, v);
