@@ -168,7 +168,10 @@ impl ScalarColors {
             let k = ((v.len() - 1) as f64 * q).round() as usize;
             *v.select_nth_unstable_by(k, f32::total_cmp).1
         };
-        let (mut lo, mut hi) = (pick(&mut v, ROBUST_QUANTILE), pick(&mut v, 1.0 - ROBUST_QUANTILE));
+        let (mut lo, mut hi) = (
+            pick(&mut v, ROBUST_QUANTILE),
+            pick(&mut v, 1.0 - ROBUST_QUANTILE),
+        );
         if matches!(map, ColorMap::RdBu | ColorMap::Sulc) && lo < 0.0 && hi > 0.0 {
             let m = lo.abs().max(hi);
             (lo, hi) = (-m, m);

@@ -156,14 +156,23 @@ mod tests {
         let input = cube_volume(dir.path());
         for ext in ["stl", "ply", "obj"] {
             let out = dir.path().join(format!("cube.{ext}"));
-            run_args(&[input.to_str().unwrap(), "--iso", "50", "-o", out.to_str().unwrap()])
-                .unwrap();
+            run_args(&[
+                input.to_str().unwrap(),
+                "--iso",
+                "50",
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .unwrap();
             let mesh = glint_io::read_mesh(&out).unwrap();
             // The iso value halfway between 0 and 100 puts the faces half a voxel
             // outside the bright cube: x in 4.5..10.5.
             let (lo, hi) = mesh.bounds().unwrap();
             for a in 0..3 {
-                assert!((lo[a] - 4.5).abs() < 1e-4 && (hi[a] - 10.5).abs() < 1e-4, "{ext}: {lo:?} {hi:?}");
+                assert!(
+                    (lo[a] - 4.5).abs() < 1e-4 && (hi[a] - 10.5).abs() < 1e-4,
+                    "{ext}: {lo:?} {hi:?}"
+                );
             }
         }
     }
@@ -176,11 +185,28 @@ mod tests {
         let out = dir.path().join("o.stl");
         let out = out.to_str().unwrap();
         let cases: Vec<(Vec<&str>, &str)> = vec![
-            (vec![input, "--iso", "50", "-o", "x.png"], ".stl, .ply or .obj"),
-            (vec![input, "--iso", "500", "-o", out], "outside the volume's range"),
-            (vec!["/nonexistent.nii", "--iso", "1", "-o", out], "cannot read volume"),
-            (vec![input, "--iso", "50", "--smooth", "3", "--mu", "0.1", "-o", out], "Taubin"),
-            (vec![input, "--iso", "50", "-o", "/nonexistent/dir/o.stl"], "does not exist"),
+            (
+                vec![input, "--iso", "50", "-o", "x.png"],
+                ".stl, .ply or .obj",
+            ),
+            (
+                vec![input, "--iso", "500", "-o", out],
+                "outside the volume's range",
+            ),
+            (
+                vec!["/nonexistent.nii", "--iso", "1", "-o", out],
+                "cannot read volume",
+            ),
+            (
+                vec![
+                    input, "--iso", "50", "--smooth", "3", "--mu", "0.1", "-o", out,
+                ],
+                "Taubin",
+            ),
+            (
+                vec![input, "--iso", "50", "-o", "/nonexistent/dir/o.stl"],
+                "does not exist",
+            ),
         ];
         for (argv, needle) in cases {
             let err = format!("{:#}", run_args(&argv).expect_err(&format!("{argv:?}")));

@@ -86,7 +86,9 @@ pub fn extract(volume: &Volume, iso: f32) -> Result<Mesh, RenderError> {
         )));
     }
     if !iso.is_finite() {
-        return Err(RenderError::Parameter(format!("iso value {iso}: expected a finite number")));
+        return Err(RenderError::Parameter(format!(
+            "iso value {iso}: expected a finite number"
+        )));
     }
     let m = linear_part(&volume.affine);
     let det = det3(&m);
@@ -219,7 +221,14 @@ impl Grid {
 
     /// The vertex on edge `e` of cell `cell`, created on first use.
     #[inline]
-    fn vertex(&self, cell: [usize; 3], e: u8, top_foreign: bool, layer: &mut Layer, out: &mut Slab) -> u32 {
+    fn vertex(
+        &self,
+        cell: [usize; 3],
+        e: u8,
+        top_foreign: bool,
+        layer: &mut Layer,
+        out: &mut Slab,
+    ) -> u32 {
         let [nx, ny, _] = self.dims;
         let (c, _) = EDGES[e as usize];
         let axis = e as usize / 4;
@@ -251,7 +260,11 @@ impl Grid {
         q[axis] += 1;
         let (a, b) = (self.at(p[0], p[1], p[2]), self.at(q[0], q[1], q[2]));
         let t = (self.iso - a) / (b - a);
-        let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.5 };
+        let t = if t.is_finite() {
+            t.clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
         let mut idx = p.map(|x| x as f64);
         idx[axis] += f64::from(t);
         let pos = std::array::from_fn(|r| {
@@ -261,7 +274,8 @@ impl Grid {
         let (ga, gb) = (self.gradient(p), self.gradient(q));
         let g: [f32; 3] = std::array::from_fn(|d| ga[d] + t * (gb[d] - ga[d]));
         let m = &self.grad_to_world;
-        let w: [f32; 3] = std::array::from_fn(|r| -(m[r][0] * g[0] + m[r][1] * g[1] + m[r][2] * g[2]));
+        let w: [f32; 3] =
+            std::array::from_fn(|r| -(m[r][0] * g[0] + m[r][1] * g[1] + m[r][2] * g[2]));
         let len = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
         let normal = if len > 0.0 && len.is_finite() {
             w.map(|x| x / len)
@@ -336,7 +350,9 @@ pub fn taubin_smooth(mesh: &mut Mesh, params: &Taubin) -> Result<(), RenderError
     mesh.validate().map_err(RenderError::Mesh)?;
     let n = mesh.positions.len();
     if n >= u32::MAX as usize {
-        return Err(RenderError::Mesh(IoError::Inconsistent(format!("{n} vertices: too many"))));
+        return Err(RenderError::Mesh(IoError::Inconsistent(format!(
+            "{n} vertices: too many"
+        ))));
     }
     // Neighbour lists in compressed rows.
     let mut start = vec![0u32; n + 1];

@@ -98,11 +98,15 @@ pub(crate) fn loops(mask: u8) -> Vec<Vec<u8>> {
     };
     for q in faces() {
         let e: [usize; 4] = std::array::from_fn(|i| edge_of(q[i], q[(i + 1) % 4]));
-        let crossed: Vec<usize> = (0..4).filter(|&i| inside(q[i]) != inside(q[(i + 1) % 4])).collect();
+        let crossed: Vec<usize> = (0..4)
+            .filter(|&i| inside(q[i]) != inside(q[(i + 1) % 4]))
+            .collect();
         match crossed.len() {
             2 => link(e[crossed[0]], e[crossed[1]]),
             // Ambiguous face: cut each inside corner off on its own.
-            4 => (0..4).filter(|&i| inside(q[i])).for_each(|i| link(e[(i + 3) % 4], e[i])),
+            4 => (0..4)
+                .filter(|&i| inside(q[i]))
+                .for_each(|i| link(e[(i + 3) % 4], e[i])),
             _ => {}
         }
     }
@@ -116,7 +120,10 @@ pub(crate) fn loops(mask: u8) -> Vec<Vec<u8>> {
         loop {
             seen[cur] = true;
             ring.push(cur as u8);
-            let n = next[cur].iter().map(|&x| x as usize).find(|&x| x != prev && !seen[x]);
+            let n = next[cur]
+                .iter()
+                .map(|&x| x as usize)
+                .find(|&x| x != prev && !seen[x]);
             match n {
                 Some(n) => (prev, cur) = (cur, n),
                 None => break,
@@ -157,7 +164,11 @@ fn orient(ring: &mut [u8], inside: impl Fn(u8) -> bool) {
 fn share_face(a: u8, b: u8) -> bool {
     let (p, q) = (EDGES[a as usize], EDGES[b as usize]);
     let corners = [p.0, p.1, q.0, q.1];
-    (0..3).any(|axis| corners.iter().all(|&c| (c >> axis & 1) == (corners[0] >> axis & 1)))
+    (0..3).any(|axis| {
+        corners
+            .iter()
+            .all(|&c| (c >> axis & 1) == (corners[0] >> axis & 1))
+    })
 }
 
 /// A fan over `ring` from an apex whose diagonals leave the cell's faces: a

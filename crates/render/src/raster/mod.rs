@@ -63,7 +63,8 @@ impl Default for SurfaceSettings {
 impl SurfaceSettings {
     /// Checks the size, supersampling factor and colours.
     pub fn validate(&self) -> Result<(), RenderError> {
-        if !(1..=MAX_IMAGE_SIDE).contains(&self.width) || !(1..=MAX_IMAGE_SIDE).contains(&self.height)
+        if !(1..=MAX_IMAGE_SIDE).contains(&self.width)
+            || !(1..=MAX_IMAGE_SIDE).contains(&self.height)
         {
             return Err(RenderError::Parameter(format!(
                 "image size {}x{}: expected 1..={MAX_IMAGE_SIDE} on each side",
@@ -129,7 +130,8 @@ impl Surfaces {
     }
 
     fn append(&mut self, k: usize, mesh: &Mesh) -> Result<(), RenderError> {
-        let bad = |what: String| RenderError::Mesh(IoError::Inconsistent(format!("mesh {k}: {what}")));
+        let bad =
+            |what: String| RenderError::Mesh(IoError::Inconsistent(format!("mesh {k}: {what}")));
         if let Err(e) = mesh.validate() {
             return Err(bad(e.to_string()));
         }
@@ -137,15 +139,24 @@ impl Surfaces {
         if mesh.normals.as_ref().is_some_and(|v| v.len() != n)
             || mesh.scalars.as_ref().is_some_and(|v| v.len() != n)
         {
-            return Err(bad(format!("normals or scalars do not match the {n} vertices")));
+            return Err(bad(format!(
+                "normals or scalars do not match the {n} vertices"
+            )));
         }
         let base = u32::try_from(self.positions.len())
             .ok()
             .filter(|b| b.checked_add(n as u32).is_some() && n < u32::MAX as usize)
             .ok_or_else(|| bad("more than 2^32 vertices in all".into()))?;
-        let positions: Vec<Vec3> = mesh.positions.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+        let positions: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect();
         let normals = match &mesh.normals {
-            Some(v) => v.iter().map(|p| Vec3::new(p[0], p[1], p[2]).normalize_or_zero()).collect(),
+            Some(v) => v
+                .iter()
+                .map(|p| Vec3::new(p[0], p[1], p[2]).normalize_or_zero())
+                .collect(),
             None => vertex_normals(&positions, &mesh.triangles),
         };
         self.positions.extend(positions);
@@ -179,7 +190,13 @@ impl Surfaces {
     /// The camera `settings` place around the meshes' bounding sphere.
     pub fn camera(&self, settings: &SurfaceSettings) -> Result<Camera, RenderError> {
         settings.validate()?;
-        Camera::frame(&settings.camera, self.center, self.radius, settings.width, settings.height)
+        Camera::frame(
+            &settings.camera,
+            self.center,
+            self.radius,
+            settings.width,
+            settings.height,
+        )
     }
 
     /// Renders the meshes seen by `camera` (from [`Surfaces::camera`]), lit by `shader`
@@ -212,7 +229,12 @@ impl Surfaces {
         };
         for (t, out) in tiles {
             let (px0, py0) = frame.tile_origin_px(t);
-            for (row, (rgb, alpha)) in out.rgb.chunks(out.w).zip(out.alpha.chunks(out.w)).enumerate() {
+            for (row, (rgb, alpha)) in out
+                .rgb
+                .chunks(out.w)
+                .zip(out.alpha.chunks(out.w))
+                .enumerate()
+            {
                 let k = (py0 + row) * w + px0;
                 image.rgb[k..k + out.w].copy_from_slice(rgb);
                 image.alpha[k..k + out.w].copy_from_slice(alpha);
@@ -239,7 +261,10 @@ pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
 }
 
 fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
-    let (mut lo, mut hi) = (Vec3::new(f32::MAX, f32::MAX, f32::MAX), Vec3::new(f32::MIN, f32::MIN, f32::MIN));
+    let (mut lo, mut hi) = (
+        Vec3::new(f32::MAX, f32::MAX, f32::MAX),
+        Vec3::new(f32::MIN, f32::MIN, f32::MIN),
+    );
     for p in positions {
         lo = Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z));
         hi = Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z));
@@ -346,14 +371,20 @@ impl Frame {
     /// Bins the triangles by tile, a chunk of triangles per task.
     fn bin(&self, s: &Surfaces) -> Bins {
         let tiles = self.tiles_x * self.tiles_y;
-        let chunk = s.triangles.len().div_ceil(4 * rayon::current_num_threads()).max(1024);
+        let chunk = s
+            .triangles
+            .len()
+            .div_ceil(4 * rayon::current_num_threads())
+            .max(1024);
         s.triangles
             .par_chunks(chunk)
             .enumerate()
             .map(|(c, tris)| {
                 let mut bins = vec![Vec::new(); tiles];
                 for (k, &tri) in tris.iter().enumerate() {
-                    let Some([x0, y0, x1, y1]) = self.bbox(tri) else { continue };
+                    let Some([x0, y0, x1, y1]) = self.bbox(tri) else {
+                        continue;
+                    };
                     let id = (c * chunk + k) as u32;
                     for ty in y0 / self.tile..=y1 / self.tile {
                         for tx in x0 / self.tile..=x1 / self.tile {
@@ -379,12 +410,21 @@ impl Frame {
     ) -> TileOut {
         let (tx, ty) = (t % self.tiles_x, t / self.tiles_x);
         let (sx0, sy0) = (tx * self.tile, ty * self.tile);
-        let (tw, th) = ((self.sw - sx0).min(self.tile), (self.sh - sy0).min(self.tile));
+        let (tw, th) = (
+            (self.sw - sx0).min(self.tile),
+            (self.sh - sy0).min(self.tile),
+        );
         let mut depth = vec![f32::NEG_INFINITY; tw * th];
         let mut ids = vec![u32::MAX; tw * th];
         for chunk in bins {
             for &id in &chunk[t] {
-                self.raster(s.triangles[id as usize], id, [sx0, sy0, tw, th], &mut depth, &mut ids);
+                self.raster(
+                    s.triangles[id as usize],
+                    id,
+                    [sx0, sy0, tw, th],
+                    &mut depth,
+                    &mut ids,
+                );
             }
         }
         self.resolve(s, [sx0, sy0, tw, th], &ids, shader, colors, settings)
@@ -395,7 +435,9 @@ impl Frame {
     /// cracks; the depth test picks one).
     fn raster(&self, tri: [u32; 3], id: u32, rect: [usize; 4], depth: &mut [f32], ids: &mut [u32]) {
         let [tx0, ty0, tw, th] = rect;
-        let Some([x0, y0, x1, y1]) = self.bbox(tri) else { return };
+        let Some([x0, y0, x1, y1]) = self.bbox(tri) else {
+            return;
+        };
         let (x0, y0) = (x0.max(tx0), y0.max(ty0));
         let (x1, y1) = (x1.min(tx0 + tw - 1), y1.min(ty0 + th - 1));
         if x0 > x1 || y0 > y1 {
@@ -442,7 +484,15 @@ impl Frame {
                 continue;
             }
             let (x, y) = (k % tw, k / tw);
-            let c = self.shade_sample(s, id, (sx0 + x) as f32, (sy0 + y) as f32, shader, colors, settings);
+            let c = self.shade_sample(
+                s,
+                id,
+                (sx0 + x) as f32,
+                (sy0 + y) as f32,
+                shader,
+                colors,
+                settings,
+            );
             let p = (y / n) * pw + x / n;
             for i in 0..3 {
                 sum[p][i] += c[i];
@@ -493,8 +543,9 @@ impl Frame {
         let inv = 1.0 / (p0 + p1 + p2);
         let beta = [p0 * inv, p1 * inv, p2 * inv];
         let [i0, i1, i2] = tri.map(|i| i as usize);
-        let mut normal = (s.normals[i0] * beta[0] + s.normals[i1] * beta[1] + s.normals[i2] * beta[2])
-            .normalize_or_zero();
+        let mut normal =
+            (s.normals[i0] * beta[0] + s.normals[i1] * beta[1] + s.normals[i2] * beta[2])
+                .normalize_or_zero();
         if normal == Vec3::ZERO || !normal.x.is_finite() {
             let [pa, pb, pc] = [i0, i1, i2].map(|i| s.positions[i]);
             normal = (pb - pa).cross(pc - pa).normalize_or_zero();
@@ -514,7 +565,8 @@ impl Frame {
         let view = match cam.projection {
             Projection::Perspective => {
                 let [u0, du, v0, dv] = self.plane;
-                -(cam.forward + cam.right * (u0 + x * du) + cam.up * (v0 + y * dv)).normalize_or_zero()
+                -(cam.forward + cam.right * (u0 + x * du) + cam.up * (v0 + y * dv))
+                    .normalize_or_zero()
             }
             Projection::Orthographic => -cam.forward,
         };
@@ -571,7 +623,9 @@ impl Edges {
     /// `w2` opposite `c`.
     #[inline]
     fn at(&self, x: f32, y: f32) -> (f32, f32, f32) {
-        let f = |p: ScreenVertex, q: ScreenVertex| ((q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x)) * self.sign;
+        let f = |p: ScreenVertex, q: ScreenVertex| {
+            ((q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x)) * self.sign
+        };
         (f(self.b, self.c), f(self.c, self.a), f(self.a, self.b))
     }
 }

@@ -57,12 +57,16 @@ mod tests {
         let n = Vec3::new(0.1, 0.0, 1.0).normalize_or_zero();
         let m = Material::default();
         for geometry in [Geometry::Phong, Geometry::Blinn] {
-            let mut shader = Shader::new(LobeKind::Exact, 20.0, 4, geometry, m, vec![], 0.0).unwrap();
+            let mut shader =
+                Shader::new(LobeKind::Exact, 20.0, 4, geometry, m, vec![], 0.0).unwrap();
             shader.lights = vec![(l, 1.0)];
             let c = geometry.cos(n.to_array(), l.to_array(), v.to_array());
             let want = m.ambient + m.diffuse * n.dot(l) + m.specular * c.max(0.0).powf(20.0);
             let got = shader.shade_surface([1.0; 3], n, v);
-            assert!((got[0] - want).abs() < 1e-5, "{geometry}: {got:?} vs {want}");
+            assert!(
+                (got[0] - want).abs() < 1e-5,
+                "{geometry}: {got:?} vs {want}"
+            );
             // The back face seen from the front is lit like the front.
             assert_eq!(shader.shade_surface([1.0; 3], -n, v), got);
         }
