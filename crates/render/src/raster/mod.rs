@@ -132,9 +132,7 @@ impl Surfaces {
     fn append(&mut self, k: usize, mesh: &Mesh) -> Result<(), RenderError> {
         let bad =
             |what: String| RenderError::Mesh(IoError::Inconsistent(format!("mesh {k}: {what}")));
-        if let Err(e) = mesh.validate() {
-            return Err(bad(e.to_string()));
-        }
+        mesh.validate().map_err(RenderError::Mesh)?;
         let n = mesh.positions.len();
         if mesh.normals.as_ref().is_some_and(|v| v.len() != n)
             || mesh.scalars.as_ref().is_some_and(|v| v.len() != n)
