@@ -76,12 +76,12 @@ fn faces() -> [[u8; 4]; 6] {
 fn build() -> Table {
     let mut cases = [(0u16, 0u8); 256];
     let mut triangles = Vec::new();
-    for mask in 0..256usize {
+    for (mask, case) in cases.iter_mut().enumerate() {
         let start = triangles.len();
         for ring in loops(mask as u8) {
             triangles.extend(triangulate(&ring));
         }
-        cases[mask] = (start as u16, (triangles.len() - start) as u8);
+        *case = (start as u16, (triangles.len() - start) as u8);
     }
     Table { cases, triangles }
 }

@@ -363,7 +363,7 @@ impl Frame {
         let y0 = a.y.min(b.y).min(c.y).ceil().max(0.0);
         let x1 = a.x.max(b.x).max(c.x).floor().min(self.sw as f32 - 1.0);
         let y1 = a.y.max(b.y).max(c.y).floor().min(self.sh as f32 - 1.0);
-        (x0 <= x1 && y0 <= y1).then(|| [x0 as usize, y0 as usize, x1 as usize, y1 as usize])
+        (x0 <= x1 && y0 <= y1).then_some([x0 as usize, y0 as usize, x1 as usize, y1 as usize])
     }
 
     /// Bins the triangles by tile, a chunk of triangles per task.
