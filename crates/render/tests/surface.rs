@@ -130,8 +130,8 @@ fn rasterised_sphere_matches_analytic_shading() {
             let want = settings
                 .color
                 .map(|b| b * (m.ambient + m.diffuse * diffuse) + m.specular * spec);
-            for ch in 0..3 {
-                worst = worst.max((image.rgb[k][ch] - want[ch]).abs());
+            for (got, want) in image.rgb[k].iter().zip(want) {
+                worst = worst.max((got - want).abs());
             }
             assert_eq!(image.alpha[k], 1.0);
             hits += 1;
