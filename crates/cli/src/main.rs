@@ -22,6 +22,8 @@ enum Command {
     Render(cmd::render::Args),
     /// Render a scene with exact cos^n and with cheaper lobes; image metrics and a picture.
     Compare(cmd::compare::Args),
+    /// Extract the isosurface of a volume as an STL, PLY or OBJ mesh.
+    Mesh(cmd::mesh::Args),
     /// Evaluate lobes at given angles or cosines.
     Eval(cmd::eval::Args),
     /// Accuracy of the lobes against cos^n: tables, CSVs and plots.
@@ -46,6 +48,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => cmd::render::run(args),
         Command::Compare(args) => cmd::compare::run(args),
+        Command::Mesh(args) => cmd::mesh::run(args),
         Command::Eval(args) => cmd::eval::run(args),
         Command::Analyze(args) => cmd::analyze::run(args),
         Command::Bench(args) => cmd::bench::run(args),

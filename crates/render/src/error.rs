@@ -34,6 +34,10 @@ pub enum RenderError {
     /// The lobe parameters were rejected by glint-lobe.
     #[error(transparent)]
     Lobe(#[from] glint_lobe::LobeError),
+    /// A mesh cannot be rendered or meshed (non-finite coordinates, bad indices,
+    /// scalars that do not match the vertices, no triangles).
+    #[error("mesh cannot be rendered")]
+    Mesh(#[source] glint_io::IoError),
     /// Reading the input volume failed.
     #[error(transparent)]
     Read(#[from] glint_io::IoError),

@@ -38,12 +38,15 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+mod colormap;
 mod error;
 mod field;
 mod image;
+pub mod isosurface;
 pub mod math;
 pub mod phantom;
 pub mod presets;
+mod raster;
 mod raycast;
 mod scene;
 mod shading;
@@ -51,11 +54,13 @@ mod tf;
 mod timings;
 
 pub use camera::{Camera, CameraSpec, Projection, View};
+pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
 pub use error::RenderError;
 pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA};
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
+pub use raster::{vertex_normals, SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
 pub use raycast::{
     Classification, ClassifySettings, FrameSettings, Kernel, Mode, RenderStats, MAX_IMAGE_SIDE,
     TERMINATION_OPACITY,

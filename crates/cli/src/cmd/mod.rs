@@ -7,5 +7,6 @@ pub mod compare;
 pub mod eval;
 pub mod hw;
 pub mod info;
+pub mod mesh;
 pub mod render;
 pub mod view;
