@@ -1,0 +1,13 @@
+"""glint: render 3D biomedical images with cheap, accurate specular lobes.
+
+``glint.read(path)`` reads NIfTI, NRRD and DICOM volumes into a :class:`Volume`;
+``Volume.from_array`` wraps data already in memory; ``glint.lobe`` evaluates any
+specular lobe on a numpy array; ``glint.hw.Unit`` is the device model. Every function
+releases the GIL while it works and raises ``ValueError``/``OSError``/``TypeError``
+with the one-line messages of the ``glint`` command.
+"""
+
+from glint._glint import Volume, lobe, lobe_kinds, read
+from glint import hw
+
+__all__ = ["Volume", "hw", "lobe", "lobe_kinds", "read"]
