@@ -2,10 +2,11 @@
 """Render the scene glint dumped (--dump-scene) with VTK's CPU ray caster,
 vtkFixedPointVolumeRayCastMapper, and print ms per frame.
 
-Used by scripts/bench-vtk; run it through that script. The scene JSON gives the
-volume path, image size, camera (eye, focal point, view up, view angle), the transfer
-function points (already scaled the way glint uses them), the material and the sample
-distance in mm. VTK gets: AutoAdjustSampleDistances off, SampleDistance = step in
+Used by scripts/bench-vtk; run it through that script. The scene JSON is glint's
+resolved scene (schema version 1): the volume path, image size, projection and
+material from the scene itself, and from its "derived" block the camera (eye, focal
+point, view up, view angle), the transfer function points (already scaled the way
+glint uses them) and the sample distance in mm. VTK gets: AutoAdjustSampleDistances off, SampleDistance = step in
 world mm (VTK's unit), ImageSampleDistance 1, linear interpolation, shading on,
 ScalarOpacityUnitDistance = the smallest spacing (glint's opacity unit is one voxel),
 the renderer's default headlight, offscreen rendering (EGL with the PyPI wheel).
@@ -25,9 +26,14 @@ def main():
     out_png = sys.argv[3] if len(sys.argv) > 3 else None
     with open(scene_path) as f:
         scene = json.load(f)
+    if scene.get("version") != 1:
+        sys.exit(f"bench_vtk: scene version {scene.get('version')} is not supported (1 is)")
+    derived = scene["derived"]
+    tf = derived["transfer_function"]
+    material = scene["material"]
 
     reader = vtk.vtkNIFTIImageReader()
-    reader.SetFileName(scene["input"])
+    reader.SetFileName(scene["input"]["path"])
     reader.Update()
     image = reader.GetOutput()
     # glint works in RAS+ world mm through the NIfTI sform. VTK's reader gives the
@@ -45,29 +51,29 @@ def main():
         image.SetOrigin(m.GetElement(0, 3), m.GetElement(1, 3), m.GetElement(2, 3))
 
     ctf = vtk.vtkColorTransferFunction()
-    for x, r, g, b in scene["color"]:
+    for x, r, g, b in tf["color"]:
         ctf.AddRGBPoint(x, r, g, b)
     otf = vtk.vtkPiecewiseFunction()
-    for x, a in scene["opacity"]:
+    for x, a in tf["opacity"]:
         otf.AddPoint(x, a)
 
     prop = vtk.vtkVolumeProperty()
     prop.SetColor(ctf)
     prop.SetScalarOpacity(otf)
     prop.SetInterpolationTypeToLinear()
-    prop.SetScalarOpacityUnitDistance(scene["min_spacing_mm"])
-    if scene["shade"]:
+    prop.SetScalarOpacityUnitDistance(derived["min_spacing_mm"])
+    if material["shade"]:
         prop.ShadeOn()
-    prop.SetAmbient(scene["ambient"])
-    prop.SetDiffuse(scene["diffuse"])
-    prop.SetSpecular(scene["specular"])
-    prop.SetSpecularPower(scene["power"])
+    prop.SetAmbient(material["ambient"])
+    prop.SetDiffuse(material["diffuse"])
+    prop.SetSpecular(material["specular"])
+    prop.SetSpecularPower(scene["lobe"]["n"])
 
     mapper = vtk.vtkFixedPointVolumeRayCastMapper()
     mapper.SetInputConnection(reader.GetOutputPort())
     mapper.SetInputData(image)
     mapper.AutoAdjustSampleDistancesOff()
-    mapper.SetSampleDistance(scene["step_mm"])
+    mapper.SetSampleDistance(derived["step_mm"])
     mapper.SetImageSampleDistance(1.0)
 
     volume = vtk.vtkVolume()
@@ -78,14 +84,14 @@ def main():
     ren.SetBackground(0, 0, 0)
     ren.AddVolume(volume)
     cam = ren.GetActiveCamera()
-    cam.SetPosition(*scene["eye"])
-    cam.SetFocalPoint(*scene["focal_point"])
-    cam.SetViewUp(*scene["view_up"])
-    if scene["projection"] == "perspective":
-        cam.SetViewAngle(scene["view_angle_deg"])
+    cam.SetPosition(*derived["eye"])
+    cam.SetFocalPoint(*derived["focal_point"])
+    cam.SetViewUp(*derived["view_up"])
+    if scene["camera"]["projection"] == "perspective":
+        cam.SetViewAngle(derived["view_angle_deg"])
     else:
         cam.ParallelProjectionOn()
-        cam.SetParallelScale(scene["parallel_scale"])
+        cam.SetParallelScale(derived["parallel_scale"])
     ren.ResetCameraClippingRange()
 
     win = vtk.vtkRenderWindow()

@@ -4,11 +4,14 @@
 use std::fmt;
 use std::str::FromStr;
 
+use serde::{Deserialize, Serialize};
+
 use crate::error::RenderError;
 use crate::math::Vec3;
 
 /// A named view: where the camera stands relative to the patient, in RAS+.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum View {
     /// In front of the face, looking towards posterior; superior up.
     #[default]
@@ -85,13 +88,30 @@ impl FromStr for View {
 }
 
 /// Perspective or orthographic projection.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Projection {
     /// Pinhole camera with a 30° vertical field of view (VTK's default).
     #[default]
     Perspective,
     /// Parallel rays.
     Orthographic,
+}
+
+impl Projection {
+    /// The name users type.
+    pub fn name(self) -> &'static str {
+        match self {
+            Projection::Perspective => "perspective",
+            Projection::Orthographic => "orthographic",
+        }
+    }
+}
+
+impl fmt::Display for Projection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 impl FromStr for Projection {
@@ -130,7 +150,8 @@ pub struct Camera {
 }
 
 /// How to place a camera around a bounding sphere.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct CameraSpec {
     /// The named starting view.
     pub view: View,

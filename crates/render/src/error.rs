@@ -34,6 +34,26 @@ pub enum RenderError {
     /// The lobe parameters were rejected by glint-lobe.
     #[error(transparent)]
     Lobe(#[from] glint_lobe::LobeError),
+    /// Reading the input volume failed.
+    #[error(transparent)]
+    Read(#[from] glint_io::IoError),
+    /// A scene is malformed (bad JSON, unknown field, unsupported version).
+    #[error("{0}")]
+    Scene(String),
+    /// A scene file could not be used.
+    #[error("{}: {source}", path.display())]
+    SceneFile {
+        /// The file.
+        path: PathBuf,
+        /// What was wrong.
+        source: Box<RenderError>,
+    },
+    /// The operating system refused (the caller names the file).
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// Encoding the image failed.
+    #[error("PNG encoding failed")]
+    Encode(#[source] png::EncodingError),
     /// Writing the image failed (the io error names the file).
     #[error(transparent)]
     Write(glint_io::IoError),

@@ -55,23 +55,26 @@ impl Image {
         }
     }
 
+    /// The image as an sRGB PNG file's bytes.
+    pub fn encode_png(&self, depth: Depth) -> Result<Vec<u8>, png::EncodingError> {
+        let mut out = Vec::new();
+        let mut enc = png::Encoder::new(&mut out, self.width, self.height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(match depth {
+            Depth::Eight => png::BitDepth::Eight,
+            Depth::Sixteen => png::BitDepth::Sixteen,
+        });
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = enc.write_header()?;
+        writer.write_image_data(&self.encode_srgb(depth))?;
+        writer.finish()?;
+        Ok(out)
+    }
+
     /// Writes an sRGB PNG to `path` atomically ([`glint_io::write_atomic`]): a failure
     /// leaves no partial file.
     pub fn write_png(&self, path: &Path, depth: Depth) -> Result<(), RenderError> {
-        glint_io::write_atomic(path, |out| {
-            let mut enc = png::Encoder::new(out, self.width, self.height);
-            enc.set_color(png::ColorType::Rgb);
-            enc.set_depth(match depth {
-                Depth::Eight => png::BitDepth::Eight,
-                Depth::Sixteen => png::BitDepth::Sixteen,
-            });
-            enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-            let mut writer = enc.write_header().map_err(std::io::Error::other)?;
-            writer
-                .write_image_data(&self.encode_srgb(depth))
-                .map_err(std::io::Error::other)?;
-            writer.finish().map_err(std::io::Error::other)
-        })
-        .map_err(RenderError::Write)
+        let bytes = self.encode_png(depth).map_err(RenderError::Encode)?;
+        glint_io::write_atomic(path, |w| w.write_all(&bytes)).map_err(RenderError::Write)
     }
 }

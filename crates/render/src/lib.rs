@@ -2,35 +2,38 @@
 //! [`glint_lobe::Lobe`], evaluated for every sample.
 //!
 //! ```
-//! use glint_lobe::{Geometry, LobeKind};
-//! use glint_render::{
-//!     phantom, preset, render, Field, Light, RenderSettings, Shader, camera_for,
-//! };
+//! use glint_lobe::LobeKind;
+//! use glint_render::{Input, LobeSpec, Phantom, Renderer, Scene};
 //!
-//! // The built-in Shepp-Logan head on a small grid, with glint's phantom preset.
-//! let volume = phantom::shepp_logan(32).unwrap();
-//! let field = Field::new(&volume).unwrap();
-//! let p = preset("phantom").unwrap();
-//! let tf = p.transfer_function(field.range().1 as f64).unwrap();
-//! let settings = RenderSettings { width: 32, height: 32, ..Default::default() };
-//! let camera = camera_for(&field, &tf, &settings).unwrap();
-//! let lights = vec![(Light::HEADLIGHT.direction(&camera), 1.0)];
-//! let shader = Shader::new(LobeKind::EnergyFit, 40.0, 4, Geometry::Phong, p.material(), lights, 0.0)
-//!     .unwrap();
-//! let image = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+//! // The built-in Shepp-Logan head on a small grid; every other choice is a default
+//! // that the resolved scene names.
+//! let scene = Scene {
+//!     input: Input::Phantom { name: Phantom::SheppLogan, size: 32 },
+//!     lobe: LobeSpec { kind: LobeKind::EnergyFit, n: Some(40.0), ..LobeSpec::default() },
+//!     size: [32, 32],
+//!     ..Scene::default()
+//! };
+//! let mut renderer = Renderer::open(&scene.input).unwrap();
+//! let rendered = renderer.render(&scene, &|_| {}).unwrap();
+//! let image = &rendered.image;
 //! assert_eq!(image.rgb.len(), 32 * 32);
 //! assert!(image.rgb.iter().flatten().all(|c| c.is_finite()));
 //! // The head covers the image's centre.
 //! assert!(image.alpha[16 * 32 + 16] > 0.5);
+//! // The resolved scene renders the same image again.
+//! let again = renderer.render(&rendered.scene, &|_| {}).unwrap();
+//! assert_eq!(again.image.rgb, image.rgb);
 //! ```
 //!
-//! The flow: a [`glint_io::Volume`] becomes a [`Field`] (values and world gradients,
-//! macro cells); a [`TransferFunction`] (from a [`preset`] or JSON) classifies samples;
-//! a [`Shader`] lights them (ambient + diffuse + lobe specular, Phong or Blinn
-//! geometry); [`render`] casts one ray per pixel, tiles in parallel, and returns a
-//! linear [`Image`] that [`Image::write_png`] writes as sRGB. To render several frames
-//! of one transfer function (a moving camera, other lights or lobes), build a
-//! [`Classification`] once and call [`Classification::render`] per frame.
+//! The flow: a [`Scene`] (serialisable, versioned) names the input, the transfer
+//! function or [`preset`], the material, the lobe, camera-relative lights and the
+//! camera; [`Scene::resolve_for`] chooses every default and builds the settings; a
+//! [`Renderer`] keeps the volume's [`Field`] (values and world gradients, macro cells)
+//! and the last [`Classification`] (the transfer function tabulated, the empty-space
+//! map), so frames that change only the camera, lights, lobe or size are cheap. A
+//! [`Shader`] lights samples (ambient + diffuse + lobe specular, Phong or Blinn
+//! geometry); the ray caster casts one ray per pixel, tiles in parallel, and returns a
+//! linear [`Image`] that [`Image::write_png`] writes as sRGB.
 
 #![warn(missing_docs)]
 
@@ -42,6 +45,7 @@ pub mod math;
 pub mod phantom;
 pub mod presets;
 mod raycast;
+mod scene;
 mod shading;
 mod tf;
 
@@ -49,12 +53,18 @@ pub use camera::{Camera, CameraSpec, Projection, View};
 pub use error::RenderError;
 pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image};
+pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{
-    camera_for, render, Classification, Kernel, Mode, RenderSettings, RenderStats, MAX_IMAGE_SIDE,
+    Classification, ClassifySettings, FrameSettings, Kernel, Mode, RenderStats, MAX_IMAGE_SIDE,
     TERMINATION_OPACITY,
 };
-pub use shading::{Light, Shader};
+pub use scene::{
+    Derived, Input, LobeSpec, RenderMode, Rendered, Renderer, Resolved, Scene, Timings,
+    DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
+};
+pub use shading::{Light, Shader, MAX_LIGHTS};
 pub use tf::{
-    linear_to_srgb, srgb_to_linear, Lut, Material, MaterialOverrides, TransferFunction, LUT_SIZE,
+    linear_to_srgb, srgb_to_linear, Lut, Material, MaterialOverrides, TransferFunction,
+    TransferFunctionFile, LUT_SIZE,
 };

@@ -144,3 +144,54 @@ mod tests {
         assert!((shepp_logan_blurred([0.69, 0.0, 0.0], 0.02) - 0.5).abs() < 1e-9);
     }
 }
+
+/// The built-in phantoms, by the names users type.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Phantom {
+    /// The 3D modified Shepp-Logan head ([`shepp_logan`]).
+    #[default]
+    SheppLogan,
+}
+
+impl Phantom {
+    /// Every phantom.
+    pub const ALL: [Phantom; 1] = [Phantom::SheppLogan];
+
+    /// The name users type.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phantom::SheppLogan => "shepp-logan",
+        }
+    }
+
+    /// The phantom sampled on a `size`^3 grid.
+    pub fn volume(self, size: usize) -> Result<Volume, RenderError> {
+        match self {
+            Phantom::SheppLogan => shepp_logan(size),
+        }
+    }
+}
+
+impl std::fmt::Display for Phantom {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Phantom {
+    type Err = RenderError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let key = s.trim().to_ascii_lowercase();
+        Phantom::ALL
+            .into_iter()
+            .find(|p| p.name() == key)
+            .ok_or_else(|| {
+                let names: Vec<_> = Phantom::ALL.iter().map(|p| p.name()).collect();
+                RenderError::Parameter(format!(
+                    "unknown phantom '{s}': expected {}",
+                    names.join(", ")
+                ))
+            })
+    }
+}

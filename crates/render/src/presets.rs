@@ -49,14 +49,18 @@ impl Preset {
 
     /// The material.
     pub fn material(&self) -> Material {
-        let [ambient, diffuse, specular, power] = self.material;
+        let [ambient, diffuse, specular, _] = self.material;
         Material {
             ambient,
             diffuse,
             specular,
-            power,
             shade: self.shade,
         }
+    }
+
+    /// The specular power (Slicer's `specularPower`): the default shininess n.
+    pub fn specular_power(&self) -> f64 {
+        self.material[3] as f64
     }
 }
 

@@ -3,6 +3,8 @@
 
 use std::str::FromStr;
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
 use crate::camera::{Camera, CameraSpec};
@@ -63,25 +65,95 @@ const ISO_REFINE_STEPS: u32 = 8;
 /// compact block of the volume that stays in the core's L2 cache).
 const TILE: usize = 16;
 
-/// What to render and how.
-#[derive(Clone, Debug)]
-pub struct RenderSettings {
+/// What a [`Classification`] depends on besides the transfer function: the mode, the
+/// sample step and empty-space skipping. Changing any of them means classifying again.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClassifySettings {
+    /// Compositing mode.
+    pub mode: Mode,
+    /// Sample distance in voxels (of the smallest spacing).
+    pub step: f64,
+    /// Empty-space skipping on (it never changes the image, only the speed).
+    pub skip_empty: bool,
+}
+
+impl Default for ClassifySettings {
+    fn default() -> Self {
+        ClassifySettings {
+            mode: Mode::Composite,
+            step: 0.5,
+            skip_empty: true,
+        }
+    }
+}
+
+impl ClassifySettings {
+    /// Checks the step and the iso threshold.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if !self.step.is_finite() || !(0.01..=100.0).contains(&self.step) {
+            return Err(RenderError::Parameter(format!(
+                "step {}: expected 0.01..=100 voxels",
+                self.step
+            )));
+        }
+        if let Mode::Iso { threshold } = self.mode {
+            if !threshold.is_finite() {
+                return Err(RenderError::Parameter(format!(
+                    "iso threshold {threshold} is not finite"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What one frame of a [`Classification`] depends on besides the [`Shader`]: image
+/// size, camera, background and the compositing loop. Changing them never classifies
+/// again.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameSettings {
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Sample distance in voxels (of the smallest spacing).
-    pub step: f64,
-    /// Compositing mode.
-    pub mode: Mode,
     /// Camera placement.
     pub camera: CameraSpec,
     /// Background colour, linear RGB.
     pub background: [f32; 3],
-    /// Empty-space skipping on (it never changes the image, only the speed).
-    pub skip_empty: bool,
     /// Which compositing loop runs.
     pub kernel: Kernel,
+}
+
+impl Default for FrameSettings {
+    fn default() -> Self {
+        FrameSettings {
+            width: 512,
+            height: 512,
+            camera: CameraSpec::default(),
+            background: [0.0; 3],
+            kernel: Kernel::Auto,
+        }
+    }
+}
+
+impl FrameSettings {
+    /// Checks the image size and the background.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if self.width == 0
+            || self.height == 0
+            || self.width > MAX_IMAGE_SIDE
+            || self.height > MAX_IMAGE_SIDE
+        {
+            return Err(RenderError::Parameter(format!(
+                "image size {}x{}: each side must be 1..={MAX_IMAGE_SIDE}",
+                self.width, self.height
+            )));
+        }
+        if self.background.iter().any(|c| !c.is_finite()) {
+            return Err(RenderError::Parameter("background is not finite".into()));
+        }
+        Ok(())
+    }
 }
 
 /// The compositing loop a render uses. Both give the same image: bit-identical for
@@ -104,57 +176,9 @@ impl Kernel {
     }
 }
 
-impl Default for RenderSettings {
-    fn default() -> Self {
-        RenderSettings {
-            width: 512,
-            height: 512,
-            step: 0.5,
-            mode: Mode::Composite,
-            camera: CameraSpec::default(),
-            background: [0.0; 3],
-            skip_empty: true,
-            kernel: Kernel::Auto,
-        }
-    }
-}
-
-impl RenderSettings {
-    /// Checks the image size and the step.
-    pub fn validate(&self) -> Result<(), RenderError> {
-        if self.width == 0
-            || self.height == 0
-            || self.width > MAX_IMAGE_SIDE
-            || self.height > MAX_IMAGE_SIDE
-        {
-            return Err(RenderError::Parameter(format!(
-                "image size {}x{}: each side must be 1..={MAX_IMAGE_SIDE}",
-                self.width, self.height
-            )));
-        }
-        if !self.step.is_finite() || !(0.01..=100.0).contains(&self.step) {
-            return Err(RenderError::Parameter(format!(
-                "step {}: expected 0.01..=100 voxels",
-                self.step
-            )));
-        }
-        if let Mode::Iso { threshold } = self.mode {
-            if !threshold.is_finite() {
-                return Err(RenderError::Parameter(format!(
-                    "iso threshold {threshold} is not finite"
-                )));
-            }
-        }
-        if self.background.iter().any(|c| !c.is_finite()) {
-            return Err(RenderError::Parameter("background is not finite".into()));
-        }
-        Ok(())
-    }
-}
-
 /// The transfer function tabulated for `settings` (MIP shows the function's own
 /// opacity, not a per-step one).
-fn lut_for(field: &Field, tf: &TransferFunction, settings: &RenderSettings) -> Lut {
+fn lut_for(field: &Field, tf: &TransferFunction, settings: &ClassifySettings) -> Lut {
     let (lo, hi) = field.range();
     let lut_step = match settings.mode {
         Mode::Mip => 1.0,
@@ -373,12 +397,10 @@ fn active_bounds(field: &Field, active: &[bool]) -> Option<([f64; 3], [f64; 3])>
 /// builds it once per transfer function and renders every frame that changes only the
 /// camera, lights, lobe or image size from it (VTK's ray-cast mapper likewise keeps its
 /// min-max volume until the transfer function changes).
-pub struct Classification<'a> {
-    field: &'a Field,
+pub struct Classification {
+    field: Arc<Field>,
     lut: Lut,
-    mode: Mode,
-    step: f64,
-    skip_empty: bool,
+    settings: ClassifySettings,
     /// Per macro cell: 0 where a sample can contribute, else the chessboard distance in
     /// cells to the nearest such cell (capped at 255); every cell closer than that is
     /// empty. All 0 when skipping is off.
@@ -398,19 +420,20 @@ pub struct Classification<'a> {
 /// from more splats to project and looser bounds respectively).
 const START_BLOCK: usize = 2;
 
-impl<'a> Classification<'a> {
+impl Classification {
     /// Classifies `field` by `tf` for the mode, step and empty-space skipping of
-    /// `settings` (its camera, size and background are not used).
+    /// `settings`. The classification keeps the field, so frames can be rendered from
+    /// it alone (a viewer or a Python object holds it across frames).
     pub fn new(
-        field: &'a Field,
+        field: Arc<Field>,
         tf: &TransferFunction,
-        settings: &RenderSettings,
-    ) -> Result<Classification<'a>, RenderError> {
+        settings: &ClassifySettings,
+    ) -> Result<Classification, RenderError> {
         settings.validate()?;
         tf.validate()?;
-        let lut = lut_for(field, tf, settings);
-        let visible = visible_cells(field, &lut, settings.mode);
-        let visible_box = active_bounds(field, &visible);
+        let lut = lut_for(&field, tf, settings);
+        let visible = visible_cells(&field, &lut, settings.mode);
+        let visible_box = active_bounds(&field, &visible);
         let full_box = ([0.0; 3], field.dims.map(|d| (d - 1) as f64));
         let (distance, clip_box) = if settings.skip_empty {
             let clip_box = if settings.mode == Mode::Mip {
@@ -423,7 +446,7 @@ impl<'a> Classification<'a> {
             (vec![0; visible.len()], full_box)
         };
         let blocks = if settings.skip_empty && settings.mode != Mode::Mip {
-            visible_blocks(field, &visible)
+            visible_blocks(&field, &visible)
         } else {
             Vec::new()
         };
@@ -431,21 +454,29 @@ impl<'a> Classification<'a> {
             field,
             lut,
             blocks,
-            mode: settings.mode,
-            step: settings.step,
-            skip_empty: settings.skip_empty,
+            settings: *settings,
             distance,
             visible_box,
             clip_box,
         })
     }
 
-    /// The camera [`render`] uses for `settings`: it frames the bounding sphere of what
-    /// can be seen (the macro cells that can show a sample), or of the whole volume
-    /// when nothing can.
-    pub fn camera(&self, settings: &RenderSettings) -> Result<Camera, RenderError> {
+    /// The field it classifies.
+    pub fn field(&self) -> &Arc<Field> {
+        &self.field
+    }
+
+    /// The settings it was built for.
+    pub fn settings(&self) -> &ClassifySettings {
+        &self.settings
+    }
+
+    /// The camera [`Classification::render`] uses for `settings`: it frames the
+    /// bounding sphere of what can be seen (the macro cells that can show a sample), or
+    /// of the whole volume when nothing can.
+    pub fn camera(&self, settings: &FrameSettings) -> Result<Camera, RenderError> {
         settings.validate()?;
-        let field = self.field;
+        let field = &*self.field;
         let (lo, hi) = self
             .visible_box
             .unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
@@ -493,27 +524,19 @@ impl<'a> Classification<'a> {
         Camera::frame(&settings.camera, center, extent * margin, w, h)
     }
 
-    /// Renders the classified field lit by `shader` with the camera, size, background
-    /// and kernel of `settings`, whose mode, step and skipping must be the ones this
-    /// classification was built for. `progress` is called with the number of pixels
-    /// finished after each tile (from worker threads).
+    /// Renders the classified field lit by `shader` (its lights placed relative to the
+    /// camera of `settings`) with the size, background and kernel of `settings`.
+    /// `progress` is called with the number of pixels finished after each tile (from
+    /// worker threads).
     pub fn render(
         &self,
         shader: &Shader,
-        settings: &RenderSettings,
+        settings: &FrameSettings,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Image, RenderError> {
-        settings.validate()?;
-        if settings.mode != self.mode
-            || settings.step != self.step
-            || settings.skip_empty != self.skip_empty
-        {
-            return Err(RenderError::Parameter(
-                "the settings' mode, step or skipping differ from the classification's".into(),
-            ));
-        }
         let camera = self.camera(settings)?;
-        let field = self.field;
+        let shader = &shader.placed(&camera);
+        let field = &*self.field;
         let (w, h) = (settings.width as usize, settings.height as usize);
         let rays = IndexRays::new(&camera, field, settings.width, settings.height);
         let starts =
@@ -528,8 +551,10 @@ impl<'a> Classification<'a> {
             ),
             rays,
             shader,
-            settings,
-            dt: (settings.step * field.min_spacing()) as f32,
+            frame: settings,
+            mode: self.settings.mode,
+            skip_empty: self.settings.skip_empty,
+            dt: (self.settings.step * field.min_spacing()) as f32,
             simd: settings.kernel == Kernel::Auto && simd_supported(),
         };
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
@@ -589,17 +614,6 @@ impl<'a> Classification<'a> {
     }
 }
 
-/// The camera [`render`] uses for `field`, `tf` and `settings`: it frames the bounding
-/// sphere of what can be seen (the macro cells that can show a sample), or of the whole
-/// volume when nothing can. [`Classification::camera`] without re-classifying.
-pub fn camera_for(
-    field: &Field,
-    tf: &TransferFunction,
-    settings: &RenderSettings,
-) -> Result<Camera, RenderError> {
-    Classification::new(field, tf, settings)?.camera(settings)
-}
-
 /// Per-render state shared by all rays.
 struct Caster<'a> {
     field: &'a Field,
@@ -611,25 +625,15 @@ struct Caster<'a> {
     /// The camera's rays in index space.
     rays: IndexRays,
     shader: &'a Shader,
-    settings: &'a RenderSettings,
+    frame: &'a FrameSettings,
+    /// [`ClassifySettings::mode`].
+    mode: Mode,
+    /// [`ClassifySettings::skip_empty`].
+    skip_empty: bool,
     /// Step in mm.
     dt: f32,
     /// Run the AVX2 compositing loop.
     simd: bool,
-}
-
-/// Renders `field` classified by `tf` and lit by `shader`. `progress` is called with
-/// the number of pixels finished after each tile (from worker threads). For several
-/// frames of one transfer function, build a [`Classification`] once and call its
-/// [`render`](Classification::render).
-pub fn render(
-    field: &Field,
-    tf: &TransferFunction,
-    shader: &Shader,
-    settings: &RenderSettings,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<Image, RenderError> {
-    Classification::new(field, tf, settings)?.render(shader, settings, progress)
 }
 
 /// Whether the CPU runs the SIMD compositing loop.
@@ -788,7 +792,7 @@ mod start_tests {
         // +inf only for rays that meet none.
         let mut volume = crate::phantom::shepp_logan(45).unwrap();
         volume.affine[2][2] *= 1.5;
-        let field = Field::new(&volume).unwrap();
+        let field = Arc::new(Field::new(&volume).unwrap());
         let tf = crate::presets::preset("phantom")
             .unwrap()
             .transfer_function(1.0)
@@ -801,7 +805,7 @@ mod start_tests {
                 (View::Anterior, 37.0, 1.7),
                 (View::Superior, -20.0, 3.0),
             ] {
-                let settings = RenderSettings {
+                let settings = FrameSettings {
                     width: w as u32,
                     height: h as u32,
                     camera: CameraSpec {
@@ -813,7 +817,8 @@ mod start_tests {
                     },
                     ..Default::default()
                 };
-                let class = Classification::new(&field, &tf, &settings).unwrap();
+                let class =
+                    Classification::new(field.clone(), &tf, &ClassifySettings::default()).unwrap();
                 assert!(!class.blocks.is_empty());
                 let camera = class.camera(&settings).unwrap();
                 let rays = IndexRays::new(&camera, &field, w as u32, h as u32);
@@ -930,7 +935,7 @@ impl Caster<'_> {
         alpha: &mut Vec<f32>,
         stats: &mut RenderStats,
     ) {
-        let bg = self.settings.background;
+        let bg = self.frame.background;
         let (xs, ys) = (px.xs, px.ys);
         let tw = xs.1 - xs.0;
         for y in ys.0..ys.1 {
@@ -963,7 +968,7 @@ impl Caster<'_> {
         alpha: &mut Vec<f32>,
         stats: &mut RenderStats,
     ) {
-        if self.settings.mode == Mode::Composite {
+        if self.mode == Mode::Composite {
             avx2::composite_tile(self, px, scratch, rgb, alpha, stats)
         } else {
             self.tile(px, rgb, alpha, stats)
@@ -977,7 +982,7 @@ impl Caster<'_> {
         let Some((ray, view)) = self.ray(x, y, start) else {
             return ([0.0; 3], 0.0);
         };
-        match self.settings.mode {
+        match self.mode {
             Mode::Composite => self.composite(&ray, &self.shader.for_ray(view), stats),
             Mode::Iso { threshold } => self.iso(&ray, view, threshold),
             Mode::Mip => self.mip(&ray),
@@ -1178,7 +1183,7 @@ impl Caster<'_> {
         let mut k = ray.k0;
         while k <= ray.k1 {
             let p = ray.at(k as f32 * self.dt);
-            if self.settings.skip_empty {
+            if self.skip_empty {
                 let (c, cell) = self.cell_of(p);
                 // A cell whose maximum cannot beat the current best is skipped.
                 if self.field.cells[cell].1 <= best {

@@ -3,6 +3,7 @@
 //! [`glint_lobe::Geometry`].
 
 use glint_lobe::{Geometry, Lobe, LobeKind};
+use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
 use crate::error::RenderError;
@@ -12,14 +13,20 @@ use crate::tf::Material;
 /// A directional light given relative to the camera: `azimuth` degrees towards the
 /// image's right and `elevation` degrees towards its top, from the viewing direction.
 /// `(0, 0)` is a headlight.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Light {
     /// Degrees towards the image's right.
     pub azimuth: f64,
     /// Degrees towards the image's top.
     pub elevation: f64,
     /// Intensity (white light).
+    #[serde(default = "unit_intensity")]
     pub intensity: f32,
+}
+
+fn unit_intensity() -> f32 {
+    1.0
 }
 
 impl Light {
@@ -71,7 +78,10 @@ pub struct Shader {
     pub(crate) lobe: Lobe<f32>,
     pub(crate) geometry: Geometry,
     pub(crate) material: Material,
-    /// World directions towards each light, and their intensities.
+    /// The lights, relative to the camera.
+    relative: Vec<Light>,
+    /// World directions towards each light, and their intensities, for the camera the
+    /// shader was last [placed](Shader::placed) for (empty before).
     pub(crate) lights: Vec<(Vec3, f32)>,
     /// Gradient magnitude (value per mm) below which a sample is unshaded; full
     /// shading from twice this value (a linear ramp between).
@@ -91,18 +101,22 @@ pub(crate) struct RayLighting {
 pub const MAX_LIGHTS: usize = 8;
 
 impl Shader {
-    /// A shader for `lobe` (kind, n, v), `geometry`, `material`, lights given as world
-    /// directions with intensities, and a gradient gate in value per mm.
+    /// A shader for `lobe` (kind, n, v), `geometry`, `material`, lights given relative
+    /// to the camera (placed in the world by each render), and a gradient gate in value
+    /// per mm.
     pub fn new(
         kind: LobeKind,
         n: f64,
         v: u32,
         geometry: Geometry,
         material: Material,
-        lights: Vec<(Vec3, f32)>,
+        lights: Vec<Light>,
         gate: f32,
     ) -> Result<Shader, RenderError> {
         material.validate()?;
+        for light in &lights {
+            light.validate()?;
+        }
         let lobe = Lobe::<f32>::new(kind, n, v)?;
         if lights.len() > MAX_LIGHTS {
             return Err(RenderError::Parameter(format!(
@@ -119,9 +133,22 @@ impl Shader {
             lobe,
             geometry,
             material,
-            lights,
+            relative: lights,
+            lights: Vec::new(),
             gate,
         })
+    }
+
+    /// This shader with its lights placed in the world for `camera`.
+    pub(crate) fn placed(&self, camera: &Camera) -> Shader {
+        Shader {
+            lights: self
+                .relative
+                .iter()
+                .map(|l| (l.direction(camera), l.intensity))
+                .collect(),
+            ..self.clone()
+        }
     }
 
     /// The lobe.
@@ -269,10 +296,24 @@ mod tests {
             4,
             Geometry::Phong,
             Material::default(),
-            vec![(Vec3::new(0.0, 0.0, 1.0), 1.0)],
+            vec![Light::HEADLIGHT],
             0.5,
         )
         .unwrap();
+        // A camera looking down -z: the headlight shines along +z.
+        let cam = Camera::frame(
+            &crate::camera::CameraSpec {
+                view: crate::camera::View::Superior,
+                ..Default::default()
+            },
+            Vec3::ZERO,
+            1.0,
+            4,
+            4,
+        )
+        .unwrap();
+        let shader = shader.placed(&cam);
+        assert!((shader.lights[0].0 - Vec3::new(0.0, 0.0, 1.0)).length() < 1e-6);
         let ray = shader.for_ray(Vec3::new(0.0, 0.0, 1.0));
         let m = Material::default();
         // Below the gate: ambient + diffuse, no specular.

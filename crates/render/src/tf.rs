@@ -2,12 +2,13 @@
 
 use std::path::Path;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::RenderError;
 
 /// Phong-style material coefficients, as in VTK's `vtkVolumeProperty` (and 3D Slicer's
-/// presets): `colour · (ambient + diffuse · N·L) + specular · lobe`.
+/// presets): `colour · (ambient + diffuse · N·L) + specular · lobe`. The specular power
+/// is not here: it is the lobe's `n` (a preset's power is its default).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     /// Ambient coefficient.
@@ -16,20 +17,17 @@ pub struct Material {
     pub diffuse: f32,
     /// Specular coefficient.
     pub specular: f32,
-    /// Specular power (shininess n of cos^n).
-    pub power: f32,
     /// Whether to shade at all; unshaded samples show the transfer-function colour.
     pub shade: bool,
 }
 
 impl Default for Material {
-    /// VTK's usual volume defaults as used by most Slicer CT presets: 0.1, 0.9, 0.2, 10.
+    /// VTK's usual volume defaults as used by most Slicer CT presets: 0.1, 0.9, 0.2.
     fn default() -> Self {
         Material {
             ambient: 0.1,
             diffuse: 0.9,
             specular: 0.2,
-            power: 10.0,
             shade: true,
         }
     }
@@ -42,7 +40,6 @@ impl Material {
             ("ambient", self.ambient),
             ("diffuse", self.diffuse),
             ("specular", self.specular),
-            ("power", self.power),
         ] {
             if !x.is_finite() || !(0.0..=10_000.0).contains(&x) {
                 return Err(RenderError::Parameter(format!(
@@ -56,8 +53,10 @@ impl Material {
 
 /// A 1D transfer function: piecewise-linear opacity and colour over the scalar value,
 /// constant beyond the first and last points (VTK's piecewise and colour transfer
-/// functions with clamping on).
-#[derive(Clone, Debug, PartialEq)]
+/// functions with clamping on). In JSON: `{"opacity": [[value, a], ...], "color":
+/// [[value, r, g, b], ...]}`, validated when read.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "TfPoints", into = "TfPoints")]
 pub struct TransferFunction {
     /// `(value, opacity)` points, values strictly increasing, opacity in [0, 1]:
     /// opacity per unit distance of one voxel (the smallest spacing).
@@ -186,9 +185,9 @@ impl TransferFunction {
     }
 
     /// Reads the JSON form: `{"opacity": [[value, a], ...], "color": [[value, r, g, b],
-    /// ...]}` plus optional material fields `ambient`, `diffuse`, `specular`, `power`,
-    /// `shade`. Returns the function and the material overrides found.
-    pub fn from_json_file(path: &Path) -> Result<(Self, MaterialOverrides), RenderError> {
+    /// ...]}` plus optional material fields `ambient`, `diffuse`, `specular`, `shade`
+    /// and the specular `power` (the lobe's n).
+    pub fn from_json_file(path: &Path) -> Result<TransferFunctionFile, RenderError> {
         let file_err = |what: String| RenderError::TransferFunctionFile {
             path: path.to_path_buf(),
             what,
@@ -210,7 +209,7 @@ impl TransferFunction {
     }
 
     /// Parses the JSON form described in [`TransferFunction::from_json_file`].
-    pub fn from_json_str(text: &str) -> Result<(Self, MaterialOverrides), RenderError> {
+    pub fn from_json_str(text: &str) -> Result<TransferFunctionFile, RenderError> {
         let doc: TfJson = serde_json::from_str(text)
             .map_err(|e| RenderError::TransferFunction(format!("bad JSON: {e}")))?;
         let opacity = doc.opacity.iter().map(|p| (p[0], p[1])).collect();
@@ -220,31 +219,46 @@ impl TransferFunction {
             .map(|p| (p[0], [p[1], p[2], p[3]]))
             .collect();
         let tf = TransferFunction::new(opacity, color)?;
-        Ok((
+        Ok(TransferFunctionFile {
             tf,
-            MaterialOverrides {
+            material: MaterialOverrides {
                 ambient: doc.ambient,
                 diffuse: doc.diffuse,
                 specular: doc.specular,
-                power: doc.power,
                 shade: doc.shade,
             },
-        ))
+            power: doc.power,
+        })
     }
 }
 
-/// Material fields a JSON transfer function may set.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// What a transfer-function JSON file holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransferFunctionFile {
+    /// The function.
+    pub tf: TransferFunction,
+    /// The material fields it sets.
+    pub material: MaterialOverrides,
+    /// The specular power it sets (the lobe's n).
+    pub power: Option<f64>,
+}
+
+/// Material fields a scene or a JSON transfer function may set; unset fields come from
+/// the preset.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MaterialOverrides {
     /// Ambient coefficient.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub ambient: Option<f32>,
     /// Diffuse coefficient.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub diffuse: Option<f32>,
     /// Specular coefficient.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub specular: Option<f32>,
-    /// Specular power.
-    pub power: Option<f32>,
     /// Shading on or off.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub shade: Option<bool>,
 }
 
@@ -255,7 +269,6 @@ impl MaterialOverrides {
             ambient: self.ambient.unwrap_or(base.ambient),
             diffuse: self.diffuse.unwrap_or(base.diffuse),
             specular: self.specular.unwrap_or(base.specular),
-            power: self.power.unwrap_or(base.power),
             shade: self.shade.unwrap_or(base.shade),
         }
     }
@@ -269,8 +282,39 @@ struct TfJson {
     ambient: Option<f32>,
     diffuse: Option<f32>,
     specular: Option<f32>,
-    power: Option<f32>,
+    power: Option<f64>,
     shade: Option<bool>,
+}
+
+/// The JSON form of a [`TransferFunction`].
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TfPoints {
+    opacity: Vec<[f64; 2]>,
+    color: Vec<[f64; 4]>,
+}
+
+impl TryFrom<TfPoints> for TransferFunction {
+    type Error = RenderError;
+    fn try_from(p: TfPoints) -> Result<Self, RenderError> {
+        TransferFunction::new(
+            p.opacity.iter().map(|q| (q[0], q[1])).collect(),
+            p.color.iter().map(|q| (q[0], [q[1], q[2], q[3]])).collect(),
+        )
+    }
+}
+
+impl From<TransferFunction> for TfPoints {
+    fn from(tf: TransferFunction) -> Self {
+        TfPoints {
+            opacity: tf.opacity.iter().map(|&(x, a)| [x, a]).collect(),
+            color: tf
+                .color
+                .iter()
+                .map(|&(x, c)| [x, c[0], c[1], c[2]])
+                .collect(),
+        }
+    }
 }
 
 /// sRGB-encoded component to linear light (IEC 61966-2-1).
@@ -427,12 +471,33 @@ mod tests {
         assert!(TransferFunction::from_flat(&[0.0, f64::NAN], &[0.0, 1.0, 1.0, 1.0]).is_err());
         assert!(TransferFunction::from_json_str("{\"opacity\": [[0, 0]]}").is_err());
         assert!(TransferFunction::from_json_str("not json").is_err());
-        let (tf, m) = TransferFunction::from_json_str(
-            r#"{"opacity": [[0, 0], [1, 1]], "color": [[0, 1, 0, 0]], "specular": 0.5}"#,
+        let file = TransferFunction::from_json_str(
+            r#"{"opacity": [[0, 0], [1, 1]], "color": [[0, 1, 0, 0]], "specular": 0.5, "power": 7}"#,
         )
         .unwrap();
-        assert_eq!(tf.opacity.len(), 2);
-        assert_eq!(m.specular, Some(0.5));
+        assert_eq!(file.tf.opacity.len(), 2);
+        assert_eq!(file.material.specular, Some(0.5));
+        assert_eq!(file.power, Some(7.0));
+    }
+
+    #[test]
+    fn serde_form_is_validated() {
+        let tf: TransferFunction =
+            serde_json::from_str(r#"{"opacity": [[0, 0], [1, 1]], "color": [[0, 1, 0, 0]]}"#)
+                .unwrap();
+        let back = serde_json::to_string(&tf).unwrap();
+        assert_eq!(serde_json::from_str::<TransferFunction>(&back).unwrap(), tf);
+        // Unsorted points and opacities above 1 are refused when read.
+        for bad in [
+            r#"{"opacity": [[1, 0], [0, 1]], "color": [[0, 1, 0, 0]]}"#,
+            r#"{"opacity": [[0, 2]], "color": [[0, 1, 0, 0]]}"#,
+            r#"{"opacity": [[0, 1]], "color": [[0, 1, 0, 0]], "x": 1}"#,
+        ] {
+            assert!(
+                serde_json::from_str::<TransferFunction>(bad).is_err(),
+                "{bad}"
+            );
+        }
     }
 
     #[test]

@@ -5,8 +5,8 @@
 use glint_io::{Samples, Volume};
 use glint_lobe::{Geometry, Lobe, LobeKind};
 use glint_render::{
-    camera_for, phantom, preset, render, CameraSpec, Classification, Field, Kernel, Light,
-    Material, Mode, Projection, RenderSettings, Shader, TransferFunction, View,
+    phantom, Camera, CameraSpec, Input, Kernel, Light, LobeSpec, MaterialOverrides, Projection,
+    RenderMode, Rendered, Renderer, Scene, TransferFunction, View,
 };
 
 fn ortho(view: View) -> CameraSpec {
@@ -17,14 +17,53 @@ fn ortho(view: View) -> CameraSpec {
     }
 }
 
-fn flat_material() -> Material {
-    Material {
-        ambient: 1.0,
-        diffuse: 0.0,
-        specular: 0.0,
-        power: 1.0,
-        shade: false,
+/// Unshaded, the transfer function's colour as it is.
+fn flat_material() -> MaterialOverrides {
+    MaterialOverrides {
+        ambient: Some(1.0),
+        diffuse: Some(0.0),
+        specular: Some(0.0),
+        shade: Some(false),
     }
+}
+
+/// A scene of `size` pixels with the defaults otherwise.
+fn scene(width: u32, height: u32) -> Scene {
+    Scene {
+        size: [width, height],
+        ..Scene::default()
+    }
+}
+
+/// The lobe `kind` with shininess `n`, v = 4.
+fn lobe(kind: LobeKind, n: f64, geometry: Geometry) -> LobeSpec {
+    LobeSpec {
+        kind,
+        n: Some(n),
+        v: 4,
+        geometry,
+    }
+}
+
+/// Renders `scene` of `volume` with a fresh renderer.
+fn render(volume: &Volume, scene: &Scene) -> Rendered {
+    Renderer::from_volume(volume)
+        .unwrap()
+        .render(scene, &|_| {})
+        .unwrap()
+}
+
+/// The camera a render of `scene` of `volume` uses.
+fn camera(volume: &Volume, scene: &Scene) -> Camera {
+    Renderer::from_volume(volume)
+        .unwrap()
+        .camera(scene)
+        .unwrap()
+}
+
+/// The Shepp-Logan phantom at `n`^3.
+fn shepp_logan(n: usize) -> Volume {
+    phantom::shepp_logan(n).unwrap()
 }
 
 /// A `n`^3 volume of 1 mm voxels, value 1 everywhere.
@@ -37,29 +76,19 @@ fn composite_follows_beer_lambert_for_any_step() {
     // Opacity a per voxel of distance through L voxels gives 1 - (1 - a)^L whatever
     // the step (Max 1995, "Optical models for direct volume rendering"). The central
     // ray of an orthographic view crosses the whole 33-voxel cube: L = 32.
-    let field = Field::new(&uniform(33)).unwrap();
+    let volume = uniform(33);
     let a = 0.05;
     let tf = TransferFunction::from_flat(&[0.0, a, 2.0, a], &[0.0, 1.0, 1.0, 1.0]).unwrap();
-    let shader = Shader::new(
-        LobeKind::Exact,
-        1.0,
-        0,
-        Geometry::Phong,
-        flat_material(),
-        vec![],
-        0.0,
-    )
-    .unwrap();
     let expect = 1.0 - (1.0f64 - a).powf(32.0);
     for step in [1.0, 0.5, 0.25, 0.1] {
-        let settings = RenderSettings {
-            width: 33,
-            height: 33,
+        let scene = Scene {
             step,
             camera: ortho(View::Anterior),
-            ..Default::default()
+            transfer_function: Some(tf.clone()),
+            material: flat_material(),
+            ..scene(33, 33)
         };
-        let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+        let img = render(&volume, &scene).image;
         let got = img.alpha[16 * 33 + 16] as f64;
         // The samples cover L to within one step.
         let slack = (1.0 - a).powf(32.0) * (1.0 - (1.0 - a).powf(step)) + 1e-4;
@@ -91,44 +120,39 @@ fn sphere(n: usize, r: f32) -> Volume {
 #[test]
 fn sphere_highlight_matches_the_analytic_answer_for_each_geometry() {
     let (n, r, size) = (72usize, 30.0f32, 160u32);
-    let field = Field::new(&sphere(n, r)).unwrap();
+    let volume = sphere(n, r);
     let tf =
         TransferFunction::from_flat(&[-100.0, 1.0, 100.0, 1.0], &[0.0, 1.0, 1.0, 1.0]).unwrap();
-    let settings = RenderSettings {
-        width: size,
-        height: size,
-        mode: Mode::Iso { threshold: 0.0 },
-        camera: ortho(View::Anterior),
-        ..Default::default()
-    };
-    let cam = camera_for(&field, &tf, &settings).unwrap();
-    let light = Light {
+    let side = Light {
         azimuth: 35.0,
         elevation: 20.0,
         intensity: 1.0,
-    }
-    .direction(&cam);
+    };
+    let base = Scene {
+        mode: RenderMode::Iso,
+        iso: Some(0.0),
+        camera: ortho(View::Anterior),
+        transfer_function: Some(tf),
+        lights: vec![side],
+        material: MaterialOverrides {
+            ambient: Some(0.0),
+            diffuse: Some(0.0),
+            specular: Some(1.0),
+            shade: Some(true),
+        },
+        gate: 0.0,
+        ..scene(size, size)
+    };
+    let cam = camera(&volume, &base);
+    let light = side.direction(&cam);
     let view = -cam.forward;
     let center = (n - 1) as f32 / 2.0; // world = index for 1 mm voxels at the origin
-    let specular_only = Material {
-        ambient: 0.0,
-        diffuse: 0.0,
-        specular: 1.0,
-        power: 60.0,
-        shade: true,
-    };
     for geometry in [Geometry::Phong, Geometry::Blinn] {
-        let shader = Shader::new(
-            LobeKind::Exact,
-            60.0,
-            4,
-            geometry,
-            specular_only,
-            vec![(light, 1.0)],
-            0.0,
-        )
-        .unwrap();
-        let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+        let scene = Scene {
+            lobe: lobe(LobeKind::Exact, 60.0, geometry),
+            ..base.clone()
+        };
+        let img = render(&volume, &scene).image;
         // Pixel of a world point in this orthographic camera.
         let to_pixel = |p: [f32; 3]| {
             let d = [p[0] - cam.eye.x, p[1] - cam.eye.y, p[2] - cam.eye.z];
@@ -200,36 +224,28 @@ fn sphere_highlight_matches_the_analytic_answer_for_each_geometry() {
 
 #[test]
 fn no_lobe_gives_nan_pixels() {
-    let field = Field::new(&phantom::shepp_logan(40).unwrap()).unwrap();
-    let p = preset("phantom").unwrap();
-    let tf = p.transfer_function(1.0).unwrap();
-    for mode in [Mode::Composite, Mode::Iso { threshold: 0.5 }] {
-        let settings = RenderSettings {
-            width: 40,
-            height: 40,
-            mode,
-            ..Default::default()
-        };
-        let cam = camera_for(&field, &tf, &settings).unwrap();
+    let mut renderer = Renderer::from_volume(&shepp_logan(40)).unwrap();
+    for (mode, iso) in [(RenderMode::Composite, None), (RenderMode::Iso, Some(0.5))] {
         let lights = vec![
-            (Light::HEADLIGHT.direction(&cam), 1.0),
-            (
-                Light {
-                    azimuth: 80.0,
-                    elevation: -60.0,
-                    intensity: 1.0,
-                }
-                .direction(&cam),
-                1.0,
-            ),
+            Light::HEADLIGHT,
+            Light {
+                azimuth: 80.0,
+                elevation: -60.0,
+                intensity: 1.0,
+            },
         ];
         for kind in LobeKind::ALL {
             for n in [0.0, 1.0, 100.0, 10_000.0] {
                 for geometry in [Geometry::Phong, Geometry::Blinn] {
-                    let shader =
-                        Shader::new(kind, n, 4, geometry, p.material(), lights.clone(), 0.0)
-                            .unwrap();
-                    let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+                    let scene = Scene {
+                        mode,
+                        iso,
+                        lights: lights.clone(),
+                        lobe: lobe(kind, n, geometry),
+                        gate: 0.0,
+                        ..scene(40, 40)
+                    };
+                    let img = renderer.render(&scene, &|_| {}).unwrap().image;
                     assert!(
                         img.rgb.iter().flatten().all(|c| c.is_finite() && *c >= 0.0),
                         "{kind} n={n} {geometry} {mode:?}"
@@ -245,29 +261,18 @@ fn phantom_mip_silhouette_has_the_skulls_projected_area() {
     // Anterior orthographic MIP: every ray through the outer ellipsoid meets the skull
     // (value 1), so the pixels above 0.5 cover the ellipse of semi-axes 0.69 (x) and
     // 0.81 (z) phantom units: area π·0.69·0.81.
-    let n = 96;
-    let field = Field::new(&phantom::shepp_logan(n).unwrap()).unwrap();
+    let volume = shepp_logan(96);
     let tf = TransferFunction::from_flat(&[0.0, 0.0, 1.0, 1.0], &[0.0, 1.0, 1.0, 1.0]).unwrap();
     let size = 200u32;
-    let settings = RenderSettings {
-        width: size,
-        height: size,
-        mode: Mode::Mip,
+    let scene = Scene {
+        mode: RenderMode::Mip,
         camera: ortho(View::Anterior),
-        ..Default::default()
+        transfer_function: Some(tf),
+        material: flat_material(),
+        ..scene(size, size)
     };
-    let cam = camera_for(&field, &tf, &settings).unwrap();
-    let shader = Shader::new(
-        LobeKind::Exact,
-        1.0,
-        0,
-        Geometry::Phong,
-        flat_material(),
-        vec![],
-        0.0,
-    )
-    .unwrap();
-    let img = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+    let cam = camera(&volume, &scene);
+    let img = render(&volume, &scene).image;
     let bright = img.rgb.iter().filter(|p| p[0] > 0.5).count() as f64;
     let pixel_mm = 2.0 * cam.half_height as f64 / size as f64;
     let area_mm2 = std::f64::consts::PI * 69.0 * 81.0;
@@ -284,16 +289,18 @@ fn empty_space_skipping_never_changes_the_image() {
     // the projected non-empty blocks; with it off, every sample inside the volume is
     // taken. Off-centre, zoomed views put block footprints across tile borders and
     // partly off the image.
-    let field = Field::new(&phantom::shepp_logan(48).unwrap()).unwrap();
-    let p = preset("phantom").unwrap();
-    let tf = p.transfer_function(1.0).unwrap();
+    let mut renderer = Renderer::from_volume(&shepp_logan(48)).unwrap();
     for projection in [Projection::Perspective, Projection::Orthographic] {
         for zoom in [1.0, 2.5] {
-            for mode in [Mode::Composite, Mode::Iso { threshold: 0.5 }, Mode::Mip] {
-                let mut settings = RenderSettings {
-                    width: 48,
-                    height: 40,
+            for (mode, iso) in [
+                (RenderMode::Composite, None),
+                (RenderMode::Iso, Some(0.5)),
+                (RenderMode::Mip, None),
+            ] {
+                let mut scene = Scene {
                     mode,
+                    iso,
+                    preset: Some("phantom".into()),
                     camera: CameraSpec {
                         azimuth: 33.0,
                         elevation: -21.0,
@@ -301,28 +308,19 @@ fn empty_space_skipping_never_changes_the_image() {
                         projection,
                         ..Default::default()
                     },
-                    ..Default::default()
+                    lobe: lobe(LobeKind::EnergyFit, 40.0, Geometry::Blinn),
+                    gate: 0.0,
+                    ..scene(48, 40)
                 };
-                let cam = camera_for(&field, &tf, &settings).unwrap();
-                let shader = Shader::new(
-                    LobeKind::EnergyFit,
-                    40.0,
-                    4,
-                    Geometry::Blinn,
-                    p.material(),
-                    vec![(Light::HEADLIGHT.direction(&cam), 1.0)],
-                    0.0,
-                )
-                .unwrap();
-                let fast = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
-                settings.skip_empty = false;
-                let slow = render(&field, &tf, &shader, &settings, &|_| {}).unwrap();
+                let fast = renderer.render(&scene, &|_| {}).unwrap().image;
+                scene.skip_empty = false;
+                let slow = renderer.render(&scene, &|_| {}).unwrap().image;
                 let what = format!("{mode:?} {projection:?} zoom {zoom}");
                 assert_eq!(fast.rgb, slow.rgb, "{what}");
                 assert_eq!(fast.alpha, slow.alpha, "{what}");
                 let covered = fast.alpha.iter().filter(|&&a| a > 0.0).count();
                 assert!(covered > 20, "{what}: {covered} pixels");
-                if mode == Mode::Composite {
+                if mode == RenderMode::Composite {
                     assert!(fast.stats.samples < slow.stats.samples, "{what}");
                 }
             }
@@ -333,28 +331,14 @@ fn empty_space_skipping_never_changes_the_image() {
 #[test]
 fn progress_reports_every_pixel() {
     use std::sync::atomic::{AtomicU64, Ordering};
-    let field = Field::new(&phantom::shepp_logan(16).unwrap()).unwrap();
-    let tf = preset("phantom").unwrap().transfer_function(1.0).unwrap();
-    let shader = Shader::new(
-        LobeKind::Exact,
-        10.0,
-        4,
-        Geometry::Phong,
-        Material::default(),
-        vec![],
-        0.0,
-    )
-    .unwrap();
-    let settings = RenderSettings {
-        width: 37,
-        height: 23,
-        ..Default::default()
-    };
+    let scene = scene(37, 23);
     let done = AtomicU64::new(0);
-    render(&field, &tf, &shader, &settings, &|n| {
-        done.fetch_add(n, Ordering::Relaxed);
-    })
-    .unwrap();
+    Renderer::from_volume(&shepp_logan(16))
+        .unwrap()
+        .render(&scene, &|n| {
+            done.fetch_add(n, Ordering::Relaxed);
+        })
+        .unwrap();
     assert_eq!(done.load(Ordering::Relaxed), 37 * 23);
 }
 
@@ -368,48 +352,37 @@ fn simd_loop_gives_the_scalar_loops_image() {
             "no AVX2+FMA: the SIMD loop is not tested"
         );
     }
-    let field = Field::new(&phantom::shepp_logan(48).unwrap()).unwrap();
-    let p = preset("phantom").unwrap();
-    let tf = p.transfer_function(1.0).unwrap();
+    let mut renderer = Renderer::from_volume(&shepp_logan(48)).unwrap();
     for projection in [Projection::Perspective, Projection::Orthographic] {
-        let settings = RenderSettings {
-            width: 48,
-            height: 40,
-            camera: CameraSpec {
-                azimuth: 33.0,
-                elevation: -21.0,
-                projection,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
-        let class = Classification::new(&field, &tf, &settings).unwrap();
-        let cam = class.camera(&settings).unwrap();
         let lights = vec![
-            (Light::HEADLIGHT.direction(&cam), 1.0),
-            (
-                Light {
-                    azimuth: 50.0,
-                    elevation: 30.0,
-                    intensity: 0.7,
-                }
-                .direction(&cam),
-                0.7,
-            ),
+            Light::HEADLIGHT,
+            Light {
+                azimuth: 50.0,
+                elevation: 30.0,
+                intensity: 0.7,
+            },
         ];
-        let scalar = RenderSettings {
-            kernel: Kernel::Scalar,
-            ..settings.clone()
-        };
         for kind in LobeKind::ALL {
             for geometry in [Geometry::Phong, Geometry::Blinn] {
-                // A gate of 0.5 value/mm blends weak-gradient samples towards flat.
+                // A gate of 0.5 value/mm (the phantom's range is 1) blends
+                // weak-gradient samples towards flat.
                 for gate in [0.0, 0.5] {
-                    let shader =
-                        Shader::new(kind, 60.0, 4, geometry, p.material(), lights.clone(), gate)
-                            .unwrap();
-                    let fast = class.render(&shader, &settings, &|_| {}).unwrap();
-                    let slow = class.render(&shader, &scalar, &|_| {}).unwrap();
+                    let scene = Scene {
+                        camera: CameraSpec {
+                            azimuth: 33.0,
+                            elevation: -21.0,
+                            projection,
+                            ..Default::default()
+                        },
+                        lights: lights.clone(),
+                        lobe: lobe(kind, 60.0, geometry),
+                        gate,
+                        ..scene(48, 40)
+                    };
+                    renderer.kernel = Kernel::Auto;
+                    let fast = renderer.render(&scene, &|_| {}).unwrap().image;
+                    renderer.kernel = Kernel::Scalar;
+                    let slow = renderer.render(&scene, &|_| {}).unwrap().image;
                     let what = format!("{kind} {geometry} gate {gate} {projection:?}");
                     assert_eq!(fast.alpha, slow.alpha, "{what}");
                     assert_eq!(fast.stats.shaded, slow.stats.shaded, "{what}");
@@ -465,44 +438,28 @@ fn mni152_brain_renders_the_same_with_every_shortcut_off() {
     // skipping (leaps, start bounds) against none, on real data; then the picture:
     // a brain filling much of the frame, shaded (not flat), with highlights.
     let Some(volume) = mni152() else { return };
-    let field = Field::new(&volume).unwrap();
-    let p = preset("mr-t2-brain").unwrap();
-    let tf = p.transfer_function(field.range().1 as f64).unwrap();
-    let settings = RenderSettings {
-        width: 80,
-        height: 80,
+    let scene = Scene {
+        input: Input::Path("mni152.nii.gz".into()),
+        preset: Some("mr-t2-brain".into()),
         camera: CameraSpec {
             view: View::Left,
             ..Default::default()
         },
-        ..Default::default()
+        gate: 0.0,
+        ..scene(80, 80)
     };
-    let class = Classification::new(&field, &tf, &settings).unwrap();
-    let cam = class.camera(&settings).unwrap();
-    let m = p.material();
-    let shader = Shader::new(
-        LobeKind::EnergyFit,
-        m.power as f64,
-        4,
-        Geometry::Phong,
-        m,
-        vec![(Light::HEADLIGHT.direction(&cam), 1.0)],
-        0.0,
-    )
-    .unwrap();
-    let fast = class.render(&shader, &settings, &|_| {}).unwrap();
-    let scalar = RenderSettings {
-        kernel: Kernel::Scalar,
-        ..settings.clone()
-    };
-    let reference = class.render(&shader, &scalar, &|_| {}).unwrap();
+    let mut renderer = Renderer::from_volume(&volume).unwrap();
+    let fast = renderer.render(&scene, &|_| {}).unwrap().image;
+    renderer.kernel = Kernel::Scalar;
+    let reference = renderer.render(&scene, &|_| {}).unwrap().image;
+    renderer.kernel = Kernel::Auto;
     assert_eq!(fast.rgb, reference.rgb);
     assert_eq!(fast.alpha, reference.alpha);
-    let no_skip = RenderSettings {
+    let no_skip = Scene {
         skip_empty: false,
-        ..settings.clone()
+        ..scene.clone()
     };
-    let slow = render(&field, &tf, &shader, &no_skip, &|_| {}).unwrap();
+    let slow = renderer.render(&no_skip, &|_| {}).unwrap().image;
     assert_eq!(fast.rgb, slow.rgb);
     assert!(fast.stats.samples * 4 < slow.stats.samples);
 

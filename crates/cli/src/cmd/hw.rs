@@ -1,7 +1,7 @@
 //! `glint hw`: the fixed-point model of the specular unit (ROM contents, width sweeps,
 //! stage-by-stage evaluation, exhaustive error check).
 
-use std::io::{Read as _, Write as _};
+use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -2,6 +2,7 @@
 
 pub mod analyze;
 pub mod bench;
+pub mod choice;
 pub mod eval;
 pub mod hw;
 pub mod info;

@@ -1,16 +1,19 @@
-//! `glint render`: a volume (or the built-in Shepp-Logan phantom) to a shaded PNG.
+//! `glint render`: a scene (a volume or the built-in phantom, with flags or a scene
+//! file) to a shaded PNG. Parses flags into a [`Scene`], renders it with the library,
+//! writes the image.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
-use std::time::Instant;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
-use glint_io::{read_volume, ReadOptions};
 use glint_lobe::{Geometry, LobeKind};
 use glint_render::{
-    phantom, preset, CameraSpec, Classification, Depth, Field, Kernel, Light, Mode, Projection,
-    RenderSettings, Shader, TransferFunction, View,
+    Depth, Input, Kernel, Light, Phantom, Projection, RenderMode, Rendered, Renderer, Scene,
+    TransferFunction, View,
 };
+
+use super::choice::choice;
 
 /// Arguments of `glint render`.
 #[derive(clap::Args)]
@@ -19,7 +22,9 @@ use glint_render::{
     glint render head.nii.gz --preset mr-t2-brain --view left --lobe k -o brain.png\n  \
     glint render ct.nrrd --preset ct-bone --view anterior --azimuth 30 --elevation 15 \
 --lobe exact --n 40 --geometry blinn --light 45,30 -o bone.png\n  \
-    glint render --mode mip --projection orthographic -o mip.png\n\n\
+    glint render --mode mip --projection orthographic -o mip.png\n  \
+    glint render brain.nii.gz --dump-scene brain.json -o a.png   # then:\n  \
+    glint render --scene brain.json --lobe exact -o b.png        # flags override the file\n\n\
 Presets (3D Slicer's volume rendering presets, MR ones scaled to the volume's maximum):\n  \
     phantom (glint's, the default for the phantom), ct-aaa, ct-aaa2, ct-bone, ct-bones,\n  \
     ct-cardiac, ct-cardiac2, ct-cardiac3, ct-chest-contrast-enhanced, ct-chest-vessels,\n  \
@@ -29,22 +34,42 @@ Presets (3D Slicer's volume rendering presets, MR ones scaled to the volume's ma
     dti-fa-brain\n\n\
 Transfer-function JSON (--tf): {\"opacity\": [[value, alpha], ...], \"color\": [[value, r, g, b], ...],\n  \
     \"ambient\": 0.1, \"diffuse\": 0.9, \"specular\": 0.2, \"power\": 10, \"shade\": true}\n  \
-    (alpha per voxel of distance, colours sRGB in 0..1; the material fields are optional)")]
+    (alpha per voxel of distance, colours sRGB in 0..1; the material fields are optional)\n\n\
+Scene JSON (--scene, --dump-scene): every field below as a key, e.g.\n  \
+    {\"version\": 1, \"input\": {\"path\": \"brain.nii.gz\"}, \"preset\": \"mr-t2-brain\",\n  \
+    \"lobe\": {\"kind\": \"k\", \"n\": 40, \"v\": 4, \"geometry\": \"phong\"},\n  \
+    \"camera\": {\"view\": \"left\", \"azimuth\": 0, \"elevation\": 0, \"zoom\": 1, \"projection\": \"perspective\"},\n  \
+    \"lights\": [{\"azimuth\": 0, \"elevation\": 0, \"intensity\": 1}], \"size\": [512, 512], \"step\": 0.5}\n  \
+    (relative input paths are relative to the scene file)")]
 pub struct Args {
     // Boxed: the options are many, and main's subcommand enum should stay small.
     #[command(flatten)]
     opts: Box<Options>,
 }
 
-/// The options of `glint render` (boxed inside [`Args`]).
+/// The options of `glint render` (boxed inside [`Args`]). Every scene option is
+/// optional: unset, it keeps the scene file's value or the scene default.
 #[derive(clap::Args)]
 struct Options {
-    /// Volume to render (any format glint's io reads); without it, the built-in 3D
-    /// Shepp-Logan head phantom.
+    /// Volume to render (any format glint's io reads); without it (and without
+    /// --scene), the built-in phantom.
     input: Option<PathBuf>,
     /// Output PNG (written atomically).
     #[arg(short, long, default_value = "render.png")]
     output: PathBuf,
+    /// Start from this scene file; the flags below override its fields.
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
+    /// Write the resolved scene (every default chosen, plus the camera and transfer
+    /// function in world units) as JSON; `--scene` renders it again bit for bit.
+    #[arg(long, value_name = "FILE")]
+    dump_scene: Option<PathBuf>,
+    /// Built-in phantom to render when no input is given [default: shepp-logan].
+    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::ALL.map(|p| p.name())))]
+    phantom: Option<Phantom>,
+    /// Grid edge of the built-in phantom [default: 128].
+    #[arg(long, conflicts_with = "input")]
+    phantom_size: Option<usize>,
     /// Transfer-function and material preset [default: phantom for the phantom, ct-bone
     /// for CT-like volumes (minimum below -500), mr-t2-brain otherwise].
     #[arg(long, conflicts_with = "tf")]
@@ -52,45 +77,44 @@ struct Options {
     /// Custom transfer function from a JSON file (see below).
     #[arg(long)]
     tf: Option<PathBuf>,
-    /// composite (direct volume rendering), iso (first hit at --iso) or mip.
-    #[arg(long, default_value = "composite")]
-    mode: String,
+    /// How samples make a pixel [default: composite].
+    #[arg(long, value_parser = choice::<RenderMode>(RenderMode::ALL.map(|m| m.name())))]
+    mode: Option<RenderMode>,
     /// Iso value for --mode iso [default: the middle of the volume's range].
     #[arg(long, allow_negative_numbers = true)]
     iso: Option<f32>,
-    /// Named view in the volume's world frame (RAS+): anterior, posterior, left, right,
-    /// superior, inferior.
-    #[arg(long, default_value = "anterior")]
-    view: String,
+    /// Named view in the volume's world frame (RAS+) [default: anterior].
+    #[arg(long, value_parser = choice::<View>(View::ALL.map(|v| v.name())))]
+    view: Option<View>,
     /// Orbit the camera this many degrees about the view's up axis (towards the image's
-    /// right).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    azimuth: f64,
-    /// Orbit the camera this many degrees upwards.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    elevation: f64,
-    /// Magnification (1 frames what the transfer function makes visible).
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    zoom: f64,
-    /// perspective (30° field of view) or orthographic.
-    #[arg(long, default_value = "perspective")]
-    projection: String,
-    /// Sample distance along rays, in voxels of the smallest spacing.
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-    step: f64,
+    /// right) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    azimuth: Option<f64>,
+    /// Orbit the camera this many degrees upwards [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    elevation: Option<f64>,
+    /// Magnification; 1 frames what the transfer function makes visible [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    zoom: Option<f64>,
+    /// Projection (perspective: 30° field of view) [default: perspective].
+    #[arg(long, value_parser = choice::<Projection>(["perspective", "orthographic"]))]
+    projection: Option<Projection>,
+    /// Sample distance along rays, in voxels of the smallest spacing [default: 0.5].
+    #[arg(long, allow_negative_numbers = true)]
+    step: Option<f64>,
     /// Specular lobe: exact (cos^n), k (energy fit K_v), g (slope fit G_v), schlick,
-    /// gauss, minimax.
-    #[arg(long, default_value = "k")]
-    lobe: String,
+    /// gauss, minimax [default: k].
+    #[arg(long, value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
+    lobe: Option<LobeKind>,
     /// Shininess n [default: the preset's specular power].
     #[arg(long, allow_negative_numbers = true)]
     n: Option<f64>,
-    /// The power fits raise their base to 2^v.
-    #[arg(long, default_value_t = 4)]
-    v: u32,
-    /// Highlight geometry: phong (R·V) or blinn (N·H).
-    #[arg(long, default_value = "phong")]
-    geometry: String,
+    /// The power fits raise their base to 2^v [default: 4].
+    #[arg(long)]
+    v: Option<u32>,
+    /// Highlight geometry: phong (R·V) or blinn (N·H) [default: phong].
+    #[arg(long, value_parser = choice::<Geometry>(["phong", "blinn"]))]
+    geometry: Option<Geometry>,
     /// Override the preset's ambient coefficient.
     #[arg(long, allow_negative_numbers = true)]
     ambient: Option<f32>,
@@ -101,31 +125,32 @@ struct Options {
     #[arg(long, allow_negative_numbers = true)]
     specular: Option<f32>,
     /// Extra directional light at AZ,EL degrees from the view direction (towards the
-    /// image's right and top); repeatable. The headlight stays on.
-    #[arg(long = "light", value_name = "AZ,EL", allow_hyphen_values = true)]
-    lights: Vec<String>,
+    /// image's right and top), optionally with an intensity; repeatable.
+    #[arg(long = "light", value_name = "AZ,EL[,I]", allow_hyphen_values = true, value_parser = parse_light)]
+    lights: Vec<Light>,
     /// Turn the headlight off (then give at least one --light).
     #[arg(long)]
     no_headlight: bool,
-    /// Gradient-magnitude gate: samples whose gradient is below this fraction of the
-    /// value range per voxel get no directional shading (no random highlights in flat
-    /// regions).
-    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
-    gate: f64,
-    /// Image size WxH.
-    #[arg(long, default_value = "512x512")]
-    size: String,
-    /// Bits per PNG channel: 8 or 16.
-    #[arg(long, default_value_t = 8)]
-    depth: u8,
-    /// Grid edge of the built-in phantom.
-    #[arg(long, default_value_t = 128)]
-    phantom_size: usize,
+    /// Gradient-magnitude gate, a fraction of the value range per voxel: weaker
+    /// gradients get no directional shading (no random highlights in flat regions)
+    /// [default: 0.01].
+    #[arg(long, allow_negative_numbers = true)]
+    gate: Option<f64>,
+    /// Image size WxH [default: 512x512].
+    #[arg(long, value_parser = parse_size)]
+    size: Option<[u32; 2]>,
+    /// Bits per PNG channel.
+    #[arg(long, default_value = "8", value_parser = ["8", "16"])]
+    depth: String,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Print the time of each stage (read, field, classify, frame, encode, write) to
+    /// stderr.
+    #[arg(long)]
+    timings: bool,
     /// Benchmarking: render this many times and print ms per frame to stdout.
-    #[arg(long, default_value_t = 1, hide = true)]
+    #[arg(long, default_value_t = 1, hide = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     repeat: u32,
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
@@ -133,237 +158,280 @@ struct Options {
     /// Benchmarking: composite with the portable scalar loop instead of the SIMD one.
     #[arg(long, hide = true)]
     scalar: bool,
-    /// Benchmarking: write the resolved scene (camera, transfer function, material,
-    /// step, volume) as JSON, so scripts/bench-vtk can set VTK up identically.
-    #[arg(long, hide = true, value_name = "FILE")]
-    dump_scene: Option<PathBuf>,
 }
 
-fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
-    let bad = || format!("invalid --size '{s}': expected WxH, e.g. 512x512");
-    let (w, h) = s.split_once(['x', 'X']).with_context(bad)?;
-    Ok((
-        w.trim().parse().with_context(bad)?,
-        h.trim().parse().with_context(bad)?,
-    ))
+fn parse_size(s: &str) -> Result<[u32; 2], String> {
+    let bad = || format!("'{s}': expected WxH, e.g. 512x512");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    Ok([
+        w.trim().parse().map_err(|_| bad())?,
+        h.trim().parse().map_err(|_| bad())?,
+    ])
 }
 
-fn parse_light(s: &str) -> anyhow::Result<Light> {
-    let bad = || format!("invalid --light '{s}': expected AZ,EL in degrees, e.g. 45,30");
-    let (a, e) = s.split_once(',').with_context(bad)?;
-    let light = Light {
-        azimuth: a.trim().parse().with_context(bad)?,
-        elevation: e.trim().parse().with_context(bad)?,
-        intensity: 1.0,
+fn parse_light(s: &str) -> Result<Light, String> {
+    let bad = || format!("'{s}': expected AZ,EL or AZ,EL,INTENSITY in degrees, e.g. 45,30");
+    let parts: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    let (azimuth, elevation, intensity) = match parts[..] {
+        [a, e] => (a, e, 1.0),
+        [a, e, i] => (a, e, i as f32),
+        _ => return Err(bad()),
     };
-    light.validate()?;
+    let light = Light {
+        azimuth,
+        elevation,
+        intensity,
+    };
+    light.validate().map_err(|e| e.to_string())?;
     Ok(light)
 }
 
 /// Runs `glint render`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let args = *args.opts;
-    // Parse and check every flag before any work.
-    let (width, height) = parse_size(&args.size)?;
-    let depth = match args.depth {
-        8 => Depth::Eight,
-        16 => Depth::Sixteen,
-        d => bail!("invalid --depth {d}: expected 8 or 16"),
-    };
-    let view: View = args.view.parse()?;
-    let projection: Projection = args.projection.parse()?;
-    let kind: LobeKind = args.lobe.parse()?;
-    let geometry: Geometry = args.geometry.parse().map_err(anyhow::Error::msg)?;
-    let mut mode: Mode = args.mode.parse()?;
-    let extra_lights: Vec<Light> = args
-        .lights
-        .iter()
-        .map(|s| parse_light(s))
-        .collect::<anyhow::Result<_>>()?;
-    if args.no_headlight && extra_lights.is_empty() {
-        bail!("--no-headlight leaves no light: add at least one --light AZ,EL");
+    check_output_dir(&args.output)?;
+    let scene = build_scene(&args)?;
+    let mut renderer = Renderer::open(&scene.input).with_context(|| match &scene.input {
+        Input::Path(p) => format!("cannot read volume {}", p.display()),
+        Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
+    })?;
+    if args.scalar {
+        renderer.kernel = Kernel::Scalar;
     }
-    if !args.gate.is_finite() || !(0.0..=1.0).contains(&args.gate) {
-        bail!("invalid --gate {}: expected a fraction in 0..=1", args.gate);
-    }
-    if args.repeat == 0 || args.repeat > 10_000 {
-        bail!("invalid --repeat {}: expected 1..=10000", args.repeat);
-    }
-    if let Some(p) = &args.preset {
-        preset(p)?; // fail early on an unknown name
-    }
-    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            bail!(
-                "cannot write {}: directory {} does not exist",
-                args.output.display(),
-                dir.display()
-            );
-        }
-    }
-
-    let volume = match &args.input {
-        Some(path) => read_volume(path, &ReadOptions::default())
-            .with_context(|| format!("cannot read volume {}", path.display()))?,
-        None => phantom::shepp_logan(args.phantom_size)?,
-    };
-    let field = Field::new(&volume)?;
-    let (lo, hi) = field.range();
-
-    let (tf, material) = if let Some(path) = &args.tf {
-        let (tf, overrides) = TransferFunction::from_json_file(path)?;
-        (tf, overrides.apply(Default::default()))
-    } else {
-        let name = match (&args.preset, &args.input) {
-            (Some(p), _) => p.as_str(),
-            (None, None) => "phantom",
-            (None, Some(_)) if lo < -500.0 => "ct-bone",
-            (None, Some(_)) => "mr-t2-brain",
-        };
-        let p = preset(name)?;
-        if matches!(mode, Mode::Mip) && args.preset.is_none() {
-            // MIP without a preset: a grey ramp over the volume's range.
-            let ramp = TransferFunction::from_flat(
-                &[lo as f64, 0.0, (hi as f64).max(lo as f64 + 1e-6), 1.0],
-                &[lo as f64, 1.0, 1.0, 1.0],
-            )?;
-            (ramp, p.material())
-        } else {
-            (p.transfer_function(hi as f64)?, p.material())
-        }
-    };
-    let mut material = material;
-    if let Some(a) = args.ambient {
-        material.ambient = a;
-    }
-    if let Some(d) = args.diffuse {
-        material.diffuse = d;
-    }
-    if let Some(s) = args.specular {
-        material.specular = s;
-    }
-    if let Mode::Iso { threshold } = &mut mode {
-        *threshold = args.iso.unwrap_or((lo + hi) / 2.0);
-    } else if args.iso.is_some() {
-        bail!("--iso is only used with --mode iso");
-    }
-
-    let settings = RenderSettings {
-        width,
-        height,
-        step: args.step,
-        mode,
-        camera: CameraSpec {
-            view,
-            azimuth: args.azimuth,
-            elevation: args.elevation,
-            zoom: args.zoom,
-            projection,
-        },
-        background: [0.0; 3],
-        skip_empty: !args.no_skip,
-        kernel: if args.scalar {
-            Kernel::Scalar
-        } else {
-            Kernel::Auto
-        },
-    };
-    settings.validate()?;
-    let classify_start = Instant::now();
-    let classification = Classification::new(&field, &tf, &settings)?;
-    let classify_time = classify_start.elapsed();
-    let camera = classification.camera(&settings)?;
-    let mut lights = Vec::new();
-    if !args.no_headlight {
-        lights.push(Light::HEADLIGHT);
-    }
-    lights.extend(extra_lights);
-    let lights = lights
-        .iter()
-        .map(|l| (l.direction(&camera), l.intensity))
-        .collect();
-    let n = args.n.unwrap_or(material.power as f64);
-    if let Some(path) = &args.dump_scene {
-        let eye = camera.eye;
-        let focal = camera.eye + camera.forward * 100.0;
-        let scene = serde_json::json!({
-            "input": args.input,
-            "size": [width, height],
-            "projection": match projection { Projection::Perspective => "perspective", Projection::Orthographic => "orthographic" },
-            "eye": [eye.x, eye.y, eye.z],
-            "focal_point": [focal.x, focal.y, focal.z],
-            "view_up": [camera.up.x, camera.up.y, camera.up.z],
-            // Perspective: full vertical view angle in degrees; orthographic: half height in mm.
-            "view_angle_deg": 2.0 * (camera.half_height as f64).atan().to_degrees(),
-            "parallel_scale": camera.half_height,
-            "step_mm": args.step * field.min_spacing(),
-            "min_spacing_mm": field.min_spacing(),
-            "opacity": tf.opacity.iter().map(|&(x, a)| [x, a]).collect::<Vec<_>>(),
-            "color": tf.color.iter().map(|&(x, c)| [x, c[0], c[1], c[2]]).collect::<Vec<_>>(),
-            "ambient": material.ambient,
-            "diffuse": material.diffuse,
-            "specular": material.specular,
-            "power": n,
-            "shade": material.shade,
-        });
-        std::fs::write(path, serde_json::to_string_pretty(&scene)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
-    let gate = (args.gate * (hi - lo) as f64 / field.min_spacing()) as f32;
-    let shader = Shader::new(kind, n, args.v, geometry, material, lights, gate)?;
-
-    let total = u64::from(width) * u64::from(height) * u64::from(args.repeat);
-    let bar = if !args.quiet && std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::new(total);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} rendering [{bar:40}] {percent}% {elapsed_precise}",
-            )
-            .expect("static template")
-            .progress_chars("=> "),
-        );
-        Some(bar)
-    } else {
-        None
-    };
+    let resolved = renderer.resolve(&scene)?;
+    let bar = progress_bar(&args, &resolved.scene);
     let progress = |n: u64| {
         if let Some(b) = &bar {
             b.inc(n);
         }
     };
-    let mut image = None;
+    let mut rendered = renderer.render_resolved(resolved.clone(), &progress)?;
     let start = Instant::now();
-    for _ in 0..args.repeat {
-        image = Some(classification.render(&shader, &settings, &progress)?);
+    for _ in 1..args.repeat {
+        rendered = renderer.render_resolved(resolved.clone(), &progress)?;
     }
-    let elapsed = start.elapsed();
+    let more = start.elapsed();
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
     if args.repeat > 1 {
-        if let Some(img) = &image {
-            eprintln!(
-                "glint render: classified once in {:.2} ms; per frame {:?}",
-                classify_time.as_secs_f64() * 1e3,
-                img.stats
-            );
-        }
-        println!(
-            "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, step {})",
-            elapsed.as_secs_f64() * 1e3 / args.repeat as f64,
-            args.repeat,
-            width,
-            height,
-            kind.name(),
-            args.step
-        );
+        print_repeat(&args, &rendered, more);
     }
-    let image = image.expect("repeat >= 1");
-    image.write_png(&args.output, depth)?;
+    let depth = if args.depth == "16" {
+        Depth::Sixteen
+    } else {
+        Depth::Eight
+    };
+    let start = Instant::now();
+    let png = rendered
+        .image
+        .encode_png(depth)
+        .context("encoding the PNG")?;
+    let encode = start.elapsed();
+    let start = Instant::now();
+    glint_io::write_atomic(&args.output, |w| w.write_all(&png))?;
+    let write = start.elapsed();
+    if let Some(path) = &args.dump_scene {
+        dump_scene(path, &rendered.scene)?;
+    }
+    if args.timings {
+        print_timings(&rendered, encode, write);
+    }
     if !args.quiet {
         eprintln!("glint: wrote {}", args.output.display());
     }
     Ok(())
+}
+
+/// Refuses before any work when the output's directory does not exist.
+fn check_output_dir(output: &Path) -> anyhow::Result<()> {
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            bail!(
+                "cannot write {}: directory {} does not exist",
+                output.display(),
+                dir.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The scene file (or the default scene) with every given flag applied.
+fn build_scene(args: &Options) -> anyhow::Result<Scene> {
+    let mut scene = match &args.scene {
+        Some(path) => load_scene(path)?,
+        None => Scene::default(),
+    };
+    apply_input(args, &mut scene);
+    apply_classification(args, &mut scene)?;
+    apply_lighting(args, &mut scene)?;
+    let camera = &mut scene.camera;
+    set(&mut camera.view, args.view);
+    set(&mut camera.azimuth, args.azimuth);
+    set(&mut camera.elevation, args.elevation);
+    set(&mut camera.zoom, args.zoom);
+    set(&mut camera.projection, args.projection);
+    set(&mut scene.size, args.size);
+    set(&mut scene.step, args.step);
+    if args.no_skip {
+        scene.skip_empty = false;
+    }
+    Ok(scene)
+}
+
+/// `*field = value` when the flag was given.
+fn set<T>(field: &mut T, value: Option<T>) {
+    if let Some(v) = value {
+        *field = v;
+    }
+}
+
+/// Reads a scene file; a relative input path in it is relative to the file.
+fn load_scene(path: &Path) -> anyhow::Result<Scene> {
+    let mut scene = Scene::from_json_file(path)?;
+    if let Input::Path(p) = &mut scene.input {
+        if p.is_relative() {
+            if let Some(dir) = path.parent() {
+                *p = dir.join(&*p);
+            }
+        }
+    }
+    Ok(scene)
+}
+
+fn apply_input(args: &Options, scene: &mut Scene) {
+    if let Some(path) = &args.input {
+        scene.input = Input::Path(path.clone());
+    } else if args.phantom.is_some() || args.phantom_size.is_some() {
+        let (name, size) = match scene.input {
+            Input::Phantom { name, size } => (name, size),
+            Input::Path(_) => (Phantom::default(), 128),
+        };
+        scene.input = Input::Phantom {
+            name: args.phantom.unwrap_or(name),
+            size: args.phantom_size.unwrap_or(size),
+        };
+    }
+}
+
+fn apply_classification(args: &Options, scene: &mut Scene) -> anyhow::Result<()> {
+    if let Some(p) = &args.preset {
+        glint_render::preset(p)?; // fail before reading the volume
+        scene.preset = Some(p.clone());
+        scene.transfer_function = None;
+    }
+    if let Some(path) = &args.tf {
+        let file = TransferFunction::from_json_file(path)?;
+        scene.transfer_function = Some(file.tf);
+        scene.preset = None;
+        let m = &mut scene.material;
+        set(&mut m.ambient, file.material.ambient.map(Some));
+        set(&mut m.diffuse, file.material.diffuse.map(Some));
+        set(&mut m.specular, file.material.specular.map(Some));
+        set(&mut m.shade, file.material.shade.map(Some));
+        if file.power.is_some() {
+            scene.lobe.n = file.power;
+        }
+    }
+    set(&mut scene.mode, args.mode);
+    if args.iso.is_some() {
+        scene.iso = args.iso;
+    } else if args.mode.is_some_and(|m| m != RenderMode::Iso) {
+        scene.iso = None;
+    }
+    let m = &mut scene.material;
+    set(&mut m.ambient, args.ambient.map(Some));
+    set(&mut m.diffuse, args.diffuse.map(Some));
+    set(&mut m.specular, args.specular.map(Some));
+    Ok(())
+}
+
+fn apply_lighting(args: &Options, scene: &mut Scene) -> anyhow::Result<()> {
+    let lobe = &mut scene.lobe;
+    set(&mut lobe.kind, args.lobe);
+    set(&mut lobe.n, args.n.map(Some));
+    set(&mut lobe.v, args.v);
+    set(&mut lobe.geometry, args.geometry);
+    set(&mut scene.gate, args.gate);
+    if args.no_headlight {
+        scene
+            .lights
+            .retain(|l| (l.azimuth, l.elevation) != (0.0, 0.0));
+        if args.lights.is_empty() && scene.lights.is_empty() {
+            bail!("--no-headlight leaves no light: add at least one --light AZ,EL");
+        }
+    }
+    scene.lights.extend(args.lights.iter().copied());
+    Ok(())
+}
+
+fn progress_bar(args: &Options, scene: &Scene) -> Option<indicatif::ProgressBar> {
+    if args.quiet || !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let [w, h] = scene.size;
+    let bar = indicatif::ProgressBar::new(u64::from(w) * u64::from(h) * u64::from(args.repeat));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} rendering [{bar:40}] {percent}% {elapsed_precise}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
+    );
+    Some(bar)
+}
+
+/// Writes the resolved scene atomically (absolute input path, so it renders the same
+/// from anywhere).
+fn dump_scene(path: &Path, scene: &Scene) -> anyhow::Result<()> {
+    let mut scene = scene.clone();
+    if let Input::Path(p) = &mut scene.input {
+        *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
+    }
+    let json = scene.to_json()?;
+    glint_io::write_atomic(path, |w| w.write_all(json.as_bytes()))?;
+    Ok(())
+}
+
+/// `--repeat`: frames after the first (which classifies) in ms per frame.
+fn print_repeat(args: &Options, rendered: &Rendered, elapsed: Duration) {
+    let frames = args.repeat - 1;
+    eprintln!(
+        "glint render: classified once in {:.2} ms; per frame {:?}",
+        rendered.timings.classify.as_secs_f64() * 1e3,
+        rendered.image.stats
+    );
+    let s = &rendered.scene;
+    println!(
+        "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, step {})",
+        elapsed.as_secs_f64() * 1e3 / frames as f64,
+        frames,
+        s.size[0],
+        s.size[1],
+        s.lobe.kind.name(),
+        s.step
+    );
+}
+
+fn print_timings(rendered: &Rendered, encode: Duration, write: Duration) {
+    let t = rendered.timings;
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let total = t.read + t.field + t.classify + t.frame + encode + write;
+    eprintln!(
+        "glint render: read {:.1} ms, field {:.1} ms, classify {:.1} ms, frame {:.1} ms, \
+         encode {:.1} ms, write {:.1} ms, total {:.1} ms",
+        ms(t.read),
+        ms(t.field),
+        ms(t.classify),
+        ms(t.frame),
+        ms(encode),
+        ms(write),
+        ms(total)
+    );
 }
 
 #[cfg(test)]
@@ -384,8 +452,16 @@ mod tests {
         let out = dir.path().join("out.png");
         let mut argv = vec!["glint", "-q", "-o", out.to_str().unwrap()];
         argv.extend_from_slice(extra);
-        let cli = Cli::try_parse_from(argv).unwrap();
-        let result = run(cli.args);
+        // A flag clap refuses counts as the command's error (main prints its first line).
+        let result = match Cli::try_parse_from(argv) {
+            Ok(cli) => run(cli.args),
+            Err(e) => Err(anyhow::anyhow!(e
+                .to_string()
+                .lines()
+                .next()
+                .unwrap_or_default()
+                .to_string())),
+        };
         let left = std::fs::read_dir(dir.path()).unwrap().count() > 0;
         (result, left, dir)
     }
@@ -482,10 +558,111 @@ mod tests {
 
     #[test]
     fn size_and_light_parsing() {
-        assert_eq!(parse_size("640x480").unwrap(), (640, 480));
-        assert_eq!(parse_size("64X48").unwrap(), (64, 48));
+        assert_eq!(parse_size("640x480").unwrap(), [640, 480]);
+        assert_eq!(parse_size("64X48").unwrap(), [64, 48]);
         assert!(parse_size("64").is_err());
         let l = parse_light("-30,15").unwrap();
-        assert_eq!((l.azimuth, l.elevation), (-30.0, 15.0));
+        assert_eq!((l.azimuth, l.elevation, l.intensity), (-30.0, 15.0, 1.0));
+        assert_eq!(parse_light("10,20,0.5").unwrap().intensity, 0.5);
+        assert!(parse_light("1,2,3,4").is_err());
+    }
+
+    /// Runs `glint render ARGS` in `dir`, writing `name`; returns the PNG's bytes.
+    fn render_to(dir: &Path, name: &str, extra: &[&str]) -> Vec<u8> {
+        let out = dir.join(name);
+        let mut argv = vec!["glint", "-q", "-o", out.to_str().unwrap()];
+        argv.extend_from_slice(extra);
+        run(Cli::try_parse_from(argv).unwrap().args).unwrap();
+        std::fs::read(out).unwrap()
+    }
+
+    #[test]
+    fn a_dumped_scene_renders_the_same_image_bit_for_bit() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("scene.json");
+        let small = ["--size", "40x32", "--phantom-size", "40"];
+        for extra in [
+            &[][..],
+            &["--mode", "mip", "--projection", "orthographic"][..],
+            &[
+                "--mode",
+                "iso",
+                "--view",
+                "left",
+                "--lobe",
+                "schlick",
+                "--light",
+                "-40,20,0.5",
+            ][..],
+        ] {
+            let mut argv = small.to_vec();
+            argv.extend_from_slice(extra);
+            argv.extend(["--dump-scene", json.to_str().unwrap()]);
+            let first = render_to(dir.path(), "a.png", &argv);
+            let again = render_to(dir.path(), "b.png", &["--scene", json.to_str().unwrap()]);
+            assert_eq!(first, again, "{extra:?}");
+            // The dump names what was chosen.
+            let text = std::fs::read_to_string(&json).unwrap();
+            let scene = Scene::from_json(&text).unwrap();
+            assert!(
+                scene.lobe.n.is_some() && scene.material.specular.is_some(),
+                "{text}"
+            );
+            assert!(scene.derived.is_some(), "{text}");
+        }
+        // Flags override the file: another lobe changes the image.
+        let other = render_to(
+            dir.path(),
+            "c.png",
+            &[
+                "--scene",
+                json.to_str().unwrap(),
+                "--lobe",
+                "exact",
+                "--n",
+                "5",
+            ],
+        );
+        let base = render_to(dir.path(), "d.png", &["--scene", json.to_str().unwrap()]);
+        assert_ne!(other, base);
+    }
+
+    #[test]
+    fn bad_scene_files_fail_without_output() {
+        let dir = tempfile::tempdir().unwrap();
+        let cases = [
+            (
+                "unknown.json",
+                r#"{"version": 1, "colour": [1, 0, 0]}"#,
+                "colour",
+            ),
+            ("future.json", r#"{"version": 99}"#, "version 99"),
+            ("lobe.json", r#"{"lobe": {"kind": "cosine"}}"#, "cosine"),
+            (
+                "tf.json",
+                r#"{"transfer_function": {"opacity": [[1, 0], [0, 1]], "color": [[0, 1, 1, 1]]}}"#,
+                "increasing",
+            ),
+            (
+                "truncated.json",
+                r#"{"version": 1, "size": [64"#,
+                "scene JSON",
+            ),
+        ];
+        for (name, text, needle) in cases {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            let (result, left, _out) = run_in_tmp(&["--scene", path.to_str().unwrap()]);
+            let err = format!("{:#}", result.expect_err(name));
+            assert!(
+                err.contains(needle) && err.contains(name),
+                "{name}: '{err}'"
+            );
+            assert!(!err.contains('\n'), "{name}: one line expected: {err}");
+            assert!(!left, "{name} left a file");
+        }
+        let (result, left, _out) = run_in_tmp(&["--scene", "/nonexistent/scene.json"]);
+        assert!(format!("{:#}", result.unwrap_err()).contains("/nonexistent/scene.json"));
+        assert!(!left);
     }
 }

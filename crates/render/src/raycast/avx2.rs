@@ -247,7 +247,7 @@ pub(super) unsafe fn composite_tile(
     if kept.len() > 0 {
         light(c, kept, views, colors, buffers);
     }
-    let bg = c.settings.background;
+    let bg = c.frame.background;
     for (col, &op) in colors.iter().zip(&alpha[start..]) {
         rgb.push([
             col[0] + (1.0 - op) * bg[0],

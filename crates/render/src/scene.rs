@@ -1,0 +1,778 @@
+//! The one description of a render: [`Scene`], a serialisable value (versioned JSON) that
+//! every front end builds (the command line, compare mode, the viewer, the Python
+//! module, benches and tests), and [`Renderer`], which turns scenes into images.
+//!
+//! [`Scene::resolve`] is the only place where defaults are chosen (the preset guessed
+//! from the data, the shininess from the preset, the iso value from the range, ...);
+//! each choice is written back into the resolved scene, so a dumped scene renders the
+//! same image again.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glint_io::{read_volume, ReadOptions, Volume};
+use glint_lobe::{Geometry, LobeKind};
+use serde::{Deserialize, Serialize};
+
+use crate::camera::{Camera, CameraSpec, Projection};
+use crate::error::RenderError;
+use crate::field::Field;
+use crate::image::Image;
+use crate::phantom::Phantom;
+use crate::presets::preset;
+use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel, Mode};
+use crate::shading::{Light, Shader, MAX_LIGHTS};
+use crate::tf::{Material, MaterialOverrides, TransferFunction};
+
+/// The scene schema version this build reads and writes.
+pub const SCENE_VERSION: u32 = 1;
+
+/// The largest scene file accepted (a scene is a few kilobytes; an inline transfer
+/// function of a few hundred points stays far below this).
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// Shininess used when neither the scene nor a preset gives one (VTK's usual volume
+/// specular power in Slicer's CT presets).
+pub const DEFAULT_SHININESS: f64 = 10.0;
+
+/// A render, described completely: what to read, how to classify it, how to light and
+/// view it, and the image size. Fields left unset are chosen by [`Scene::resolve`].
+///
+/// ```
+/// use glint_render::{Input, Phantom, Renderer, Scene};
+///
+/// let scene = Scene {
+///     input: Input::Phantom { name: Phantom::SheppLogan, size: 32 },
+///     size: [32, 32],
+///     ..Scene::default()
+/// };
+/// let json = scene.to_json().unwrap();
+/// assert_eq!(Scene::from_json(&json).unwrap(), scene);
+/// let mut renderer = Renderer::open(&scene.input).unwrap();
+/// let rendered = renderer.render(&scene, &|_| {}).unwrap();
+/// assert_eq!(rendered.image.rgb.len(), 32 * 32);
+/// // The resolved scene names what was chosen: the phantom's preset and its power.
+/// assert_eq!(rendered.scene.preset.as_deref(), Some("phantom"));
+/// assert!(rendered.scene.lobe.n.is_some());
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Scene {
+    /// Schema version ([`SCENE_VERSION`]).
+    pub version: u32,
+    /// The volume.
+    pub input: Input,
+    /// How samples along a ray make a pixel.
+    pub mode: RenderMode,
+    /// Iso value for [`RenderMode::Iso`] (default: the middle of the value range).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iso: Option<f32>,
+    /// Transfer-function and material preset (default: guessed from the data); unused
+    /// when `transfer_function` is given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
+    /// An inline transfer function, which replaces the preset's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transfer_function: Option<TransferFunction>,
+    /// Material coefficients that replace the preset's.
+    pub material: MaterialOverrides,
+    /// The specular lobe.
+    pub lobe: LobeSpec,
+    /// Directional lights relative to the camera (the headlight is `(0, 0)`).
+    pub lights: Vec<Light>,
+    /// Camera placement.
+    pub camera: CameraSpec,
+    /// Image width and height in pixels.
+    pub size: [u32; 2],
+    /// Sample distance along rays, in voxels of the smallest spacing.
+    pub step: f64,
+    /// Gradient-magnitude gate, as a fraction of the value range per voxel: samples
+    /// with a weaker gradient get no directional shading.
+    pub gate: f64,
+    /// Empty-space skipping (never changes the image, only the speed).
+    pub skip_empty: bool,
+    /// Background colour, linear RGB.
+    pub background: [f32; 3],
+    /// Written by a render for other tools (e.g. scripts/bench_vtk.py): the camera
+    /// and transfer function that were used, in world units. Ignored on input.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub derived: Option<Derived>,
+}
+
+impl Default for Scene {
+    /// The built-in phantom, composite, lobe `k` (n from the preset, v = 4, Phong),
+    /// headlight, anterior perspective view, 512x512, step 0.5 voxel.
+    fn default() -> Self {
+        Scene {
+            version: SCENE_VERSION,
+            input: Input::default(),
+            mode: RenderMode::Composite,
+            iso: None,
+            preset: None,
+            transfer_function: None,
+            material: MaterialOverrides::default(),
+            lobe: LobeSpec::default(),
+            lights: vec![Light::HEADLIGHT],
+            camera: CameraSpec::default(),
+            size: [512, 512],
+            step: 0.5,
+            gate: 0.01,
+            skip_empty: true,
+            background: [0.0; 3],
+            derived: None,
+        }
+    }
+}
+
+/// Where the volume comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum Input {
+    /// A file (or DICOM directory) any glint reader opens.
+    Path(PathBuf),
+    /// A built-in phantom sampled on a `size`^3 grid.
+    Phantom {
+        /// Which phantom.
+        name: Phantom,
+        /// Grid edge in voxels.
+        size: usize,
+    },
+}
+
+impl Default for Input {
+    /// The default phantom at 128^3.
+    fn default() -> Self {
+        Input::Phantom {
+            name: Phantom::default(),
+            size: 128,
+        }
+    }
+}
+
+impl Input {
+    /// Reads the file or builds the phantom.
+    pub fn open(&self) -> Result<Volume, RenderError> {
+        match self {
+            Input::Path(path) => Ok(read_volume(path, &ReadOptions::default())?),
+            Input::Phantom { name, size } => name.volume(*size),
+        }
+    }
+}
+
+/// How samples along a ray make a pixel (the scene's form of [`Mode`], whose iso value
+/// the scene keeps in [`Scene::iso`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RenderMode {
+    /// Front-to-back compositing of shaded, classified samples.
+    #[default]
+    Composite,
+    /// The first point where the value reaches the iso value, shaded and opaque.
+    Iso,
+    /// Maximum intensity projection.
+    Mip,
+}
+
+impl RenderMode {
+    /// Every mode, in the order `--help` lists them.
+    pub const ALL: [RenderMode; 3] = [RenderMode::Composite, RenderMode::Iso, RenderMode::Mip];
+
+    /// The name users type.
+    pub fn name(self) -> &'static str {
+        match self {
+            RenderMode::Composite => "composite",
+            RenderMode::Iso => "iso",
+            RenderMode::Mip => "mip",
+        }
+    }
+}
+
+impl std::str::FromStr for RenderMode {
+    type Err = RenderError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let key = s.trim().to_ascii_lowercase();
+        RenderMode::ALL
+            .into_iter()
+            .find(|m| m.name() == key)
+            .ok_or_else(|| {
+                RenderError::Parameter(format!(
+                    "unknown mode '{s}': expected composite, iso or mip"
+                ))
+            })
+    }
+}
+
+/// The specular lobe of a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LobeSpec {
+    /// Which lobe.
+    #[serde(with = "by_name")]
+    pub kind: LobeKind,
+    /// Shininess n (default: the preset's specular power).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n: Option<f64>,
+    /// The power fits raise their base to 2^v.
+    pub v: u32,
+    /// Phong (R·V) or Blinn (N·H).
+    #[serde(with = "by_name")]
+    pub geometry: Geometry,
+}
+
+impl Default for LobeSpec {
+    /// The paper's lobe: K_4, Phong geometry, n from the preset.
+    fn default() -> Self {
+        LobeSpec {
+            kind: LobeKind::EnergyFit,
+            n: None,
+            v: 4,
+            geometry: Geometry::Phong,
+        }
+    }
+}
+
+/// Serde through a type's name (`FromStr` and `Display`), for glint-lobe's enums,
+/// which do not depend on serde.
+mod by_name {
+    use std::fmt::Display;
+    use std::str::FromStr;
+
+    use serde::{de::Error, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<T: Display, S: Serializer>(x: &T, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(x)
+    }
+
+    pub fn deserialize<'de, T, D>(d: D) -> Result<T, D::Error>
+    where
+        T: FromStr,
+        T::Err: Display,
+        D: Deserializer<'de>,
+    {
+        let name = String::deserialize(d)?;
+        name.parse().map_err(D::Error::custom)
+    }
+}
+
+/// What a render used, in world units, for tools that rebuild the scene elsewhere
+/// (VTK in scripts/bench_vtk.py). Written by [`Renderer::render`]; ignored on input.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Derived {
+    /// Eye position, mm (RAS+).
+    pub eye: [f32; 3],
+    /// A point on the view axis, mm.
+    pub focal_point: [f32; 3],
+    /// Up vector.
+    pub view_up: [f32; 3],
+    /// Perspective: full vertical view angle, degrees.
+    pub view_angle_deg: f64,
+    /// Orthographic: half the image height, mm.
+    pub parallel_scale: f32,
+    /// Sample distance, mm.
+    pub step_mm: f64,
+    /// The smallest voxel spacing, mm (the transfer function's unit distance).
+    pub min_spacing_mm: f64,
+    /// The transfer function used.
+    pub transfer_function: TransferFunction,
+}
+
+/// A scene with every default chosen, and what the ray caster needs to render it.
+#[derive(Clone, Debug)]
+pub struct Resolved {
+    /// The scene with every default written in.
+    pub scene: Scene,
+    /// The transfer function.
+    pub tf: TransferFunction,
+    /// What the classification depends on.
+    pub classify: ClassifySettings,
+    /// What the frame depends on.
+    pub frame: FrameSettings,
+    /// The lighting.
+    pub shader: Shader,
+}
+
+impl Scene {
+    /// Parses a scene from JSON, checking the version.
+    pub fn from_json(text: &str) -> Result<Scene, RenderError> {
+        let scene: Scene = serde_json::from_str(text)
+            .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
+        if scene.version == 0 || scene.version > SCENE_VERSION {
+            return Err(RenderError::Scene(format!(
+                "scene version {} is not supported (this glint reads version {SCENE_VERSION})",
+                scene.version
+            )));
+        }
+        Ok(scene)
+    }
+
+    /// Reads a scene file (at most [`MAX_SCENE_BYTES`]).
+    pub fn from_json_file(path: &std::path::Path) -> Result<Scene, RenderError> {
+        let file = |e: RenderError| RenderError::SceneFile {
+            path: path.to_path_buf(),
+            source: Box::new(e),
+        };
+        let meta = std::fs::metadata(path).map_err(|e| file(RenderError::Io(e)))?;
+        if meta.len() > MAX_SCENE_BYTES {
+            return Err(file(RenderError::Scene(format!(
+                "{} bytes is too large for a scene (limit {MAX_SCENE_BYTES})",
+                meta.len()
+            ))));
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| file(RenderError::Io(e)))?;
+        Scene::from_json(&text).map_err(file)
+    }
+
+    /// The scene as pretty-printed JSON.
+    pub fn to_json(&self) -> Result<String, RenderError> {
+        serde_json::to_string_pretty(self).map_err(|e| RenderError::Scene(e.to_string()))
+    }
+
+    /// Reads the input and resolves the scene against it (one-shot; a [`Renderer`]
+    /// keeps the volume and classification across scenes).
+    pub fn resolve(&self) -> Result<Resolved, RenderError> {
+        let field = Field::new(&self.input.open()?)?;
+        self.resolve_for(&field)
+    }
+
+    /// Chooses every default for `field` and builds the settings and shader: the one
+    /// place where glint picks anything the user did not say.
+    pub fn resolve_for(&self, field: &Field) -> Result<Resolved, RenderError> {
+        let mut scene = self.clone();
+        scene.derived = None;
+        let (lo, hi) = field.range();
+        let (tf, base, power) = scene.resolve_classification(lo, hi)?;
+        let material = scene.material.apply(base);
+        scene.material = MaterialOverrides {
+            ambient: Some(material.ambient),
+            diffuse: Some(material.diffuse),
+            specular: Some(material.specular),
+            shade: Some(material.shade),
+        };
+        let n = *scene.lobe.n.get_or_insert(power);
+        let mode = match (scene.mode, scene.iso) {
+            (RenderMode::Iso, iso) => Mode::Iso {
+                threshold: *scene.iso.get_or_insert(iso.unwrap_or((lo + hi) / 2.0)),
+            },
+            (_, Some(_)) => {
+                return Err(RenderError::Parameter(
+                    "an iso value is only used in iso mode".into(),
+                ))
+            }
+            (RenderMode::Composite, None) => Mode::Composite,
+            (RenderMode::Mip, None) => Mode::Mip,
+        };
+        if scene.lights.is_empty() {
+            return Err(RenderError::Parameter(
+                "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0)".into(),
+            ));
+        }
+        if scene.lights.len() > MAX_LIGHTS {
+            return Err(RenderError::Parameter(format!(
+                "{} lights: at most {MAX_LIGHTS}",
+                scene.lights.len()
+            )));
+        }
+        if !scene.gate.is_finite() || !(0.0..=1.0).contains(&scene.gate) {
+            return Err(RenderError::Parameter(format!(
+                "gate {}: expected a fraction in 0..=1",
+                scene.gate
+            )));
+        }
+        let gate = (scene.gate * (hi - lo) as f64 / field.min_spacing()) as f32;
+        let classify = ClassifySettings {
+            mode,
+            step: scene.step,
+            skip_empty: scene.skip_empty,
+        };
+        classify.validate()?;
+        let frame = FrameSettings {
+            width: scene.size[0],
+            height: scene.size[1],
+            camera: scene.camera,
+            background: scene.background,
+            kernel: Kernel::Auto,
+        };
+        frame.validate()?;
+        let lobe = scene.lobe;
+        let shader = Shader::new(
+            lobe.kind,
+            n,
+            lobe.v,
+            lobe.geometry,
+            material,
+            scene.lights.clone(),
+            gate,
+        )?;
+        Ok(Resolved {
+            scene,
+            tf,
+            classify,
+            frame,
+            shader,
+        })
+    }
+
+    /// The transfer function, the material it comes with and the default shininess,
+    /// for a volume whose values span `lo..=hi`; writes the preset (or the MIP ramp)
+    /// that was chosen back into the scene.
+    fn resolve_classification(
+        &mut self,
+        lo: f32,
+        hi: f32,
+    ) -> Result<(TransferFunction, Material, f64), RenderError> {
+        if let Some(tf) = &self.transfer_function {
+            tf.validate()?;
+            let power = match &self.preset {
+                Some(name) => preset(name)?.specular_power(),
+                None => DEFAULT_SHININESS,
+            };
+            return Ok((tf.clone(), Material::default(), power));
+        }
+        let name = match (&self.preset, &self.input) {
+            (Some(p), _) => p.clone(),
+            (None, Input::Phantom { .. }) => "phantom".into(),
+            // Hounsfield units reach air at -1000: CT.
+            (None, Input::Path(_)) if lo < -500.0 => "ct-bone".into(),
+            (None, Input::Path(_)) => "mr-t2-brain".into(),
+        };
+        let p = preset(&name)?;
+        if self.mode == RenderMode::Mip && self.preset.is_none() {
+            // MIP without a preset: a grey ramp over the volume's range, written back
+            // as an inline transfer function.
+            let ramp = TransferFunction::from_flat(
+                &[lo as f64, 0.0, (hi as f64).max(lo as f64 + 1e-6), 1.0],
+                &[lo as f64, 1.0, 1.0, 1.0],
+            )?;
+            self.transfer_function = Some(ramp.clone());
+            return Ok((ramp, p.material(), p.specular_power()));
+        }
+        self.preset = Some(p.name.to_string());
+        Ok((
+            p.transfer_function(hi as f64)?,
+            p.material(),
+            p.specular_power(),
+        ))
+    }
+}
+
+/// How long each stage of a render took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// Reading (and decompressing) the input, or building the phantom.
+    pub read: Duration,
+    /// Building the field: values, gradients, macro cells.
+    pub field: Duration,
+    /// Classifying (zero when the classification was reused).
+    pub classify: Duration,
+    /// Casting the rays of the frame.
+    pub frame: Duration,
+}
+
+/// A rendered image and the resolved scene that made it.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image.
+    pub image: Image,
+    /// The scene with every default written in, and [`Scene::derived`] filled.
+    pub scene: Scene,
+    /// Stage times (read and field from [`Renderer::open`]).
+    pub timings: Timings,
+}
+
+/// Renders scenes of one volume, keeping the field and the last classification, so
+/// frames that change only the camera, lights, lobe or size do not classify again (an
+/// interactive viewer, a notebook rendering many views).
+pub struct Renderer {
+    field: Arc<Field>,
+    classification: Option<(TransferFunction, Arc<Classification>)>,
+    /// Which compositing loop frames use (the SIMD one by default).
+    pub kernel: Kernel,
+    opened: Timings,
+}
+
+impl Renderer {
+    /// Reads `input` and builds its field.
+    pub fn open(input: &Input) -> Result<Renderer, RenderError> {
+        let start = Instant::now();
+        let volume = input.open()?;
+        let read = start.elapsed();
+        let mut renderer = Renderer::from_volume(&volume)?;
+        renderer.opened.read = read;
+        Ok(renderer)
+    }
+
+    /// A renderer of a volume already in memory.
+    pub fn from_volume(volume: &Volume) -> Result<Renderer, RenderError> {
+        let start = Instant::now();
+        let field = Arc::new(Field::new(volume)?);
+        Ok(Renderer {
+            field,
+            classification: None,
+            kernel: Kernel::Auto,
+            opened: Timings {
+                field: start.elapsed(),
+                ..Timings::default()
+            },
+        })
+    }
+
+    /// The field every scene is rendered from.
+    pub fn field(&self) -> &Arc<Field> {
+        &self.field
+    }
+
+    /// Resolves `scene` against this renderer's volume ([`Scene::resolve_for`]).
+    pub fn resolve(&self, scene: &Scene) -> Result<Resolved, RenderError> {
+        let mut resolved = scene.resolve_for(&self.field)?;
+        resolved.frame.kernel = self.kernel;
+        Ok(resolved)
+    }
+
+    /// The camera a render of `scene` uses (it frames what the scene's transfer
+    /// function makes visible, so it classifies, and keeps the classification).
+    pub fn camera(&mut self, scene: &Scene) -> Result<Camera, RenderError> {
+        let resolved = self.resolve(scene)?;
+        let (class, _) = self.classification(&resolved.tf, &resolved.classify)?;
+        class.camera(&resolved.frame)
+    }
+
+    /// The classification for `tf` and `settings`: the last one when they are the
+    /// same, else a new one (which replaces it). Returns it and whether it was built.
+    pub fn classification(
+        &mut self,
+        tf: &TransferFunction,
+        settings: &ClassifySettings,
+    ) -> Result<(Arc<Classification>, bool), RenderError> {
+        if let Some((t, c)) = &self.classification {
+            if t == tf && c.settings() == settings {
+                return Ok((c.clone(), false));
+            }
+        }
+        let c = Arc::new(Classification::new(self.field.clone(), tf, settings)?);
+        self.classification = Some((tf.clone(), c.clone()));
+        Ok((c, true))
+    }
+
+    /// Renders `scene` (its input is not read again: the renderer's volume is used).
+    /// `progress` is called with the number of pixels finished after each tile.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Rendered, RenderError> {
+        let resolved = self.resolve(scene)?;
+        self.render_resolved(resolved, progress)
+    }
+
+    /// Renders a scene resolved by [`Renderer::resolve`].
+    pub fn render_resolved(
+        &mut self,
+        resolved: Resolved,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Rendered, RenderError> {
+        let start = Instant::now();
+        let (class, built) = self.classification(&resolved.tf, &resolved.classify)?;
+        let classify = if built {
+            start.elapsed()
+        } else {
+            Duration::ZERO
+        };
+        let start = Instant::now();
+        let image = class.render(&resolved.shader, &resolved.frame, progress)?;
+        let frame = start.elapsed();
+        let camera = class.camera(&resolved.frame)?;
+        let mut scene = resolved.scene;
+        scene.derived = Some(derived(&camera, &self.field, &resolved.tf, scene.step));
+        Ok(Rendered {
+            image,
+            scene,
+            timings: Timings {
+                classify,
+                frame,
+                ..self.opened
+            },
+        })
+    }
+}
+
+fn derived(camera: &Camera, field: &Field, tf: &TransferFunction, step: f64) -> Derived {
+    let focal = camera.eye + camera.forward * 100.0;
+    Derived {
+        eye: camera.eye.to_array(),
+        focal_point: focal.to_array(),
+        view_up: camera.up.to_array(),
+        view_angle_deg: match camera.projection {
+            Projection::Perspective => 2.0 * (camera.half_height as f64).atan().to_degrees(),
+            Projection::Orthographic => crate::camera::FIELD_OF_VIEW_DEG,
+        },
+        parallel_scale: camera.half_height,
+        step_mm: step * field.min_spacing(),
+        min_spacing_mm: field.min_spacing(),
+        transfer_function: tf.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> Scene {
+        Scene {
+            input: Input::Phantom {
+                name: Phantom::SheppLogan,
+                size: 24,
+            },
+            size: [24, 20],
+            ..Scene::default()
+        }
+    }
+
+    #[test]
+    fn json_round_trip_keeps_every_field() {
+        let mut scene = small();
+        scene.mode = RenderMode::Iso;
+        scene.iso = Some(0.25);
+        scene.lobe = LobeSpec {
+            kind: LobeKind::Schlick,
+            n: Some(33.0),
+            v: 3,
+            geometry: Geometry::Blinn,
+        };
+        scene.lights.push(Light {
+            azimuth: -40.0,
+            elevation: 20.0,
+            intensity: 0.5,
+        });
+        scene.material.specular = Some(0.7);
+        let json = scene.to_json().unwrap();
+        assert!(json.contains("\"version\": 1"), "{json}");
+        assert!(
+            json.contains("\"schlick\"") && json.contains("\"blinn\""),
+            "{json}"
+        );
+        assert_eq!(Scene::from_json(&json).unwrap(), scene);
+    }
+
+    #[test]
+    fn missing_fields_take_defaults_and_unknown_ones_are_refused() {
+        assert_eq!(Scene::from_json("{}").unwrap(), Scene::default());
+        let err = Scene::from_json(r#"{"colour": 1}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("colour"), "{err}");
+        let err = Scene::from_json(r#"{"version": 7}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("version 7"), "{err}");
+        let err = Scene::from_json(r#"{"lobe": {"kind": "cosine"}}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("cosine"), "{err}");
+    }
+
+    #[test]
+    fn resolution_writes_its_choices_back_and_is_idempotent() {
+        let field = Field::new(&small().input.open().unwrap()).unwrap();
+        for mode in RenderMode::ALL {
+            let scene = Scene { mode, ..small() };
+            let first = scene.resolve_for(&field).unwrap();
+            let s = &first.scene;
+            assert!(s.lobe.n.is_some() && s.material.ambient.is_some());
+            assert!(s.preset.is_some() || s.transfer_function.is_some());
+            assert_eq!(s.iso.is_some(), mode == RenderMode::Iso);
+            // Resolving the resolved scene chooses nothing new.
+            let again = s.resolve_for(&field).unwrap();
+            assert_eq!(&again.scene, s, "{mode:?}");
+            assert_eq!(again.tf, first.tf);
+        }
+    }
+
+    #[test]
+    fn bad_scenes_are_refused_with_the_reason() {
+        let field = Field::new(&small().input.open().unwrap()).unwrap();
+        let cases: Vec<(Scene, &str)> = vec![
+            (
+                Scene {
+                    lights: vec![],
+                    ..small()
+                },
+                "no light",
+            ),
+            (
+                Scene {
+                    iso: Some(1.0),
+                    ..small()
+                },
+                "iso",
+            ),
+            (
+                Scene {
+                    preset: Some("ct-nonsense".into()),
+                    ..small()
+                },
+                "ct-nonsense",
+            ),
+            (
+                Scene {
+                    step: 0.0,
+                    ..small()
+                },
+                "step",
+            ),
+            (
+                Scene {
+                    size: [0, 4],
+                    ..small()
+                },
+                "image size",
+            ),
+            (
+                Scene {
+                    gate: f64::NAN,
+                    ..small()
+                },
+                "gate",
+            ),
+        ];
+        for (scene, needle) in cases {
+            let err = scene.resolve_for(&field).unwrap_err().to_string();
+            assert!(err.contains(needle), "'{err}' lacks '{needle}'");
+        }
+    }
+
+    #[test]
+    fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
+        let scene = small();
+        let mut r = Renderer::open(&scene.input).unwrap();
+        let first = r.render(&scene, &|_| {}).unwrap();
+        assert!(first.timings.classify > Duration::ZERO);
+        // Another view and lobe: same classification.
+        let moved = Scene {
+            camera: CameraSpec {
+                azimuth: 30.0,
+                ..scene.camera
+            },
+            lobe: LobeSpec {
+                kind: LobeKind::Exact,
+                ..scene.lobe
+            },
+            ..scene.clone()
+        };
+        let second = r.render(&moved, &|_| {}).unwrap();
+        assert_eq!(second.timings.classify, Duration::ZERO);
+        assert_ne!(second.image.rgb, first.image.rgb);
+        // Another step: classified again, and the image equals a fresh renderer's.
+        let finer = Scene {
+            step: 0.25,
+            ..scene.clone()
+        };
+        let third = r.render(&finer, &|_| {}).unwrap();
+        assert!(third.timings.classify > Duration::ZERO);
+        let fresh = Renderer::open(&scene.input)
+            .unwrap()
+            .render(&finer, &|_| {})
+            .unwrap();
+        assert_eq!(third.image, fresh.image);
+    }
+}
