@@ -6,8 +6,7 @@
 
 use numpy::ndarray::{ArrayView3, ShapeBuilder as _};
 use numpy::{
-    Element, PyArray3, PyArrayDyn, PyArrayMethods as _,
-    PyUntypedArray, PyUntypedArrayMethods as _,
+    Element, PyArray3, PyArrayDyn, PyArrayMethods as _, PyUntypedArray, PyUntypedArrayMethods as _,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;

@@ -125,7 +125,10 @@ impl Unit {
         let arr = arrays::as_ndarray(cos, "cos")?;
         arrays::require_contiguous(arr, "cos")?;
         let a = arr.cast::<PyArrayDyn<f64>>().map_err(|_| {
-            PyTypeError::new_err(format!("cos must be float64, got {}", arrays::dtype_name(arr)))
+            PyTypeError::new_err(format!(
+                "cos must be float64, got {}",
+                arrays::dtype_name(arr)
+            ))
         })?;
         let values: Vec<f64> = a.try_readonly()?.as_array().iter().copied().collect();
         let unit = Arc::clone(&self.unit);
@@ -205,9 +208,7 @@ fn eval_codes(
             n: u32::try_from(n).map_err(|_| at(format!("n = {n} out of range")))?,
             ks,
         };
-        let out = unit
-            .eval(&input)
-            .map_err(|e| at(errors::one_line(&e)))?;
+        let out = unit.eval(&input).map_err(|e| at(errors::one_line(&e)))?;
         rgb.extend_from_slice(&out.rgb);
     }
     Ok(rgb)

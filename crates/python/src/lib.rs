@@ -16,7 +16,10 @@
 mod arrays;
 mod errors;
 mod hw;
+mod json;
 mod lobe;
+mod render;
+mod scene;
 mod volume;
 
 use pyo3::prelude::*;
@@ -25,6 +28,10 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<volume::Volume>()?;
+    m.add_class::<scene::Scene>()?;
+    m.add_class::<render::Renderer>()?;
+    m.add_class::<render::Image>()?;
+    m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(volume::read, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe_kinds, m)?)?;

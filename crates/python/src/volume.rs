@@ -147,8 +147,8 @@ impl Volume {
                 "slope {slope} and intercept {intercept} must be finite, slope non-zero"
             )));
         }
-        let mut v = glint_io::Volume::new(dims, spacing, samples)
-            .map_err(|e| errors::value_error(&e))?;
+        let mut v =
+            glint_io::Volume::new(dims, spacing, samples).map_err(|e| errors::value_error(&e))?;
         if let Some(a) = affine {
             v.affine = a;
         }
@@ -287,4 +287,3 @@ impl Volume {
         PyTuple::new(py, [ctor, args.into_any()])
     }
 }
-

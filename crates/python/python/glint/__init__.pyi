@@ -1,7 +1,7 @@
 """Type stubs for the glint package (the native module glint._glint)."""
 
 import os
-from typing import Literal, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -75,3 +75,73 @@ def lobe(
 ) -> npt.NDArray[np.float64]: ...
 def lobe_kinds() -> list[str]:
     """The lobe names glint.lobe accepts."""
+
+class Scene:
+    """A render described completely; the fields and JSON of `glint render --scene`.
+
+    Immutable: ``replace(**fields)`` returns a changed copy. Fields read back as plain
+    Python values (dicts, lists, str, numbers); unset optional fields are None.
+    """
+
+    def __init__(self, **fields: Any) -> None:
+        """The default scene with the given fields replaced, e.g.
+        ``Scene(preset="mr-t2-brain", size=(256, 256), camera={"view": "left"},
+        lobe={"kind": "exact", "n": 40})``; a str ``input`` is a file path.
+        Unknown fields or bad values raise ValueError."""
+    @staticmethod
+    def from_json(text: str) -> Scene: ...
+    def to_json(self) -> str: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def replace(self, **fields: Any) -> Scene: ...
+    version: int
+    input: Dict[str, Any]
+    mode: Literal["composite", "iso", "mip"]
+    iso: Optional[float]
+    preset: Optional[str]
+    transfer_function: Optional[Dict[str, Any]]
+    material: Dict[str, Any]
+    lobe: Dict[str, Any]
+    lights: List[Dict[str, float]]
+    camera: Dict[str, Any]
+    size: List[int]
+    step: float
+    gate: float
+    skip_empty: bool
+    background: List[float]
+    derived: Optional[Dict[str, Any]]
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
+
+class Image:
+    """A rendered image; shown inline by Jupyter."""
+
+    @property
+    def array(self) -> npt.NDArray[np.uint8]:
+        """sRGB uint8, shape (height, width, 3): the pixels of glint render's PNG."""
+    @property
+    def alpha(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def scene(self) -> Scene:
+        """The resolved scene (every default chosen)."""
+    @property
+    def timings(self) -> Dict[str, float]:
+        """Seconds: read, field, classify (0 when reused), frame."""
+    def png(self) -> bytes: ...
+    def _repr_png_(self) -> bytes: ...
+    def save(self, path: _Path, sixteen_bit: bool = False) -> None: ...
+    def __array__(self, dtype: Any = None, copy: Optional[bool] = None) -> npt.NDArray[Any]: ...
+
+class Renderer:
+    """Renders many scenes of one volume, keeping its classification across calls."""
+
+    def __init__(self, volume: Union[Volume, _Path]) -> None: ...
+    def render(self, scene: Optional[Scene] = None, **fields: Any) -> Image:
+        """Renders scene (default Scene()) with fields replaced; its input is ignored."""
+
+def render(
+    volume: Union[Volume, _Path, None] = None, scene: Optional[Scene] = None, **fields: Any
+) -> npt.NDArray[np.uint8]:
+    """Renders volume (None: the scene's input) with scene: sRGB uint8 (H, W, 3)."""
