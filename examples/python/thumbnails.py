@@ -7,7 +7,8 @@
 Finds NIfTI (.nii, .nii.gz) and NRRD (.nrrd, .nhdr) files and DICOM series
 (directories holding .dcm files) under SCANS_DIR and writes OUT_DIR/<name>.png for
 each. Workers receive only a path and a glint.Scene (both pickle small); each reads its
-volume and renders it with the GIL released. A scan that fails is reported on one line
+volume and renders it with the GIL released. Workers are spawned, not forked: glint's
+render threads (rayon) do not survive fork(). A scan that fails is reported on one line
 and the others go on; the exit status is 1 if any failed.
 
 The same `thumbnail` function runs under Dask or Ray (see docs/python.md).
@@ -15,6 +16,7 @@ The same `thumbnail` function runs under Dask or Ray (see docs/python.md).
 
 import argparse
 import concurrent.futures as cf
+import multiprocessing
 import os
 import pathlib
 import sys
@@ -74,7 +76,10 @@ def main(argv=None) -> int:
         lobe={"kind": args.lobe},
     )
     failed = 0
-    with cf.ProcessPoolExecutor(max_workers=args.workers) as pool:
+    # "spawn": fresh worker processes. A forked child of a process that has rendered
+    # would inherit glint's thread pool without its threads and wait forever.
+    spawn = multiprocessing.get_context("spawn")
+    with cf.ProcessPoolExecutor(max_workers=args.workers, mp_context=spawn) as pool:
         jobs = {
             pool.submit(thumbnail, str(s), scene, str(args.out / out_name(s, args.scans))): s
             for s in scans

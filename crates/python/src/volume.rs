@@ -97,11 +97,14 @@ fn check_affine(a: &[[f64; 4]; 4]) -> PyResult<[f64; 3]> {
     Ok(spacing)
 }
 
+/// A voxel-to-world affine, row-major.
+type Affine = [[f64; 4]; 4];
+
 /// The spacing and affine from what the caller gave.
 fn geometry(
     spacing: Option<[f64; 3]>,
-    affine: Option<[[f64; 4]; 4]>,
-) -> PyResult<([f64; 3], Option<[[f64; 4]; 4]>)> {
+    affine: Option<Affine>,
+) -> PyResult<([f64; 3], Option<Affine>)> {
     let Some(a) = affine else {
         return Ok((spacing.unwrap_or([1.0; 3]), None));
     };
