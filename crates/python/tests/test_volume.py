@@ -17,7 +17,7 @@ def test_read_matches_nibabel(mni_path):
     vol = glint.read(mni_path)
     assert vol.shape == img.shape
     assert vol.format == "NIfTI-1"
-    assert vol.path == str(mni_path)
+    assert vol.path == mni_path
     # Stored samples: same type and values as nibabel's unscaled data, same axis order.
     raw = np.asanyarray(img.dataobj.get_unscaled())
     assert vol.dtype == str(img.get_data_dtype())
@@ -95,7 +95,7 @@ def test_slope_and_intercept():
         (np.zeros((2, 2, 2), np.float32), {"affine": np.zeros((4, 4))}, ValueError, "last row"),
         (np.zeros((2, 2, 2), np.float32), {"affine": np.diag([1.0, 1.0, 0.0, 1.0])}, ValueError, "singular"),
         (np.zeros((2, 2, 2), np.float32), {"affine": np.full((4, 4), np.nan)}, ValueError, "non-finite"),
-        (np.zeros((2, 2, 2), np.float32), {"affine": np.eye(3)}, ValueError, ""),
+        (np.zeros((2, 2, 2), np.float32), {"affine": np.eye(3)}, ValueError, None),
         (np.zeros((2, 2, 2), np.float32), {"affine": np.eye(4), "spacing": (2, 1, 1)}, ValueError, "disagrees"),
         (np.zeros((2, 2, 2), np.float32), {"slope": 0.0}, ValueError, "slope"),
     ],
@@ -119,7 +119,6 @@ def test_read_errors_match_the_cli(glint_bin, tmp_path, mni_path):
     cut.write_bytes(head)
     with pytest.raises(ValueError) as err:
         glint.read(cut)
-    assert "truncated" in str(err.value)
     assert str(err.value) == cli_error_line(glint_bin, "info", str(cut))
 
     garbage = tmp_path / "garbage.nii.gz"

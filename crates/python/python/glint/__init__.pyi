@@ -1,6 +1,7 @@
 """Type stubs for the glint package (the native module glint._glint)."""
 
 import os
+import pathlib
 from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
@@ -54,7 +55,7 @@ class Volume:
     def format(self) -> Optional[str]:
         """'NIfTI-1', 'NRRD' or 'DICOM' for files, None for arrays."""
     @property
-    def path(self) -> Optional[str]: ...
+    def path(self) -> Optional[pathlib.Path]: ...
     def range(self) -> Tuple[float, float]:
         """Smallest and largest physical value (NaN ignored)."""
     def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
