@@ -29,6 +29,8 @@ enum Command {
     Bench(cmd::bench::Command),
     /// Describe a volume or surface file.
     Info(cmd::info::Args),
+    /// Interactive viewer in the browser: a local web server rendering frames.
+    View(cmd::view::Args),
     /// The specular unit: ROM contents, width sweeps, stage-by-stage evaluation.
     #[command(subcommand)]
     Hw(cmd::hw::Command),
@@ -46,6 +48,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => cmd::bench::run(args),
         Command::Info(args) => cmd::info::run(args),
         Command::Hw(args) => cmd::hw::run(args),
+        Command::View(args) => cmd::view::run(args),
     };
     report(result)
 }

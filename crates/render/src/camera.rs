@@ -177,6 +177,26 @@ impl Default for CameraSpec {
     }
 }
 
+impl CameraSpec {
+    /// Checks the angles (finite, within ±3600°) and the zoom (0.001..=1000).
+    pub fn validate(&self) -> Result<(), RenderError> {
+        for (name, x) in [("azimuth", self.azimuth), ("elevation", self.elevation)] {
+            if !x.is_finite() || x.abs() > 3600.0 {
+                return Err(RenderError::Parameter(format!(
+                    "{name} = {x}: expected finite degrees within ±3600"
+                )));
+            }
+        }
+        if !self.zoom.is_finite() || !(1e-3..=1e3).contains(&self.zoom) {
+            return Err(RenderError::Parameter(format!(
+                "zoom = {}: expected a number in 0.001..=1000",
+                self.zoom
+            )));
+        }
+        Ok(())
+    }
+}
+
 fn rotate(v: Vec3, axis: Vec3, deg: f64) -> Vec3 {
     // Rodrigues' rotation formula.
     let (s, c) = (deg.to_radians().sin() as f32, deg.to_radians().cos() as f32);
@@ -193,19 +213,7 @@ impl Camera {
         width: u32,
         height: u32,
     ) -> Result<Camera, RenderError> {
-        for (name, x) in [("azimuth", spec.azimuth), ("elevation", spec.elevation)] {
-            if !x.is_finite() || x.abs() > 3600.0 {
-                return Err(RenderError::Parameter(format!(
-                    "{name} = {x}: expected finite degrees within ±3600"
-                )));
-            }
-        }
-        if !spec.zoom.is_finite() || !(1e-3..=1e3).contains(&spec.zoom) {
-            return Err(RenderError::Parameter(format!(
-                "zoom = {}: expected a number in 0.001..=1000",
-                spec.zoom
-            )));
-        }
+        spec.validate()?;
         let (to_eye, up0) = spec.view.eye_and_up();
         // Azimuth about the up axis; positive turns the eye towards the image's right.
         let right0 = (-to_eye).cross(up0);

@@ -293,10 +293,27 @@ pub struct Resolved {
 }
 
 impl Scene {
-    /// Parses a scene from JSON, checking the version.
+    /// Parses a scene from JSON, checking the version. Errors name the field
+    /// (`lobe.kind: unknown lobe ...`).
     pub fn from_json(text: &str) -> Result<Scene, RenderError> {
-        let scene: Scene = serde_json::from_str(text)
+        let mut de = serde_json::Deserializer::from_str(text);
+        let scene: Scene = serde_path_to_error::deserialize(&mut de)
             .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
+        de.end()
+            .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
+        scene.check_version()
+    }
+
+    /// A scene from a parsed JSON value (e.g. a viewer's patched scene), checked like
+    /// [`Scene::from_json`].
+    pub fn from_value(value: serde_json::Value) -> Result<Scene, RenderError> {
+        let scene: Scene = serde_path_to_error::deserialize(value)
+            .map_err(|e| RenderError::Scene(format!("bad scene: {e}")))?;
+        scene.check_version()
+    }
+
+    fn check_version(self) -> Result<Scene, RenderError> {
+        let scene = self;
         if scene.version == 0 || scene.version > SCENE_VERSION {
             return Err(RenderError::Scene(format!(
                 "scene version {} is not supported (this glint reads version {SCENE_VERSION})",
@@ -394,6 +411,7 @@ impl Scene {
             kernel: Kernel::Auto,
         };
         frame.validate()?;
+        scene.camera.validate()?;
         let lobe = scene.lobe;
         let shader = Shader::new(
             lobe.kind,
@@ -515,6 +533,17 @@ impl Renderer {
                 ..Timings::default()
             },
         })
+    }
+
+    /// A renderer of a field already built (several renderers, each with its own
+    /// classification, can share one field: one per viewer client).
+    pub fn from_field(field: Arc<Field>) -> Renderer {
+        Renderer {
+            field,
+            classification: None,
+            kernel: Kernel::Auto,
+            opened: Timings::default(),
+        }
     }
 
     /// The field every scene is rendered from.

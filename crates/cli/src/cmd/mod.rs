@@ -7,3 +7,4 @@ pub mod eval;
 pub mod hw;
 pub mod info;
 pub mod render;
+pub mod view;

@@ -291,7 +291,7 @@ fn set<T>(field: &mut T, value: Option<T>) {
 }
 
 /// Reads a scene file; a relative input path in it is relative to the file.
-fn load_scene(path: &Path) -> anyhow::Result<Scene> {
+pub(crate) fn load_scene(path: &Path) -> anyhow::Result<Scene> {
     let mut scene = Scene::from_json_file(path)?;
     if let Input::Path(p) = &mut scene.input {
         if p.is_relative() {

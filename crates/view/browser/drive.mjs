@@ -1,0 +1,76 @@
+// Drives glint view in Debian's headless Chromium through playwright-core (no browser
+// download: the executable is /usr/bin/chromium or $CHROMIUM).
+//
+//   node drive.mjs test URL SCREENSHOT.png   load, wait for the first frame, drag,
+//                                            check the canvas changed, screenshot
+//   node drive.mjs bench URL SECONDS         drag for SECONDS; frames/s received
+//                                            during the drag, input-to-frame latency
+//
+// Prints one JSON line; exits non-zero on failure.
+import { chromium } from "playwright-core";
+
+const [mode, url, arg] = process.argv.slice(2);
+if (!["test", "bench"].includes(mode) || !url) {
+  console.error("usage: drive.mjs test URL OUT.png | drive.mjs bench URL SECONDS");
+  process.exit(2);
+}
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
+  headless: true,
+  // As root in a closed network: no sandbox, no GPU, no background connections.
+  args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync"],
+});
+try {
+  const page = await browser.newPage({ viewport: { width: 900, height: 640 } });
+  page.on("pageerror", (e) => { console.error(`page error: ${e.message}`); process.exitCode = 1; });
+  await page.goto(url);
+  await page.waitForFunction(() => window.glint && window.glint.full >= 1, null, { timeout: 120000 });
+  if (process.env.GLINT_VIEW) {
+    // Start from a named view (the benchmark's scene).
+    await page.click(`#views button:text-is("${process.env.GLINT_VIEW}")`);
+    const full = await page.evaluate(() => window.glint.full);
+    await page.waitForFunction((n) => window.glint.full > n, full, { timeout: 120000 });
+  }
+  const box = await page.locator("#frame").boundingBox();
+  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+  const pixels = () => page.evaluate(() => document.getElementById("frame").toDataURL());
+  if (mode === "test") {
+    const before = await pixels();
+    const full = await page.evaluate(() => window.glint.full);
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    for (let i = 1; i <= 10; i++) await page.mouse.move(cx + 8 * i, cy + 2 * i);
+    await page.mouse.up();
+    await page.waitForFunction((n) => window.glint.full > n, full, { timeout: 120000 });
+    const after = await pixels();
+    await page.screenshot({ path: arg });
+    const g = await page.evaluate(() => ({ frames: window.glint.frames, full: window.glint.full, errors: window.glint.errors }));
+    const changed = before !== after;
+    console.log(JSON.stringify({ ...g, changed }));
+    if (!changed || g.errors.length) process.exitCode = 1;
+  } else {
+    const seconds = Number(arg || 5);
+    await page.evaluate(() => { window.glint.latencies.length = 0; });
+    const f0 = await page.evaluate(() => window.glint.frames);
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    const t0 = Date.now();
+    let i = 0;
+    // A steady drag: one pointer move every 16 ms (a 60 Hz mouse), in a circle.
+    while (Date.now() - t0 < seconds * 1000) {
+      i += 1;
+      await page.mouse.move(cx + 80 * Math.cos(i / 20), cy + 40 * Math.sin(i / 20));
+      await new Promise((r) => setTimeout(r, 16));
+    }
+    const elapsed = (Date.now() - t0) / 1000;
+    const f1 = await page.evaluate(() => window.glint.frames);
+    await page.mouse.up();
+    const lat = (await page.evaluate(() => window.glint.latencies.slice())).sort((a, b) => a - b);
+    const q = (p) => lat.length ? lat[Math.min(lat.length - 1, Math.floor(p * lat.length))] : NaN;
+    console.log(JSON.stringify({ seconds: elapsed, events: i, frames: f1 - f0,
+      fps: (f1 - f0) / elapsed, latency_ms_p50: q(0.5), latency_ms_p95: q(0.95), samples: lat.length }));
+  }
+} finally {
+  await browser.close();
+}

@@ -1,0 +1,345 @@
+//! glint-view: the interactive viewer. The Rust ray caster renders on the server; the
+//! browser shows frames and sends interaction over a WebSocket (the remote-rendering
+//! arrangement of Kitware's ParaViewWeb and trame). The page, its script and styles
+//! are embedded in the binary.
+//!
+//! ```no_run
+//! use std::sync::Arc;
+//! use glint_render::Scene;
+//! use glint_view::{Viewer, ViewerConfig};
+//!
+//! # async fn run() -> Result<(), Box<dyn std::error::Error>> {
+//! let viewer = Arc::new(Viewer::new(Scene::default(), ViewerConfig::default())?);
+//! let listener = tokio::net::TcpListener::bind("127.0.0.1:8080").await?;
+//! println!("open http://{}/", listener.local_addr()?);
+//! glint_view::serve(listener, viewer).await?;
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! Protocol ([`protocol`]): on connection the server sends a `hello` (the resolved
+//! scene, presets, lobes, views, the value range) and a first frame. The page sends
+//! `update` messages (a partial scene, a sequence number, whether the user is still
+//! dragging), `split` and `save`. Only the latest state is rendered: updates that
+//! arrive while a frame renders are merged, never queued. While the user drags,
+//! frames are half size and JPEG at quality 70; 150 ms after the last interactive
+//! update a full-resolution frame follows.
+
+#![warn(missing_docs)]
+
+pub mod protocol;
+mod session;
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::State;
+use axum::http::header;
+use axum::response::{Html, IntoResponse};
+use axum::routing::get;
+use axum::Router;
+use glint_lobe::LobeKind;
+use glint_render::{Field, RenderError, Renderer, Scene, View, PRESETS};
+
+pub use session::{apply_patch, render_frame, Frame, MAX_VIEW_SIDE};
+
+use protocol::{ClientMessage, Purpose, ServerMessage, Split};
+
+/// Why the viewer refused something.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    /// Rendering or resolving the scene failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// A client message was refused.
+    #[error("{0}")]
+    Message(String),
+}
+
+/// Limits and timing of a viewer.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewerConfig {
+    /// Clients served at once; more are refused with a message.
+    pub max_clients: usize,
+    /// Largest client message, bytes (scene patches are a few hundred bytes).
+    pub max_message_bytes: usize,
+    /// Quiet time after the last interactive update before the full frame.
+    pub settle: Duration,
+}
+
+impl Default for ViewerConfig {
+    fn default() -> Self {
+        ViewerConfig {
+            max_clients: 8,
+            max_message_bytes: 64 * 1024,
+            settle: Duration::from_millis(150),
+        }
+    }
+}
+
+/// A viewer of one volume: the field every client renders, the starting scene and the
+/// limits.
+pub struct Viewer {
+    field: Arc<Field>,
+    scene: Scene,
+    range: [f32; 2],
+    config: ViewerConfig,
+    clients: AtomicUsize,
+}
+
+impl Viewer {
+    /// Reads the scene's input and checks the scene resolves.
+    pub fn new(scene: Scene, config: ViewerConfig) -> Result<Viewer, RenderError> {
+        let renderer = Renderer::open(&scene.input)?;
+        let scene = renderer.resolve(&scene)?.scene;
+        let (lo, hi) = renderer.field().range();
+        Ok(Viewer {
+            field: renderer.field().clone(),
+            scene,
+            range: [lo, hi],
+            config,
+            clients: AtomicUsize::new(0),
+        })
+    }
+
+    /// Clients connected now.
+    pub fn clients(&self) -> usize {
+        self.clients.load(Ordering::SeqCst)
+    }
+}
+
+/// Serves the page and the WebSocket on `listener` until the process ends.
+pub async fn serve(listener: tokio::net::TcpListener, viewer: Arc<Viewer>) -> std::io::Result<()> {
+    axum::serve(listener, router(viewer)).await
+}
+
+/// The viewer's routes: `/` (the page), `/app.js`, `/style.css`, `/ws`.
+pub fn router(viewer: Arc<Viewer>) -> Router {
+    Router::new()
+        .route("/", get(|| async { Html(include_str!("page/index.html")) }))
+        .route(
+            "/app.js",
+            get(|| async {
+                (
+                    [(header::CONTENT_TYPE, "text/javascript")],
+                    include_str!("page/app.js"),
+                )
+            }),
+        )
+        .route(
+            "/style.css",
+            get(|| async {
+                (
+                    [(header::CONTENT_TYPE, "text/css")],
+                    include_str!("page/style.css"),
+                )
+            }),
+        )
+        .route("/ws", get(upgrade))
+        .with_state(viewer)
+}
+
+async fn upgrade(ws: WebSocketUpgrade, State(viewer): State<Arc<Viewer>>) -> impl IntoResponse {
+    // The transport limit is well above the protocol's, so an oversize message is
+    // answered with an error instead of closing the connection.
+    let limit = viewer.config.max_message_bytes * 16;
+    ws.max_message_size(limit)
+        .on_upgrade(move |socket| connection(socket, viewer))
+}
+
+/// Counts a client while it is connected.
+struct Seat(Arc<Viewer>);
+
+impl Seat {
+    fn take(viewer: &Arc<Viewer>) -> Option<Seat> {
+        let max = viewer.config.max_clients;
+        viewer
+            .clients
+            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
+                (n < max).then_some(n + 1)
+            })
+            .ok()
+            .map(|_| Seat(viewer.clone()))
+    }
+}
+
+impl Drop for Seat {
+    fn drop(&mut self) {
+        self.0.clients.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+async fn send_json(socket: &mut WebSocket, msg: &ServerMessage) -> bool {
+    let text = serde_json::to_string(msg).expect("server messages serialise");
+    socket.send(Message::Text(text.into())).await.is_ok()
+}
+
+/// What the connection should render next.
+#[derive(Clone, Copy, PartialEq)]
+enum Wanted {
+    Nothing,
+    Frame(Purpose),
+}
+
+async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
+    let Some(_seat) = Seat::take(&viewer) else {
+        let message = format!(
+            "server busy: at most {} clients at once",
+            viewer.config.max_clients
+        );
+        send_json(&mut socket, &ServerMessage::Error { message }).await;
+        let _ = socket.send(Message::Close(None)).await;
+        return;
+    };
+    let hello = ServerMessage::Hello {
+        scene: serde_json::to_value(&viewer.scene).expect("scenes serialise"),
+        presets: PRESETS.iter().map(|p| p.name).collect(),
+        lobes: LobeKind::ALL.map(|k| k.name()).to_vec(),
+        views: View::ALL.map(|v| v.name()).to_vec(),
+        range: viewer.range,
+    };
+    if !send_json(&mut socket, &hello).await {
+        return;
+    }
+    let renderer = Arc::new(Mutex::new(Renderer::from_field(viewer.field.clone())));
+    let mut state = ClientState {
+        scene: viewer.scene.clone(),
+        split: Split::Off,
+        seq: 0,
+    };
+    let mut wanted = Wanted::Frame(Purpose::Full);
+    let mut save = false;
+    let mut inflight: Option<tokio::task::JoinHandle<Result<(Frame, Purpose), RenderError>>> = None;
+    let mut settle: Option<tokio::time::Instant> = None;
+    loop {
+        if inflight.is_none() {
+            let purpose = if save {
+                save = false;
+                Some(Purpose::Save)
+            } else if let Wanted::Frame(p) = wanted {
+                wanted = Wanted::Nothing;
+                Some(p)
+            } else {
+                None
+            };
+            if let Some(purpose) = purpose {
+                let (r, s) = (renderer.clone(), state.clone());
+                inflight = Some(tokio::task::spawn_blocking(move || {
+                    let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
+                    render_frame(&mut r, &s.scene, s.split, purpose, s.seq).map(|f| (f, purpose))
+                }));
+            }
+        }
+        tokio::select! {
+            msg = socket.recv() => {
+                let Some(Ok(msg)) = msg else { return };
+                let text = match msg {
+                    Message::Text(t) => t,
+                    Message::Close(_) => return,
+                    Message::Binary(_) => {
+                        let message = "binary messages are not accepted: send JSON text".into();
+                        if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
+                        continue;
+                    }
+                    _ => continue,
+                };
+                let outcome = {
+                    let r = renderer.lock().unwrap_or_else(|e| e.into_inner());
+                    state.handle(text.as_str(), &r, &viewer.config)
+                };
+                match outcome {
+                    Ok(Action::Render { interactive }) => {
+                        if interactive {
+                            wanted = Wanted::Frame(Purpose::Interactive);
+                            settle = Some(tokio::time::Instant::now() + viewer.config.settle);
+                        } else {
+                            wanted = Wanted::Frame(Purpose::Full);
+                            settle = None;
+                        }
+                    }
+                    Ok(Action::Save) => save = true,
+                    Err(e) => {
+                        let message = e.to_string().replace('\n', " ");
+                        if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
+                    }
+                }
+            }
+            done = async { inflight.as_mut().expect("guarded").await }, if inflight.is_some() => {
+                inflight = None;
+                match done {
+                    Ok(Ok((frame, purpose))) => {
+                        if socket.send(Message::Binary(frame.message.into())).await.is_err() { return }
+                        if purpose != Purpose::Interactive {
+                            let scene = serde_json::to_value(&frame.scene).expect("scenes serialise");
+                            let msg = ServerMessage::Scene { seq: frame.seq, scene };
+                            if !send_json(&mut socket, &msg).await { return }
+                        }
+                    }
+                    Ok(Err(e)) => {
+                        let message = e.to_string().replace('\n', " ");
+                        if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
+                    }
+                    Err(_) => {
+                        let message = "the render failed unexpectedly".into();
+                        if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
+                    }
+                }
+            }
+            _ = tokio::time::sleep_until(settle.unwrap_or_else(tokio::time::Instant::now)), if settle.is_some() => {
+                settle = None;
+                wanted = Wanted::Frame(Purpose::Full);
+            }
+        }
+    }
+}
+
+/// One client's scene, split mode and last event number.
+#[derive(Clone)]
+struct ClientState {
+    scene: Scene,
+    split: Split,
+    seq: u32,
+}
+
+/// What a client message asks for.
+enum Action {
+    Render { interactive: bool },
+    Save,
+}
+
+impl ClientState {
+    fn handle(
+        &mut self,
+        text: &str,
+        renderer: &Renderer,
+        config: &ViewerConfig,
+    ) -> Result<Action, ViewError> {
+        if text.len() > config.max_message_bytes {
+            return Err(ViewError::Message(format!(
+                "message of {} bytes refused: at most {}",
+                text.len(),
+                config.max_message_bytes
+            )));
+        }
+        let msg: ClientMessage = serde_json::from_str(text)
+            .map_err(|e| ViewError::Message(format!("bad message: {e}")))?;
+        match msg {
+            ClientMessage::Update {
+                seq,
+                interactive,
+                scene,
+            } => {
+                self.scene = apply_patch(renderer, &self.scene, &scene)?;
+                self.seq = seq;
+                Ok(Action::Render { interactive })
+            }
+            ClientMessage::Split { split } => {
+                self.split = split;
+                Ok(Action::Render { interactive: false })
+            }
+            ClientMessage::Save {} => Ok(Action::Save),
+        }
+    }
+}

@@ -1,0 +1,138 @@
+// glint view: draws the frames the server renders and sends interaction as partial
+// scenes. window.glint exposes counters for the browser test and the benchmark.
+"use strict";
+const $ = (id) => document.getElementById(id);
+const canvas = $("frame");
+const ctx = canvas.getContext("2d");
+const glint = (window.glint = { frames: 0, full: 0, latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
+let seq = 0;
+let scene = null;
+const frameTimes = [];
+
+const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+ws.binaryType = "arraybuffer";
+
+function send(msg) {
+  if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+}
+
+// Sends a partial scene; interactive updates get a quick half-size frame.
+function update(patch, interactive = false) {
+  seq += 1;
+  glint.sent.set(seq, performance.now());
+  send({ type: "update", seq, interactive, scene: patch });
+}
+
+function fill(select, names) {
+  select.innerHTML = "";
+  for (const n of names) select.add(new Option(n, n));
+}
+
+ws.onmessage = async (ev) => {
+  if (typeof ev.data === "string") {
+    const msg = JSON.parse(ev.data);
+    if (msg.type === "hello") {
+      scene = msg.scene;
+      fill($("preset"), msg.presets);
+      fill($("lobe"), msg.lobes);
+      const views = $("views");
+      for (const v of msg.views) {
+        const b = document.createElement("button");
+        b.type = "button";
+        b.textContent = v;
+        b.onclick = () => { scene.camera = { ...scene.camera, view: v, azimuth: 0, elevation: 0 }; update({ camera: { view: v, azimuth: 0, elevation: 0 } }); };
+        views.append(b);
+      }
+      $("iso").min = msg.range[0];
+      $("iso").max = msg.range[1];
+      showScene(scene);
+    } else if (msg.type === "scene") {
+      glint.scene = msg.scene;
+      if (glint.saving) { download("scene.json", new Blob([JSON.stringify(msg.scene, null, 2)], { type: "application/json" })); glint.saving = false; }
+    } else if (msg.type === "error") {
+      glint.errors.push(msg.message);
+      $("error").textContent = msg.message;
+    }
+    return;
+  }
+  const view = new DataView(ev.data);
+  const magic = String.fromCharCode(...new Uint8Array(ev.data, 0, 4));
+  if (magic !== "GLNT") return;
+  const h = { seq: view.getUint32(4, true), width: view.getUint32(8, true), height: view.getUint32(12, true),
+    ms: view.getFloat32(16, true), format: view.getUint8(20), purpose: view.getUint8(21) };
+  const blob = new Blob([new Uint8Array(ev.data, 24)], { type: h.format === 0 ? "image/jpeg" : "image/png" });
+  if (h.purpose === 2) { download("glint.png", blob); return; }
+  const bitmap = await createImageBitmap(blob);
+  if (h.purpose === 1) { canvas.width = h.width; canvas.height = h.height; }
+  ctx.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
+  const now = performance.now();
+  glint.frames += 1;
+  if (h.purpose === 1) glint.full += 1;
+  // Input-to-frame latency: every event this frame reflects (its seq and the older
+  // ones, merged into it on the server) waited from its pointer event until now.
+  for (const [s, t] of glint.sent) {
+    if (s <= h.seq) { glint.latencies.push(now - t); glint.sent.delete(s); }
+  }
+  frameTimes.push(now);
+  while (frameTimes.length && now - frameTimes[0] > 1000) frameTimes.shift();
+  $("timing").textContent = `${h.width}×${h.height} in ${h.ms.toFixed(1)} ms · ${frameTimes.length} frames/s`;
+  $("status").textContent = h.purpose === 0 ? "interactive" : "";
+  $("error").textContent = "";
+};
+ws.onclose = () => { $("status").textContent = "disconnected"; };
+
+function showScene(s) {
+  $("preset").value = s.preset || "";
+  $("mode").value = s.mode;
+  $("lobe").value = s.lobe.kind;
+  $("n").value = s.lobe.n;
+  $("v").value = s.lobe.v;
+  $("geometry").value = s.lobe.geometry;
+  $("projection").value = s.camera.projection;
+  if (s.iso !== undefined) $("iso").value = s.iso;
+}
+
+function download(name, blob) {
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(blob);
+  a.download = name;
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 1000);
+}
+
+// Dragging orbits the camera; the wheel zooms.
+let drag = null;
+canvas.addEventListener("pointerdown", (e) => { drag = { x: e.clientX, y: e.clientY }; canvas.setPointerCapture(e.pointerId); });
+canvas.addEventListener("pointermove", (e) => {
+  if (!drag || !scene) return;
+  const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+  drag = { x: e.clientX, y: e.clientY };
+  const c = scene.camera;
+  c.azimuth = (((c.azimuth - dx * 0.5) % 360) + 360) % 360;
+  c.elevation = Math.max(-89, Math.min(89, c.elevation + dy * 0.5));
+  update({ camera: { azimuth: c.azimuth, elevation: c.elevation } }, true);
+});
+canvas.addEventListener("pointerup", () => { drag = null; update({}, false); });
+canvas.addEventListener("wheel", (e) => {
+  e.preventDefault();
+  if (!scene) return;
+  scene.camera.zoom = Math.max(0.2, Math.min(20, scene.camera.zoom * Math.pow(1.1, -e.deltaY / 100)));
+  update({ camera: { zoom: scene.camera.zoom } }, true);
+}, { passive: false });
+
+$("preset").onchange = (e) => update({ preset: e.target.value, transfer_function: null });
+$("mode").onchange = (e) => {
+  const patch = { mode: e.target.value, iso: e.target.value === "iso" ? Number($("iso").value) : null };
+  update(patch);
+};
+$("iso").oninput = (e) => { if ($("mode").value === "iso") update({ iso: Number(e.target.value) }, true); };
+$("lobe").onchange = (e) => update({ lobe: { kind: e.target.value } });
+$("n").onchange = (e) => update({ lobe: { n: Number(e.target.value) } });
+$("v").onchange = (e) => update({ lobe: { v: Number(e.target.value) } });
+$("geometry").onchange = (e) => update({ lobe: { geometry: e.target.value } });
+$("projection").onchange = (e) => update({ camera: { projection: e.target.value } });
+$("split").onchange = (e) => send({ type: "split", split: e.target.value });
+const light = () => update({ lights: [{ azimuth: Number($("light-az").value), elevation: Number($("light-el").value), intensity: 1 }] }, true);
+$("light-az").oninput = light;
+$("light-el").oninput = light;
+$("save").onclick = () => { glint.saving = true; send({ type: "save" }); };

@@ -1,0 +1,199 @@
+//! The viewer's wire protocol: JSON text messages for events, binary messages for
+//! frames (a fixed header, then a JPEG or PNG).
+
+use serde::{Deserialize, Serialize};
+
+/// A message from the page.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum ClientMessage {
+    /// Change scene fields (a partial scene: top-level fields replace the current
+    /// ones; `camera`, `lobe` and `material` merge field by field). `seq` is echoed in
+    /// the frame that shows it; `interactive` asks for a quick, reduced frame (while
+    /// dragging), followed by a full one when the input stops.
+    Update {
+        /// The client's event number.
+        seq: u32,
+        /// A reduced frame now, a full one when the input stops.
+        #[serde(default)]
+        interactive: bool,
+        /// The fields to change.
+        #[serde(default)]
+        scene: serde_json::Map<String, serde_json::Value>,
+    },
+    /// Show the chosen lobe alone, beside `exact`, or as a difference heat map.
+    Split {
+        /// The split mode.
+        split: Split,
+    },
+    /// Send the full-resolution PNG and the resolved scene, for download.
+    Save {},
+}
+
+/// What a frame shows.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Split {
+    /// The scene's lobe.
+    #[default]
+    Off,
+    /// `exact` on the left, the scene's lobe on the right.
+    Side,
+    /// The difference of the two in CIE luminance, as a heat map.
+    Diff,
+}
+
+/// A message to the page.
+#[derive(Clone, Debug, Serialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum ServerMessage {
+    /// Sent once on connection.
+    Hello {
+        /// The resolved starting scene.
+        scene: serde_json::Value,
+        /// Preset names.
+        presets: Vec<&'static str>,
+        /// Lobe names.
+        lobes: Vec<&'static str>,
+        /// View names.
+        views: Vec<&'static str>,
+        /// The volume's value range (for the iso slider).
+        range: [f32; 2],
+    },
+    /// The resolved scene a full frame was rendered from.
+    Scene {
+        /// The update it reflects.
+        seq: u32,
+        /// The scene.
+        scene: serde_json::Value,
+    },
+    /// A message was refused; the previous state stays.
+    Error {
+        /// One line for the user.
+        message: String,
+    },
+}
+
+/// Size of [`FrameHeader`] on the wire.
+pub const HEADER_BYTES: usize = 24;
+
+/// The frame image's encoding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Format {
+    /// Baseline JPEG.
+    Jpeg = 0,
+    /// PNG.
+    Png = 1,
+}
+
+/// Why a frame was sent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Purpose {
+    /// Reduced resolution, while the user drags.
+    Interactive = 0,
+    /// Full resolution, when the input stops.
+    Full = 1,
+    /// Full-resolution PNG for download.
+    Save = 2,
+}
+
+/// The header before every frame's image bytes: magic `GLNT`, then little-endian
+/// `seq: u32, width: u32, height: u32, render_ms: f32`, format and purpose bytes, two
+/// zero bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameHeader {
+    /// The last update the frame reflects.
+    pub seq: u32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Render time on the server, ms.
+    pub render_ms: f32,
+    /// Encoding.
+    pub format: Format,
+    /// Why it was sent.
+    pub purpose: Purpose,
+}
+
+impl FrameHeader {
+    /// The header followed by `image`.
+    pub fn encode(&self, image: &[u8]) -> Vec<u8> {
+        let mut out = Vec::with_capacity(HEADER_BYTES + image.len());
+        out.extend_from_slice(b"GLNT");
+        out.extend_from_slice(&self.seq.to_le_bytes());
+        out.extend_from_slice(&self.width.to_le_bytes());
+        out.extend_from_slice(&self.height.to_le_bytes());
+        out.extend_from_slice(&self.render_ms.to_le_bytes());
+        out.extend_from_slice(&[self.format as u8, self.purpose as u8, 0, 0]);
+        out.extend_from_slice(image);
+        out
+    }
+
+    /// Splits a frame message into its header and image bytes.
+    pub fn decode(bytes: &[u8]) -> Option<(FrameHeader, &[u8])> {
+        if bytes.len() < HEADER_BYTES || &bytes[..4] != b"GLNT" {
+            return None;
+        }
+        let u = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
+        let format = match bytes[20] {
+            0 => Format::Jpeg,
+            1 => Format::Png,
+            _ => return None,
+        };
+        let purpose = match bytes[21] {
+            0 => Purpose::Interactive,
+            1 => Purpose::Full,
+            2 => Purpose::Save,
+            _ => return None,
+        };
+        let header = FrameHeader {
+            seq: u(4),
+            width: u(8),
+            height: u(12),
+            render_ms: f32::from_bits(u(16)),
+            format,
+            purpose,
+        };
+        Some((header, &bytes[HEADER_BYTES..]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_round_trips() {
+        let h = FrameHeader {
+            seq: 7,
+            width: 640,
+            height: 480,
+            render_ms: 12.5,
+            format: Format::Png,
+            purpose: Purpose::Save,
+        };
+        let bytes = h.encode(b"img");
+        assert_eq!(bytes.len(), HEADER_BYTES + 3);
+        assert_eq!(FrameHeader::decode(&bytes), Some((h, &b"img"[..])));
+        assert_eq!(FrameHeader::decode(&bytes[..10]), None);
+    }
+
+    #[test]
+    fn client_messages_parse_strictly() {
+        let m: ClientMessage =
+            serde_json::from_str(r#"{"type": "update", "seq": 3, "scene": {"step": 1}}"#).unwrap();
+        assert!(matches!(
+            m,
+            ClientMessage::Update {
+                seq: 3,
+                interactive: false,
+                ..
+            }
+        ));
+        assert!(serde_json::from_str::<ClientMessage>(r#"{"type": "save", "x": 1}"#).is_err());
+        assert!(serde_json::from_str::<ClientMessage>(r#"{"type": "delete"}"#).is_err());
+    }
+}

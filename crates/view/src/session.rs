@@ -1,0 +1,261 @@
+//! One client's state: its scene (camera, lobe, ...), split mode, and the renderer that
+//! keeps its classification; turning messages into state changes and states into
+//! encoded frames.
+
+use std::time::Instant;
+
+use glint_lobe::LobeKind;
+use glint_render::{
+    srgb_to_linear, Depth, Image, RenderError, RenderStats, Renderer, Scene, MAX_IMAGE_SIDE,
+};
+use serde_json::{Map, Value};
+
+use crate::protocol::{Format, FrameHeader, Purpose, Split};
+use crate::ViewError;
+
+/// Largest image side a client may ask for (the viewer renders every frame at this
+/// size at most; `glint render` takes up to [`MAX_IMAGE_SIDE`]).
+pub const MAX_VIEW_SIDE: u32 = 2048;
+
+/// Scene fields a client may not change: the server renders only the volume it was
+/// started with.
+const FIXED_FIELDS: [&str; 3] = ["input", "version", "derived"];
+
+/// Scene fields that are objects merged field by field.
+const MERGED_FIELDS: [&str; 3] = ["camera", "lobe", "material"];
+
+/// JPEG quality of frames sent while the user drags (small and quick).
+const INTERACTIVE_QUALITY: u8 = 70;
+
+/// JPEG quality of the full-resolution frame when the input stops.
+const FULL_QUALITY: u8 = 92;
+
+/// Difference in luminance (linear, 0..1) shown at full heat in the diff view: 5%.
+const DIFF_FULL_SCALE: f32 = 0.05;
+
+/// `scene` with the fields of `patch` applied, checked against `renderer`'s volume.
+pub fn apply_patch(
+    renderer: &Renderer,
+    scene: &Scene,
+    patch: &Map<String, Value>,
+) -> Result<Scene, ViewError> {
+    let mut doc = serde_json::to_value(scene).map_err(|e| ViewError::Message(e.to_string()))?;
+    let obj = doc.as_object_mut().expect("a scene is a JSON object");
+    for (key, value) in patch {
+        if FIXED_FIELDS.contains(&key.as_str()) {
+            return Err(ViewError::Message(format!(
+                "the viewer does not change '{key}'"
+            )));
+        }
+        match (obj.get_mut(key), value) {
+            (Some(Value::Object(current)), Value::Object(fields))
+                if MERGED_FIELDS.contains(&key.as_str()) =>
+            {
+                for (k, v) in fields {
+                    current.insert(k.clone(), v.clone());
+                }
+            }
+            _ => {
+                obj.insert(key.clone(), value.clone());
+            }
+        }
+    }
+    let next = Scene::from_value(doc)?;
+    if next.size.iter().any(|&s| s > MAX_VIEW_SIDE) {
+        return Err(ViewError::Message(format!(
+            "image size {}x{}: the viewer renders at most {MAX_VIEW_SIDE} per side",
+            next.size[0], next.size[1]
+        )));
+    }
+    renderer.resolve(&next)?;
+    Ok(next)
+}
+
+/// A rendered frame, ready to send.
+pub struct Frame {
+    /// Header and image bytes.
+    pub message: Vec<u8>,
+    /// The resolved scene of the (main) render.
+    pub scene: Scene,
+    /// The last update the frame reflects.
+    pub seq: u32,
+}
+
+/// Renders `scene` for `purpose` (interactive frames at half size) with `split`,
+/// encoded with its header.
+pub fn render_frame(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    split: Split,
+    purpose: Purpose,
+    seq: u32,
+) -> Result<Frame, RenderError> {
+    let mut s = scene.clone();
+    if purpose == Purpose::Interactive {
+        s.size = s.size.map(|x| (x / 2).max(1));
+    }
+    let start = Instant::now();
+    let main = renderer.render(&s, &|_| {})?;
+    let image = match split {
+        Split::Off => main.image,
+        Split::Side | Split::Diff => {
+            let mut exact = main.scene.clone();
+            exact.lobe.kind = LobeKind::Exact;
+            let reference = renderer.render(&exact, &|_| {})?.image;
+            if split == Split::Side {
+                side_by_side(&reference, &main.image)
+            } else {
+                difference(&reference, &main.image)
+            }
+        }
+    };
+    let render_ms = start.elapsed().as_secs_f32() * 1e3;
+    let (format, bytes) = match purpose {
+        Purpose::Save => (
+            Format::Png,
+            image
+                .encode_png(Depth::Eight)
+                .map_err(RenderError::Encode)?,
+        ),
+        Purpose::Interactive => (Format::Jpeg, jpeg(&image, INTERACTIVE_QUALITY)?),
+        Purpose::Full => (Format::Jpeg, jpeg(&image, FULL_QUALITY)?),
+    };
+    let header = FrameHeader {
+        seq,
+        width: image.width,
+        height: image.height,
+        render_ms,
+        format,
+        purpose,
+    };
+    Ok(Frame {
+        message: header.encode(&bytes),
+        scene: main.scene,
+        seq,
+    })
+}
+
+fn jpeg(image: &Image, quality: u8) -> Result<Vec<u8>, RenderError> {
+    let rgb = image.encode_srgb(Depth::Eight);
+    let mut out = Vec::new();
+    let too_big = || {
+        RenderError::Parameter(format!(
+            "{}x{} is too large for JPEG",
+            image.width, image.height
+        ))
+    };
+    let (w, h) = (
+        u16::try_from(image.width).map_err(|_| too_big())?,
+        u16::try_from(image.height).map_err(|_| too_big())?,
+    );
+    jpeg_encoder::Encoder::new(&mut out, quality)
+        .encode(&rgb, w, h, jpeg_encoder::ColorType::Rgb)
+        .map_err(|e| RenderError::Parameter(format!("JPEG encoding failed: {e}")))?;
+    Ok(out)
+}
+
+/// `left` and `right` (same size) side by side.
+fn side_by_side(left: &Image, right: &Image) -> Image {
+    let (w, h) = (left.width as usize, left.height as usize);
+    let mut rgb = Vec::with_capacity(2 * w * h);
+    let mut alpha = Vec::with_capacity(2 * w * h);
+    for y in 0..h {
+        for img in [left, right] {
+            rgb.extend_from_slice(&img.rgb[y * w..(y + 1) * w]);
+            alpha.extend_from_slice(&img.alpha[y * w..(y + 1) * w]);
+        }
+    }
+    debug_assert!(2 * left.width <= 2 * MAX_IMAGE_SIDE);
+    Image {
+        width: 2 * left.width,
+        height: left.height,
+        rgb,
+        alpha,
+        stats: RenderStats::default(),
+    }
+}
+
+/// The absolute difference of CIE luminance (Rec. 709 weights on linear RGB) as a
+/// black-red-yellow-white heat map, full heat at [`DIFF_FULL_SCALE`].
+fn difference(a: &Image, b: &Image) -> Image {
+    let lum = |c: &[f32; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    let rgb = a
+        .rgb
+        .iter()
+        .zip(&b.rgb)
+        .map(|(p, q)| {
+            let t = ((lum(p) - lum(q)).abs() / DIFF_FULL_SCALE).min(1.0) * 3.0;
+            // sRGB ramps: red, then green, then blue.
+            [t, t - 1.0, t - 2.0].map(|x| srgb_to_linear(x.clamp(0.0, 1.0) as f64) as f32)
+        })
+        .collect();
+    Image {
+        width: a.width,
+        height: a.height,
+        rgb,
+        alpha: vec![1.0; a.alpha.len()],
+        stats: RenderStats::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glint_render::{Input, Phantom};
+
+    fn scene() -> Scene {
+        Scene {
+            input: Input::Phantom {
+                name: Phantom::SheppLogan,
+                size: 24,
+            },
+            size: [24, 24],
+            ..Scene::default()
+        }
+    }
+
+    #[test]
+    fn patches_merge_nested_fields_and_refuse_bad_ones() {
+        let r = Renderer::open(&scene().input).unwrap();
+        let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
+        let s = apply_patch(&r, &scene(), &patch(r#"{"camera": {"azimuth": 30}}"#)).unwrap();
+        assert_eq!(s.camera.azimuth, 30.0);
+        assert_eq!(s.camera.view, scene().camera.view);
+        for (bad, needle) in [
+            (r#"{"input": {"path": "/etc/passwd"}}"#, "input"),
+            (r#"{"camera": {"zoom": -3}}"#, "zoom"),
+            (r#"{"camera": {"tilt": 3}}"#, "tilt"),
+            (r#"{"step": "fast"}"#, "step"),
+            (r#"{"size": [99999, 2]}"#, "99999"),
+            (r#"{"lobe": {"n": 1e9}}"#, "1000000000"),
+        ] {
+            let err = apply_patch(&r, &scene(), &patch(bad))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(needle), "{bad}: '{err}'");
+        }
+    }
+
+    #[test]
+    fn split_frames_have_the_right_shape() {
+        let mut r = Renderer::open(&scene().input).unwrap();
+        for (split, width) in [(Split::Off, 24), (Split::Side, 48), (Split::Diff, 24)] {
+            let f = render_frame(&mut r, &scene(), split, Purpose::Full, 5).unwrap();
+            let (h, jpeg) = FrameHeader::decode(&f.message).unwrap();
+            assert_eq!((h.width, h.height, h.seq), (width, 24, 5));
+            assert_eq!(&jpeg[..2], &[0xFF, 0xD8], "JPEG SOI marker");
+        }
+        let f = render_frame(&mut r, &scene(), Split::Off, Purpose::Interactive, 1).unwrap();
+        assert_eq!(FrameHeader::decode(&f.message).unwrap().0.width, 12);
+        let f = render_frame(&mut r, &scene(), Split::Off, Purpose::Save, 1).unwrap();
+        assert_eq!(&FrameHeader::decode(&f.message).unwrap().1[1..4], b"PNG");
+    }
+
+    #[test]
+    fn the_diff_of_an_image_with_itself_is_black() {
+        let mut r = Renderer::open(&scene().input).unwrap();
+        let img = r.render(&scene(), &|_| {}).unwrap().image;
+        let d = difference(&img, &img);
+        assert!(d.rgb.iter().flatten().all(|&c| c == 0.0));
+    }
+}
