@@ -1,0 +1,148 @@
+"""Type stubs for the glint package (the native module glint._glint)."""
+
+import os
+import pathlib
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+from glint import hw as hw
+
+_Path = Union[str, "os.PathLike[str]"]
+LobeName = Literal["exact", "k", "g", "schlick", "gauss", "minimax"]
+
+class Volume:
+    """A 3-D scalar volume; samples indexed [i, j, k] like nibabel's get_fdata()."""
+
+    @staticmethod
+    def from_array(
+        array: npt.NDArray[np.generic],
+        spacing: Optional[Sequence[float]] = None,
+        affine: Optional[npt.ArrayLike] = None,
+        slope: float = 1.0,
+        intercept: float = 0.0,
+        units: Optional[str] = None,
+    ) -> Volume:
+        """A volume from a C- or Fortran-contiguous 3-D array indexed [i, j, k]
+        (uint8, int8, uint16, int16, uint32, int32, float32 or float64; copied).
+        ``affine`` maps (i, j, k, 1) to RAS+ mm; without it the affine is
+        diag(spacing) (spacing defaults to 1 mm)."""
+    @property
+    def shape(self) -> Tuple[int, int, int]: ...
+    @property
+    def dtype(self) -> str:
+        """The stored sample type, e.g. 'int16'."""
+    @property
+    def samples(self) -> npt.NDArray[np.generic]:
+        """The stored samples, a read-only view [i, j, k] (no copy)."""
+    def fdata(self) -> npt.NDArray[np.float64]:
+        """slope * samples + intercept as a new float64 array (nibabel's get_fdata())."""
+    @property
+    def spacing(self) -> Tuple[float, float, float]: ...
+    @property
+    def affine(self) -> npt.NDArray[np.float64]:
+        """Voxel (i, j, k, 1) to world RAS+ mm, 4x4 (a new array)."""
+    @property
+    def slope(self) -> float: ...
+    @property
+    def intercept(self) -> float: ...
+    @property
+    def units(self) -> Optional[str]: ...
+    @property
+    def notes(self) -> list[str]: ...
+    @property
+    def format(self) -> Optional[str]:
+        """'NIfTI-1', 'NRRD' or 'DICOM' for files, None for arrays."""
+    @property
+    def path(self) -> Optional[pathlib.Path]: ...
+    def range(self) -> Tuple[float, float]:
+        """Smallest and largest physical value (NaN ignored)."""
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
+
+def read(path: _Path, max_voxels: Optional[int] = None) -> Volume:
+    """Reads a NIfTI (.nii, .nii.gz), NRRD (.nrrd, .nhdr) or DICOM (file or directory)
+    volume. Raises OSError (FileNotFoundError, ...) or ValueError."""
+
+@overload
+def lobe(kind: LobeName | str, cos: float, n: float, v: int = 4) -> float: ...
+@overload
+def lobe(
+    kind: LobeName | str, cos: npt.NDArray[np.float32], n: float, v: int = 4
+) -> npt.NDArray[np.float32]: ...
+@overload
+def lobe(
+    kind: LobeName | str, cos: npt.NDArray[np.float64], n: float, v: int = 4
+) -> npt.NDArray[np.float64]: ...
+def lobe_kinds() -> list[str]:
+    """The lobe names glint.lobe accepts."""
+
+class Scene:
+    """A render described completely; the fields and JSON of `glint render --scene`.
+
+    Immutable: ``replace(**fields)`` returns a changed copy. Fields read back as plain
+    Python values (dicts, lists, str, numbers); unset optional fields are None.
+    """
+
+    def __init__(self, **fields: Any) -> None:
+        """The default scene with the given fields replaced, e.g.
+        ``Scene(preset="mr-t2-brain", size=(256, 256), camera={"view": "left"},
+        lobe={"kind": "exact", "n": 40})``; a str ``input`` is a file path.
+        Unknown fields or bad values raise ValueError."""
+    @staticmethod
+    def from_json(text: str) -> Scene: ...
+    def to_json(self) -> str: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def replace(self, **fields: Any) -> Scene: ...
+    version: int
+    input: Dict[str, Any]
+    mode: Literal["composite", "iso", "mip"]
+    iso: Optional[float]
+    preset: Optional[str]
+    transfer_function: Optional[Dict[str, Any]]
+    material: Dict[str, Any]
+    lobe: Dict[str, Any]
+    lights: List[Dict[str, float]]
+    camera: Dict[str, Any]
+    size: List[int]
+    step: float
+    gate: float
+    skip_empty: bool
+    background: List[float]
+    derived: Optional[Dict[str, Any]]
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
+
+class Image:
+    """A rendered image; shown inline by Jupyter."""
+
+    @property
+    def array(self) -> npt.NDArray[np.uint8]:
+        """sRGB uint8, shape (height, width, 3): the pixels of glint render's PNG."""
+    @property
+    def alpha(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def scene(self) -> Scene:
+        """The resolved scene (every default chosen)."""
+    @property
+    def timings(self) -> Dict[str, float]:
+        """Seconds: read, field, classify (0 when reused), frame."""
+    def png(self) -> bytes: ...
+    def _repr_png_(self) -> bytes: ...
+    def save(self, path: _Path, sixteen_bit: bool = False) -> None: ...
+    def __array__(self, dtype: Any = None, copy: Optional[bool] = None) -> npt.NDArray[Any]: ...
+
+class Renderer:
+    """Renders many scenes of one volume, keeping its classification across calls."""
+
+    def __init__(self, volume: Union[Volume, _Path]) -> None: ...
+    def render(self, scene: Optional[Scene] = None, **fields: Any) -> Image:
+        """Renders scene (default Scene()) with fields replaced; its input is ignored."""
+
+def render(
+    volume: Union[Volume, _Path, None] = None, scene: Optional[Scene] = None, **fields: Any
+) -> npt.NDArray[np.uint8]:
+    """Renders volume (None: the scene's input) with scene: sRGB uint8 (H, W, 3)."""

@@ -1,0 +1,50 @@
+//! Rust errors to Python exceptions, with the `glint` command's one-line messages.
+
+use std::error::Error;
+use std::io::ErrorKind;
+
+use pyo3::exceptions::{
+    PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError,
+    PyPermissionError, PyValueError,
+};
+use pyo3::prelude::*;
+
+/// The error and its sources joined with `": "`: the line `glint` prints after
+/// `glint: error: ` (anyhow's `{:#}` format).
+pub fn one_line(err: &dyn Error) -> String {
+    let mut line = err.to_string();
+    let mut source = err.source();
+    while let Some(s) = source {
+        line.push_str(": ");
+        line.push_str(&s.to_string());
+        source = s.source();
+    }
+    line
+}
+
+/// A `ValueError` with the error's one-line message.
+pub fn value_error(err: &dyn Error) -> PyErr {
+    PyValueError::new_err(one_line(err))
+}
+
+/// A reading error as Python sees it: operating-system failures are `OSError` (the
+/// subclass for the cause, e.g. `FileNotFoundError`, with the OS error as
+/// `__cause__`); everything else about the file's contents is a `ValueError`.
+pub fn io_error(py: Python<'_>, err: glint_io::IoError) -> PyErr {
+    let message = one_line(&err);
+    match err {
+        glint_io::IoError::Os { source, .. } => {
+            let exc = match source.kind() {
+                ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+                ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+                ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
+                ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
+                ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
+                _ => PyOSError::new_err(message),
+            };
+            exc.set_cause(py, Some(PyErr::from(source)));
+            exc
+        }
+        _ => PyValueError::new_err(message),
+    }
+}

@@ -1,0 +1,269 @@
+//! `glint.Renderer`, `glint.render` and `glint.Image`: glint_render's Renderer over
+//! `glint.Volume`s and `glint.Scene`s, images out as numpy arrays and PNG.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use numpy::{PyArray1, PyArrayMethods as _};
+use pyo3::exceptions::PyOSError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use glint_render::{Depth, Input, RenderError, Rendered, Renderer as RRenderer};
+
+use crate::errors;
+use crate::scene::{with_fields, Scene};
+use crate::volume::Volume;
+
+/// A render error as Python sees it: reading and writing failures as `glint.read`
+/// raises them, other OS failures `OSError`, everything else `ValueError`.
+pub fn render_error(py: Python<'_>, err: RenderError) -> PyErr {
+    match err {
+        RenderError::Read(e) | RenderError::Write(e) => errors::io_error(py, e),
+        RenderError::Io(e) => {
+            let exc = PyOSError::new_err(errors::one_line(&e));
+            exc.set_cause(py, Some(PyErr::from(e)));
+            exc
+        }
+        other => errors::value_error(&other),
+    }
+}
+
+/// What a renderer draws: a volume in memory, or a file to read.
+enum Source {
+    Volume(Arc<glint_io::Volume>, Option<PathBuf>),
+    Path(PathBuf),
+}
+
+/// A `glint.Volume` or a path.
+fn source_of(obj: &Bound<'_, PyAny>) -> PyResult<Source> {
+    if let Ok(v) = obj.cast::<Volume>() {
+        let v = v.get();
+        let path = v.source.as_ref().map(|(p, _)| p.clone());
+        return Ok(Source::Volume(Arc::clone(&v.inner), path));
+    }
+    Ok(Source::Path(obj.extract::<PathBuf>().map_err(|_| {
+        pyo3::exceptions::PyTypeError::new_err(format!(
+            "expected a glint.Volume or a path, got {}",
+            obj.get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_default()
+        ))
+    })?))
+}
+
+/// Renders scenes of one volume, keeping its gradients and the last classification
+/// (transfer function, step, mode) across calls: views that change only the camera,
+/// lights, lobe or size render without classifying again.
+#[pyclass(module = "glint", frozen)]
+pub struct Renderer {
+    inner: Mutex<RRenderer>,
+    /// The file the volume came from, written into rendered scenes' `input`.
+    path: Option<PathBuf>,
+}
+
+impl Renderer {
+    /// Opens `source` with the GIL released.
+    fn open(py: Python<'_>, source: Source) -> PyResult<Renderer> {
+        let (result, path) = match source {
+            Source::Volume(v, path) => (py.detach(move || RRenderer::from_volume(&v)), path),
+            Source::Path(p) => {
+                let input = Input::Path(p.clone());
+                (py.detach(move || RRenderer::open(&input)), Some(p))
+            }
+        };
+        let inner = result.map_err(|e| render_error(py, e))?;
+        Ok(Renderer {
+            inner: Mutex::new(inner),
+            path,
+        })
+    }
+
+    /// Renders with the GIL released (other threads wait for this renderer's lock
+    /// without holding the GIL).
+    fn render_scene(&self, py: Python<'_>, mut scene: glint_render::Scene) -> PyResult<Image> {
+        if let Some(p) = &self.path {
+            scene.input = Input::Path(p.clone());
+        }
+        let rendered = py
+            .detach(|| {
+                let mut r = self
+                    .inner
+                    .lock()
+                    .unwrap_or_else(|poisoned| poisoned.into_inner());
+                r.render(&scene, &|_| {})
+            })
+            .map_err(|e| render_error(py, e))?;
+        Ok(Image { rendered })
+    }
+}
+
+#[pymethods]
+impl Renderer {
+    /// A renderer of a `glint.Volume` or of the volume file at a path (read now).
+    #[new]
+    fn new(py: Python<'_>, volume: &Bound<'_, PyAny>) -> PyResult<Renderer> {
+        let source = source_of(volume)?;
+        Renderer::open(py, source)
+    }
+
+    /// Renders `scene` (default: `glint.Scene()`), with keyword arguments replacing
+    /// its fields; the scene's `input` is ignored (this renderer's volume is used).
+    #[pyo3(signature = (scene=None, **fields))]
+    fn render(
+        &self,
+        py: Python<'_>,
+        scene: Option<&Bound<'_, Scene>>,
+        fields: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Image> {
+        let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
+        let scene = with_fields(&base, fields)?;
+        self.render_scene(py, scene)
+    }
+}
+
+/// Renders a volume (a `glint.Volume` or a path; None: the scene's own input) with a
+/// scene: an sRGB uint8 array of shape (height, width, 3), as `glint render` writes
+/// it to PNG. Keyword arguments replace scene fields. The GIL is released throughout.
+#[pyfunction]
+#[pyo3(signature = (volume=None, scene=None, **fields))]
+pub fn render<'py>(
+    py: Python<'py>,
+    volume: Option<&Bound<'py, PyAny>>,
+    scene: Option<&Bound<'py, Scene>>,
+    fields: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
+    let scene = with_fields(&base, fields)?;
+    let renderer = match volume {
+        Some(v) => Renderer::open(py, source_of(v)?)?,
+        None => {
+            let input = scene.input.clone();
+            let inner = py
+                .detach(move || RRenderer::open(&input))
+                .map_err(|e| render_error(py, e))?;
+            Renderer {
+                inner: Mutex::new(inner),
+                path: None,
+            }
+        }
+    };
+    renderer.render_scene(py, scene)?.array(py)
+}
+
+/// A rendered image: `array` (sRGB uint8, (height, width, 3)), the resolved `scene`,
+/// PNG bytes; shows inline in Jupyter.
+#[pyclass(module = "glint", frozen)]
+pub struct Image {
+    rendered: Rendered,
+}
+
+#[pymethods]
+impl Image {
+    /// sRGB uint8 samples, shape (height, width, 3): the pixels of the PNG
+    /// `glint render` writes.
+    #[getter]
+    fn array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let img = &self.rendered.image;
+        let shape = [img.height as usize, img.width as usize, 3];
+        let bytes = py.detach(|| img.encode_srgb(Depth::Eight));
+        Ok(PyArray1::from_vec(py, bytes).reshape(shape)?.into_any())
+    }
+
+    /// Accumulated opacity per pixel, float32 (height, width).
+    #[getter]
+    fn alpha<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let img = &self.rendered.image;
+        let shape = [img.height as usize, img.width as usize];
+        Ok(PyArray1::from_vec(py, img.alpha.clone())
+            .reshape(shape)?
+            .into_any())
+    }
+
+    /// Width in pixels.
+    #[getter]
+    fn width(&self) -> u32 {
+        self.rendered.image.width
+    }
+
+    /// Height in pixels.
+    #[getter]
+    fn height(&self) -> u32 {
+        self.rendered.image.height
+    }
+
+    /// The scene with every default chosen (`glint render --dump-scene` writes the
+    /// same): render it again to get the same image.
+    #[getter]
+    fn scene(&self) -> Scene {
+        Scene {
+            inner: self.rendered.scene.clone(),
+        }
+    }
+
+    /// Seconds spent reading, building the field, classifying (0 when the renderer
+    /// reused its classification) and rendering the frame.
+    #[getter]
+    fn timings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let t = &self.rendered.timings;
+        let d = PyDict::new(py);
+        d.set_item("read", t.read.as_secs_f64())?;
+        d.set_item("field", t.field.as_secs_f64())?;
+        d.set_item("classify", t.classify.as_secs_f64())?;
+        d.set_item("frame", t.frame.as_secs_f64())?;
+        Ok(d)
+    }
+
+    /// The image as an 8-bit sRGB PNG file's bytes.
+    fn png<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let img = &self.rendered.image;
+        let bytes = py
+            .detach(|| img.encode_png(Depth::Eight))
+            .map_err(|e| render_error(py, RenderError::Encode(e)))?;
+        Ok(PyBytes::new(py, &bytes))
+    }
+
+    /// Jupyter's inline display.
+    fn _repr_png_<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        self.png(py)
+    }
+
+    /// Writes an sRGB PNG atomically (no partial file on failure); `sixteen_bit` for
+    /// 16 bits per channel.
+    #[pyo3(signature = (path, sixteen_bit=false))]
+    fn save(&self, py: Python<'_>, path: PathBuf, sixteen_bit: bool) -> PyResult<()> {
+        let depth = if sixteen_bit {
+            Depth::Sixteen
+        } else {
+            Depth::Eight
+        };
+        let img = &self.rendered.image;
+        py.detach(|| img.write_png(&path, depth))
+            .map_err(|e| render_error(py, e))
+    }
+
+    /// `numpy.asarray(image)` gives `image.array`.
+    #[pyo3(signature = (dtype=None, copy=None))]
+    fn __array__<'py>(
+        &self,
+        py: Python<'py>,
+        dtype: Option<&Bound<'py, PyAny>>,
+        copy: Option<bool>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let _ = copy; // always a new array
+        let arr = self.array(py)?;
+        match dtype {
+            Some(d) => arr.call_method1("astype", (d,)),
+            None => Ok(arr),
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.rendered.scene;
+        format!(
+            "glint.Image({}x{}, lobe={} n={:?} v={})",
+            self.rendered.image.width, self.rendered.image.height, s.lobe.kind, s.lobe.n, s.lobe.v
+        )
+    }
+}

@@ -1,0 +1,143 @@
+"""glint.Scene, glint.render and glint.Renderer against `glint render`."""
+
+import io
+import json
+import pickle
+import re
+import threading
+
+import numpy as np
+import pytest
+from PIL import Image as PILImage
+
+import glint
+from conftest import cli_error_line, run_glint
+
+
+def cli_render(glint_bin, scene, tmp_path, name="cli"):
+    """The PNG `glint render --scene` writes for scene, decoded to uint8 (H, W, 3)."""
+    scene_file = tmp_path / f"{name}.json"
+    scene_file.write_text(scene.to_json())
+    png = tmp_path / f"{name}.png"
+    proc = run_glint(glint_bin, "render", "--scene", str(scene_file), "--quiet", "-o", str(png))
+    assert proc.returncode == 0, proc.stderr
+    with PILImage.open(png) as im:
+        assert im.mode == "RGB"
+        return np.asarray(im)
+
+
+@pytest.fixture(scope="module")
+def brain_scene(mni_path):
+    return glint.Scene(input=str(mni_path), preset="mr-t2-brain", size=(160, 120),
+                       camera={"view": "left"}, lobe={"kind": "exact", "n": 30})
+
+
+def test_render_equals_cli_byte_for_byte(glint_bin, mni_path, brain_scene, tmp_path):
+    want = cli_render(glint_bin, brain_scene, tmp_path)
+    got = glint.render(mni_path, brain_scene)
+    assert got.dtype == np.uint8 and got.shape == (120, 160, 3)
+    assert want.shape == got.shape
+    assert np.array_equal(got, want)
+    assert got.max() > 0  # the brain is there
+
+
+def test_renderer_keeps_classification_and_matches_cli(glint_bin, mni_path, brain_scene, tmp_path):
+    renderer = glint.Renderer(glint.read(mni_path))
+    first = renderer.render(brain_scene)
+    assert first.timings["classify"] > 0
+    views = []
+    for view in ("anterior", "superior"):
+        image = renderer.render(brain_scene, camera={"view": view}, lobe={"kind": "k"})
+        assert image.timings["classify"] == 0.0  # same transfer function: reused
+        views.append((brain_scene.replace(camera={"view": view}, lobe={"kind": "k"}), image))
+    # A new transfer function classifies again.
+    assert renderer.render(brain_scene, preset="mr-default").timings["classify"] > 0
+    for i, (scene, image) in enumerate(views):
+        assert np.array_equal(image.array, cli_render(glint_bin, scene, tmp_path, f"v{i}"))
+        # The resolved scene renders the same image on the command line.
+        assert np.array_equal(np.asarray(image), cli_render(glint_bin, image.scene, tmp_path, f"r{i}"))
+
+
+def test_in_memory_volume_renders_like_the_file(mni_path, brain_scene):
+    import nibabel as nib
+
+    img = nib.load(str(mni_path))
+    vol = glint.Volume.from_array(np.asanyarray(img.dataobj), affine=img.affine)
+    small = brain_scene.replace(size=(64, 48))
+    assert np.array_equal(glint.render(vol, small), glint.render(mni_path, small))
+
+
+def test_image_png_and_save(mni_path, brain_scene, tmp_path):
+    image = glint.Renderer(mni_path).render(brain_scene, size=(40, 30))
+    assert (image.width, image.height) == (40, 30)
+    with PILImage.open(io.BytesIO(image._repr_png_())) as im:
+        assert np.array_equal(np.asarray(im), image.array)
+    image.save(tmp_path / "x.png")
+    with PILImage.open(tmp_path / "x.png") as im:
+        assert np.array_equal(np.asarray(im), image.array)
+    assert image.alpha.shape == (30, 40) and image.alpha.dtype == np.float32
+    assert 0.0 <= image.alpha.min() and image.alpha.max() <= 1.0
+    with pytest.raises(OSError):
+        image.save(tmp_path / "no-such-dir" / "x.png")
+    assert not (tmp_path / "no-such-dir").exists()
+
+
+def test_scene_fields_json_and_pickle():
+    default = glint.Scene()
+    assert default == glint.Scene.from_json(default.to_json())
+    assert default.size == [512, 512] and default.mode == "composite"
+    assert default.preset is None and default.iso is None
+    s = glint.Scene(size=(64, 32), lobe={"kind": "schlick", "n": 20}, mode="mip", step=0.25)
+    assert s.size == [64, 32] and s.lobe["kind"] == "schlick" and s.lobe["n"] == 20
+    assert json.loads(s.to_json())["lobe"]["kind"] == "schlick"
+    assert s.to_dict()["step"] == 0.25
+    assert s.replace(step=None).step == default.step
+    assert pickle.loads(pickle.dumps(s)) == s
+    assert s != default
+    assert "camera" in dir(s)
+    with pytest.raises(AttributeError):
+        s.no_such_field
+
+
+def test_scene_errors_match_the_cli(glint_bin, tmp_path):
+    for fields in ({"colour": 3}, {"version": 99}, {"lobe": {"kind": "nope"}}):
+        with pytest.raises(ValueError) as err:
+            glint.Scene(**fields)
+        bad = tmp_path / "bad.json"
+        bad.write_text(json.dumps({"version": 1, **fields}))
+        line = cli_error_line(glint_bin, "render", "--scene", str(bad), "-o", str(tmp_path / "x.png"))
+        # serde's position differs (the file holds fewer fields); the rest is the same.
+        # (The command prints the parser's message twice, as RenderError::SceneFile
+        # both shows its source and returns it from source(); compare the first.)
+        at = re.compile(r" at line \d+ column \d+")
+        assert at.sub("", line).startswith(at.sub("", f"{bad}: {err.value}"))
+    with pytest.raises(TypeError):
+        glint.Scene(size={1, 2})
+    with pytest.raises(ValueError, match="invalid parameter"):
+        glint.render(None, glint.Scene(size=(0, 10)))
+    with pytest.raises(FileNotFoundError, match="I/O error"):
+        glint.render("/no/such/file.nii.gz")
+    with pytest.raises(TypeError, match="glint.Volume or a path"):
+        glint.Renderer(3.5)
+
+
+def test_renders_from_threads(mni_path, brain_scene):
+    small = brain_scene.replace(size=(64, 64))
+    want = glint.render(mni_path, small)
+    renderer = glint.Renderer(mni_path)
+    got = []
+
+    def work(i):
+        if i % 2:
+            got.append(glint.render(mni_path, small))
+        else:
+            got.append(renderer.render(small).array)  # one renderer shared by threads
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(got) == 4
+    for g in got:
+        assert np.array_equal(g, want)
