@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for _ in 0..frames {
         for (resolved, times) in [(&k, &mut tk), (&hw, &mut th)] {
             let r = renderer.render_resolved(resolved.clone(), &|_| {})?;
-            times.push(r.timings.frame.as_secs_f64() * 1e3);
+            times.push(r.timings.get("frame").as_secs_f64() * 1e3);
         }
     }
     let (mk, mh) = (median(tk), median(th));

@@ -46,6 +46,15 @@ impl Timings {
         &self.stages
     }
 
+    /// The time of `stage`, zero when it did not run.
+    pub fn get(&self, stage: &str) -> Duration {
+        self.stages
+            .iter()
+            .filter(|(s, _)| *s == stage)
+            .map(|(_, d)| *d)
+            .sum()
+    }
+
     /// The sum of the stages.
     pub fn total(&self) -> Duration {
         self.stages.iter().map(|(_, d)| *d).sum()

@@ -284,7 +284,7 @@ fn compare_lobe(
         kind,
         n: scene.lobe.n.unwrap_or_default(),
         v,
-        frame: shot.rendered.timings.frame,
+        frame: shot.rendered.timings.get("frame"),
         delta_e: delta_e_map(exact, &shot.srgb)?,
         shot,
         whole,
@@ -455,8 +455,8 @@ fn text_report(reference: &Reference, dark: &Rendered, rows: &[Comparison]) -> S
         s.size[1],
         fmt_num(s.lobe.n.unwrap_or_default()),
         s.lobe.geometry,
-        ms(dark.timings.classify),
-        ms(r.timings.frame),
+        ms(dark.timings.get("classify")),
+        ms(r.timings.get("frame")),
         100.0 * hl as f64 / reference.mask.len().max(1) as f64,
         fmt_num(100.0 * HIGHLIGHT_FRACTION),
     );
@@ -512,7 +512,7 @@ fn json_report(
         .collect();
     Ok(json!({
         "scene": serde_json::to_value(&r.scene)?,
-        "exact": { "classify_ms": ms(dark.timings.classify), "render_ms": ms(r.timings.frame) },
+        "exact": { "classify_ms": ms(dark.timings.get("classify")), "render_ms": ms(r.timings.get("frame")) },
         "highlight": {
             "fraction_of_max": HIGHLIGHT_FRACTION,
             "pixels": reference.mask.iter().filter(|&&m| m).count(),

@@ -34,7 +34,7 @@ impl Shader {
                     Geometry::Phong => 2.0 * n_dot_l * n_dot_v - l.dot(view),
                     Geometry::Blinn => n.dot((l + view).normalize_or_zero()),
                 };
-                specular += intensity * self.lobe.eval(c);
+                specular += intensity * self.specular.eval(c);
             }
         }
         let lit = m.ambient + m.diffuse * diffuse;
