@@ -61,7 +61,9 @@ impl SchlickUnit {
         let x = cos.clamp(0, one as i64) as u64;
         let den = u64::from(n) * (one - x) + x;
         // den = 0 only for x = 0, n = 0: the divider then gives all ones.
-        let q = (x << (QF + 1)).checked_div(den).unwrap_or((1 << (QF + 2)) - 1);
+        let q = (x << (QF + 1))
+            .checked_div(den)
+            .unwrap_or((1 << (QF + 2)) - 1);
         ((q + 1) >> 1).min(1 << QF)
     }
 

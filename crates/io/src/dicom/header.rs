@@ -251,11 +251,7 @@ type FrameTable = (Vec<Option<[f64; 3]>>, Vec<(f64, f64)>);
 
 /// Per-frame positions and rescales: from the per-frame functional groups of an enhanced
 /// multi-frame object, else the one top-level (or shared) position for frame 0.
-fn frame_table(
-    path: &Path,
-    obj: &InMemDicomObject,
-    frames: usize,
-) -> Result<FrameTable, IoError> {
+fn frame_table(path: &Path, obj: &InMemDicomObject, frames: usize) -> Result<FrameTable, IoError> {
     let rescale_of = |o: &InMemDicomObject| {
         (
             float(o, tags::RESCALE_SLOPE).unwrap_or(1.0),
