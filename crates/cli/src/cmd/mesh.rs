@@ -43,7 +43,10 @@ pub struct Args {
 }
 
 /// The writer for an output path, from its extension.
-fn writer(path: &Path) -> anyhow::Result<fn(&Path, &Mesh) -> Result<(), glint_io::IoError>> {
+/// A mesh writer of glint_io.
+type MeshWriter = fn(&Path, &Mesh) -> Result<(), glint_io::IoError>;
+
+fn writer(path: &Path) -> anyhow::Result<MeshWriter> {
     Ok(match Format::guess(path) {
         Some(Format::Stl) => write_stl,
         Some(Format::Ply) => |p, m| write_ply(p, m, PlyEncoding::BinaryLittleEndian),
