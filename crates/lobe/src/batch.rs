@@ -261,6 +261,10 @@ mod x86 {
     use super::{eval_all, Params};
 
     /// The kernels compiled for AVX-512.
+    ///
+    /// # Safety
+    /// The CPU must support AVX-512 F, VL, DQ, BW, AVX2 and FMA (checked by the
+    /// dispatcher with `is_x86_feature_detected!`).
     #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
     pub(super) unsafe fn eval_avx512(params: &Params, cos: &[f32], out: &mut [f32]) {
         match *params {
@@ -272,6 +276,9 @@ mod x86 {
     }
 
     /// The kernels compiled for AVX2 + FMA.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA (checked by the dispatcher).
     #[target_feature(enable = "avx2,fma")]
     pub(super) unsafe fn eval_avx2(params: &Params, cos: &[f32], out: &mut [f32]) {
         eval_all(params, cos, out)

@@ -63,18 +63,29 @@ pub(super) fn supported() -> bool {
 }
 
 /// `a + t (b - a)`, rounded as the scalar code rounds it (no FMA).
+///
+/// # Safety
+/// Only for callers compiled with AVX2 (the loops of this module, whose entry checks
+/// [`supported`]).
 #[inline(always)]
 unsafe fn lerp(a: __m256, b: __m256, t: __m256) -> __m256 {
     _mm256_add_ps(a, _mm256_mul_ps(t, _mm256_sub_ps(b, a)))
 }
 
 /// [`lerp`] on four lanes.
+///
+/// # Safety
+/// Only for callers compiled with AVX2 (the loops of this module, whose entry checks
+/// [`supported`]).
 #[inline(always)]
 unsafe fn lerp4(a: __m128, b: __m128, t: __m128) -> __m128 {
     _mm_add_ps(a, _mm_mul_ps(t, _mm_sub_ps(b, a)))
 }
 
 /// The two f32 at `p` as one 64-bit integer.
+///
+/// # Safety
+/// `p` and `p + 1` must be readable f32 (alignment is not required).
 #[inline(always)]
 unsafe fn pair(p: *const f32) -> i64 {
     p.cast::<i64>().read_unaligned()
@@ -82,6 +93,10 @@ unsafe fn pair(p: *const f32) -> i64 {
 
 /// Corners `(i, i+1)` of one row for eight lanes whose row starts are `p[l] + off`: the
 /// first corners in lane order, then the second.
+///
+/// # Safety
+/// Each `p[l] + off` and the f32 after it must be readable, and the CPU must support
+/// AVX2 (as for the other helpers of this module).
 #[inline(always)]
 unsafe fn row(p: [*const f32; LANES], off: usize) -> (__m256, __m256) {
     let at = |l: usize| pair(p[l].add(off));
@@ -95,6 +110,10 @@ unsafe fn row(p: [*const f32; LANES], off: usize) -> (__m256, __m256) {
 }
 
 /// `a·b` for vectors given by components, summed left to right like `Vec3::dot`.
+///
+/// # Safety
+/// Only for callers compiled with AVX2 (the loops of this module, whose entry checks
+/// [`supported`]).
 #[inline(always)]
 unsafe fn dot(a: [__m256; 3], b: [__m256; 3]) -> __m256 {
     _mm256_add_ps(
