@@ -16,7 +16,7 @@ def test_read_matches_nibabel(mni_path):
     img = nib.load(str(mni_path))
     vol = glint.read(mni_path)
     assert vol.shape == img.shape
-    assert vol.format == "NIfTI-1"
+    assert vol.format == "NIfTI"
     assert vol.path == mni_path
     # Stored samples: same type and values as nibabel's unscaled data, same axis order.
     raw = np.asanyarray(img.dataobj.get_unscaled())

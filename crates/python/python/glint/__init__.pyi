@@ -53,7 +53,7 @@ class Volume:
     def notes(self) -> list[str]: ...
     @property
     def format(self) -> Optional[str]:
-        """'NIfTI-1', 'NRRD' or 'DICOM' for files, None for arrays."""
+        """'NIfTI', 'NRRD' or 'DICOM' for files, None for arrays."""
     @property
     def path(self) -> Optional[pathlib.Path]: ...
     def range(self) -> Tuple[float, float]:
