@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use glint_analysis::image::{
     compare, comparison_png, delta_e_map, highlight_mask, sweep_plot, ComparisonRow, ImageMetrics,
     Srgb8Image, SweepSeries, DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION,
@@ -19,6 +19,7 @@ use glint_render::{
 use serde_json::{json, Value};
 
 use super::choice::choice;
+use super::render::{check_output_dir, load_scene, open_renderer as open, parse_size, set};
 
 /// The n of the sweep (issue 13, item 3).
 const SWEEP_N: [f64; 7] = [10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0];
@@ -130,22 +131,6 @@ struct Options {
     quiet: bool,
 }
 
-fn parse_size(s: &str) -> Result<[u32; 2], String> {
-    let bad = || format!("'{s}': expected WxH, e.g. 512x512");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    Ok([
-        w.trim().parse().map_err(|_| bad())?,
-        h.trim().parse().map_err(|_| bad())?,
-    ])
-}
-
-/// `*field = value` when the flag was given.
-fn set<T>(field: &mut T, value: Option<T>) {
-    if let Some(v) = value {
-        *field = v;
-    }
-}
-
 /// The scene file (or the default scene) with the given flags applied, lobe exact.
 fn build_scene(o: &Options) -> anyhow::Result<Scene> {
     let mut scene = match &o.scene {
@@ -191,19 +176,6 @@ fn build_scene(o: &Options) -> anyhow::Result<Scene> {
         glint_analysis::check_v(v)?;
     }
     scene.lobe.kind = LobeKind::Exact;
-    Ok(scene)
-}
-
-/// Reads a scene file; a relative input path in it is relative to the file.
-fn load_scene(path: &Path) -> anyhow::Result<Scene> {
-    let mut scene = Scene::from_json_file(path)?;
-    if let Input::Path(p) = &mut scene.input {
-        if p.is_relative() {
-            if let Some(dir) = path.parent() {
-                *p = dir.join(&*p);
-            }
-        }
-    }
     Ok(scene)
 }
 
@@ -326,27 +298,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if !o.quiet {
         eprintln!("glint: wrote {}", output.display());
-    }
-    Ok(())
-}
-
-fn open(scene: &Scene) -> anyhow::Result<Renderer> {
-    Renderer::open(&scene.input).with_context(|| match &scene.input {
-        Input::Path(p) => format!("cannot read volume {}", p.display()),
-        Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
-    })
-}
-
-/// Refuses before any work when the output's directory does not exist.
-fn check_output_dir(output: &Path) -> anyhow::Result<()> {
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            bail!(
-                "cannot write {}: directory {} does not exist",
-                output.display(),
-                dir.display()
-            );
-        }
     }
     Ok(())
 }

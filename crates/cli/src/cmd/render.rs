@@ -160,7 +160,7 @@ struct Options {
     scalar: bool,
 }
 
-fn parse_size(s: &str) -> Result<[u32; 2], String> {
+pub(crate) fn parse_size(s: &str) -> Result<[u32; 2], String> {
     let bad = || format!("'{s}': expected WxH, e.g. 512x512");
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
     Ok([
@@ -194,10 +194,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let args = *args.opts;
     check_output_dir(&args.output)?;
     let scene = build_scene(&args)?;
-    let mut renderer = Renderer::open(&scene.input).with_context(|| match &scene.input {
-        Input::Path(p) => format!("cannot read volume {}", p.display()),
-        Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
-    })?;
+    let mut renderer = open_renderer(&scene)?;
     if args.scalar {
         renderer.kernel = Kernel::Scalar;
     }
@@ -246,8 +243,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A renderer of the scene's input, with an error that names it.
+pub(crate) fn open_renderer(scene: &Scene) -> anyhow::Result<Renderer> {
+    Renderer::open(&scene.input).with_context(|| match &scene.input {
+        Input::Path(p) => format!("cannot read volume {}", p.display()),
+        Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
+    })
+}
+
 /// Refuses before any work when the output's directory does not exist.
-fn check_output_dir(output: &Path) -> anyhow::Result<()> {
+pub(crate) fn check_output_dir(output: &Path) -> anyhow::Result<()> {
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         if !dir.is_dir() {
             bail!(
@@ -284,7 +289,7 @@ fn build_scene(args: &Options) -> anyhow::Result<Scene> {
 }
 
 /// `*field = value` when the flag was given.
-fn set<T>(field: &mut T, value: Option<T>) {
+pub(crate) fn set<T>(field: &mut T, value: Option<T>) {
     if let Some(v) = value {
         *field = v;
     }
