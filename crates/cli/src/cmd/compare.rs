@@ -197,7 +197,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         o.lobes.clone()
     };
-    let mut renderer = open(&scene)?;
+    let mut renderer = open(&scene, &o.scene.read_options())?;
     let dark = renderer.render(&dark_scene(&scene), &|_| {})?;
     let reference = reference(&mut renderer, &scene, &dark)?;
     let v = reference.shot.rendered.scene.lobe.v;
@@ -421,7 +421,7 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
     };
     let out = o.output.clone().unwrap_or_else(|| "compare-sweep".into());
     let staging = Staging::new(&out)?;
-    let mut renderer = open(&scene)?;
+    let mut renderer = open(&scene, &o.scene.read_options())?;
     let dark = renderer.render(&dark_scene(&scene), &|_| {})?;
     let mut rows = Vec::new();
     for &n in &ns {

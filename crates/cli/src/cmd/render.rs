@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
+use glint_io::ReadOptions;
 use glint_lobe::LobeKind;
 use glint_render::{Depth, Input, Kernel, Rendered, Renderer, Scene};
 
@@ -85,7 +86,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let args = *args.opts;
     check_output_dir(&args.output)?;
     let scene = build_scene(&args)?;
-    let mut renderer = open_renderer(&scene)?;
+    let mut renderer = open_renderer(&scene, &args.scene.read_options())?;
     if args.scalar {
         renderer.kernel = Kernel::Scalar;
     }
@@ -134,12 +135,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A renderer of the scene's input, with an error that names it.
-pub(crate) fn open_renderer(scene: &Scene) -> anyhow::Result<Renderer> {
-    Renderer::open(&scene.input).with_context(|| match &scene.input {
-        Input::Path(p) => format!("cannot read volume {}", p.display()),
-        Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
-    })
+/// A renderer of the scene's input, with an error that names it; prints what the
+/// reader assumed (e.g. DICOM frames without positions) to stderr.
+pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Result<Renderer> {
+    let renderer =
+        Renderer::open_with(&scene.input, options).with_context(|| match &scene.input {
+            Input::Path(p) => format!("cannot read volume {}", p.display()),
+            Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
+        })?;
+    if let Input::Path(path) = &scene.input {
+        for note in renderer.notes().iter().filter(|n| n.contains("assumed")) {
+            eprintln!("glint: {}: {note}", path.display());
+        }
+    }
+    Ok(renderer)
 }
 
 /// Refuses before any work when the output's directory does not exist.

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::bail;
+use glint_io::ReadOptions;
 use glint_lobe::Geometry;
 use glint_render::{Input, Light, Phantom, Projection, RenderMode, Scene, TransferFunction, View};
 
@@ -91,6 +92,10 @@ pub struct SceneFlags {
     /// Image size WxH [default: 512x512].
     #[arg(long, value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
+    /// Refuse what lenient readers accept with a note (DICOM without preamble or meta
+    /// group, multi-frame DICOM without frame positions).
+    #[arg(long)]
+    pub strict: bool,
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     pub no_skip: bool,
@@ -107,6 +112,14 @@ impl SceneFlags {
         };
         self.apply(&mut scene)?;
         Ok(scene)
+    }
+
+    /// How to read the input volume.
+    pub fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            strict: self.strict,
+            ..ReadOptions::default()
+        }
     }
 
     /// Applies every given flag to `scene`.
