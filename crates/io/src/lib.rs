@@ -37,6 +37,7 @@
 
 #![warn(missing_docs)]
 
+mod clock;
 mod common;
 pub mod dicom;
 pub mod gifti;
@@ -170,6 +171,9 @@ pub struct VolumeFile {
     /// Facts about the reading worth telling the user (where the affine came from,
     /// dropped dimensions, ...).
     pub notes: Vec<String>,
+    /// Time spent inflating gzip data (with reading the compressed bytes), for
+    /// compressed NIfTI; `None` when nothing was inflated or it was not measured.
+    pub inflate: Option<std::time::Duration>,
 }
 
 /// A mesh with what is known about the file it came from.

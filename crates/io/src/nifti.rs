@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 
 use flate2::read::MultiGzDecoder;
 
+use crate::clock::Clock;
+
 use crate::common::{
     check_affine, checked_voxels, decode_samples, encode_samples, is_gzip, open, os_or_invalid,
     read_exact_growing, spacing_of, write_atomic, Endian, ScalarType,
@@ -229,17 +231,15 @@ fn parse_nifti2(path: &Path, b: &[u8], endian: Endian, pair: bool) -> Result<Hea
     })
 }
 
-/// Opens a file, gunzipping it when it starts with the gzip signature; the length is
-/// known only for an uncompressed file.
-fn open_maybe_gz(path: &Path) -> Result<(Box<dyn Read>, Option<u64>), IoError> {
+/// Opens a file, gunzipping it when it starts with the gzip signature (the time spent
+/// inflating goes to `clock`); the length is known only for an uncompressed file.
+fn open_maybe_gz(path: &Path, clock: &Clock) -> Result<(Box<dyn Read>, Option<u64>), IoError> {
     let gz = is_gzip(path)?;
     let file = open(path)?;
     let len = file.metadata().map(|m| m.len()).ok();
     Ok(if gz {
-        (
-            Box::new(BufReader::new(MultiGzDecoder::new(BufReader::new(file)))),
-            None,
-        )
+        let inflater = MultiGzDecoder::new(BufReader::new(file));
+        (Box::new(BufReader::new(clock.timed(inflater))), None)
     } else {
         (Box::new(BufReader::new(file)), len)
     })
@@ -269,7 +269,8 @@ fn image_of(path: &Path) -> Result<PathBuf, IoError> {
 pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     let lower = path.to_string_lossy().to_ascii_lowercase();
     let pair = lower.ends_with(".hdr") || lower.ends_with(".hdr.gz");
-    let (mut reader, file_len) = open_maybe_gz(path)?;
+    let clock = Clock::default();
+    let (mut reader, file_len) = open_maybe_gz(path, &clock)?;
     let head = read_exact_growing(path, &mut reader, HEADER_SIZE, "NIfTI header")?;
     let h = parse_header(
         path,
@@ -315,7 +316,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     let offset = h.vox_offset as u64;
     let (data_path, mut data, data_len, skip) = if pair {
         let img = image_of(path)?;
-        let (r, len) = open_maybe_gz(&img)?;
+        let (r, len) = open_maybe_gz(&img, &clock)?;
         (img, r, len, offset)
     } else {
         (
@@ -386,6 +387,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         },
         format: crate::Format::Nifti,
         notes,
+        inflate: clock.spent(),
     })
 }
 

@@ -444,6 +444,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         },
         format: Format::Nrrd,
         notes,
+        inflate: None,
     })
 }
 

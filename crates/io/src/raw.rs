@@ -46,6 +46,7 @@ pub fn read(path: &Path, params: &RawParams, options: &ReadOptions) -> Result<Vo
         },
         format: Format::Raw,
         notes: vec!["raw samples: geometry from the caller, origin at voxel 0".into()],
+        inflate: None,
     })
 }
 

@@ -155,3 +155,13 @@ fn nifti2_hostile_dims() {
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(matches!(err, IoError::Truncated { .. }), "{err}");
 }
+
+/// Issue 12: the time spent inflating is measured for a gzip file and only for one.
+#[test]
+fn inflate_time_is_reported_for_compressed_files_only() {
+    let gz = glint_io::open_volume(&data("n2.nii.gz"), &ReadOptions::default()).unwrap();
+    assert!(gz.inflate.is_some());
+    let plain = glint_io::open_volume(&data("n2.nii"), &ReadOptions::default()).unwrap();
+    assert_eq!(plain.inflate, None);
+    assert_eq!(gz.volume.samples, plain.volume.samples);
+}

@@ -66,8 +66,8 @@ pub use raycast::{
     TERMINATION_OPACITY,
 };
 pub use scene::{
-    Derived, Input, LobeSpec, RenderMode, Rendered, Renderer, Resolved, Scene, DEFAULT_SHININESS,
-    MAX_SCENE_BYTES, SCENE_VERSION,
+    Derived, Input, LobeSpec, OpenedVolume, RenderMode, Rendered, Renderer, Resolved, Scene,
+    DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
 };
 pub use shading::{Light, Shader, MAX_LIGHTS};
 pub use tf::{

@@ -154,20 +154,38 @@ impl Default for Input {
 impl Input {
     /// Reads the file or builds the phantom.
     pub fn open(&self) -> Result<Volume, RenderError> {
-        Ok(self.open_with(&ReadOptions::default())?.0)
+        Ok(self.open_with(&ReadOptions::default())?.volume)
     }
 
-    /// The volume with the reader's notes (e.g. DICOM's "geometry assumed: ..."); a
-    /// phantom has none.
-    pub fn open_with(&self, options: &ReadOptions) -> Result<(Volume, Vec<String>), RenderError> {
+    /// The volume with what the reader said and measured.
+    pub fn open_with(&self, options: &ReadOptions) -> Result<OpenedVolume, RenderError> {
         match self {
             Input::Path(path) => {
                 let file = open_volume(path, options)?;
-                Ok((file.volume, file.notes))
+                Ok(OpenedVolume {
+                    volume: file.volume,
+                    notes: file.notes,
+                    inflate: file.inflate,
+                })
             }
-            Input::Phantom { name, size } => Ok((name.volume(*size)?, Vec::new())),
+            Input::Phantom { name, size } => Ok(OpenedVolume {
+                volume: name.volume(*size)?,
+                notes: Vec::new(),
+                inflate: None,
+            }),
         }
     }
+}
+
+/// A volume read by [`Input::open_with`].
+#[derive(Clone, Debug)]
+pub struct OpenedVolume {
+    /// The volume.
+    pub volume: Volume,
+    /// The reader's notes (e.g. DICOM's "geometry assumed: ..."); a phantom has none.
+    pub notes: Vec<String>,
+    /// Time spent inflating gzip data, when the reader measured it.
+    pub inflate: Option<std::time::Duration>,
 }
 
 /// How samples along a ray make a pixel (the scene's form of [`Mode`], whose iso value
@@ -520,12 +538,19 @@ impl Renderer {
     /// [`Renderer::open`] with reader options (e.g. `strict`); the reader's notes are
     /// kept ([`Renderer::notes`]).
     pub fn open_with(input: &Input, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        let start = Instant::now();
+        let opened = input.open_with(options)?;
         let mut read = Timings::default();
-        let (volume, notes) = read.time("read", || input.open_with(options))?;
-        let mut renderer = Renderer::from_volume(&volume)?;
+        // Inflating is reported apart from reading and parsing (issue 12).
+        let inflate = opened.inflate.unwrap_or_default();
+        read.record("read", start.elapsed().saturating_sub(inflate));
+        if let Some(inflate) = opened.inflate {
+            read.record("read: inflate", inflate);
+        }
+        let mut renderer = Renderer::from_volume(&opened.volume)?;
         read.extend(&renderer.opened);
         renderer.opened = read;
-        renderer.notes = notes;
+        renderer.notes = opened.notes;
         Ok(renderer)
     }
 

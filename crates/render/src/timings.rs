@@ -64,12 +64,14 @@ impl Timings {
 impl fmt::Display for Timings {
     /// One line per stage, `stage  12.34 ms`, then the total.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let w = self.stages.iter().map(|(s, _)| s.len()).max().unwrap_or(0);
+        let w = w.max("total".len());
         for (s, d) in &self.stages {
-            writeln!(f, "{s:<16} {:9.2} ms", d.as_secs_f64() * 1e3)?;
+            writeln!(f, "{s:<w$} {:9.2} ms", d.as_secs_f64() * 1e3)?;
         }
         write!(
             f,
-            "{:<16} {:9.2} ms",
+            "{:<w$} {:9.2} ms",
             "total",
             self.total().as_secs_f64() * 1e3
         )

@@ -158,6 +158,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         },
         format: Format::Dicom,
         notes,
+        inflate: None,
     })
 }
 
