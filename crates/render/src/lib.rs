@@ -56,7 +56,7 @@ mod timings;
 pub use camera::{Camera, CameraSpec, Projection, View};
 pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
 pub use error::RenderError;
-pub use field::{Field, MACRO_CELL, MAX_FIELD_VOXELS};
+pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA};
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
