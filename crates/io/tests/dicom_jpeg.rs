@@ -120,6 +120,7 @@ fn twelve_bit_lossy_jpeg_is_refused_by_name() {
     let err = dicom::read(&dir().join(row.file), &ReadOptions::default()).unwrap_err();
     assert!(matches!(err, IoError::Unsupported { .. }), "{err}");
     let msg = err.to_string();
+    eprintln!("{msg}");
     assert!(
         msg.contains("extended12.dcm") && msg.contains("JPEG Extended"),
         "{msg}"
