@@ -30,7 +30,7 @@ import imagecodecs
 import numpy as np
 import pydicom
 from pydicom.dataset import Dataset, FileMetaDataset
-from pydicom.encaps import encapsulate, encapsulate_extended
+from pydicom.encaps import encapsulate, encapsulate_extended, generate_frames
 from pydicom.pixels import pixel_array
 from pydicom.uid import (
     JPEGBaseline8Bit,
@@ -238,13 +238,13 @@ def main():
         lines.append("\t".join(row(name if series else name + ".dcm", ref, refusal)))
     with open(os.path.join(out, "reference.tsv"), "w") as f:
         f.write("\n".join(lines) + "\n")
-    digest = hashlib.sha256(open(os.path.join(out, "reference.tsv"), "rb").read()).hexdigest()
+    with open(os.path.join(out, "reference.tsv"), "rb") as f:
+        digest = hashlib.sha256(f.read()).hexdigest()
     print(f"reference.tsv sha256 {digest[:16]}", file=sys.stderr)
 
 
 def _frames_of(path):
-    from pydicom.encaps import generate_frames
-
+    """The codestreams of a file's frames."""
     ds = pydicom.dcmread(path)
     return list(generate_frames(ds.PixelData, number_of_frames=int(ds.get("NumberOfFrames", 1))))
 
