@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests: sample-data lookup and hand-built headers.
 #![allow(dead_code)]
 
+pub mod table;
+
 use std::path::PathBuf;
 
 /// The directory scripts/fetch-samples fills.
