@@ -128,6 +128,20 @@ impl FromStr for ColorMap {
     }
 }
 
+/// Scenes name maps as users type them (`"viridis"`).
+impl serde::Serialize for ColorMap {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for ColorMap {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        name.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 /// Scalars mapped through a colour map: values at or below `range.0` get the map's
 /// low end, at or above `range.1` its high end.
 #[derive(Clone, Debug)]

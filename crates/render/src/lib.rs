@@ -42,6 +42,7 @@ mod colormap;
 mod error;
 mod field;
 mod image;
+mod meshes;
 pub mod isosurface;
 pub mod math;
 pub mod phantom;
@@ -65,8 +66,11 @@ pub use raycast::{
     Classification, ClassifySettings, FrameSettings, Kernel, Mode, RenderStats, MAX_IMAGE_SIDE,
     TERMINATION_OPACITY,
 };
+pub use meshes::{
+    MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS,
+};
 pub use scene::{
-    Derived, Input, LobeSpec, RenderMode, Rendered, Renderer, Resolved, Scene, DEFAULT_SHININESS,
+    Derived, Input, LobeSpec, Plan, RenderMode, Rendered, Renderer, Resolved, Scene, DEFAULT_SHININESS,
     MAX_SCENE_BYTES, SCENE_VERSION,
 };
 pub use shading::{Light, Shader, MAX_LIGHTS};
