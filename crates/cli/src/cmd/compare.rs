@@ -12,14 +12,13 @@ use glint_analysis::image::{
     Srgb8Image, SweepSeries, DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION,
 };
 use glint_analysis::{fmt_num, lobe_label, Staging};
-use glint_lobe::{Geometry, LobeKind};
-use glint_render::{
-    Depth, Input, Phantom, Projection, RenderMode, Rendered, Renderer, Scene, View,
-};
+use glint_lobe::LobeKind;
+use glint_render::{Depth, Input, Rendered, Renderer, Scene};
 use serde_json::{json, Value};
 
 use super::choice::choice;
-use super::render::{check_output_dir, load_scene, open_renderer as open, parse_size, set};
+use super::render::{check_output_dir, open_renderer as open};
+use super::scene_flags::SceneFlags;
 
 /// The n of the sweep (issue 13, item 3).
 const SWEEP_N: [f64; 7] = [10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0];
@@ -51,60 +50,15 @@ pub struct Args {
 /// The options of `glint compare` (see `glint render` for the scene options).
 #[derive(clap::Args)]
 struct Options {
-    /// Volume to render; without it (and without --scene), the built-in phantom.
-    input: Option<PathBuf>,
+    #[command(flatten)]
+    scene: SceneFlags,
     /// The comparison picture (PNG) [default: compare.png]; with --sweep, the output
     /// directory [default: compare-sweep].
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Start from this scene file; the flags below override its fields.
-    #[arg(long, value_name = "FILE")]
-    scene: Option<PathBuf>,
-    /// Built-in phantom when no input is given [default: shepp-logan].
-    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::ALL.map(|p| p.name())))]
-    phantom: Option<Phantom>,
-    /// Grid edge of the built-in phantom [default: 128].
-    #[arg(long, conflicts_with = "input")]
-    phantom_size: Option<usize>,
-    /// Transfer-function and material preset (see `glint render --help`).
-    #[arg(long)]
-    preset: Option<String>,
-    /// How samples make a pixel [default: composite].
-    #[arg(long, value_parser = choice::<RenderMode>(RenderMode::ALL.map(|m| m.name())))]
-    mode: Option<RenderMode>,
-    /// Named view [default: anterior].
-    #[arg(long, value_parser = choice::<View>(View::ALL.map(|v| v.name())))]
-    view: Option<View>,
-    /// Orbit the camera about the view's up axis, degrees [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    azimuth: Option<f64>,
-    /// Orbit the camera upwards, degrees [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    elevation: Option<f64>,
-    /// Magnification [default: 1].
-    #[arg(long, allow_negative_numbers = true)]
-    zoom: Option<f64>,
-    /// Projection [default: perspective].
-    #[arg(long, value_parser = choice::<Projection>(["perspective", "orthographic"]))]
-    projection: Option<Projection>,
-    /// Image size WxH [default: 512x512].
-    #[arg(long, value_parser = parse_size)]
-    size: Option<[u32; 2]>,
-    /// Sample distance along rays, in voxels [default: 0.5].
-    #[arg(long, allow_negative_numbers = true)]
-    step: Option<f64>,
     /// Lobe to compare against exact; repeatable [default: k; with --sweep: k and g].
     #[arg(long = "lobe", value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
     lobes: Vec<LobeKind>,
-    /// Shininess n [default: the preset's specular power].
-    #[arg(long, allow_negative_numbers = true, conflicts_with = "sweep")]
-    n: Option<f64>,
-    /// The power fits raise their base to 2^v [default: 4].
-    #[arg(long, conflicts_with = "sweep")]
-    v: Option<u32>,
-    /// Highlight geometry [default: phong].
-    #[arg(long, value_parser = choice::<Geometry>(["phong", "blinn"]))]
-    geometry: Option<Geometry>,
     /// Print the metrics (and the resolved scene) as JSON instead of a table.
     #[arg(long, conflicts_with = "sweep")]
     json: bool,
@@ -131,50 +85,12 @@ struct Options {
     quiet: bool,
 }
 
-/// The scene file (or the default scene) with the given flags applied, lobe exact.
+/// The scene of the flags, lobe exact.
 fn build_scene(o: &Options) -> anyhow::Result<Scene> {
-    let mut scene = match &o.scene {
-        Some(path) => load_scene(path)?,
-        None => Scene::default(),
-    };
-    if let Some(path) = &o.input {
-        scene.input = Input::Path(path.clone());
-    } else if o.phantom.is_some() || o.phantom_size.is_some() {
-        let (name, size) = match scene.input {
-            Input::Phantom { name, size } => (name, size),
-            Input::Path(_) => (Phantom::default(), 128),
-        };
-        scene.input = Input::Phantom {
-            name: o.phantom.unwrap_or(name),
-            size: o.phantom_size.unwrap_or(size),
-        };
+    if o.sweep && (o.scene.n.is_some() || o.scene.v.is_some()) {
+        bail!("--sweep chooses n and v itself: drop --n and --v (or use --sweep-n, --sweep-v)");
     }
-    if let Some(p) = &o.preset {
-        glint_render::preset(p)?; // fail before reading the volume
-        scene.preset = Some(p.clone());
-        scene.transfer_function = None;
-    }
-    set(&mut scene.mode, o.mode);
-    if o.mode.is_some_and(|m| m != RenderMode::Iso) {
-        scene.iso = None;
-    }
-    let camera = &mut scene.camera;
-    set(&mut camera.view, o.view);
-    set(&mut camera.azimuth, o.azimuth);
-    set(&mut camera.elevation, o.elevation);
-    set(&mut camera.zoom, o.zoom);
-    set(&mut camera.projection, o.projection);
-    set(&mut scene.size, o.size);
-    set(&mut scene.step, o.step);
-    set(&mut scene.lobe.n, o.n.map(Some));
-    set(&mut scene.lobe.v, o.v);
-    set(&mut scene.lobe.geometry, o.geometry);
-    if let Some(n) = o.n {
-        glint_analysis::check_n(n)?;
-    }
-    if let Some(v) = o.v {
-        glint_analysis::check_v(v)?;
-    }
+    let mut scene = o.scene.scene()?;
     scene.lobe.kind = LobeKind::Exact;
     Ok(scene)
 }
