@@ -21,6 +21,9 @@ use super::scene_flags::{set, SceneFlags};
     glint render ct.nrrd --preset ct-bone --view anterior --azimuth 30 --elevation 15 \
 --lobe exact --n 40 --geometry blinn --light 45,30 -o bone.png\n  \
     glint render --mode mip --projection orthographic -o mip.png\n  \
+    glint render lh.pial.gii rh.pial.gii --overlay lh.sulc.gii --overlay rh.sulc.gii \
+--colormap sulc --view left --ssaa 4 -o brain.png\n  \
+    glint render mni152.nii.gz --mode surface --iso 60 --view left -o surface.png\n  \
     glint render brain.nii.gz --dump-scene brain.json -o a.png   # then:\n  \
     glint render --scene brain.json --lobe exact -o b.png        # flags override the file\n\n\
 Presets (3D Slicer's volume rendering presets, MR ones scaled to the volume's maximum):\n  \
@@ -108,6 +111,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.repeat > 1 {
         print_repeat(&args, &rendered, more);
     }
+    if let Some(colors) = &rendered.colors {
+        colors.draw_bar(&mut rendered.image);
+    }
     let depth = if args.depth == "16" {
         Depth::Sixteen
     } else {
@@ -135,10 +141,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// A renderer of the scene's input, with an error that names it.
+/// Meshes are read when the scene is resolved (their errors name the file).
 pub(crate) fn open_renderer(scene: &Scene) -> anyhow::Result<Renderer> {
     Renderer::open(&scene.input).with_context(|| match &scene.input {
         Input::Path(p) => format!("cannot read volume {}", p.display()),
         Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
+        Input::None => "cannot open the scene".into(),
     })
 }
 
@@ -183,8 +191,19 @@ fn progress_bar(args: &Options, scene: &Scene) -> Option<indicatif::ProgressBar>
 /// from anywhere).
 fn dump_scene(path: &Path, scene: &Scene) -> anyhow::Result<()> {
     let mut scene = scene.clone();
+    let absolute =
+        |p: &mut PathBuf| -> anyhow::Result<()> {
+            *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
+            Ok(())
+        };
     if let Input::Path(p) = &mut scene.input {
-        *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
+        absolute(p)?;
+    }
+    for m in &mut scene.meshes {
+        absolute(&mut m.path)?;
+        if let Some(o) = &mut m.overlay {
+            absolute(&mut o.path)?;
+        }
     }
     let json = scene.to_json()?;
     glint_io::write_atomic(path, |w| w.write_all(json.as_bytes()))?;
@@ -200,14 +219,18 @@ fn print_repeat(args: &Options, rendered: &Rendered, elapsed: Duration) {
         rendered.image.stats
     );
     let s = &rendered.scene;
+    let detail = if s.is_surface() {
+        format!("ssaa {}", s.ssaa.unwrap_or_default())
+    } else {
+        format!("step {}", s.step)
+    };
     println!(
-        "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, step {})",
+        "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, {detail})",
         elapsed.as_secs_f64() * 1e3 / frames as f64,
         frames,
         s.size[0],
         s.size[1],
         s.lobe.kind.name(),
-        s.step
     );
 }
 
