@@ -29,7 +29,9 @@ fn sample(name: &str) -> Option<PathBuf> {
     let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
     let root = std::env::var_os("GLINT_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(&std::env::var_os("HOME").unwrap_or_default()).join(".cache/glint"));
+        .unwrap_or_else(|| {
+            Path::new(&std::env::var_os("HOME").unwrap_or_default()).join(".cache/glint")
+        });
     let p = root.join("samples").join(name);
     if p.is_file() {
         return Some(p);
@@ -132,7 +134,10 @@ fn fsaverage5_hemispheres_with_a_sulcal_depth_overlay() {
         overlay["range"][0].as_f64().unwrap(),
         overlay["range"][1].as_f64().unwrap(),
     );
-    assert!(-1.4938 <= lo && lo < 0.0 && 0.0 < hi && hi <= 1.807, "{lo} {hi}");
+    assert!(
+        (-1.4938..0.0).contains(&lo) && hi > 0.0 && hi <= 1.807,
+        "{lo} {hi}"
+    );
     assert!(scene["meshes"][1].get("overlay").is_none());
     // Seen from above, both hemispheres cover the image's left and right halves.
     let covered = |x0: u32, x1: u32| {
@@ -172,9 +177,27 @@ fn a_dumped_mesh_scene_renders_again_bit_for_bit() {
     let (mesh, overlay) = octahedron(dir.path());
     let d = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
     ok(&[
-        "render", &mesh, "--overlay", &overlay, "--colormap", "rdbu", "--ssaa", "4",
-        "--size", "96x80", "--azimuth", "25", "--elevation", "20", "--lobe", "exact",
-        "-q", "-o", &d("a.png"), "--dump-scene", &d("a.json"),
+        "render",
+        &mesh,
+        "--overlay",
+        &overlay,
+        "--colormap",
+        "rdbu",
+        "--ssaa",
+        "4",
+        "--size",
+        "96x80",
+        "--azimuth",
+        "25",
+        "--elevation",
+        "20",
+        "--lobe",
+        "exact",
+        "-q",
+        "-o",
+        &d("a.png"),
+        "--dump-scene",
+        &d("a.json"),
     ]);
     let text = std::fs::read_to_string(d("a.json")).unwrap();
     let scene: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -184,7 +207,10 @@ fn a_dumped_mesh_scene_renders_again_bit_for_bit() {
     // Values 0..5: the 2nd and 98th percentiles of six values (nearest rank, ranks
     // round(5 * 0.02) = 0 and round(5 * 0.98) = 5) are the ends; no sign change, so
     // the diverging map is not centred on zero.
-    assert_eq!(scene["meshes"][0]["overlay"]["range"], serde_json::json!([0.0, 5.0]));
+    assert_eq!(
+        scene["meshes"][0]["overlay"]["range"],
+        serde_json::json!([0.0, 5.0])
+    );
     ok(&["render", "--scene", &d("a.json"), "-q", "-o", &d("b.png")]);
     let (a, b) = (
         std::fs::read(d("a.png")).unwrap(),
@@ -192,7 +218,16 @@ fn a_dumped_mesh_scene_renders_again_bit_for_bit() {
     );
     assert!(a == b, "the dumped scene rendered a different image");
     // And a flag still overrides the file.
-    ok(&["render", "--scene", &d("a.json"), "--ssaa", "1", "-q", "-o", &d("c.png")]);
+    ok(&[
+        "render",
+        "--scene",
+        &d("a.json"),
+        "--ssaa",
+        "1",
+        "-q",
+        "-o",
+        &d("c.png"),
+    ]);
     assert_ne!(std::fs::read(d("c.png")).unwrap(), a);
 }
 
@@ -202,8 +237,22 @@ fn compare_works_on_a_mesh() {
     let (mesh, _) = octahedron(dir.path());
     let out = dir.path().join("cmp.png");
     let text = ok(&[
-        "compare", &mesh, "--size", "64x48", "--n", "200", "--lobe", "exact", "--lobe", "k",
-        "--v", "2", "--json", "-q", "-o", out.to_str().unwrap(),
+        "compare",
+        &mesh,
+        "--size",
+        "64x48",
+        "--n",
+        "200",
+        "--lobe",
+        "exact",
+        "--lobe",
+        "k",
+        "--v",
+        "2",
+        "--json",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
     ]);
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
     let c = &doc["comparisons"];
@@ -213,7 +262,11 @@ fn compare_works_on_a_mesh() {
     // K_2 at n = 200 is far from cos^200 (the paper's table: v must grow with n), so
     // the highlight differs.
     assert_eq!(c[1]["lobe"], "k");
-    assert!(c[1]["image"]["delta_e"]["max"].as_f64().unwrap() > 0.5, "{}", c[1]);
+    assert!(
+        c[1]["image"]["delta_e"]["max"].as_f64().unwrap() > 0.5,
+        "{}",
+        c[1]
+    );
     assert!(out.is_file());
 }
 
@@ -223,16 +276,32 @@ fn a_volume_isosurface_renders_in_surface_mode() {
     let out = dir.path().join("iso.png");
     let scene = dir.path().join("iso.json");
     ok(&[
-        "render", "--phantom-size", "32", "--mode", "surface", "--size", "48x48", "-q",
-        "-o", out.to_str().unwrap(), "--dump-scene", scene.to_str().unwrap(),
+        "render",
+        "--phantom-size",
+        "32",
+        "--mode",
+        "surface",
+        "--size",
+        "48x48",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+        "--dump-scene",
+        scene.to_str().unwrap(),
     ]);
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
     assert_eq!(s["mode"], "surface");
-    assert!(s["iso"].is_number(), "the default iso value is written back: {s}");
+    assert!(
+        s["iso"].is_number(),
+        "the default iso value is written back: {s}"
+    );
     let (_, _, ch, px) = decode(&out);
     let k = (24 * 48 + 24) * ch;
-    assert!(px[k..k + 3].iter().any(|&c| c > 20), "the head covers the centre");
+    assert!(
+        px[k..k + 3].iter().any(|&c| c > 20),
+        "the head covers the centre"
+    );
 }
 
 #[test]
@@ -261,8 +330,14 @@ property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_he
             "no vertex scalar",
         ),
         (vec![&mesh, "--overlay", &mesh], "expected a GIFTI"),
-        (vec![&mesh, "--overlay", &mesh, "--overlay", &mesh], "2 overlays for 1 meshes"),
-        (vec![&mesh, "--colormap", "viridis"], "need a mesh with an --overlay"),
+        (
+            vec![&mesh, "--overlay", &mesh, "--overlay", &mesh],
+            "2 overlays for 1 meshes",
+        ),
+        (
+            vec![&mesh, "--colormap", "viridis"],
+            "need a mesh with an --overlay",
+        ),
         (vec![&mesh, "--ssaa", "3"], "ssaa"),
         (vec![&mesh, "--mode", "mip"], "needs a volume"),
         (vec![&mesh, "--iso", "3"], "iso value needs a volume"),

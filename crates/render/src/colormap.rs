@@ -233,7 +233,13 @@ impl ScalarColors {
         let px = (h as f32 / LABEL_HEIGHT_DIV).max(LABEL_MIN_PX);
         let right = x0 as f32 - 1.0 - px / 3.0;
         draw_text(image, &format_value(self.range.1), right, y0 as f32, px);
-        draw_text(image, &format_value(self.range.0), right, (y0 + bar_h) as f32, px);
+        draw_text(
+            image,
+            &format_value(self.range.0),
+            right,
+            (y0 + bar_h) as f32,
+            px,
+        );
     }
 }
 
@@ -244,7 +250,13 @@ fn format_value(v: f32) -> String {
     if a != 0.0 && !(1e-2..1e4).contains(&a) {
         format!("{v:.2e}")
     } else {
-        let digits = if a < 10.0 { 2 } else if a < 100.0 { 1 } else { 0 };
+        let digits = if a < 10.0 {
+            2
+        } else if a < 100.0 {
+            1
+        } else {
+            0
+        };
         format!("{v:.digits$}")
     }
 }
@@ -275,7 +287,10 @@ fn draw_text(image: &mut Image, text: &str, right: f32, y: f32, px: f32) {
         };
         let b = outline.px_bounds();
         outline.draw(|gx, gy, coverage| {
-            let (px, py) = (b.min.x as i64 + i64::from(gx), b.min.y as i64 + i64::from(gy));
+            let (px, py) = (
+                b.min.x as i64 + i64::from(gx),
+                b.min.y as i64 + i64::from(gy),
+            );
             if (0..w).contains(&px) && (0..h).contains(&py) {
                 let k = (py * w + px) as usize;
                 let a = coverage.clamp(0.0, 1.0);

@@ -276,9 +276,12 @@ fn read_overlay(overlay: &Overlay, mesh: &Path, vertices: usize) -> Result<Value
                 VertexValues::Scalars(v) => Values::Scalars(v),
                 VertexValues::Labels { keys, table } => {
                     let color = |key: i32| {
-                        table.iter().find(|l| l.key == key).map_or([f32::NAN; 3], |l| {
-                            [0, 1, 2].map(|i| srgb_to_linear(f64::from(l.rgba[i])) as f32)
-                        })
+                        table
+                            .iter()
+                            .find(|l| l.key == key)
+                            .map_or([f32::NAN; 3], |l| {
+                                [0, 1, 2].map(|i| srgb_to_linear(f64::from(l.rgba[i])) as f32)
+                            })
                     };
                     Values::Colors(keys.into_iter().map(color).collect())
                 }
@@ -289,7 +292,10 @@ fn read_overlay(overlay: &Overlay, mesh: &Path, vertices: usize) -> Result<Value
                 return Err(bad(format!("array {array}: a PLY file has one (0)")));
             }
             let scalars = read_mesh(path)?.scalars.ok_or_else(|| {
-                bad("no vertex scalar property (scalar, value, quality, intensity, confidence)".into())
+                bad(
+                    "no vertex scalar property (scalar, value, quality, intensity, confidence)"
+                        .into(),
+                )
             })?;
             Values::Scalars(scalars)
         }

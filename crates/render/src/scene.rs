@@ -16,15 +16,17 @@ use glint_lobe::{Geometry, LobeKind};
 use serde::{Deserialize, Serialize};
 
 use crate::camera::{Camera, CameraSpec, Projection};
+use crate::colormap::ScalarColors;
 use crate::error::RenderError;
 use crate::field::Field;
-use crate::colormap::ScalarColors;
 use crate::image::Image;
 use crate::isosurface::extract_field;
-use crate::meshes::{MeshKey, MeshSet, MeshSpec, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
+use crate::meshes::{
+    MeshKey, MeshSet, MeshSpec, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS,
+};
 use crate::phantom::Phantom;
-use crate::raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
 use crate::presets::preset;
+use crate::raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
 use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel, Mode};
 use crate::shading::{Light, Shader, MAX_LIGHTS};
 use crate::tf::{Material, MaterialOverrides, TransferFunction};
@@ -436,7 +438,11 @@ impl Scene {
 
     /// Resolves a surface scene: `field` the volume (if any), `set` its meshes and
     /// isosurface as read for this scene.
-    fn resolve_surface(&self, field: Option<&Field>, set: &MeshSet) -> Result<Resolved, RenderError> {
+    fn resolve_surface(
+        &self,
+        field: Option<&Field>,
+        set: &MeshSet,
+    ) -> Result<Resolved, RenderError> {
         let mut scene = self.clone();
         scene.derived = None;
         match (&scene.input, scene.mode) {
@@ -510,7 +516,6 @@ impl Scene {
             },
         })
     }
-
 
     /// Chooses every default for `field` and builds the settings and shader: the one
     /// place where glint picks anything the user did not say.
@@ -639,7 +644,8 @@ impl Scene {
 fn check_lights(lights: &[Light]) -> Result<(), RenderError> {
     if lights.is_empty() {
         return Err(RenderError::Parameter(
-            "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0)".into(),
+            "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0)"
+                .into(),
         ));
     }
     if lights.len() > MAX_LIGHTS {
@@ -856,9 +862,8 @@ impl Renderer {
                 if built {
                     timings.record("classify", start.elapsed());
                 }
-                let image = timings.time("frame", || {
-                    class.render(&resolved.shader, &frame, progress)
-                })?;
+                let image =
+                    timings.time("frame", || class.render(&resolved.shader, &frame, progress))?;
                 let camera = class.camera(&frame)?;
                 let field = self.field.as_deref().expect("a volume plan has a field");
                 let step_mm = scene.step * field.min_spacing();
@@ -1075,5 +1080,84 @@ mod tests {
             .render(&finer, &|_| {})
             .unwrap();
         assert_eq!(third.image, fresh.image);
+    }
+
+    /// A closed octahedron as OBJ in `dir`.
+    fn octahedron(dir: &std::path::Path) -> PathBuf {
+        let path = dir.join("octa.obj");
+        std::fs::write(
+            &path,
+            "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+             f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n",
+        )
+        .unwrap();
+        path
+    }
+
+    #[test]
+    fn a_mesh_scene_resolves_once_and_reads_its_meshes_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = format!(
+            r#"{{"meshes": [{{"path": {:?}}}], "size": [32, 24]}}"#,
+            octahedron(dir.path())
+        );
+        // Meshes without an input key: no volume.
+        let scene = Scene::from_json(&json).unwrap();
+        assert_eq!(scene.input, Input::None);
+        let mut r = Renderer::open_scene(&scene).unwrap();
+        assert!(r.field().is_none());
+        let first = r.render(&scene, &|_| {}).unwrap();
+        let s = &first.scene;
+        assert_eq!(s.mode, RenderMode::Surface);
+        assert_eq!(s.ssaa, Some(DEFAULT_SSAA));
+        assert_eq!(s.lobe.n, Some(SURFACE_SHININESS));
+        assert_eq!(s.meshes[0].color, Some(SURFACE_COLOR));
+        assert!(first.colors.is_none());
+        // The resolved scene chooses nothing new and renders the same image.
+        let mut again = s.clone();
+        again.derived = None;
+        let second = r.render(&again, &|_| {}).unwrap();
+        assert_eq!(second.scene, first.scene);
+        assert_eq!(second.image, first.image);
+        // Its JSON names the lack of a volume, and reads back to the same scene.
+        let text = again.to_json().unwrap();
+        assert!(text.contains(r#""input": "none""#), "{text}");
+        assert_eq!(Scene::from_json(&text).unwrap(), again);
+        // The octahedron covers the centre of the image.
+        assert!(first.image.alpha[12 * 32 + 16] > 0.99);
+        // A new camera reuses the meshes read (same Arc).
+        let moved = Scene {
+            camera: CameraSpec {
+                azimuth: 40.0,
+                ..again.camera
+            },
+            ..again.clone()
+        };
+        let before = r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m));
+        r.render(&moved, &|_| {}).unwrap();
+        assert_eq!(r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m)), before);
+    }
+
+    #[test]
+    fn a_volume_with_meshes_renders_only_as_surfaces() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = Scene {
+            meshes: vec![MeshSpec::new(octahedron(dir.path()))],
+            ..small()
+        };
+        let mut r = Renderer::open_scene(&scene).unwrap();
+        let err = r.resolve(&scene).unwrap_err();
+        assert!(matches!(err, RenderError::Unsupported(_)), "{err}");
+        // In surface mode the phantom's isosurface joins the octahedron.
+        let surface = Scene {
+            mode: RenderMode::Surface,
+            ..scene
+        };
+        let resolved = r.resolve(&surface).unwrap();
+        assert!(resolved.scene.iso.is_some());
+        let Plan::Surface { surfaces, .. } = &resolved.plan else {
+            panic!("a surface plan expected");
+        };
+        assert_eq!(surfaces.mesh_count(), 2);
     }
 }

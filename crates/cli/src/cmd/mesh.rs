@@ -134,7 +134,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// ones from the triangles, as `glint render` shades it), optionally smoothed.
 fn convert(args: &Args, taubin: &Taubin, write: MeshWriter) -> anyhow::Result<()> {
     if args.iso.is_some() {
-        bail!("--iso applies to volumes; {} is a surface", args.input.display());
+        bail!(
+            "--iso applies to volumes; {} is a surface",
+            args.input.display()
+        );
     }
     let mut mesh = glint_io::read_mesh(&args.input)
         .with_context(|| format!("cannot read surface {}", args.input.display()))?;

@@ -191,11 +191,10 @@ fn progress_bar(args: &Options, scene: &Scene) -> Option<indicatif::ProgressBar>
 /// from anywhere).
 fn dump_scene(path: &Path, scene: &Scene) -> anyhow::Result<()> {
     let mut scene = scene.clone();
-    let absolute =
-        |p: &mut PathBuf| -> anyhow::Result<()> {
-            *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
-            Ok(())
-        };
+    let absolute = |p: &mut PathBuf| -> anyhow::Result<()> {
+        *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
+        Ok(())
+    };
     if let Input::Path(p) = &mut scene.input {
         absolute(p)?;
     }

@@ -171,8 +171,7 @@ impl Surfaces {
                 .collect(),
             None => vertex_normals(&positions, &mesh.triangles),
         };
-        self.mesh_starts
-            .push((base, self.triangles.len() as u32));
+        self.mesh_starts.push((base, self.triangles.len() as u32));
         self.positions.extend(positions);
         self.normals.extend(normals);
         if let Some(s) = &mut self.scalars {
@@ -192,7 +191,10 @@ impl Surfaces {
     /// not match its vertices.
     pub fn set_vertex_colors(&mut self, k: usize, colors: &[[f32; 3]]) -> Result<(), RenderError> {
         let (v0, v1) = self.vertex_range(k).ok_or_else(|| {
-            RenderError::Parameter(format!("mesh {k}: there are {} meshes", self.mesh_starts.len()))
+            RenderError::Parameter(format!(
+                "mesh {k}: there are {} meshes",
+                self.mesh_starts.len()
+            ))
         })?;
         if colors.len() != v1 - v0 {
             return Err(RenderError::Mesh(IoError::Inconsistent(format!(
