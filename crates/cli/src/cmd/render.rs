@@ -41,7 +41,10 @@ Scene JSON (--scene, --dump-scene): every field below as a key, e.g.\n  \
     \"lobe\": {\"kind\": \"k\", \"n\": 40, \"v\": 4, \"geometry\": \"phong\"},\n  \
     \"camera\": {\"view\": \"left\", \"azimuth\": 0, \"elevation\": 0, \"zoom\": 1, \"projection\": \"perspective\"},\n  \
     \"lights\": [{\"azimuth\": 0, \"elevation\": 0, \"intensity\": 1}], \"size\": [512, 512], \"step\": 0.5}\n  \
-    (relative input paths are relative to the scene file)")]
+    A scene of meshes: {\"input\": \"none\", \"mode\": \"surface\", \"ssaa\": 2, \"meshes\": [{\"path\": \"lh.pial.gii\",\n  \
+    \"overlay\": {\"path\": \"lh.sulc.gii\", \"array\": 0, \"colormap\": \"viridis\", \"range\": [-1, 1]},\n  \
+    \"color\": [0.85, 0.77, 0.64]}], ...} (colours linear RGB; a volume with meshes renders in surface mode)\n  \
+    (relative input, mesh and overlay paths are relative to the scene file)")]
 pub struct Args {
     // Boxed: the options are many, and main's subcommand enum should stay small.
     #[command(flatten)]
