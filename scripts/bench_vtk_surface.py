@@ -2,12 +2,14 @@
 """VTK's side of scripts/bench-vtk-surface: surface rendering and isosurface extraction.
 
 Modes:
-  render SCENE.json FRAMES [OUT.png]
-      Renders the meshes glint dumped (glint render MESH... --dump-scene SCENE.json
-      writes the scene and each mesh as a binary PLY with glint's vertex normals), or,
-      when the scene names a volume and an iso value, the vtkFlyingEdges3D isosurface
-      of that volume (normals from the gradient, as glint's). Same camera, image size,
-      material and headlight; per-pixel (Phong) lighting; no multisampling. Offscreen
+  render SCENE.json FRAMES OUT.png|- [MESH.ply ...]
+      Renders the scene glint dumped (glint render MESH... --dump-scene SCENE.json):
+      its meshes from the PLY files given, one per mesh in order (glint mesh X.gii -o
+      X.ply converts them with glint's vertex normals), and, when the scene is in
+      surface mode with a volume, the vtkFlyingEdges3D isosurface of that volume at the
+      scene's iso value (normals from the gradient, as glint's). Same camera, image
+      size, material and shininess, headlight; per-pixel (Phong) lighting; no
+      multisampling. Offscreen
       through EGL with the PyPI wheel, so on a machine without a GPU this is Mesa's
       software rasterizer, llvmpipe. Prints ms per frame after one warm-up frame.
   extract VOLUME ISO FRAMES
@@ -54,24 +56,29 @@ def flying_edges(image, iso):
     return fe
 
 
-def render(scene_path, frames, out_png):
+def render(scene_path, frames, out_png, plys):
     with open(scene_path) as f:
         scene = json.load(f)
     ren = vtk.vtkRenderer()
-    ren.SetBackground(0, 0, 0)
+    ren.SetBackground(*scene["background"])
     triangles = 0
-    if scene.get("volume"):
-        fe = flying_edges(nifti_image(scene["volume"]), scene["iso"])
+    sources = []
+    colors = []
+    for mesh, ply in zip(scene.get("meshes", []), plys):
+        reader = vtk.vtkPLYReader()
+        reader.SetFileName(ply)
+        reader.Update()
+        sources.append(reader.GetOutput())
+        colors.append(mesh["color"])
+    if len(sources) != len(scene.get("meshes", [])):
+        sys.exit("bench_vtk_surface: give one PLY per mesh of the scene")
+    if scene.get("mode") == "surface" and isinstance(scene.get("input"), dict):
+        fe = flying_edges(nifti_image(scene["input"]["path"]), scene["iso"])
         fe.Update()
-        sources = [fe.GetOutput()]
-    else:
-        sources = []
-        for path in scene["meshes"]:
-            reader = vtk.vtkPLYReader()
-            reader.SetFileName(path)
-            reader.Update()
-            sources.append(reader.GetOutput())
-    for poly in sources:
+        sources.append(fe.GetOutput())
+        colors.append(SURFACE_COLOR)
+    material = scene["material"]
+    for poly, color in zip(sources, colors):
         triangles += poly.GetNumberOfCells()
         mapper = vtk.vtkPolyDataMapper()
         mapper.SetInputData(poly)
@@ -79,24 +86,25 @@ def render(scene_path, frames, out_png):
         actor = vtk.vtkActor()
         actor.SetMapper(mapper)
         prop = actor.GetProperty()
-        prop.SetColor(*scene["color"])
-        prop.SetAmbient(scene["ambient"])
-        prop.SetDiffuse(scene["diffuse"])
-        prop.SetSpecular(scene["specular"])
-        prop.SetSpecularPower(scene["power"])
+        prop.SetColor(*color)
+        prop.SetAmbient(material["ambient"])
+        prop.SetDiffuse(material["diffuse"])
+        prop.SetSpecular(material["specular"])
+        prop.SetSpecularPower(scene["lobe"]["n"])
         prop.SetInterpolationToPhong()
         ren.AddActor(actor)
+    derived = scene["derived"]
     cam = ren.GetActiveCamera()
-    cam.SetPosition(*scene["eye"])
-    cam.SetFocalPoint(*scene["focal_point"])
-    cam.SetViewUp(*scene["view_up"])
-    if scene["projection"] == "perspective":
-        cam.SetViewAngle(scene["view_angle_deg"])
+    cam.SetPosition(*derived["eye"])
+    cam.SetFocalPoint(*derived["focal_point"])
+    cam.SetViewUp(*derived["view_up"])
+    if scene["camera"]["projection"] == "perspective":
+        cam.SetViewAngle(derived["view_angle_deg"])
     else:
         cam.ParallelProjectionOn()
-        cam.SetParallelScale(scene["parallel_scale"])
+        cam.SetParallelScale(derived["parallel_scale"])
     ren.ResetCameraClippingRange()
-    ren.TwoSidedLightingOn()
+    ren.TwoSidedLightingOn()  # glint's headlight lights both sides as well
 
     win = vtk.vtkRenderWindow()
     win.SetOffScreenRendering(1)
@@ -108,8 +116,8 @@ def render(scene_path, frames, out_png):
     for _ in range(frames):
         win.Render()
     ms = (time.perf_counter() - start) * 1e3 / frames
-    renderer = win.ReportCapabilities().splitlines()
-    gl = next((l.split(":", 1)[1].strip() for l in renderer if "OpenGL renderer" in l), "?")
+    caps = win.ReportCapabilities().splitlines()
+    gl = next((l.split(":", 1)[1].strip() for l in caps if "OpenGL renderer" in l), "?")
     print(f"vtk: {ms:.2f} ms/frame ({frames} frames, {scene['size'][0]}x{scene['size'][1]}, "
           f"{triangles} triangles, {gl}, VTK {vtk.vtkVersion.GetVTKVersion()})")
     if out_png:
@@ -120,6 +128,10 @@ def render(scene_path, frames, out_png):
         writer.SetFileName(out_png)
         writer.SetInputConnection(grab.GetOutputPort())
         writer.Write()
+
+
+# glint_render::SURFACE_COLOR, the isosurface's colour.
+SURFACE_COLOR = (0.85, 0.77, 0.64)
 
 
 def extract(volume, iso, frames):
@@ -150,7 +162,8 @@ def e2e(volume, iso, out_stl):
 def main():
     mode = sys.argv[1] if len(sys.argv) > 1 else ""
     if mode == "render":
-        render(sys.argv[2], int(sys.argv[3]), sys.argv[4] if len(sys.argv) > 4 else None)
+        out = sys.argv[4] if len(sys.argv) > 4 and sys.argv[4] != "-" else None
+        render(sys.argv[2], int(sys.argv[3]), out, sys.argv[5:])
     elif mode == "extract":
         extract(sys.argv[2], float(sys.argv[3]), int(sys.argv[4]))
     elif mode == "e2e":

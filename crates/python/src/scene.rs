@@ -13,7 +13,7 @@ use crate::json;
 
 /// Fields the scene JSON omits while they are unset (`Option` fields serialised with
 /// `skip_serializing_if`); reading them gives None.
-const OPTIONAL_FIELDS: [&str; 4] = ["iso", "preset", "transfer_function", "derived"];
+const OPTIONAL_FIELDS: [&str; 5] = ["iso", "preset", "transfer_function", "derived", "ssaa"];
 
 /// A render, described completely (volume, classification, lobe, lights, camera, size).
 /// Immutable: `scene.replace(field=value)` returns a changed copy.
@@ -99,6 +99,8 @@ impl Scene {
         match as_object(&self.inner)?.get(name) {
             Some(v) => json::to_py(py, v),
             None if OPTIONAL_FIELDS.contains(&name) => Ok(py.None().into_bound(py)),
+            // Omitted while empty.
+            None if name == "meshes" => json::to_py(py, &Value::Array(Vec::new())),
             None => Err(PyAttributeError::new_err(format!(
                 "'Scene' object has no attribute '{name}'"
             ))),
@@ -108,6 +110,7 @@ impl Scene {
     fn __dir__(&self) -> PyResult<Vec<String>> {
         let mut names: Vec<String> = as_object(&RScene::default())?.keys().cloned().collect();
         names.extend(OPTIONAL_FIELDS.iter().map(|s| s.to_string()));
+        names.push("meshes".into());
         names.extend(
             ["from_json", "to_json", "to_dict", "replace"]
                 .iter()

@@ -128,6 +128,20 @@ impl FromStr for ColorMap {
     }
 }
 
+/// Scenes name maps as users type them (`"viridis"`).
+impl serde::Serialize for ColorMap {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for ColorMap {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        name.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 /// Scalars mapped through a colour map: values at or below `range.0` get the map's
 /// low end, at or above `range.1` its high end.
 #[derive(Clone, Debug)]
@@ -189,8 +203,9 @@ impl ScalarColors {
     }
 
     /// Draws the colour bar: a vertical strip at the image's right edge, the map's
-    /// high end at the top, with a one-pixel white frame. Images too small for a bar
-    /// (under 64 pixels high or 32 wide) are left as they are.
+    /// high end at the top, with a one-pixel white frame and the range's ends written
+    /// beside its ends. Images too small for a bar (under 64 pixels high or 32 wide)
+    /// are left as they are.
     pub fn draw_bar(&self, image: &mut Image) {
         let (w, h) = (image.width as usize, image.height as usize);
         if h < 64 || w < 32 {
@@ -215,8 +230,81 @@ impl ScalarColors {
                 image.alpha[k] = 1.0;
             }
         }
+        let px = (h as f32 / LABEL_HEIGHT_DIV).max(LABEL_MIN_PX);
+        let right = x0 as f32 - 1.0 - px / 3.0;
+        draw_text(image, &format_value(self.range.1), right, y0 as f32, px);
+        draw_text(
+            image,
+            &format_value(self.range.0),
+            right,
+            (y0 + bar_h) as f32,
+            px,
+        );
     }
 }
+
+/// A colour-bar label: 3 significant digits, scientific notation for very large or
+/// small magnitudes.
+fn format_value(v: f32) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-2..1e4).contains(&a) {
+        format!("{v:.2e}")
+    } else {
+        let digits = if a < 10.0 {
+            2
+        } else if a < 100.0 {
+            1
+        } else {
+            0
+        };
+        format!("{v:.digits$}")
+    }
+}
+
+/// Writes `text` in white, right-aligned at `right`, vertically centred on `y`, `px`
+/// pixels high, blended over the image by glyph coverage. The glyphs are DejaVu Sans
+/// (the `dejavu` crate, as glint-analysis's plots), rasterised by `ab_glyph`.
+fn draw_text(image: &mut Image, text: &str, right: f32, y: f32, px: f32) {
+    use ab_glyph::{point, Font, FontRef, ScaleFont};
+    let Ok(font) = FontRef::try_from_slice(dejavu::sans::regular()) else {
+        return;
+    };
+    let scaled = font.as_scaled(px);
+    let width: f32 = text
+        .chars()
+        .map(|c| scaled.h_advance(font.glyph_id(c)))
+        .sum();
+    // Digits' height is about the ascent; centre them on `y`.
+    let baseline = y + scaled.ascent() / 2.0 - 1.0;
+    let mut x = right - width;
+    let (w, h) = (image.width as i64, image.height as i64);
+    for c in text.chars() {
+        let id = font.glyph_id(c);
+        let glyph = id.with_scale_and_position(px, point(x, baseline));
+        x += scaled.h_advance(id);
+        let Some(outline) = font.outline_glyph(glyph) else {
+            continue;
+        };
+        let b = outline.px_bounds();
+        outline.draw(|gx, gy, coverage| {
+            let (px, py) = (
+                b.min.x as i64 + i64::from(gx),
+                b.min.y as i64 + i64::from(gy),
+            );
+            if (0..w).contains(&px) && (0..h).contains(&py) {
+                let k = (py * w + px) as usize;
+                let a = coverage.clamp(0.0, 1.0);
+                image.rgb[k] = image.rgb[k].map(|c| c * (1.0 - a) + a);
+                image.alpha[k] = image.alpha[k].max(a);
+            }
+        });
+    }
+}
+
+/// Label height: 1/this of the image height, at least [`LABEL_MIN_PX`].
+const LABEL_HEIGHT_DIV: f32 = 32.0;
+/// Smallest label height, pixels (below this digits are unreadable).
+const LABEL_MIN_PX: f32 = 10.0;
 
 /// Quantile cut from each end by [`ScalarColors::robust_range`].
 const ROBUST_QUANTILE: f64 = 0.02;

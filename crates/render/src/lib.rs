@@ -44,6 +44,7 @@ mod field;
 mod image;
 pub mod isosurface;
 pub mod math;
+mod meshes;
 pub mod phantom;
 pub mod presets;
 mod raster;
@@ -58,6 +59,7 @@ pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
 pub use error::RenderError;
 pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA};
+pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
 pub use raster::{vertex_normals, SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
@@ -66,7 +68,8 @@ pub use raycast::{
     TERMINATION_OPACITY,
 };
 pub use scene::{
-    Derived, Input, LobeSpec, OpenedVolume, RenderMode, Rendered, Renderer, Resolved, Scene,
+    Derived, Input, LobeSpec, OpenedVolume, Plan, RenderMode, Rendered, Renderer, Resolved,
+    Scene,
     DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
 };
 pub use shading::{Light, Shader, MAX_LIGHTS};

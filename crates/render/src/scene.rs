@@ -16,11 +16,17 @@ use glint_lobe::{Geometry, LobeKind};
 use serde::{Deserialize, Serialize};
 
 use crate::camera::{Camera, CameraSpec, Projection};
+use crate::colormap::ScalarColors;
 use crate::error::RenderError;
 use crate::field::Field;
 use crate::image::Image;
+use crate::isosurface::extract_field;
+use crate::meshes::{
+    MeshKey, MeshSet, MeshSpec, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS,
+};
 use crate::phantom::Phantom;
 use crate::presets::preset;
+use crate::raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
 use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel, Mode};
 use crate::shading::{Light, Shader, MAX_LIGHTS};
 use crate::tf::{Material, MaterialOverrides, TransferFunction};
@@ -62,11 +68,21 @@ pub const DEFAULT_SHININESS: f64 = 10.0;
 pub struct Scene {
     /// Schema version ([`SCENE_VERSION`]).
     pub version: u32,
-    /// The volume.
+    /// The volume ([`Input::None`] for a scene of meshes only).
     pub input: Input,
+    /// Surface meshes, rasterised ([`RenderMode::Surface`]). A scene of meshes only
+    /// may leave `input` out: a scene read from JSON with meshes and no `input` key
+    /// has no volume.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<MeshSpec>,
+    /// Surface renders: samples per pixel along each axis, 1, 2 or 4 (default
+    /// [`DEFAULT_SSAA`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ssaa: Option<u32>,
     /// How samples along a ray make a pixel.
     pub mode: RenderMode,
-    /// Iso value for [`RenderMode::Iso`] (default: the middle of the value range).
+    /// Iso value for [`RenderMode::Iso`] and for the isosurface [`RenderMode::Surface`]
+    /// extracts from the volume (default: the middle of the value range).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub iso: Option<f32>,
     /// Transfer-function and material preset (default: guessed from the data); unused
@@ -108,6 +124,8 @@ impl Default for Scene {
         Scene {
             version: SCENE_VERSION,
             input: Input::default(),
+            meshes: Vec::new(),
+            ssaa: None,
             mode: RenderMode::Composite,
             iso: None,
             preset: None,
@@ -139,6 +157,8 @@ pub enum Input {
         /// Grid edge in voxels.
         size: usize,
     },
+    /// No volume: a scene of meshes only (`"input": "none"`).
+    None,
 }
 
 impl Default for Input {
@@ -173,6 +193,9 @@ impl Input {
                 notes: Vec::new(),
                 inflate: None,
             }),
+            Input::None => Err(RenderError::Parameter(
+                "the scene has no volume (input \"none\")".into(),
+            )),
         }
     }
 }
@@ -200,11 +223,19 @@ pub enum RenderMode {
     Iso,
     /// Maximum intensity projection.
     Mip,
+    /// The scene's meshes and the volume's isosurface at [`Scene::iso`], rasterised
+    /// (the mode of every scene with meshes).
+    Surface,
 }
 
 impl RenderMode {
     /// Every mode, in the order `--help` lists them.
-    pub const ALL: [RenderMode; 3] = [RenderMode::Composite, RenderMode::Iso, RenderMode::Mip];
+    pub const ALL: [RenderMode; 4] = [
+        RenderMode::Composite,
+        RenderMode::Iso,
+        RenderMode::Mip,
+        RenderMode::Surface,
+    ];
 
     /// The name users type.
     pub fn name(self) -> &'static str {
@@ -212,6 +243,7 @@ impl RenderMode {
             RenderMode::Composite => "composite",
             RenderMode::Iso => "iso",
             RenderMode::Mip => "mip",
+            RenderMode::Surface => "surface",
         }
     }
 }
@@ -225,7 +257,7 @@ impl std::str::FromStr for RenderMode {
             .find(|m| m.name() == key)
             .ok_or_else(|| {
                 RenderError::Parameter(format!(
-                    "unknown mode '{s}': expected composite, iso or mip"
+                    "unknown mode '{s}': expected composite, iso, mip or surface"
                 ))
             })
     }
@@ -297,27 +329,51 @@ pub struct Derived {
     pub view_angle_deg: f64,
     /// Orthographic: half the image height, mm.
     pub parallel_scale: f32,
-    /// Sample distance, mm.
-    pub step_mm: f64,
+    /// Sample distance, mm (ray-cast volumes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step_mm: Option<f64>,
     /// The smallest voxel spacing, mm (the transfer function's unit distance).
-    pub min_spacing_mm: f64,
-    /// The transfer function used.
-    pub transfer_function: TransferFunction,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_spacing_mm: Option<f64>,
+    /// The transfer function used (ray-cast volumes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transfer_function: Option<TransferFunction>,
 }
 
-/// A scene with every default chosen, and what the ray caster needs to render it.
+/// A scene with every default chosen, and what the ray caster or the rasterizer
+/// needs to render it.
 #[derive(Clone, Debug)]
 pub struct Resolved {
     /// The scene with every default written in.
     pub scene: Scene,
-    /// The transfer function.
-    pub tf: TransferFunction,
-    /// What the classification depends on.
-    pub classify: ClassifySettings,
-    /// What the frame depends on.
-    pub frame: FrameSettings,
     /// The lighting.
     pub shader: Shader,
+    /// How the image is made.
+    pub plan: Plan,
+}
+
+/// How a resolved scene is rendered.
+#[derive(Clone, Debug)]
+#[allow(clippy::large_enum_variant)]
+pub enum Plan {
+    /// Ray casting the volume.
+    Volume {
+        /// The transfer function.
+        tf: TransferFunction,
+        /// What the classification depends on.
+        classify: ClassifySettings,
+        /// What the frame depends on.
+        frame: FrameSettings,
+    },
+    /// Rasterising the meshes (and the volume's isosurface).
+    Surface {
+        /// The meshes, read.
+        surfaces: Arc<Surfaces>,
+        /// Size, supersampling, camera, colours.
+        settings: SurfaceSettings,
+        /// The colours of the scalar overlays, when any.
+        colors: Option<ScalarColors>,
+    },
 }
 
 impl Scene {
@@ -329,15 +385,28 @@ impl Scene {
             .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
         de.end()
             .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
-        scene.check_version()
+        let input_given = !scene.meshes.is_empty()
+            && serde_json::from_str::<serde_json::Value>(text)
+                .is_ok_and(|v| v.get("input").is_some());
+        scene.meshes_only_unless(input_given).check_version()
+    }
+
+    /// A scene read with meshes and without an `input` key has no volume (the
+    /// default phantom is for scenes of nothing else).
+    fn meshes_only_unless(mut self, input_given: bool) -> Scene {
+        if !self.meshes.is_empty() && !input_given {
+            self.input = Input::None;
+        }
+        self
     }
 
     /// A scene from a parsed JSON value (e.g. a viewer's patched scene), checked like
     /// [`Scene::from_json`].
     pub fn from_value(value: serde_json::Value) -> Result<Scene, RenderError> {
+        let input_given = value.get("input").is_some();
         let scene: Scene = serde_path_to_error::deserialize(value)
             .map_err(|e| RenderError::Scene(format!("bad scene: {e}")))?;
-        scene.check_version()
+        scene.meshes_only_unless(input_given).check_version()
     }
 
     fn check_version(self) -> Result<Scene, RenderError> {
@@ -373,16 +442,116 @@ impl Scene {
         serde_json::to_string_pretty(self).map_err(|e| RenderError::Scene(e.to_string()))
     }
 
-    /// Reads the input and resolves the scene against it (one-shot; a [`Renderer`]
-    /// keeps the volume and classification across scenes).
+    /// Reads the input and the meshes and resolves the scene against them (one-shot;
+    /// a [`Renderer`] keeps the volume, the meshes and the classification across
+    /// scenes).
     pub fn resolve(&self) -> Result<Resolved, RenderError> {
-        let field = Field::new(&self.input.open()?)?;
-        self.resolve_for(&field)
+        Renderer::open_scene(self)?.resolve(self)
+    }
+
+    /// Whether the scene is rasterised (it has meshes, or asks for the volume's
+    /// isosurface) rather than ray cast.
+    pub fn is_surface(&self) -> bool {
+        !self.meshes.is_empty() || self.mode == RenderMode::Surface
+    }
+
+    /// The iso value of the volume's isosurface in a surface scene (the scene's, else
+    /// the middle of the robust range), `None` when the scene has no volume.
+    fn surface_iso(&self, field: Option<&Field>) -> Option<f32> {
+        let field = field?;
+        let (lo, hi) = field.robust_range();
+        Some(self.iso.unwrap_or((lo + hi) / 2.0))
+    }
+
+    /// Resolves a surface scene: `field` the volume (if any), `set` its meshes and
+    /// isosurface as read for this scene.
+    fn resolve_surface(
+        &self,
+        field: Option<&Field>,
+        set: &MeshSet,
+    ) -> Result<Resolved, RenderError> {
+        let mut scene = self.clone();
+        scene.derived = None;
+        match (&scene.input, scene.mode) {
+            (_, RenderMode::Surface) => {}
+            // A scene of meshes only: rasterising is the only way to render it.
+            (Input::None, RenderMode::Composite) => scene.mode = RenderMode::Surface,
+            (Input::None, mode) => {
+                return Err(RenderError::Parameter(format!(
+                    "mode {} needs a volume; a scene of meshes only renders in surface mode",
+                    mode.name()
+                )))
+            }
+            (_, mode) => {
+                return Err(RenderError::Unsupported(format!(
+                    "a volume {} rendering with meshes: compositing ray-cast volumes and meshes is not implemented; render the volume's isosurface with the meshes (mode surface, iso value)",
+                    mode.name()
+                )))
+            }
+        }
+        scene.iso = scene.surface_iso(field);
+        if field.is_none() && self.iso.is_some() {
+            return Err(RenderError::Parameter(
+                "an iso value needs a volume to extract the isosurface from".into(),
+            ));
+        }
+        check_lights(&scene.lights)?;
+        let material = scene.material.apply(SURFACE_MATERIAL);
+        material.validate()?;
+        scene.material = MaterialOverrides {
+            ambient: Some(material.ambient),
+            diffuse: Some(material.diffuse),
+            specular: Some(material.specular),
+            shade: Some(material.shade),
+        };
+        let n = *scene.lobe.n.get_or_insert(SURFACE_SHININESS);
+        let ssaa = *scene.ssaa.get_or_insert(DEFAULT_SSAA);
+        let mesh_colors = scene
+            .meshes
+            .iter_mut()
+            .map(|m| *m.color.get_or_insert(SURFACE_COLOR))
+            .collect();
+        let colors = set.resolve_overlays(&mut scene.meshes)?;
+        let settings = SurfaceSettings {
+            width: scene.size[0],
+            height: scene.size[1],
+            ssaa,
+            camera: scene.camera,
+            background: scene.background,
+            color: SURFACE_COLOR,
+            mesh_colors,
+        };
+        settings.validate()?;
+        scene.camera.validate()?;
+        let lobe = scene.lobe;
+        let shader = Shader::new(
+            lobe.kind,
+            n,
+            lobe.v,
+            lobe.geometry,
+            material,
+            scene.lights.clone(),
+            0.0,
+        )?;
+        Ok(Resolved {
+            scene,
+            shader,
+            plan: Plan::Surface {
+                surfaces: set.surfaces.clone(),
+                settings,
+                colors,
+            },
+        })
     }
 
     /// Chooses every default for `field` and builds the settings and shader: the one
     /// place where glint picks anything the user did not say.
     pub fn resolve_for(&self, field: &Field) -> Result<Resolved, RenderError> {
+        if self.is_surface() {
+            return Err(RenderError::Parameter(
+                "a surface scene is resolved by a Renderer, which reads its meshes".into(),
+            ));
+        }
         let mut scene = self.clone();
         scene.derived = None;
         // Presets, the MIP ramp, the default iso value and the gate follow the robust
@@ -409,18 +578,9 @@ impl Scene {
             }
             (RenderMode::Composite, None) => Mode::Composite,
             (RenderMode::Mip, None) => Mode::Mip,
+            (RenderMode::Surface, None) => unreachable!("surface scenes are refused above"),
         };
-        if scene.lights.is_empty() {
-            return Err(RenderError::Parameter(
-                "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0)".into(),
-            ));
-        }
-        if scene.lights.len() > MAX_LIGHTS {
-            return Err(RenderError::Parameter(format!(
-                "{} lights: at most {MAX_LIGHTS}",
-                scene.lights.len()
-            )));
-        }
+        check_lights(&scene.lights)?;
         if !scene.gate.is_finite() || !(0.0..=1.0).contains(&scene.gate) {
             return Err(RenderError::Parameter(format!(
                 "gate {}: expected a fraction in 0..=1",
@@ -455,10 +615,12 @@ impl Scene {
         )?;
         Ok(Resolved {
             scene,
-            tf,
-            classify,
-            frame,
             shader,
+            plan: Plan::Volume {
+                tf,
+                classify,
+                frame,
+            },
         })
     }
 
@@ -483,7 +645,7 @@ impl Scene {
             (None, Input::Phantom { name, .. }) => name.preset().into(),
             // Hounsfield units reach air at -1000: CT.
             (None, Input::Path(_)) if lo < -500.0 => "ct-bone".into(),
-            (None, Input::Path(_)) => "mr-t2-brain".into(),
+            (None, Input::Path(_) | Input::None) => "mr-t2-brain".into(),
         };
         let p = preset(&name)?;
         if self.mode == RenderMode::Mip && self.preset.is_none() {
@@ -505,6 +667,23 @@ impl Scene {
     }
 }
 
+/// The lights of a scene: at least one, at most [`MAX_LIGHTS`].
+fn check_lights(lights: &[Light]) -> Result<(), RenderError> {
+    if lights.is_empty() {
+        return Err(RenderError::Parameter(
+            "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0)"
+                .into(),
+        ));
+    }
+    if lights.len() > MAX_LIGHTS {
+        return Err(RenderError::Parameter(format!(
+            "{} lights: at most {MAX_LIGHTS}",
+            lights.len()
+        )));
+    }
+    Ok(())
+}
+
 /// A rendered image and the resolved scene that made it.
 #[derive(Clone, Debug)]
 pub struct Rendered {
@@ -512,17 +691,25 @@ pub struct Rendered {
     pub image: Image,
     /// The scene with every default written in, and [`Scene::derived`] filled.
     pub scene: Scene,
-    /// Stage times: `read` and the field's stages from [`Renderer::open`], then
+    /// Stage times: `read` and the field's stages from [`Renderer::open`] (`meshes`
+    /// and `isosurface` when they were read or extracted for this scene), then
     /// `classify` (when the classification was built) and `frame`.
     pub timings: Timings,
+    /// The colours of the scalar overlays, for a colour bar
+    /// ([`ScalarColors::draw_bar`]); `None` without scalar overlays.
+    pub colors: Option<ScalarColors>,
 }
 
-/// Renders scenes of one volume, keeping the field and the last classification, so
-/// frames that change only the camera, lights, lobe or size do not classify again (an
-/// interactive viewer, a notebook rendering many views).
+/// Renders scenes of one volume and one set of meshes, keeping the field, the meshes
+/// read (and the isosurface extracted) and the last classification, so frames that
+/// change only the camera, lights, lobe or size do not read, extract or classify again
+/// (an interactive viewer, a notebook rendering many views). Cloning is cheap (the
+/// data are shared): one clone per viewer client.
+#[derive(Clone)]
 pub struct Renderer {
-    field: Arc<Field>,
+    field: Option<Arc<Field>>,
     classification: Option<(TransferFunction, Arc<Classification>)>,
+    meshes: Option<(MeshKey, Arc<MeshSet>)>,
     /// Which compositing loop frames use (the SIMD one by default).
     pub kernel: Kernel,
     opened: Timings,
@@ -530,7 +717,7 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    /// Reads `input` and builds its field.
+    /// Reads `input` and builds its field (nothing for [`Input::None`]).
     pub fn open(input: &Input) -> Result<Renderer, RenderError> {
         Renderer::open_with(input, &ReadOptions::default())
     }
@@ -538,6 +725,16 @@ impl Renderer {
     /// [`Renderer::open`] with reader options (e.g. `strict`); the reader's notes are
     /// kept ([`Renderer::notes`]).
     pub fn open_with(input: &Input, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        if *input == Input::None {
+            return Ok(Renderer {
+                field: None,
+                classification: None,
+                meshes: None,
+                kernel: Kernel::Auto,
+                opened: Timings::default(),
+                notes: Vec::new(),
+            });
+        }
         let start = Instant::now();
         let opened = input.open_with(options)?;
         let mut read = Timings::default();
@@ -560,48 +757,106 @@ impl Renderer {
         &self.notes
     }
 
+    /// Reads `scene`'s input and its meshes (with their overlays, and the volume's
+    /// isosurface in surface mode).
+    pub fn open_scene(scene: &Scene) -> Result<Renderer, RenderError> {
+        let mut renderer = Renderer::open(&scene.input)?;
+        if scene.is_surface() {
+            renderer.mesh_set(scene)?;
+        }
+        Ok(renderer)
+    }
+
     /// A renderer of a volume already in memory.
     pub fn from_volume(volume: &Volume) -> Result<Renderer, RenderError> {
-        let field = Arc::new(Field::new(volume)?);
-        Ok(Renderer {
-            opened: field.timings().clone(),
-            notes: Vec::new(),
-            field,
-            classification: None,
-            kernel: Kernel::Auto,
-        })
+        Ok(Renderer::from_field(Arc::new(Field::new(volume)?)))
     }
 
     /// A renderer of a field already built (several renderers, each with its own
     /// classification, can share one field: one per viewer client).
     pub fn from_field(field: Arc<Field>) -> Renderer {
         Renderer {
-            field,
+            opened: field.timings().clone(),
+            field: Some(field),
             classification: None,
+            meshes: None,
             kernel: Kernel::Auto,
-            opened: Timings::default(),
             notes: Vec::new(),
         }
     }
 
-    /// The field every scene is rendered from.
-    pub fn field(&self) -> &Arc<Field> {
-        &self.field
+    /// The field every scene is rendered from; `None` for a renderer of meshes only.
+    pub fn field(&self) -> Option<&Arc<Field>> {
+        self.field.as_ref()
     }
 
-    /// Resolves `scene` against this renderer's volume ([`Scene::resolve_for`]).
-    pub fn resolve(&self, scene: &Scene) -> Result<Resolved, RenderError> {
-        let mut resolved = scene.resolve_for(&self.field)?;
-        resolved.frame.kernel = self.kernel;
+    /// The meshes of `scene` (and the isosurface it asks for): the ones read last when
+    /// the scene names the same files and iso value, else read now.
+    fn mesh_set(&mut self, scene: &Scene) -> Result<Arc<MeshSet>, RenderError> {
+        let field = self.field.as_deref();
+        let iso = if scene.mode == RenderMode::Surface {
+            scene.surface_iso(field)
+        } else {
+            None
+        };
+        let key = MeshKey::new(&scene.meshes, iso);
+        if let Some((k, set)) = &self.meshes {
+            if *k == key {
+                return Ok(set.clone());
+            }
+        }
+        let extra = match (field, iso) {
+            (Some(f), Some(iso)) => {
+                let mesh = self.opened.time("isosurface", || extract_field(f, iso))?;
+                if mesh.triangles.is_empty() {
+                    return Err(RenderError::Parameter(format!(
+                        "no isosurface at iso value {iso}: no voxel edge crosses it"
+                    )));
+                }
+                Some(mesh)
+            }
+            _ => None,
+        };
+        let set = self
+            .opened
+            .time("meshes", || MeshSet::load(&scene.meshes, extra))?;
+        let set = Arc::new(set);
+        self.meshes = Some((key, set.clone()));
+        Ok(set)
+    }
+
+    /// Resolves `scene` against this renderer's volume ([`Scene::resolve_for`]) or,
+    /// for a surface scene, its meshes (read now if the scene names others).
+    pub fn resolve(&mut self, scene: &Scene) -> Result<Resolved, RenderError> {
+        if scene.is_surface() || self.field.is_none() {
+            let set = self.mesh_set(scene)?;
+            return scene.resolve_surface(self.field.as_deref(), &set);
+        }
+        let field = self.field.as_ref().expect("checked above");
+        let mut resolved = scene.resolve_for(field)?;
+        if let Plan::Volume { frame, .. } = &mut resolved.plan {
+            frame.kernel = self.kernel;
+        }
         Ok(resolved)
     }
 
-    /// The camera a render of `scene` uses (it frames what the scene's transfer
-    /// function makes visible, so it classifies, and keeps the classification).
+    /// The camera a render of `scene` uses (for a volume it frames what the scene's
+    /// transfer function makes visible, so it classifies, and keeps the
+    /// classification; for surfaces, the bounding sphere of every mesh).
     pub fn camera(&mut self, scene: &Scene) -> Result<Camera, RenderError> {
-        let resolved = self.resolve(scene)?;
-        let (class, _) = self.classification(&resolved.tf, &resolved.classify)?;
-        class.camera(&resolved.frame)
+        match self.resolve(scene)?.plan {
+            Plan::Volume {
+                tf,
+                classify,
+                frame,
+            } => {
+                let (class, _) = self.classification(&tf, &classify)?;
+                class.camera(&frame)
+            }
+            Plan::Surface {
+                surfaces, settings, ..
+            } => surfaces.camera(&settings),
+        }
     }
 
     /// The classification for `tf` and `settings`: the last one when they are the
@@ -616,13 +871,19 @@ impl Renderer {
                 return Ok((c.clone(), false));
             }
         }
-        let c = Arc::new(Classification::new(self.field.clone(), tf, settings)?);
+        let field = self
+            .field
+            .clone()
+            .ok_or_else(|| RenderError::Parameter("the renderer has no volume".into()))?;
+        let c = Arc::new(Classification::new(field, tf, settings)?);
         self.classification = Some((tf.clone(), c.clone()));
         Ok((c, true))
     }
 
-    /// Renders `scene` (its input is not read again: the renderer's volume is used).
-    /// `progress` is called with the number of pixels finished after each tile.
+    /// Renders `scene` (its input is not read again: the renderer's volume is used;
+    /// its meshes are read when they are not the ones read last).
+    /// `progress` is called with the number of pixels finished after each tile
+    /// (volumes) or once at the end (surfaces).
     pub fn render(
         &mut self,
         scene: &Scene,
@@ -639,26 +900,54 @@ impl Renderer {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Rendered, RenderError> {
         let mut timings = self.opened.clone();
-        let start = Instant::now();
-        let (class, built) = self.classification(&resolved.tf, &resolved.classify)?;
-        if built {
-            timings.record("classify", start.elapsed());
-        }
-        let image = timings.time("frame", || {
-            class.render(&resolved.shader, &resolved.frame, progress)
-        })?;
-        let camera = class.camera(&resolved.frame)?;
         let mut scene = resolved.scene;
-        scene.derived = Some(derived(&camera, &self.field, &resolved.tf, scene.step));
+        let (image, derived, colors) = match resolved.plan {
+            Plan::Volume {
+                tf,
+                classify,
+                frame,
+            } => {
+                let start = Instant::now();
+                let (class, built) = self.classification(&tf, &classify)?;
+                if built {
+                    timings.record("classify", start.elapsed());
+                }
+                let image =
+                    timings.time("frame", || class.render(&resolved.shader, &frame, progress))?;
+                let camera = class.camera(&frame)?;
+                let field = self.field.as_deref().expect("a volume plan has a field");
+                let step_mm = scene.step * field.min_spacing();
+                let mut d = derived(&camera);
+                d.step_mm = Some(step_mm);
+                d.min_spacing_mm = Some(field.min_spacing());
+                d.transfer_function = Some(tf);
+                (image, d, None)
+            }
+            Plan::Surface {
+                surfaces,
+                settings,
+                colors,
+            } => {
+                let camera = surfaces.camera(&settings)?;
+                let image = timings.time("frame", || {
+                    surfaces.render(&camera, &resolved.shader, &settings, colors.as_ref())
+                })?;
+                progress(u64::from(settings.width) * u64::from(settings.height));
+                (image, derived(&camera), colors)
+            }
+        };
+        scene.derived = Some(derived);
         Ok(Rendered {
             image,
             scene,
             timings,
+            colors,
         })
     }
 }
 
-fn derived(camera: &Camera, field: &Field, tf: &TransferFunction, step: f64) -> Derived {
+/// The camera in world units (the volume's fields are filled by the caller).
+fn derived(camera: &Camera) -> Derived {
     let focal = camera.eye + camera.forward * 100.0;
     Derived {
         eye: camera.eye.to_array(),
@@ -669,9 +958,9 @@ fn derived(camera: &Camera, field: &Field, tf: &TransferFunction, step: f64) -> 
             Projection::Orthographic => crate::camera::FIELD_OF_VIEW_DEG,
         },
         parallel_scale: camera.half_height,
-        step_mm: step * field.min_spacing(),
-        min_spacing_mm: field.min_spacing(),
-        transfer_function: tf.clone(),
+        step_mm: None,
+        min_spacing_mm: None,
+        transfer_function: None,
     }
 }
 
@@ -736,7 +1025,7 @@ mod tests {
     #[test]
     fn resolution_writes_its_choices_back_and_is_idempotent() {
         let field = Field::new(&small().input.open().unwrap()).unwrap();
-        for mode in RenderMode::ALL {
+        for mode in [RenderMode::Composite, RenderMode::Iso, RenderMode::Mip] {
             let scene = Scene { mode, ..small() };
             let first = scene.resolve_for(&field).unwrap();
             let s = &first.scene;
@@ -746,7 +1035,11 @@ mod tests {
             // Resolving the resolved scene chooses nothing new.
             let again = s.resolve_for(&field).unwrap();
             assert_eq!(&again.scene, s, "{mode:?}");
-            assert_eq!(again.tf, first.tf);
+            let tf = |r: &Resolved| match &r.plan {
+                Plan::Volume { tf, .. } => tf.clone(),
+                Plan::Surface { .. } => panic!("a volume scene resolved to a surface plan"),
+            };
+            assert_eq!(tf(&again), tf(&first));
         }
     }
 
@@ -837,5 +1130,84 @@ mod tests {
             .render(&finer, &|_| {})
             .unwrap();
         assert_eq!(third.image, fresh.image);
+    }
+
+    /// A closed octahedron as OBJ in `dir`.
+    fn octahedron(dir: &std::path::Path) -> PathBuf {
+        let path = dir.join("octa.obj");
+        std::fs::write(
+            &path,
+            "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+             f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n",
+        )
+        .unwrap();
+        path
+    }
+
+    #[test]
+    fn a_mesh_scene_resolves_once_and_reads_its_meshes_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = format!(
+            r#"{{"meshes": [{{"path": {:?}}}], "size": [32, 24]}}"#,
+            octahedron(dir.path())
+        );
+        // Meshes without an input key: no volume.
+        let scene = Scene::from_json(&json).unwrap();
+        assert_eq!(scene.input, Input::None);
+        let mut r = Renderer::open_scene(&scene).unwrap();
+        assert!(r.field().is_none());
+        let first = r.render(&scene, &|_| {}).unwrap();
+        let s = &first.scene;
+        assert_eq!(s.mode, RenderMode::Surface);
+        assert_eq!(s.ssaa, Some(DEFAULT_SSAA));
+        assert_eq!(s.lobe.n, Some(SURFACE_SHININESS));
+        assert_eq!(s.meshes[0].color, Some(SURFACE_COLOR));
+        assert!(first.colors.is_none());
+        // The resolved scene chooses nothing new and renders the same image.
+        let mut again = s.clone();
+        again.derived = None;
+        let second = r.render(&again, &|_| {}).unwrap();
+        assert_eq!(second.scene, first.scene);
+        assert_eq!(second.image, first.image);
+        // Its JSON names the lack of a volume, and reads back to the same scene.
+        let text = again.to_json().unwrap();
+        assert!(text.contains(r#""input": "none""#), "{text}");
+        assert_eq!(Scene::from_json(&text).unwrap(), again);
+        // The octahedron covers the centre of the image.
+        assert!(first.image.alpha[12 * 32 + 16] > 0.99);
+        // A new camera reuses the meshes read (same Arc).
+        let moved = Scene {
+            camera: CameraSpec {
+                azimuth: 40.0,
+                ..again.camera
+            },
+            ..again.clone()
+        };
+        let before = r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m));
+        r.render(&moved, &|_| {}).unwrap();
+        assert_eq!(r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m)), before);
+    }
+
+    #[test]
+    fn a_volume_with_meshes_renders_only_as_surfaces() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = Scene {
+            meshes: vec![MeshSpec::new(octahedron(dir.path()))],
+            ..small()
+        };
+        let mut r = Renderer::open_scene(&scene).unwrap();
+        let err = r.resolve(&scene).unwrap_err();
+        assert!(matches!(err, RenderError::Unsupported(_)), "{err}");
+        // In surface mode the phantom's isosurface joins the octahedron.
+        let surface = Scene {
+            mode: RenderMode::Surface,
+            ..scene
+        };
+        let resolved = r.resolve(&surface).unwrap();
+        assert!(resolved.scene.iso.is_some());
+        let Plan::Surface { surfaces, .. } = &resolved.plan else {
+            panic!("a surface plan expected");
+        };
+        assert_eq!(surfaces.mesh_count(), 2);
     }
 }

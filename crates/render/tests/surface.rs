@@ -73,6 +73,7 @@ fn rasterised_sphere_matches_analytic_shading() {
         },
         background: [0.1, 0.2, 0.3],
         color: [0.8, 0.6, 0.4],
+        mesh_colors: Vec::new(),
     };
     let camera = surfaces.camera(&settings).unwrap();
     let relative = vec![

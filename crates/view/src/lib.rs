@@ -41,7 +41,7 @@ use axum::response::{Html, IntoResponse};
 use axum::routing::get;
 use axum::Router;
 use glint_lobe::LobeKind;
-use glint_render::{Field, RenderError, Renderer, Scene, View, PRESETS};
+use glint_render::{RenderError, Renderer, Scene, View, PRESETS};
 
 pub use session::{apply_patch, render_frame, Frame, MAX_VIEW_SIDE};
 
@@ -82,7 +82,8 @@ impl Default for ViewerConfig {
 /// A viewer of one volume: the field every client renders, the starting scene and the
 /// limits.
 pub struct Viewer {
-    field: Arc<Field>,
+    /// Reads nothing more: every client renders with a clone of it.
+    renderer: Renderer,
     scene: Scene,
     range: [f32; 2],
     config: ViewerConfig,
@@ -92,11 +93,12 @@ pub struct Viewer {
 impl Viewer {
     /// Reads the scene's input and checks the scene resolves.
     pub fn new(scene: Scene, config: ViewerConfig) -> Result<Viewer, RenderError> {
-        let renderer = Renderer::open(&scene.input)?;
+        let mut renderer = Renderer::open_scene(&scene)?;
         let scene = renderer.resolve(&scene)?.scene;
-        let (lo, hi) = renderer.field().range();
+        // A scene of meshes only has no value range (the page's iso slider).
+        let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
         Ok(Viewer {
-            field: renderer.field().clone(),
+            renderer,
             scene,
             range: [lo, hi],
             config,
@@ -203,7 +205,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     if !send_json(&mut socket, &hello).await {
         return;
     }
-    let renderer = Arc::new(Mutex::new(Renderer::from_field(viewer.field.clone())));
+    let renderer = Arc::new(Mutex::new(viewer.renderer.clone()));
     let mut state = ClientState {
         scene: viewer.scene.clone(),
         split: Split::Off,

@@ -19,7 +19,7 @@ pub const MAX_VIEW_SIDE: u32 = 2048;
 
 /// Scene fields a client may not change: the server renders only the volume it was
 /// started with.
-const FIXED_FIELDS: [&str; 3] = ["input", "version", "derived"];
+const FIXED_FIELDS: [&str; 4] = ["input", "meshes", "version", "derived"];
 
 /// Scene fields that are objects merged field by field.
 const MERGED_FIELDS: [&str; 3] = ["camera", "lobe", "material"];
@@ -67,7 +67,8 @@ pub fn apply_patch(
             next.size[0], next.size[1]
         )));
     }
-    renderer.resolve(&next)?;
+    // A clone shares the volume and meshes (resolving may read meshes it lacks).
+    renderer.clone().resolve(&next)?;
     Ok(next)
 }
 

@@ -205,3 +205,50 @@ async fn clients_beyond_the_limit_are_refused_and_disconnects_free_seats() {
     json_of(&mut d, "hello").await;
     frame(&mut d, Purpose::Full).await;
 }
+
+/// Issue 16: the viewer serves a scene of meshes only through the same protocol.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_mesh_scene_is_served_and_rotates() {
+    let dir = std::env::temp_dir().join(format!("glint-view-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("octa.obj");
+    std::fs::write(
+        &obj,
+        "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+         f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n",
+    )
+    .unwrap();
+    let scene = Scene {
+        input: Input::None,
+        meshes: vec![glint_render::MeshSpec::new(&obj)],
+        size: [48, 40],
+        ..Scene::default()
+    };
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer));
+    let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    let hello = json_of(&mut c, "hello").await;
+    assert_eq!(hello["scene"]["input"], "none");
+    assert_eq!(hello["scene"]["mode"], "surface");
+    let (h, first) = frame(&mut c, Purpose::Full).await;
+    assert_eq!((h.width, h.height), (48, 40));
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 1, "interactive": false, "scene": {"camera": {"azimuth": 30, "elevation": 40}}}"#,
+    )
+    .await;
+    let (h, rotated) = frame(&mut c, Purpose::Full).await;
+    assert_eq!(h.seq, 1);
+    assert_ne!(rotated, first, "rotation must change the image");
+    // The meshes are fixed for a viewer, like the volume.
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 2, "interactive": false, "scene": {"meshes": []}}"#,
+    )
+    .await;
+    let err = json_of(&mut c, "error").await;
+    assert!(err["message"].as_str().unwrap().contains("meshes"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -341,6 +341,7 @@ fn input_name(input: &Input) -> String {
     match input {
         Input::Path(p) => p.display().to_string(),
         Input::Phantom { name, size } => format!("{name} phantom {size}^3"),
+        Input::None => "meshes".into(),
     }
 }
 

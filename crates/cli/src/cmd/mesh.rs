@@ -7,21 +7,25 @@ use anyhow::{bail, Context};
 use glint_io::mesh::{write_obj, write_ply, write_stl, PlyEncoding};
 use glint_io::{read_volume, Format, Mesh, ReadOptions};
 use glint_render::isosurface::{extract, taubin_smooth, Taubin};
+use glint_render::math::Vec3;
+use glint_render::vertex_normals;
 
 /// Arguments of `glint mesh`.
 #[derive(clap::Args)]
 #[command(after_help = "Examples:\n  \
     glint mesh mni152_t1_09a.nii.gz --iso 60 -o brain.stl\n  \
-    glint mesh ct.nrrd --iso 300 --smooth 20 -o bone.ply\n\n\
+    glint mesh ct.nrrd --iso 300 --smooth 20 -o bone.ply\n  \
+    glint mesh lh.pial.gii -o lh.pial.ply     # a surface converted, with vertex normals\n\n\
 The surface separates values >= ISO (inside) from lower ones; triangles are \
 counter-clockwise seen from outside and the normals (PLY, OBJ) point outwards, from the \
 volume's gradient (or from the triangles after --smooth).")]
 pub struct Args {
-    /// The volume (any format glint's io reads).
+    /// The volume (any format glint's io reads), or a surface (.gii, .stl, .obj, .ply)
+    /// to convert.
     input: PathBuf,
-    /// The iso value, in the volume's physical units.
+    /// The iso value, in the volume's physical units (required for a volume).
     #[arg(long, allow_negative_numbers = true)]
-    iso: f32,
+    iso: Option<f32>,
     /// Output mesh; the extension picks the format: .stl (binary), .ply (binary), .obj.
     #[arg(short, long)]
     output: PathBuf,
@@ -79,19 +83,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     }
+    if Format::guess(&args.input).is_some_and(Format::is_mesh) {
+        return convert(&args, &taubin, write);
+    }
+    let Some(iso) = args.iso else {
+        bail!("--iso is required to extract a surface from the volume");
+    };
     let volume = read_volume(&args.input, &ReadOptions::default())
         .with_context(|| format!("cannot read volume {}", args.input.display()))?;
     let (lo, hi) = volume.range();
-    if !(lo..=hi).contains(&f64::from(args.iso)) {
+    if !(lo..=hi).contains(&f64::from(iso)) {
         bail!(
             "--iso {} is outside the volume's range {lo}..{hi}: the surface would be empty",
-            args.iso
+            iso
         );
     }
     let start = Instant::now();
-    let mut mesh = extract(&volume, args.iso)?;
+    let mut mesh = extract(&volume, iso)?;
     for _ in 1..args.repeat {
-        mesh = extract(&volume, args.iso)?;
+        mesh = extract(&volume, iso)?;
     }
     let per = start.elapsed().as_secs_f64() * 1e3 / f64::from(args.repeat);
     if args.repeat > 1 {
@@ -102,10 +112,48 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     if mesh.triangles.is_empty() {
-        bail!("no surface at --iso {}: no voxel edge crosses it", args.iso);
+        bail!("no surface at --iso {}: no voxel edge crosses it", iso);
     }
     if taubin.iterations > 0 {
         taubin_smooth(&mut mesh, &taubin)?;
+    }
+    write(&args.output, &mesh)?;
+    if !args.quiet {
+        eprintln!(
+            "glint: wrote {} ({} vertices, {} triangles)",
+            args.output.display(),
+            mesh.positions.len(),
+            mesh.triangles.len()
+        );
+    }
+    Ok(())
+}
+
+/// A surface file written in another format (e.g. GIFTI to PLY for VTK, in
+/// scripts/bench-vtk-surface), with vertex normals (the file's, else area-weighted
+/// ones from the triangles, as `glint render` shades it), optionally smoothed.
+fn convert(args: &Args, taubin: &Taubin, write: MeshWriter) -> anyhow::Result<()> {
+    if args.iso.is_some() {
+        bail!(
+            "--iso applies to volumes; {} is a surface",
+            args.input.display()
+        );
+    }
+    let mut mesh = glint_io::read_mesh(&args.input)
+        .with_context(|| format!("cannot read surface {}", args.input.display()))?;
+    mesh.validate()
+        .with_context(|| format!("cannot convert {}", args.input.display()))?;
+    if taubin.iterations > 0 {
+        taubin_smooth(&mut mesh, taubin)?;
+    }
+    if mesh.normals.is_none() {
+        let positions: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect();
+        let normals = vertex_normals(&positions, &mesh.triangles);
+        mesh.normals = Some(normals.iter().map(|n| n.to_array()).collect());
     }
     write(&args.output, &mesh)?;
     if !args.quiet {

@@ -22,6 +22,9 @@ use super::scene_flags::{set, SceneFlags};
     glint render ct.nrrd --preset ct-bone --view anterior --azimuth 30 --elevation 15 \
 --lobe exact --n 40 --geometry blinn --light 45,30 -o bone.png\n  \
     glint render --mode mip --projection orthographic -o mip.png\n  \
+    glint render lh.pial.gii rh.pial.gii --overlay lh.sulc.gii --overlay rh.sulc.gii \
+--colormap sulc --view left --ssaa 4 -o brain.png\n  \
+    glint render mni152.nii.gz --mode surface --iso 60 --view left -o surface.png\n  \
     glint render brain.nii.gz --dump-scene brain.json -o a.png   # then:\n  \
     glint render --scene brain.json --lobe exact -o b.png        # flags override the file\n\n\
 Presets (3D Slicer's volume rendering presets, MR ones scaled to the volume's maximum):\n  \
@@ -39,7 +42,10 @@ Scene JSON (--scene, --dump-scene): every field below as a key, e.g.\n  \
     \"lobe\": {\"kind\": \"k\", \"n\": 40, \"v\": 4, \"geometry\": \"phong\"},\n  \
     \"camera\": {\"view\": \"left\", \"azimuth\": 0, \"elevation\": 0, \"zoom\": 1, \"projection\": \"perspective\"},\n  \
     \"lights\": [{\"azimuth\": 0, \"elevation\": 0, \"intensity\": 1}], \"size\": [512, 512], \"step\": 0.5}\n  \
-    (relative input paths are relative to the scene file)")]
+    A scene of meshes: {\"input\": \"none\", \"mode\": \"surface\", \"ssaa\": 2, \"meshes\": [{\"path\": \"lh.pial.gii\",\n  \
+    \"overlay\": {\"path\": \"lh.sulc.gii\", \"array\": 0, \"colormap\": \"viridis\", \"range\": [-1, 1]},\n  \
+    \"color\": [0.85, 0.77, 0.64]}], ...} (colours linear RGB; a volume with meshes renders in surface mode)\n  \
+    (relative input, mesh and overlay paths are relative to the scene file)")]
 pub struct Args {
     // Boxed: the options are many, and main's subcommand enum should stay small.
     #[command(flatten)]
@@ -109,6 +115,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.repeat > 1 {
         print_repeat(&args, &rendered, more);
     }
+    if let Some(colors) = &rendered.colors {
+        colors.draw_bar(&mut rendered.image);
+    }
     let depth = if args.depth == "16" {
         Depth::Sixteen
     } else {
@@ -136,12 +145,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// A renderer of the scene's input, with an error that names it; prints what the
-/// reader assumed (e.g. DICOM frames without positions) to stderr.
+/// reader assumed (e.g. DICOM frames without positions) to stderr. Meshes are read
+/// when the scene is resolved (their errors name the file).
 pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Result<Renderer> {
     let renderer =
         Renderer::open_with(&scene.input, options).with_context(|| match &scene.input {
             Input::Path(p) => format!("cannot read volume {}", p.display()),
             Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
+            Input::None => "cannot open the scene".into(),
         })?;
     if let Input::Path(path) = &scene.input {
         for note in renderer.notes().iter().filter(|n| n.contains("assumed")) {
@@ -192,8 +203,18 @@ fn progress_bar(args: &Options, scene: &Scene) -> Option<indicatif::ProgressBar>
 /// from anywhere).
 fn dump_scene(path: &Path, scene: &Scene) -> anyhow::Result<()> {
     let mut scene = scene.clone();
-    if let Input::Path(p) = &mut scene.input {
+    let absolute = |p: &mut PathBuf| -> anyhow::Result<()> {
         *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
+        Ok(())
+    };
+    if let Input::Path(p) = &mut scene.input {
+        absolute(p)?;
+    }
+    for m in &mut scene.meshes {
+        absolute(&mut m.path)?;
+        if let Some(o) = &mut m.overlay {
+            absolute(&mut o.path)?;
+        }
     }
     let json = scene.to_json()?;
     glint_io::write_atomic(path, |w| w.write_all(json.as_bytes()))?;
@@ -209,14 +230,18 @@ fn print_repeat(args: &Options, rendered: &Rendered, elapsed: Duration) {
         rendered.image.stats
     );
     let s = &rendered.scene;
+    let detail = if s.is_surface() {
+        format!("ssaa {}", s.ssaa.unwrap_or_default())
+    } else {
+        format!("step {}", s.step)
+    };
     println!(
-        "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, step {})",
+        "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, {detail})",
         elapsed.as_secs_f64() * 1e3 / frames as f64,
         frames,
         s.size[0],
         s.size[1],
         s.lobe.kind.name(),
-        s.step
     );
 }
 

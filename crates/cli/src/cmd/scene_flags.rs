@@ -5,9 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::bail;
-use glint_io::ReadOptions;
+use clap::builder::TypedValueParser;
+use glint_io::{Format, ReadOptions};
 use glint_lobe::Geometry;
-use glint_render::{Input, Light, Phantom, Projection, RenderMode, Scene, TransferFunction, View};
+use glint_render::{
+    ColorMap, Input, Light, MeshSpec, Overlay, Phantom, Projection, RenderMode, Scene,
+    TransferFunction, View,
+};
 
 use super::choice::choice;
 
@@ -15,9 +19,26 @@ use super::choice::choice;
 /// scene default (which `Scene::resolve_for` chooses and `--dump-scene` shows).
 #[derive(clap::Args, Default)]
 pub struct SceneFlags {
-    /// Volume (any format glint's io reads); without it (and without --scene), the
-    /// built-in phantom.
-    pub input: Option<PathBuf>,
+    /// A volume (any format glint's io reads) and/or surface meshes (.gii with
+    /// pointset and triangle arrays, .stl, .obj, .ply: told apart by extension);
+    /// without any (and without --scene), the built-in phantom.
+    #[arg(value_name = "INPUT")]
+    pub input: Vec<PathBuf>,
+    /// Per-vertex values for the meshes, one per mesh in order: a GIFTI shape or label
+    /// array (the file's first per-vertex array) or a PLY file's vertex scalar;
+    /// repeatable.
+    #[arg(long, value_name = "FILE")]
+    pub overlay: Vec<PathBuf>,
+    /// Colour map of the scalar overlays [default: viridis].
+    #[arg(long, value_parser = choice::<ColorMap>(ColorMap::ALL.map(|m| m.name())))]
+    pub colormap: Option<ColorMap>,
+    /// Overlay values at the colour map's ends [default: the overlays' 2nd and 98th
+    /// percentiles].
+    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true, value_parser = parse_range)]
+    pub overlay_range: Option<[f32; 2]>,
+    /// Surfaces: samples per pixel along each axis (anti-aliasing) [default: 2].
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(["1", "2", "4"]).map(|s| s.parse::<u32>().expect("one of the listed numbers")))]
+    pub ssaa: Option<u32>,
     /// Start from this scene file; the flags below override its fields.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
@@ -34,10 +55,12 @@ pub struct SceneFlags {
     /// Custom transfer function from a JSON file (see `glint render --help`).
     #[arg(long, value_name = "FILE")]
     pub tf: Option<PathBuf>,
-    /// How samples make a pixel [default: composite].
+    /// How a volume becomes a picture; surface: its isosurface at --iso, rasterised with
+    /// the meshes [default: composite; surface for meshes].
     #[arg(long, value_parser = choice::<RenderMode>(RenderMode::ALL.map(|m| m.name())))]
     pub mode: Option<RenderMode>,
-    /// Iso value for --mode iso [default: the middle of the volume's robust range].
+    /// Iso value for --mode iso and --mode surface [default: the middle of the volume's
+    /// robust range].
     #[arg(long, allow_negative_numbers = true)]
     pub iso: Option<f32>,
     /// Named view in the volume's world frame (RAS+) [default: anterior].
@@ -124,7 +147,7 @@ impl SceneFlags {
 
     /// Applies every given flag to `scene`.
     pub fn apply(&self, scene: &mut Scene) -> anyhow::Result<()> {
-        self.apply_input(scene);
+        self.apply_input(scene)?;
         self.apply_classification(scene)?;
         self.apply_lighting(scene)?;
         let camera = &mut scene.camera;
@@ -141,19 +164,62 @@ impl SceneFlags {
         Ok(())
     }
 
-    fn apply_input(&self, scene: &mut Scene) {
-        if let Some(path) = &self.input {
-            scene.input = Input::Path(path.clone());
+    fn apply_input(&self, scene: &mut Scene) -> anyhow::Result<()> {
+        let (meshes, volumes): (Vec<&PathBuf>, Vec<&PathBuf>) = self
+            .input
+            .iter()
+            .partition(|p| Format::guess(p).is_some_and(Format::is_mesh));
+        if volumes.len() > 1 {
+            bail!(
+                "{} volumes given ({}, {}): a scene holds one volume (and any number of meshes)",
+                volumes.len(),
+                volumes[0].display(),
+                volumes[1].display()
+            );
+        }
+        if !self.input.is_empty() {
+            scene.input = volumes
+                .first()
+                .map_or(Input::None, |p| Input::Path(p.to_path_buf()));
+            scene.meshes = meshes.into_iter().map(MeshSpec::new).collect();
         } else if self.phantom.is_some() || self.phantom_size.is_some() {
             let (name, size) = match scene.input {
                 Input::Phantom { name, size } => (name, size),
-                Input::Path(_) => (Phantom::default(), Phantom::DEFAULT_SIZE),
+                Input::Path(_) | Input::None => (Phantom::default(), Phantom::DEFAULT_SIZE),
             };
             scene.input = Input::Phantom {
                 name: self.phantom.unwrap_or(name),
                 size: self.phantom_size.unwrap_or(size),
             };
         }
+        self.apply_overlays(scene)
+    }
+
+    /// `--overlay` (one per mesh, in order), `--colormap`, `--overlay-range`, `--ssaa`.
+    fn apply_overlays(&self, scene: &mut Scene) -> anyhow::Result<()> {
+        if self.overlay.len() > scene.meshes.len() {
+            bail!(
+                "{} overlays for {} meshes: give at most one --overlay per mesh, in the meshes' order",
+                self.overlay.len(),
+                scene.meshes.len()
+            );
+        }
+        for (mesh, path) in scene.meshes.iter_mut().zip(&self.overlay) {
+            mesh.overlay = Some(Overlay::new(path));
+        }
+        if self.colormap.is_some() || self.overlay_range.is_some() {
+            let mut any = false;
+            for o in scene.meshes.iter_mut().filter_map(|m| m.overlay.as_mut()) {
+                set(&mut o.colormap, self.colormap.map(Some));
+                set(&mut o.range, self.overlay_range.map(Some));
+                any = true;
+            }
+            if !any {
+                bail!("--colormap and --overlay-range need a mesh with an --overlay");
+            }
+        }
+        set(&mut scene.ssaa, self.ssaa.map(Some));
+        Ok(())
     }
 
     fn apply_classification(&self, scene: &mut Scene) -> anyhow::Result<()> {
@@ -178,7 +244,10 @@ impl SceneFlags {
         set(&mut scene.mode, self.mode);
         if self.iso.is_some() {
             scene.iso = self.iso;
-        } else if self.mode.is_some_and(|m| m != RenderMode::Iso) {
+        } else if self
+            .mode
+            .is_some_and(|m| m != RenderMode::Iso && m != RenderMode::Surface)
+        {
             scene.iso = None;
         }
         let m = &mut scene.material;
@@ -223,11 +292,21 @@ pub fn set<T>(field: &mut T, value: Option<T>) {
 /// Reads a scene file; a relative input path in it is relative to the file.
 pub fn load_scene(path: &Path) -> anyhow::Result<Scene> {
     let mut scene = Scene::from_json_file(path)?;
-    if let Input::Path(p) = &mut scene.input {
+    let Some(dir) = path.parent() else {
+        return Ok(scene);
+    };
+    let rebase = |p: &mut PathBuf| {
         if p.is_relative() {
-            if let Some(dir) = path.parent() {
-                *p = dir.join(&*p);
-            }
+            *p = dir.join(&*p);
+        }
+    };
+    if let Input::Path(p) = &mut scene.input {
+        rebase(p);
+    }
+    for m in &mut scene.meshes {
+        rebase(&mut m.path);
+        if let Some(o) = &mut m.overlay {
+            rebase(&mut o.path);
         }
     }
     Ok(scene)
@@ -241,6 +320,18 @@ pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
         w.trim().parse().map_err(|_| bad())?,
         h.trim().parse().map_err(|_| bad())?,
     ])
+}
+
+/// Parses `LO,HI` (an overlay range).
+pub fn parse_range(s: &str) -> Result<[f32; 2], String> {
+    let bad = || format!("'{s}': expected LO,HI with LO < HI, e.g. -1,1");
+    let (lo, hi) = s.split_once(',').ok_or_else(bad)?;
+    let lo: f32 = lo.trim().parse().map_err(|_| bad())?;
+    let hi: f32 = hi.trim().parse().map_err(|_| bad())?;
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(bad());
+    }
+    Ok([lo, hi])
 }
 
 /// Parses `AZ,EL` or `AZ,EL,INTENSITY` (degrees) into a camera-relative light.

@@ -95,8 +95,10 @@ class Scene:
     def to_dict(self) -> Dict[str, Any]: ...
     def replace(self, **fields: Any) -> Scene: ...
     version: int
-    input: Dict[str, Any]
-    mode: Literal["composite", "iso", "mip"]
+    input: Union[Dict[str, Any], Literal["none"]]
+    meshes: List[Dict[str, Any]]
+    ssaa: Optional[int]
+    mode: Literal["composite", "iso", "mip", "surface"]
     iso: Optional[float]
     preset: Optional[str]
     transfer_function: Optional[Dict[str, Any]]

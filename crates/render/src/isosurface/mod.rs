@@ -13,7 +13,7 @@ use glint_io::{IoError, Mesh, Volume};
 use rayon::prelude::*;
 
 use crate::error::RenderError;
-use crate::field::MAX_FIELD_VOXELS;
+use crate::field::{Field, MAX_FIELD_VOXELS};
 use crate::math::{det3, inverse3, linear_part, transpose3, Mat3};
 
 use table::{table, EDGES};
@@ -73,16 +73,38 @@ const NONE: u32 = u32::MAX;
 /// gradient), positions in world mm. Values at least `iso` are inside; NaN samples are
 /// outside. Closed wherever the surface does not reach the volume's border.
 pub fn extract(volume: &Volume, iso: f32) -> Result<Mesh, RenderError> {
-    let dims = volume.dims;
-    if dims.iter().any(|&d| d < 2) {
-        return Err(RenderError::Volume(format!(
-            "dims {dims:?}: an isosurface needs at least 2 samples along each axis"
-        )));
-    }
     if volume.len() > MAX_FIELD_VOXELS {
         return Err(RenderError::Volume(format!(
             "{} voxels: at most {MAX_FIELD_VOXELS}",
             volume.len()
+        )));
+    }
+    extract_values(&volume.to_f32(), volume.dims, &volume.affine, iso)
+}
+
+/// The isosurface of a [`Field`]'s values at `iso`, like [`extract`] (the field has
+/// replaced NaN samples by the volume's minimum, so they count as outside unless `iso`
+/// is at or below it).
+pub fn extract_field(field: &Field, iso: f32) -> Result<Mesh, RenderError> {
+    let mut affine = [[0.0; 4]; 4];
+    for (r, row) in affine.iter_mut().take(3).enumerate() {
+        row[..3].copy_from_slice(&field.to_world[r]);
+        row[3] = field.origin[r];
+    }
+    affine[3][3] = 1.0;
+    extract_values(&field.values, field.dims, &affine, iso)
+}
+
+/// [`extract`] on samples already in f32 (x fastest) with their voxel-to-world affine.
+fn extract_values(
+    values: &[f32],
+    dims: [usize; 3],
+    affine: &[[f64; 4]; 4],
+    iso: f32,
+) -> Result<Mesh, RenderError> {
+    if dims.iter().any(|&d| d < 2) {
+        return Err(RenderError::Volume(format!(
+            "dims {dims:?}: an isosurface needs at least 2 samples along each axis"
         )));
     }
     if !iso.is_finite() {
@@ -90,16 +112,16 @@ pub fn extract(volume: &Volume, iso: f32) -> Result<Mesh, RenderError> {
             "iso value {iso}: expected a finite number"
         )));
     }
-    let m = linear_part(&volume.affine);
+    let m = linear_part(affine);
     let det = det3(&m);
     let inv = inverse3(&m)
         .filter(|_| det.is_finite() && det != 0.0)
         .ok_or_else(|| RenderError::Volume("the voxel-to-world affine is singular".into()))?;
     let grid = Grid {
-        values: volume.to_f32(),
+        values,
         dims,
         iso,
-        affine: volume.affine,
+        affine: *affine,
         grad_to_world: to_f32(&transpose3(&inv)),
         flip: det < 0.0,
     };
@@ -120,8 +142,8 @@ fn to_f32(m: &Mat3) -> [[f32; 3]; 3] {
 }
 
 /// The sampled volume and what every slab needs.
-struct Grid {
-    values: Vec<f32>,
+struct Grid<'a> {
+    values: &'a [f32],
     dims: [usize; 3],
     iso: f32,
     affine: [[f64; 4]; 4],
@@ -150,7 +172,7 @@ struct Layer {
     z: Vec<u32>,
 }
 
-impl Grid {
+impl Grid<'_> {
     #[inline]
     fn at(&self, i: usize, j: usize, k: usize) -> f32 {
         self.values[i + self.dims[0] * (j + self.dims[1] * k)]

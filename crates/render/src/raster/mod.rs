@@ -45,6 +45,9 @@ pub struct SurfaceSettings {
     pub background: [f32; 3],
     /// Colour of surfaces without scalars, linear RGB.
     pub color: [f32; 3],
+    /// Colour of each mesh (in the order given to [`Surfaces::new`]) without scalars,
+    /// linear RGB; meshes past the end get `color`.
+    pub mesh_colors: Vec<[f32; 3]>,
 }
 
 impl Default for SurfaceSettings {
@@ -56,6 +59,7 @@ impl Default for SurfaceSettings {
             camera: CameraSpec::default(),
             background: [0.0; 3],
             color: SURFACE_COLOR,
+            mesh_colors: Vec::new(),
         }
     }
 }
@@ -77,7 +81,11 @@ impl SurfaceSettings {
                 self.ssaa
             )));
         }
-        let colours = self.background.iter().chain(&self.color);
+        let colours = self
+            .background
+            .iter()
+            .chain(&self.color)
+            .chain(self.mesh_colors.iter().flatten());
         if colours.into_iter().any(|c| !c.is_finite() || *c < 0.0) {
             return Err(RenderError::Parameter(
                 "background and surface colours must be finite and >= 0".into(),
@@ -96,6 +104,10 @@ pub struct Surfaces {
     /// Per-vertex scalars; NaN for vertices of meshes without them.
     scalars: Option<Vec<f32>>,
     triangles: Vec<[u32; 3]>,
+    /// Per-vertex fixed colours (label colours), NaN where a vertex has none.
+    colors: Option<Vec<[f32; 3]>>,
+    /// First vertex and first triangle of each mesh.
+    mesh_starts: Vec<(u32, u32)>,
     center: Vec3,
     radius: f32,
 }
@@ -114,6 +126,8 @@ impl Surfaces {
             normals: Vec::new(),
             scalars: with_scalars.then(Vec::new),
             triangles: Vec::new(),
+            colors: None,
+            mesh_starts: Vec::new(),
             center: Vec3::ZERO,
             radius: 0.0,
         };
@@ -157,6 +171,7 @@ impl Surfaces {
                 .collect(),
             None => vertex_normals(&positions, &mesh.triangles),
         };
+        self.mesh_starts.push((base, self.triangles.len() as u32));
         self.positions.extend(positions);
         self.normals.extend(normals);
         if let Some(s) = &mut self.scalars {
@@ -168,6 +183,51 @@ impl Surfaces {
         self.triangles
             .extend(mesh.triangles.iter().map(|t| t.map(|i| i + base)));
         Ok(())
+    }
+
+    /// Gives the vertices of mesh `k` (in the order given to [`Surfaces::new`]) fixed
+    /// colours, linear RGB (e.g. a parcellation's label colours), which replace the
+    /// scalars' and the mesh colour. Fails when `k` is past the meshes or the colours do
+    /// not match its vertices.
+    pub fn set_vertex_colors(&mut self, k: usize, colors: &[[f32; 3]]) -> Result<(), RenderError> {
+        let (v0, v1) = self.vertex_range(k).ok_or_else(|| {
+            RenderError::Parameter(format!(
+                "mesh {k}: there are {} meshes",
+                self.mesh_starts.len()
+            ))
+        })?;
+        if colors.len() != v1 - v0 {
+            return Err(RenderError::Mesh(IoError::Inconsistent(format!(
+                "mesh {k}: {} colours for {} vertices",
+                colors.len(),
+                v1 - v0
+            ))));
+        }
+        let n = self.positions.len();
+        let all = self.colors.get_or_insert_with(|| vec![[f32::NAN; 3]; n]);
+        all[v0..v1].copy_from_slice(colors);
+        Ok(())
+    }
+
+    /// Vertex index range of mesh `k`.
+    fn vertex_range(&self, k: usize) -> Option<(usize, usize)> {
+        let start = self.mesh_starts.get(k)?.0 as usize;
+        let end = self
+            .mesh_starts
+            .get(k + 1)
+            .map_or(self.positions.len(), |s| s.0 as usize);
+        Some((start, end))
+    }
+
+    /// The mesh triangle `id` belongs to.
+    #[inline]
+    fn mesh_of(&self, id: u32) -> usize {
+        self.mesh_starts.partition_point(|s| s.1 <= id) - 1
+    }
+
+    /// Number of meshes.
+    pub fn mesh_count(&self) -> usize {
+        self.mesh_starts.len()
     }
 
     /// Centre and radius of a sphere around every vertex (the bounding box's).
@@ -548,16 +608,31 @@ impl Frame {
             let [pa, pb, pc] = [i0, i1, i2].map(|i| s.positions[i]);
             normal = (pb - pa).cross(pc - pa).normalize_or_zero();
         }
-        let base = match (&s.scalars, colors) {
+        let fixed = s.colors.as_ref().map(|c| {
+            // The colour of the vertex nearest the sample: labels do not blend.
+            let k = if beta[0] >= beta[1] && beta[0] >= beta[2] {
+                i0
+            } else if beta[1] >= beta[2] {
+                i1
+            } else {
+                i2
+            };
+            c[k]
+        });
+        let scalar = match (&s.scalars, colors) {
             (Some(v), Some(map)) => {
                 let sc = v[i0] * beta[0] + v[i1] * beta[1] + v[i2] * beta[2];
-                if sc.is_nan() {
-                    settings.color
-                } else {
-                    map.color(sc)
-                }
+                (!sc.is_nan()).then(|| map.color(sc))
             }
-            _ => settings.color,
+            _ => None,
+        };
+        let base = match (fixed, scalar) {
+            (Some(c), _) if !c[0].is_nan() => c,
+            (_, Some(c)) => c,
+            _ => *settings
+                .mesh_colors
+                .get(s.mesh_of(id))
+                .unwrap_or(&settings.color),
         };
         let cam = &self.camera;
         let view = match cam.projection {

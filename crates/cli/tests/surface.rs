@@ -1,0 +1,357 @@
+//! `glint render` and `glint compare` on meshes, end to end: the fsaverage5
+//! hemispheres with a sulcal-depth overlay, a dumped mesh scene that renders again bit
+//! for bit, compare on a mesh, an isosurface of a volume, and bad overlays refused with
+//! one line and no file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn glint(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(args)
+        .output()
+        .expect("run glint")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = glint(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// A sample file, or `None` (with a note) when it is missing outside CI; in CI a
+/// missing sample fails the test.
+fn sample(name: &str) -> Option<PathBuf> {
+    let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
+    let root = std::env::var_os("GLINT_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(&std::env::var_os("HOME").unwrap_or_default()).join(".cache/glint")
+        });
+    let p = root.join("samples").join(name);
+    if p.is_file() {
+        return Some(p);
+    }
+    assert!(!ci, "sample {} missing in CI", p.display());
+    eprintln!("skipping: {} missing (scripts/fetch-samples)", p.display());
+    None
+}
+
+/// An 8-bit RGB(A) PNG decoded: width, height, channels, samples.
+fn decode(path: &Path) -> (u32, u32, usize, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    let channels = info.color_type.samples();
+    (info.width, info.height, channels, buf)
+}
+
+/// A closed octahedron (6 vertices, 8 triangles, outward winding) as OBJ text.
+const OCTAHEDRON: &str = "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+
+/// A PLY holding `n` vertices with a scalar property (values 0, 1, ..., n-1) and one
+/// triangle, as a per-vertex overlay file.
+fn ply_scalars(n: usize) -> String {
+    let mut s = format!(
+        "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n\
+property float z\nproperty float scalar\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+    );
+    for i in 0..n {
+        s.push_str(&format!("{i} {} 0 {i}\n", i % 2));
+    }
+    s.push_str("3 0 1 2\n");
+    s
+}
+
+/// Writes the octahedron and a matching 6-value overlay into `dir`.
+fn octahedron(dir: &Path) -> (String, String) {
+    let mesh = dir.join("octa.obj");
+    std::fs::write(&mesh, OCTAHEDRON).unwrap();
+    let overlay = dir.join("octa-values.ply");
+    std::fs::write(&overlay, ply_scalars(6)).unwrap();
+    (
+        mesh.to_str().unwrap().to_string(),
+        overlay.to_str().unwrap().to_string(),
+    )
+}
+
+/// Issue 16's done-when: both fsaverage5 pial hemispheres in one scene, the left one
+/// with its sulcal depth through a colour map, with per-pixel highlights and a colour
+/// bar.
+#[test]
+fn fsaverage5_hemispheres_with_a_sulcal_depth_overlay() {
+    let (Some(lh), Some(rh), Some(sulc)) = (
+        sample("fsaverage5_pial_left.gii.gz"),
+        sample("fsaverage5_pial_right.gii.gz"),
+        sample("fsaverage5_sulc_left.gii.gz"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let scene = dir.path().join(format!("{name}.json"));
+        let mut args = vec![
+            "render",
+            lh.to_str().unwrap(),
+            rh.to_str().unwrap(),
+            "--overlay",
+            sulc.to_str().unwrap(),
+            "--view",
+            "superior",
+            "--size",
+            "160x160",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+            "--dump-scene",
+            scene.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        ok(&args);
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+        (decode(&out), json)
+    };
+    let ((w, h, ch, lit), scene) = render("lit.png", &[]);
+    assert_eq!((w, h), (160, 160));
+    // The resolved scene: no volume, two meshes, the overlay's range inside the
+    // sulcal depth's (-1.4937 .. 1.8069, nibabel 5.4.2 via scripts/gifti-reference.py)
+    // and spanning zero (sulci and gyri).
+    assert_eq!(scene["input"], "none");
+    assert_eq!(scene["mode"], "surface");
+    assert_eq!(scene["meshes"].as_array().unwrap().len(), 2);
+    let overlay = &scene["meshes"][0]["overlay"];
+    assert_eq!(overlay["colormap"], "viridis");
+    let (lo, hi) = (
+        overlay["range"][0].as_f64().unwrap(),
+        overlay["range"][1].as_f64().unwrap(),
+    );
+    assert!(
+        (-1.4938..0.0).contains(&lo) && hi > 0.0 && hi <= 1.807,
+        "{lo} {hi}"
+    );
+    assert!(scene["meshes"][1].get("overlay").is_none());
+    // Seen from above, both hemispheres cover the image's left and right halves.
+    let covered = |x0: u32, x1: u32| {
+        (0..h)
+            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let k = (y * w + x) as usize * ch;
+                lit[k..k + 3].iter().any(|&c| c > 0)
+            })
+            .count()
+    };
+    assert!(covered(10, 70) > 1500 && covered(80, 130) > 1500);
+    // Highlights: the same scene without the specular term is darker where the lobe
+    // adds light, by far more than rounding.
+    let ((_, _, _, matte), _) = render("matte.png", &["--specular", "0"]);
+    let gain = lit
+        .iter()
+        .zip(&matte)
+        .map(|(&a, &b)| i32::from(a) - i32::from(b))
+        .max()
+        .unwrap();
+    assert!(gain > 40, "the brightest highlight adds {gain}/255");
+    // The colour bar at the right edge: viridis' yellow top above its purple bottom.
+    let px = |x: u32, y: u32| {
+        let k = (y * w + x) as usize * ch;
+        [lit[k], lit[k + 1], lit[k + 2]]
+    };
+    let x = w - w / 40 - 3;
+    let (top, bottom) = (px(x, h / 5 + 3), px(x, h * 4 / 5 - 3));
+    assert!(top[0] > 200 && top[1] > 200 && top[2] < 100, "{top:?}");
+    assert!(bottom[0] < 100 && bottom[2] > 60, "{bottom:?}");
+}
+
+#[test]
+fn a_dumped_mesh_scene_renders_again_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, overlay) = octahedron(dir.path());
+    let d = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    ok(&[
+        "render",
+        &mesh,
+        "--overlay",
+        &overlay,
+        "--colormap",
+        "rdbu",
+        "--ssaa",
+        "4",
+        "--size",
+        "96x80",
+        "--azimuth",
+        "25",
+        "--elevation",
+        "20",
+        "--lobe",
+        "exact",
+        "-q",
+        "-o",
+        &d("a.png"),
+        "--dump-scene",
+        &d("a.json"),
+    ]);
+    let text = std::fs::read_to_string(d("a.json")).unwrap();
+    let scene: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(scene["ssaa"], 4);
+    assert_eq!(scene["meshes"][0]["overlay"]["colormap"], "rdbu");
+    assert_eq!(scene["meshes"][0]["overlay"]["array"], 0);
+    // Values 0..5: the 2nd and 98th percentiles of six values (nearest rank, ranks
+    // round(5 * 0.02) = 0 and round(5 * 0.98) = 5) are the ends; no sign change, so
+    // the diverging map is not centred on zero.
+    assert_eq!(
+        scene["meshes"][0]["overlay"]["range"],
+        serde_json::json!([0.0, 5.0])
+    );
+    ok(&["render", "--scene", &d("a.json"), "-q", "-o", &d("b.png")]);
+    let (a, b) = (
+        std::fs::read(d("a.png")).unwrap(),
+        std::fs::read(d("b.png")).unwrap(),
+    );
+    assert!(a == b, "the dumped scene rendered a different image");
+    // And a flag still overrides the file.
+    ok(&[
+        "render",
+        "--scene",
+        &d("a.json"),
+        "--ssaa",
+        "1",
+        "-q",
+        "-o",
+        &d("c.png"),
+    ]);
+    assert_ne!(std::fs::read(d("c.png")).unwrap(), a);
+}
+
+#[test]
+fn compare_works_on_a_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, _) = octahedron(dir.path());
+    let out = dir.path().join("cmp.png");
+    let text = ok(&[
+        "compare",
+        &mesh,
+        "--size",
+        "64x48",
+        "--n",
+        "200",
+        "--lobe",
+        "exact",
+        "--lobe",
+        "k",
+        "--v",
+        "2",
+        "--json",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let c = &doc["comparisons"];
+    assert_eq!(c[0]["lobe"], "exact");
+    assert_eq!(c[0]["image"]["pixels"], 64 * 48);
+    assert_eq!(c[0]["image"]["delta_e"]["max"], 0.0);
+    // K_2 at n = 200 is far from cos^200 (the paper's table: v must grow with n), so
+    // the highlight differs.
+    assert_eq!(c[1]["lobe"], "k");
+    assert!(
+        c[1]["image"]["delta_e"]["max"].as_f64().unwrap() > 0.5,
+        "{}",
+        c[1]
+    );
+    assert!(out.is_file());
+}
+
+#[test]
+fn a_volume_isosurface_renders_in_surface_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("iso.png");
+    let scene = dir.path().join("iso.json");
+    ok(&[
+        "render",
+        "--phantom-size",
+        "32",
+        "--mode",
+        "surface",
+        "--size",
+        "48x48",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+        "--dump-scene",
+        scene.to_str().unwrap(),
+    ]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    assert_eq!(s["mode"], "surface");
+    assert!(
+        s["iso"].is_number(),
+        "the default iso value is written back: {s}"
+    );
+    let (_, _, ch, px) = decode(&out);
+    let k = (24 * 48 + 24) * ch;
+    assert!(
+        px[k..k + 3].iter().any(|&c| c > 20),
+        "the head covers the centre"
+    );
+}
+
+#[test]
+fn bad_overlays_and_mesh_scenes_fail_with_one_line_and_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, _) = octahedron(dir.path());
+    let short = dir.path().join("short.ply");
+    std::fs::write(&short, ply_scalars(4)).unwrap();
+    let no_scalar = dir.path().join("plain.ply");
+    std::fs::write(
+        &no_scalar,
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out.png");
+    let o = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![&mesh, "--overlay", short.to_str().unwrap()],
+            "4 values for the 6 vertices",
+        ),
+        (
+            vec![&mesh, "--overlay", no_scalar.to_str().unwrap()],
+            "no vertex scalar",
+        ),
+        (vec![&mesh, "--overlay", &mesh], "expected a GIFTI"),
+        (
+            vec![&mesh, "--overlay", &mesh, "--overlay", &mesh],
+            "2 overlays for 1 meshes",
+        ),
+        (
+            vec![&mesh, "--colormap", "viridis"],
+            "need a mesh with an --overlay",
+        ),
+        (vec![&mesh, "--ssaa", "3"], "ssaa"),
+        (vec![&mesh, "--mode", "mip"], "needs a volume"),
+        (vec![&mesh, "--iso", "3"], "iso value needs a volume"),
+        (vec!["/nonexistent/lh.pial.gii"], "lh.pial.gii"),
+        (vec![&mesh, "--overlay-range", "2,1"], "LO,HI"),
+    ];
+    for (argv, needle) in cases {
+        let mut args = vec!["render", "-q", "-o", o];
+        args.extend_from_slice(&argv);
+        let r = glint(&args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{argv:?} succeeded");
+        assert!(err.contains(needle), "{argv:?}: '{err}' lacks '{needle}'");
+        assert_eq!(err.trim_end().lines().count(), 1, "{argv:?}: {err}");
+        assert!(!out.exists(), "{argv:?} left {o}");
+    }
+}
