@@ -2,7 +2,7 @@
 
 use crate::config::check_register;
 use crate::fixed::requantize;
-use crate::{Config, HwError, Rom, Rounding};
+use crate::{Config, HwError, Rom};
 
 /// The fixed-point format of every stage, derived from a [`Config`] and its ROM.
 /// `*_frac` are fraction bits; all values except `cos` and the Sm2 difference are
@@ -268,15 +268,5 @@ impl Unit {
             0,
             self.config.out_round,
         ) as u64
-    }
-
-    /// The real value of a lobe code.
-    pub fn lobe_value(&self, code: u64) -> f64 {
-        code as f64 / 2f64.powi(self.formats.lobe_frac as i32)
-    }
-
-    /// Rounding used by the RGB multipliers.
-    pub fn out_rounding(&self) -> Rounding {
-        self.config.out_round
     }
 }

@@ -222,7 +222,7 @@ mod x86 {
         let mut i = 0;
         while i < body {
             // SAFETY: i + 8 <= body <= len for both slices.
-            let c = _mm256_loadu_ps(cos.as_ptr().add(i));
+            let c = unsafe { _mm256_loadu_ps(cos.as_ptr().add(i)) };
             let ordered = _mm256_cmp_ps::<_CMP_ORD_Q>(c, c);
             // NaN lanes become -1 here (MAXPS returns its second operand); masked below.
             let x = _mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(c, neg1), pos1), scale);
@@ -234,8 +234,9 @@ mod x86 {
             let code = _mm256_add_epi32(_mm256_sub_epi32(tr, up), down);
             let idx = _mm256_min_epi32(_mm256_max_epi32(_mm256_sub_epi32(code, lo), zero), last);
             // SAFETY: every index is clamped to 0 ..= values.len() - 1.
-            let v = _mm256_i32gather_ps::<4>(base, idx);
-            _mm256_storeu_ps(out.as_mut_ptr().add(i), _mm256_and_ps(v, ordered));
+            let v = unsafe { _mm256_i32gather_ps::<4>(base, idx) };
+            // SAFETY: i + 8 <= body <= len, and `out` has the length of `cos`.
+            unsafe { _mm256_storeu_ps(out.as_mut_ptr().add(i), _mm256_and_ps(v, ordered)) };
             i += 8;
         }
         t.eval_scalar(&cos[body..], &mut out[body..]);

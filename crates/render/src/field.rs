@@ -290,21 +290,6 @@ impl Field {
         mul3(&self.to_index, d)
     }
 
-    /// The world-space corners of the sampled box (voxel centres 0 ..= dims-1).
-    pub fn world_corners(&self) -> [[f64; 3]; 8] {
-        let hi = self.dims.map(|d| (d - 1) as f64);
-        let mut out = [[0.0; 3]; 8];
-        for (n, o) in out.iter_mut().enumerate() {
-            let p = [
-                if n & 1 != 0 { hi[0] } else { 0.0 },
-                if n & 2 != 0 { hi[1] } else { 0.0 },
-                if n & 4 != 0 { hi[2] } else { 0.0 },
-            ];
-            *o = self.index_to_world(p);
-        }
-        out
-    }
-
     /// The trilinear cell holding `p` (index units, inside `[0, dims-1]`; outside
     /// points are clamped to the border cells).
     #[inline(always)]

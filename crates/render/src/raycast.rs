@@ -983,10 +983,14 @@ impl Caster<'_> {
         alpha: &mut Vec<f32>,
         stats: &mut RenderStats,
     ) {
-        if self.mode == Mode::Composite {
-            avx2::composite_tile(self, px, scratch, rgb, alpha, stats)
-        } else {
-            self.tile(px, rgb, alpha, stats)
+        // SAFETY: this function's `# Safety` contract, which its callers uphold,
+        // covers every unsafe operation below (CPU features, pointer ranges).
+        unsafe {
+            if self.mode == Mode::Composite {
+                avx2::composite_tile(self, px, scratch, rgb, alpha, stats)
+            } else {
+                self.tile(px, rgb, alpha, stats)
+            }
         }
     }
 

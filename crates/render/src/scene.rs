@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glint_hw::Config as HwConfig;
-use glint_io::{read_volume, ReadOptions, Volume};
+use glint_io::{open_volume, ReadOptions, Volume};
 use glint_lobe::{Geometry, Lobe, LobeKind, Specular};
 use serde::{Deserialize, Serialize};
 
@@ -156,9 +156,18 @@ impl Default for Input {
 impl Input {
     /// Reads the file or builds the phantom.
     pub fn open(&self) -> Result<Volume, RenderError> {
+        Ok(self.open_with(&ReadOptions::default())?.0)
+    }
+
+    /// The volume with the reader's notes (e.g. DICOM's "geometry assumed: ..."); a
+    /// phantom has none.
+    pub fn open_with(&self, options: &ReadOptions) -> Result<(Volume, Vec<String>), RenderError> {
         match self {
-            Input::Path(path) => Ok(read_volume(path, &ReadOptions::default())?),
-            Input::Phantom { name, size } => name.volume(*size),
+            Input::Path(path) => {
+                let file = open_volume(path, options)?;
+                Ok((file.volume, file.notes))
+            }
+            Input::Phantom { name, size } => Ok((name.volume(*size)?, Vec::new())),
         }
     }
 }
@@ -665,17 +674,31 @@ pub struct Renderer {
     /// Which compositing loop frames use (the SIMD one by default).
     pub kernel: Kernel,
     opened: Timings,
+    notes: Vec<String>,
 }
 
 impl Renderer {
     /// Reads `input` and builds its field.
     pub fn open(input: &Input) -> Result<Renderer, RenderError> {
+        Renderer::open_with(input, &ReadOptions::default())
+    }
+
+    /// [`Renderer::open`] with reader options (e.g. `strict`); the reader's notes are
+    /// kept ([`Renderer::notes`]).
+    pub fn open_with(input: &Input, options: &ReadOptions) -> Result<Renderer, RenderError> {
         let mut read = Timings::default();
-        let volume = read.time("read", || input.open())?;
+        let (volume, notes) = read.time("read", || input.open_with(options))?;
         let mut renderer = Renderer::from_volume(&volume)?;
         read.extend(&renderer.opened);
         renderer.opened = read;
+        renderer.notes = notes;
         Ok(renderer)
+    }
+
+    /// What the reader said about the input: where the affine came from, what it
+    /// assumed (lines starting "geometry assumed:"), dropped dimensions.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     /// A renderer of a volume already in memory.
@@ -683,6 +706,7 @@ impl Renderer {
         let field = Arc::new(Field::new(volume)?);
         Ok(Renderer {
             opened: field.timings().clone(),
+            notes: Vec::new(),
             field,
             classification: None,
             hw: HwCache::default(),
@@ -699,6 +723,7 @@ impl Renderer {
             hw: HwCache::default(),
             kernel: Kernel::Auto,
             opened: Timings::default(),
+            notes: Vec::new(),
         }
     }
 

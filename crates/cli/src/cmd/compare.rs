@@ -12,14 +12,13 @@ use glint_analysis::image::{
     Srgb8Image, SweepSeries, DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION,
 };
 use glint_analysis::{fmt_num, lobe_label, Staging};
-use glint_lobe::{Geometry, LobeKind};
-use glint_render::{
-    Depth, Input, Phantom, Projection, RenderMode, Rendered, Renderer, Scene, View,
-};
+use glint_lobe::LobeKind;
+use glint_render::{Depth, Input, Rendered, Renderer, Scene, SceneLobe};
 use serde_json::{json, Value};
 
 use super::choice::choice;
-use super::render::{check_output_dir, load_scene, open_renderer as open, parse_size, set};
+use super::render::{check_output_dir, open_renderer as open};
+use super::scene_flags::SceneFlags;
 
 /// The n of the sweep (issue 13, item 3).
 const SWEEP_N: [f64; 7] = [10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0];
@@ -51,60 +50,16 @@ pub struct Args {
 /// The options of `glint compare` (see `glint render` for the scene options).
 #[derive(clap::Args)]
 struct Options {
-    /// Volume to render; without it (and without --scene), the built-in phantom.
-    input: Option<PathBuf>,
+    #[command(flatten)]
+    scene: SceneFlags,
     /// The comparison picture (PNG) [default: compare.png]; with --sweep, the output
     /// directory [default: compare-sweep].
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Start from this scene file; the flags below override its fields.
-    #[arg(long, value_name = "FILE")]
-    scene: Option<PathBuf>,
-    /// Built-in phantom when no input is given [default: shepp-logan].
-    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::ALL.map(|p| p.name())))]
-    phantom: Option<Phantom>,
-    /// Grid edge of the built-in phantom [default: 128].
-    #[arg(long, conflicts_with = "input")]
-    phantom_size: Option<usize>,
-    /// Transfer-function and material preset (see `glint render --help`).
-    #[arg(long)]
-    preset: Option<String>,
-    /// How samples make a pixel [default: composite].
-    #[arg(long, value_parser = choice::<RenderMode>(RenderMode::ALL.map(|m| m.name())))]
-    mode: Option<RenderMode>,
-    /// Named view [default: anterior].
-    #[arg(long, value_parser = choice::<View>(View::ALL.map(|v| v.name())))]
-    view: Option<View>,
-    /// Orbit the camera about the view's up axis, degrees [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    azimuth: Option<f64>,
-    /// Orbit the camera upwards, degrees [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    elevation: Option<f64>,
-    /// Magnification [default: 1].
-    #[arg(long, allow_negative_numbers = true)]
-    zoom: Option<f64>,
-    /// Projection [default: perspective].
-    #[arg(long, value_parser = choice::<Projection>(["perspective", "orthographic"]))]
-    projection: Option<Projection>,
-    /// Image size WxH [default: 512x512].
-    #[arg(long, value_parser = parse_size)]
-    size: Option<[u32; 2]>,
-    /// Sample distance along rays, in voxels [default: 0.5].
-    #[arg(long, allow_negative_numbers = true)]
-    step: Option<f64>,
-    /// Lobe to compare against exact; repeatable [default: k; with --sweep: k and g].
-    #[arg(long = "lobe", value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
-    lobes: Vec<LobeKind>,
-    /// Shininess n [default: the preset's specular power].
-    #[arg(long, allow_negative_numbers = true, conflicts_with = "sweep")]
-    n: Option<f64>,
-    /// The power fits raise their base to 2^v [default: 4].
-    #[arg(long, conflicts_with = "sweep")]
-    v: Option<u32>,
-    /// Highlight geometry [default: phong].
-    #[arg(long, value_parser = choice::<Geometry>(["phong", "blinn"]))]
-    geometry: Option<Geometry>,
+    /// Lobe to compare against exact; repeatable; `hw` is the unit of --hw-config
+    /// [default: k; with --sweep: k and g; --sweep takes no hw].
+    #[arg(long = "lobe", value_parser = choice::<SceneLobe>(SceneLobe::ALL.map(|k| k.name())))]
+    lobes: Vec<SceneLobe>,
     /// Print the metrics (and the resolved scene) as JSON instead of a table.
     #[arg(long, conflicts_with = "sweep")]
     json: bool,
@@ -131,51 +86,13 @@ struct Options {
     quiet: bool,
 }
 
-/// The scene file (or the default scene) with the given flags applied, lobe exact.
+/// The scene of the flags, lobe exact.
 fn build_scene(o: &Options) -> anyhow::Result<Scene> {
-    let mut scene = match &o.scene {
-        Some(path) => load_scene(path)?,
-        None => Scene::default(),
-    };
-    if let Some(path) = &o.input {
-        scene.input = Input::Path(path.clone());
-    } else if o.phantom.is_some() || o.phantom_size.is_some() {
-        let (name, size) = match scene.input {
-            Input::Phantom { name, size } => (name, size),
-            Input::Path(_) => (Phantom::default(), 128),
-        };
-        scene.input = Input::Phantom {
-            name: o.phantom.unwrap_or(name),
-            size: o.phantom_size.unwrap_or(size),
-        };
+    if o.sweep && (o.scene.n.is_some() || o.scene.v.is_some()) {
+        bail!("--sweep chooses n and v itself: drop --n and --v (or use --sweep-n, --sweep-v)");
     }
-    if let Some(p) = &o.preset {
-        glint_render::preset(p)?; // fail before reading the volume
-        scene.preset = Some(p.clone());
-        scene.transfer_function = None;
-    }
-    set(&mut scene.mode, o.mode);
-    if o.mode.is_some_and(|m| m != RenderMode::Iso) {
-        scene.iso = None;
-    }
-    let camera = &mut scene.camera;
-    set(&mut camera.view, o.view);
-    set(&mut camera.azimuth, o.azimuth);
-    set(&mut camera.elevation, o.elevation);
-    set(&mut camera.zoom, o.zoom);
-    set(&mut camera.projection, o.projection);
-    set(&mut scene.size, o.size);
-    set(&mut scene.step, o.step);
-    set(&mut scene.lobe.n, o.n.map(Some));
-    set(&mut scene.lobe.v, o.v);
-    set(&mut scene.lobe.geometry, o.geometry);
-    if let Some(n) = o.n {
-        glint_analysis::check_n(n)?;
-    }
-    if let Some(v) = o.v {
-        glint_analysis::check_v(v)?;
-    }
-    scene.lobe.kind = LobeKind::Exact;
+    let mut scene = o.scene.scene()?;
+    scene.lobe.kind = LobeKind::Exact.into();
     Ok(scene)
 }
 
@@ -229,7 +146,9 @@ fn dark_scene(scene: &Scene) -> Scene {
 
 /// One lobe compared with exact.
 struct Comparison {
-    kind: LobeKind,
+    kind: SceneLobe,
+    /// The unit of a `hw` row.
+    hw: Option<glint_hw::Config>,
     n: f64,
     v: u32,
     frame: Duration,
@@ -242,18 +161,21 @@ struct Comparison {
 fn compare_lobe(
     renderer: &mut Renderer,
     reference: &Reference,
-    kind: LobeKind,
+    flags: &SceneFlags,
+    kind: SceneLobe,
     v: u32,
 ) -> anyhow::Result<Comparison> {
     let mut scene = reference.shot.rendered.scene.clone();
     scene.derived = None;
-    scene.lobe.kind = kind;
     scene.lobe.v = v;
+    flags.set_lobe(&mut scene, kind);
+    let v = scene.lobe.v;
     let shot = shoot(renderer, &scene)?;
     let exact = &reference.shot.srgb;
     let (whole, highlight) = compare(exact, &shot.srgb, Some(&reference.mask))?;
     Ok(Comparison {
         kind,
+        hw: scene.lobe.hw.filter(|_| kind == SceneLobe::Hw),
         n: scene.lobe.n.unwrap_or_default(),
         v,
         frame: shot.rendered.timings.get("frame"),
@@ -277,17 +199,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let output = o.output.clone().unwrap_or_else(|| "compare.png".into());
     check_output_dir(&output)?;
     let lobes = if o.lobes.is_empty() {
-        vec![LobeKind::EnergyFit]
+        vec![LobeKind::EnergyFit.into()]
     } else {
         o.lobes.clone()
     };
-    let mut renderer = open(&scene)?;
+    let mut renderer = open(&scene, &o.scene.read_options())?;
     let dark = renderer.render(&dark_scene(&scene), &|_| {})?;
     let reference = reference(&mut renderer, &scene, &dark)?;
     let v = reference.shot.rendered.scene.lobe.v;
     let mut rows = Vec::new();
     for &kind in &lobes {
-        rows.push(compare_lobe(&mut renderer, &reference, kind, v)?);
+        rows.push(compare_lobe(&mut renderer, &reference, &o.scene, kind, v)?);
     }
     write_figure(&output, &reference, &rows, o.scale_max)?;
     if o.json {
@@ -302,12 +224,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Whether the lobe has a v to show (the power fits and the unit).
+fn uses_v(kind: SceneLobe) -> bool {
+    kind.float().is_none_or(|k| k.uses_v())
+}
+
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
-/// A row title: the lobe with its parameters.
-fn lobe_title(kind: LobeKind, n: f64, v: u32) -> String {
+/// A row title: the lobe with its parameters (for the unit: its ROM and output width).
+fn lobe_title(c: &Comparison) -> String {
+    let (n, v) = (c.n, c.v);
+    let kind = match (c.kind, &c.hw) {
+        (SceneLobe::Float(kind), _) => kind,
+        (SceneLobe::Hw, hw) => {
+            let hw = hw.clone().unwrap_or_default();
+            return format!(
+                "hw unit ({} ROM, {}-bit output, v = {v}), n = {}",
+                hw.coefficients,
+                hw.out_bits,
+                fmt_num(n.round())
+            );
+        }
+    };
     let label = lobe_label(kind, n, v);
     if kind == LobeKind::Exact {
         label
@@ -328,7 +268,7 @@ fn write_figure(
             let de = c.whole.delta_e.map(|d| (d.mean, d.p99)).unwrap_or_default();
             format!(
                 "{}: mean ΔE {:.3}, p99 {:.3}{}",
-                lobe_title(c.kind, c.n, c.v),
+                lobe_title(c),
                 de.0,
                 de.1,
                 match c.highlight.and_then(|h| h.delta_e) {
@@ -371,7 +311,7 @@ fn table_row(c: &Comparison, scope: &str, m: &ImageMetrics) -> String {
         "{:<9} {:<5} {:<2} {:<10.1} {:<7} {:<10} {:<8} {:<8} {:<8} {:<7} {:<7} {:<7} {:<7} {}\n",
         c.kind.name(),
         fmt_num(c.n),
-        if c.kind.uses_v() {
+        if uses_v(c.kind) {
             c.v.to_string()
         } else {
             "-".into()
@@ -454,7 +394,7 @@ fn json_report(
             json!({
                 "lobe": c.kind.name(),
                 "n": c.n,
-                "v": c.kind.uses_v().then_some(c.v),
+                "v": uses_v(c.kind).then_some(c.v),
                 "render_ms": ms(c.frame),
                 "image": metrics_json(&c.whole),
                 "highlight": c.highlight.as_ref().map(metrics_json),
@@ -501,11 +441,17 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
     let lobes = if o.lobes.is_empty() {
         SWEEP_LOBES.to_vec()
     } else {
-        o.lobes.clone()
+        o.lobes
+            .iter()
+            .map(|l| match l.float() {
+                Some(kind) => Ok(kind),
+                None => bail!("--sweep varies v, which a hw unit fixes: compare --lobe hw without --sweep (one unit per run)"),
+            })
+            .collect::<anyhow::Result<_>>()?
     };
     let out = o.output.clone().unwrap_or_else(|| "compare-sweep".into());
     let staging = Staging::new(&out)?;
-    let mut renderer = open(&scene)?;
+    let mut renderer = open(&scene, &o.scene.read_options())?;
     let dark = renderer.render(&dark_scene(&scene), &|_| {})?;
     let mut rows = Vec::new();
     for &n in &ns {
@@ -519,7 +465,13 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
                 vec![None]
             };
             for v in kind_vs {
-                let c = compare_lobe(&mut renderer, &reference, kind, v.unwrap_or(s.lobe.v))?;
+                let c = compare_lobe(
+                    &mut renderer,
+                    &reference,
+                    &o.scene,
+                    kind.into(),
+                    v.unwrap_or(s.lobe.v),
+                )?;
                 if !o.quiet {
                     eprintln!(
                         "glint compare: {} n = {} v = {:?}",

@@ -9,4 +9,5 @@ pub mod hw;
 pub mod info;
 pub mod mesh;
 pub mod render;
+pub mod scene_flags;
 pub mod view;

@@ -7,13 +7,11 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
-use glint_lobe::{Geometry, LobeKind};
-use glint_render::{
-    Depth, Input, Kernel, Light, Phantom, Projection, RenderMode, Rendered, Renderer, Scene,
-    TransferFunction, View,
-};
+use glint_io::ReadOptions;
+use glint_render::{SceneLobe, Depth, Input, Kernel, Rendered, Renderer, Scene};
 
 use super::choice::choice;
+use super::scene_flags::SceneFlags;
 
 /// Arguments of `glint render`.
 #[derive(clap::Args)]
@@ -51,94 +49,20 @@ pub struct Args {
 /// optional: unset, it keeps the scene file's value or the scene default.
 #[derive(clap::Args)]
 struct Options {
-    /// Volume to render (any format glint's io reads); without it (and without
-    /// --scene), the built-in phantom.
-    input: Option<PathBuf>,
+    #[command(flatten)]
+    scene: SceneFlags,
     /// Output PNG (written atomically).
     #[arg(short, long, default_value = "render.png")]
     output: PathBuf,
-    /// Start from this scene file; the flags below override its fields.
-    #[arg(long, value_name = "FILE")]
-    scene: Option<PathBuf>,
     /// Write the resolved scene (every default chosen, plus the camera and transfer
     /// function in world units) as JSON; `--scene` renders it again bit for bit.
     #[arg(long, value_name = "FILE")]
     dump_scene: Option<PathBuf>,
-    /// Built-in phantom to render when no input is given [default: shepp-logan].
-    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::ALL.map(|p| p.name())))]
-    phantom: Option<Phantom>,
-    /// Grid edge of the built-in phantom [default: 128].
-    #[arg(long, conflicts_with = "input")]
-    phantom_size: Option<usize>,
-    /// Transfer-function and material preset [default: phantom for the phantom, ct-bone
-    /// for CT-like volumes (minimum below -500), mr-t2-brain otherwise].
-    #[arg(long, conflicts_with = "tf")]
-    preset: Option<String>,
-    /// Custom transfer function from a JSON file (see below).
-    #[arg(long)]
-    tf: Option<PathBuf>,
-    /// How samples make a pixel [default: composite].
-    #[arg(long, value_parser = choice::<RenderMode>(RenderMode::ALL.map(|m| m.name())))]
-    mode: Option<RenderMode>,
-    /// Iso value for --mode iso [default: the middle of the volume's range].
-    #[arg(long, allow_negative_numbers = true)]
-    iso: Option<f32>,
-    /// Named view in the volume's world frame (RAS+) [default: anterior].
-    #[arg(long, value_parser = choice::<View>(View::ALL.map(|v| v.name())))]
-    view: Option<View>,
-    /// Orbit the camera this many degrees about the view's up axis (towards the image's
-    /// right) [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    azimuth: Option<f64>,
-    /// Orbit the camera this many degrees upwards [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    elevation: Option<f64>,
-    /// Magnification; 1 frames what the transfer function makes visible [default: 1].
-    #[arg(long, allow_negative_numbers = true)]
-    zoom: Option<f64>,
-    /// Projection (perspective: 30° field of view) [default: perspective].
-    #[arg(long, value_parser = choice::<Projection>(["perspective", "orthographic"]))]
-    projection: Option<Projection>,
-    /// Sample distance along rays, in voxels of the smallest spacing [default: 0.5].
-    #[arg(long, allow_negative_numbers = true)]
-    step: Option<f64>,
     /// Specular lobe: exact (cos^n), k (energy fit K_v), g (slope fit G_v), schlick,
-    /// gauss, minimax [default: k].
-    #[arg(long, value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
-    lobe: Option<LobeKind>,
-    /// Shininess n [default: the preset's specular power].
-    #[arg(long, allow_negative_numbers = true)]
-    n: Option<f64>,
-    /// The power fits raise their base to 2^v [default: 4].
-    #[arg(long)]
-    v: Option<u32>,
-    /// Highlight geometry: phong (R·V) or blinn (N·H) [default: phong].
-    #[arg(long, value_parser = choice::<Geometry>(["phong", "blinn"]))]
-    geometry: Option<Geometry>,
-    /// Override the preset's ambient coefficient.
-    #[arg(long, allow_negative_numbers = true)]
-    ambient: Option<f32>,
-    /// Override the preset's diffuse coefficient.
-    #[arg(long, allow_negative_numbers = true)]
-    diffuse: Option<f32>,
-    /// Override the preset's specular coefficient.
-    #[arg(long, allow_negative_numbers = true)]
-    specular: Option<f32>,
-    /// Extra directional light at AZ,EL degrees from the view direction (towards the
-    /// image's right and top), optionally with an intensity; repeatable.
-    #[arg(long = "light", value_name = "AZ,EL[,I]", allow_hyphen_values = true, value_parser = parse_light)]
-    lights: Vec<Light>,
-    /// Turn the headlight off (then give at least one --light).
-    #[arg(long)]
-    no_headlight: bool,
-    /// Gradient-magnitude gate, a fraction of the value range per voxel: weaker
-    /// gradients get no directional shading (no random highlights in flat regions)
-    /// [default: 0.01].
-    #[arg(long, allow_negative_numbers = true)]
-    gate: Option<f64>,
-    /// Image size WxH [default: 512x512].
-    #[arg(long, value_parser = parse_size)]
-    size: Option<[u32; 2]>,
+    /// gauss, minimax, or hw (the hardware unit's output, bit for bit; --hw-config)
+    /// [default: k].
+    #[arg(long, value_parser = choice::<SceneLobe>(SceneLobe::ALL.map(|k| k.name())))]
+    lobe: Option<SceneLobe>,
     /// Bits per PNG channel.
     #[arg(long, default_value = "8", value_parser = ["8", "16"])]
     depth: String,
@@ -152,41 +76,9 @@ struct Options {
     /// Benchmarking: render this many times and print ms per frame to stdout.
     #[arg(long, default_value_t = 1, hide = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     repeat: u32,
-    /// Testing: turn empty-space skipping off.
-    #[arg(long, hide = true)]
-    no_skip: bool,
     /// Benchmarking: composite with the portable scalar loop instead of the SIMD one.
     #[arg(long, hide = true)]
     scalar: bool,
-}
-
-pub(crate) fn parse_size(s: &str) -> Result<[u32; 2], String> {
-    let bad = || format!("'{s}': expected WxH, e.g. 512x512");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    Ok([
-        w.trim().parse().map_err(|_| bad())?,
-        h.trim().parse().map_err(|_| bad())?,
-    ])
-}
-
-fn parse_light(s: &str) -> Result<Light, String> {
-    let bad = || format!("'{s}': expected AZ,EL or AZ,EL,INTENSITY in degrees, e.g. 45,30");
-    let parts: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>().map_err(|_| bad()))
-        .collect::<Result<_, _>>()?;
-    let (azimuth, elevation, intensity) = match parts[..] {
-        [a, e] => (a, e, 1.0),
-        [a, e, i] => (a, e, i as f32),
-        _ => return Err(bad()),
-    };
-    let light = Light {
-        azimuth,
-        elevation,
-        intensity,
-    };
-    light.validate().map_err(|e| e.to_string())?;
-    Ok(light)
 }
 
 /// Runs `glint render`.
@@ -194,7 +86,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let args = *args.opts;
     check_output_dir(&args.output)?;
     let scene = build_scene(&args)?;
-    let mut renderer = open_renderer(&scene)?;
+    let mut renderer = open_renderer(&scene, &args.scene.read_options())?;
     if args.scalar {
         renderer.kernel = Kernel::Scalar;
     }
@@ -243,12 +135,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A renderer of the scene's input, with an error that names it.
-pub(crate) fn open_renderer(scene: &Scene) -> anyhow::Result<Renderer> {
-    Renderer::open(&scene.input).with_context(|| match &scene.input {
-        Input::Path(p) => format!("cannot read volume {}", p.display()),
-        Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
-    })
+/// A renderer of the scene's input, with an error that names it; prints what the
+/// reader assumed (e.g. DICOM frames without positions) to stderr.
+pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Result<Renderer> {
+    let renderer =
+        Renderer::open_with(&scene.input, options).with_context(|| match &scene.input {
+            Input::Path(p) => format!("cannot read volume {}", p.display()),
+            Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
+        })?;
+    if let Input::Path(path) = &scene.input {
+        for note in renderer.notes().iter().filter(|n| n.contains("assumed")) {
+            eprintln!("glint: {}: {note}", path.display());
+        }
+    }
+    Ok(renderer)
 }
 
 /// Refuses before any work when the output's directory does not exist.
@@ -265,113 +165,13 @@ pub(crate) fn check_output_dir(output: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The scene file (or the default scene) with every given flag applied.
+/// The scene of the flags, with the lobe.
 fn build_scene(args: &Options) -> anyhow::Result<Scene> {
-    let mut scene = match &args.scene {
-        Some(path) => load_scene(path)?,
-        None => Scene::default(),
-    };
-    apply_input(args, &mut scene);
-    apply_classification(args, &mut scene)?;
-    apply_lighting(args, &mut scene)?;
-    let camera = &mut scene.camera;
-    set(&mut camera.view, args.view);
-    set(&mut camera.azimuth, args.azimuth);
-    set(&mut camera.elevation, args.elevation);
-    set(&mut camera.zoom, args.zoom);
-    set(&mut camera.projection, args.projection);
-    set(&mut scene.size, args.size);
-    set(&mut scene.step, args.step);
-    if args.no_skip {
-        scene.skip_empty = false;
+    let mut scene = args.scene.scene()?;
+    if let Some(kind) = args.lobe {
+        args.scene.set_lobe(&mut scene, kind);
     }
     Ok(scene)
-}
-
-/// `*field = value` when the flag was given.
-pub(crate) fn set<T>(field: &mut T, value: Option<T>) {
-    if let Some(v) = value {
-        *field = v;
-    }
-}
-
-/// Reads a scene file; a relative input path in it is relative to the file.
-pub(crate) fn load_scene(path: &Path) -> anyhow::Result<Scene> {
-    let mut scene = Scene::from_json_file(path)?;
-    if let Input::Path(p) = &mut scene.input {
-        if p.is_relative() {
-            if let Some(dir) = path.parent() {
-                *p = dir.join(&*p);
-            }
-        }
-    }
-    Ok(scene)
-}
-
-fn apply_input(args: &Options, scene: &mut Scene) {
-    if let Some(path) = &args.input {
-        scene.input = Input::Path(path.clone());
-    } else if args.phantom.is_some() || args.phantom_size.is_some() {
-        let (name, size) = match scene.input {
-            Input::Phantom { name, size } => (name, size),
-            Input::Path(_) => (Phantom::default(), 128),
-        };
-        scene.input = Input::Phantom {
-            name: args.phantom.unwrap_or(name),
-            size: args.phantom_size.unwrap_or(size),
-        };
-    }
-}
-
-fn apply_classification(args: &Options, scene: &mut Scene) -> anyhow::Result<()> {
-    if let Some(p) = &args.preset {
-        glint_render::preset(p)?; // fail before reading the volume
-        scene.preset = Some(p.clone());
-        scene.transfer_function = None;
-    }
-    if let Some(path) = &args.tf {
-        let file = TransferFunction::from_json_file(path)?;
-        scene.transfer_function = Some(file.tf);
-        scene.preset = None;
-        let m = &mut scene.material;
-        set(&mut m.ambient, file.material.ambient.map(Some));
-        set(&mut m.diffuse, file.material.diffuse.map(Some));
-        set(&mut m.specular, file.material.specular.map(Some));
-        set(&mut m.shade, file.material.shade.map(Some));
-        if file.power.is_some() {
-            scene.lobe.n = file.power;
-        }
-    }
-    set(&mut scene.mode, args.mode);
-    if args.iso.is_some() {
-        scene.iso = args.iso;
-    } else if args.mode.is_some_and(|m| m != RenderMode::Iso) {
-        scene.iso = None;
-    }
-    let m = &mut scene.material;
-    set(&mut m.ambient, args.ambient.map(Some));
-    set(&mut m.diffuse, args.diffuse.map(Some));
-    set(&mut m.specular, args.specular.map(Some));
-    Ok(())
-}
-
-fn apply_lighting(args: &Options, scene: &mut Scene) -> anyhow::Result<()> {
-    let lobe = &mut scene.lobe;
-    set(&mut lobe.kind, args.lobe);
-    set(&mut lobe.n, args.n.map(Some));
-    set(&mut lobe.v, args.v);
-    set(&mut lobe.geometry, args.geometry);
-    set(&mut scene.gate, args.gate);
-    if args.no_headlight {
-        scene
-            .lights
-            .retain(|l| (l.azimuth, l.elevation) != (0.0, 0.0));
-        if args.lights.is_empty() && scene.lights.is_empty() {
-            bail!("--no-headlight leaves no light: add at least one --light AZ,EL");
-        }
-    }
-    scene.lights.extend(args.lights.iter().copied());
-    Ok(())
 }
 
 fn progress_bar(args: &Options, scene: &Scene) -> Option<indicatif::ProgressBar> {
@@ -517,7 +317,7 @@ mod tests {
             (vec!["--step".into(), "0".into()], "step"),
             (vec!["--zoom".into(), "-1".into()], "zoom"),
             (vec!["--lobe".into(), "cosine".into()], "lobe"),
-            (vec!["--n".into(), "-5".into()], "shininess"),
+            (vec!["--n".into(), "-5".into()], "invalid n = -5"),
             (vec!["--v".into(), "20".into()], "v = 20"),
             (vec!["--geometry".into(), "ward".into()], "geometry"),
             (vec!["--view".into(), "sideways".into()], "view"),
@@ -550,17 +350,6 @@ mod tests {
         ]);
         result.unwrap();
         assert!(left);
-    }
-
-    #[test]
-    fn size_and_light_parsing() {
-        assert_eq!(parse_size("640x480").unwrap(), [640, 480]);
-        assert_eq!(parse_size("64X48").unwrap(), [64, 48]);
-        assert!(parse_size("64").is_err());
-        let l = parse_light("-30,15").unwrap();
-        assert_eq!((l.azimuth, l.elevation, l.intensity), (-30.0, 15.0, 1.0));
-        assert_eq!(parse_light("10,20,0.5").unwrap().intensity, 0.5);
-        assert!(parse_light("1,2,3,4").is_err());
     }
 
     /// Runs `glint render ARGS` in `dir`, writing `name`; returns the PNG's bytes.

@@ -1,14 +1,14 @@
 //! `glint view`: the interactive viewer in the browser (a local web server).
 
 use std::net::IpAddr;
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Context;
-use glint_render::{Input, Phantom, Scene};
+use glint_render::{Input, SceneLobe};
 use glint_view::{Viewer, ViewerConfig};
 
 use super::choice::choice;
+use super::scene_flags::SceneFlags;
 
 /// Arguments of `glint view`.
 #[derive(clap::Args)]
@@ -20,17 +20,12 @@ Open the printed URL in a browser: drag to orbit, wheel to zoom, the panel sets 
 preset, mode, lobe, n, v, geometry, light and split view (exact | lobe, or their\n\
 difference); Save downloads the scene (for glint render --scene) and a PNG.")]
 pub struct Args {
-    /// Volume to view; without it (and without --scene), the built-in phantom.
-    input: Option<PathBuf>,
-    /// Start from this scene file (its input is the volume served).
-    #[arg(long, value_name = "FILE")]
-    scene: Option<PathBuf>,
-    /// Built-in phantom when no input is given.
-    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::ALL.map(|p| p.name())))]
-    phantom: Option<Phantom>,
-    /// Transfer-function preset to start with.
-    #[arg(long)]
-    preset: Option<String>,
+    // Boxed: the options are many, and main's subcommand enum should stay small.
+    #[command(flatten)]
+    scene: Box<SceneFlags>,
+    /// Lobe to start with (hw: the unit of --hw-config) [default: k].
+    #[arg(long, value_parser = choice::<SceneLobe>(SceneLobe::ALL.map(|k| k.name())))]
+    lobe: Option<SceneLobe>,
     /// Port to listen on (0 picks a free one).
     #[arg(long, default_value_t = 8080)]
     port: u16,
@@ -44,22 +39,13 @@ pub struct Args {
 
 /// Runs `glint view` until interrupted.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let mut scene = match &args.scene {
-        Some(path) => super::render::load_scene(path)?,
-        None => Scene::default(),
-    };
-    if let Some(path) = &args.input {
-        scene.input = Input::Path(path.clone());
-    } else if let Some(name) = args.phantom {
-        scene.input = Input::Phantom { name, size: 128 };
+    let mut scene = args.scene.scene()?;
+    if let Some(kind) = args.lobe {
+        args.scene.set_lobe(&mut scene, kind);
     }
     if let Input::Path(p) = &mut scene.input {
         // Saved scenes name the volume absolutely, so they render from anywhere.
         *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
-    }
-    if let Some(p) = &args.preset {
-        glint_render::preset(p)?;
-        scene.preset = Some(p.clone());
     }
     let config = ViewerConfig {
         max_clients: args.max_clients as usize,

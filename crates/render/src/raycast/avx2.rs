@@ -69,7 +69,8 @@ pub(super) fn supported() -> bool {
 /// [`supported`]).
 #[inline(always)]
 unsafe fn lerp(a: __m256, b: __m256, t: __m256) -> __m256 {
-    _mm256_add_ps(a, _mm256_mul_ps(t, _mm256_sub_ps(b, a)))
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe { _mm256_add_ps(a, _mm256_mul_ps(t, _mm256_sub_ps(b, a))) }
 }
 
 /// [`lerp`] on four lanes.
@@ -79,7 +80,8 @@ unsafe fn lerp(a: __m256, b: __m256, t: __m256) -> __m256 {
 /// [`supported`]).
 #[inline(always)]
 unsafe fn lerp4(a: __m128, b: __m128, t: __m128) -> __m128 {
-    _mm_add_ps(a, _mm_mul_ps(t, _mm_sub_ps(b, a)))
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe { _mm_add_ps(a, _mm_mul_ps(t, _mm_sub_ps(b, a))) }
 }
 
 /// The two f32 at `p` as one 64-bit integer.
@@ -88,7 +90,8 @@ unsafe fn lerp4(a: __m128, b: __m128, t: __m128) -> __m128 {
 /// `p` and `p + 1` must be readable f32 (alignment is not required).
 #[inline(always)]
 unsafe fn pair(p: *const f32) -> i64 {
-    p.cast::<i64>().read_unaligned()
+    // SAFETY: the caller guarantees 8 readable bytes at `p`; no alignment is assumed.
+    unsafe { p.cast::<i64>().read_unaligned() }
 }
 
 /// Corners `(i, i+1)` of one row for eight lanes whose row starts are `p[l] + off`: the
@@ -99,14 +102,18 @@ unsafe fn pair(p: *const f32) -> i64 {
 /// AVX2 (as for the other helpers of this module).
 #[inline(always)]
 unsafe fn row(p: [*const f32; LANES], off: usize) -> (__m256, __m256) {
-    let at = |l: usize| pair(p[l].add(off));
-    // Lanes 0,1,4,5 and 2,3,6,7: the in-lane shuffles below then give lane order.
-    let a = _mm256_castsi256_ps(_mm256_set_epi64x(at(5), at(4), at(1), at(0)));
-    let b = _mm256_castsi256_ps(_mm256_set_epi64x(at(7), at(6), at(3), at(2)));
-    (
-        _mm256_shuffle_ps::<0b10_00_10_00>(a, b),
-        _mm256_shuffle_ps::<0b11_01_11_01>(a, b),
-    )
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let at = |l: usize| pair(p[l].add(off));
+        // Lanes 0,1,4,5 and 2,3,6,7: the in-lane shuffles below then give lane order.
+        let a = _mm256_castsi256_ps(_mm256_set_epi64x(at(5), at(4), at(1), at(0)));
+        let b = _mm256_castsi256_ps(_mm256_set_epi64x(at(7), at(6), at(3), at(2)));
+        (
+            _mm256_shuffle_ps::<0b10_00_10_00>(a, b),
+            _mm256_shuffle_ps::<0b11_01_11_01>(a, b),
+        )
+    }
 }
 
 /// `a·b` for vectors given by components, summed left to right like `Vec3::dot`.
@@ -116,10 +123,14 @@ unsafe fn row(p: [*const f32; LANES], off: usize) -> (__m256, __m256) {
 /// [`supported`]).
 #[inline(always)]
 unsafe fn dot(a: [__m256; 3], b: [__m256; 3]) -> __m256 {
-    _mm256_add_ps(
-        _mm256_add_ps(_mm256_mul_ps(a[0], b[0]), _mm256_mul_ps(a[1], b[1])),
-        _mm256_mul_ps(a[2], b[2]),
-    )
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(a[0], b[0]), _mm256_mul_ps(a[1], b[1])),
+            _mm256_mul_ps(a[2], b[2]),
+        )
+    }
 }
 
 /// The samples a tile's rays keep, in ray order and, within a ray, sample order
@@ -213,66 +224,70 @@ pub(super) unsafe fn composite_tile(
     alpha: &mut Vec<f32>,
     stats: &mut RenderStats,
 ) {
-    let (xs, ys) = (px.xs, px.ys);
-    let tw = xs.1 - xs.0;
-    let n = tw * (ys.1 - ys.0);
-    let Scratch {
-        views,
-        colors,
-        kept,
-        light: buffers,
-    } = scratch;
-    refill(views, n, Vec3::ZERO);
-    refill(colors, n, [0.0; 3]);
-    kept.clear();
-    let start = alpha.len();
-    alpha.resize(start + n, 0.0);
-    // INTERLEAVE rays march side by side, one step each in turn: a ray's steps form
-    // a chain of dependent loads and branches, and the core overlaps the chains of
-    // independent rays.
-    let mut slots: [Option<Marcher>; INTERLEAVE] = [const { None }; INTERLEAVE];
-    let mut next = 0;
-    loop {
-        for slot in slots.iter_mut() {
-            while slot.is_none() && next < n {
-                let i = next;
-                next += 1;
-                let (x, y) = (xs.0 + i % tw, ys.0 + i / tw);
-                if let Some((ray, view)) = c.ray(x as f32, y as f32, px.start[i]) {
-                    views[i] = view;
-                    *slot = Some(Marcher {
-                        k: ray.k0,
-                        ray,
-                        id: i as u32,
-                        alpha: 0.0,
-                        cached_cell: usize::MAX,
-                        dist: 0,
-                    });
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let (xs, ys) = (px.xs, px.ys);
+        let tw = xs.1 - xs.0;
+        let n = tw * (ys.1 - ys.0);
+        let Scratch {
+            views,
+            colors,
+            kept,
+            light: buffers,
+        } = scratch;
+        refill(views, n, Vec3::ZERO);
+        refill(colors, n, [0.0; 3]);
+        kept.clear();
+        let start = alpha.len();
+        alpha.resize(start + n, 0.0);
+        // INTERLEAVE rays march side by side, one step each in turn: a ray's steps form
+        // a chain of dependent loads and branches, and the core overlaps the chains of
+        // independent rays.
+        let mut slots: [Option<Marcher>; INTERLEAVE] = [const { None }; INTERLEAVE];
+        let mut next = 0;
+        loop {
+            for slot in slots.iter_mut() {
+                while slot.is_none() && next < n {
+                    let i = next;
+                    next += 1;
+                    let (x, y) = (xs.0 + i % tw, ys.0 + i / tw);
+                    if let Some((ray, view)) = c.ray(x as f32, y as f32, px.start[i]) {
+                        views[i] = view;
+                        *slot = Some(Marcher {
+                            k: ray.k0,
+                            ray,
+                            id: i as u32,
+                            alpha: 0.0,
+                            cached_cell: usize::MAX,
+                            dist: 0,
+                        });
+                    }
+                }
+            }
+            if slots.iter().all(Option::is_none) {
+                break;
+            }
+            for slot in slots.iter_mut() {
+                if let Some(m) = slot {
+                    if !step(c, m, kept, stats) {
+                        alpha[start + m.id as usize] = m.alpha;
+                        *slot = None;
+                    }
                 }
             }
         }
-        if slots.iter().all(Option::is_none) {
-            break;
+        if kept.len() > 0 {
+            light(c, kept, views, colors, buffers);
         }
-        for slot in slots.iter_mut() {
-            if let Some(m) = slot {
-                if !step(c, m, kept, stats) {
-                    alpha[start + m.id as usize] = m.alpha;
-                    *slot = None;
-                }
-            }
+        let bg = c.frame.background;
+        for (col, &op) in colors.iter().zip(&alpha[start..]) {
+            rgb.push([
+                col[0] + (1.0 - op) * bg[0],
+                col[1] + (1.0 - op) * bg[1],
+                col[2] + (1.0 - op) * bg[2],
+            ]);
         }
-    }
-    if kept.len() > 0 {
-        light(c, kept, views, colors, buffers);
-    }
-    let bg = c.frame.background;
-    for (col, &op) in colors.iter().zip(&alpha[start..]) {
-        rgb.push([
-            col[0] + (1.0 - op) * bg[0],
-            col[1] + (1.0 - op) * bg[1],
-            col[2] + (1.0 - op) * bg[2],
-        ]);
     }
 }
 
@@ -300,127 +315,131 @@ struct Marcher {
 /// The CPU must support AVX2 and FMA (inlined into [`composite_tile`]).
 #[inline(always)]
 unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderStats) -> bool {
-    let f = c.field;
-    let [nx, ny, _] = f.dims;
-    let sxy = nx * ny;
-    let cd = f.cell_dims;
-    let ray = &m.ray;
-    let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
-    let dt = _mm256_set1_ps(c.dt);
-    let hi = axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32));
-    let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
-    // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
-    let (nxv, sxyv) = (_mm256_set1_epi32(nx as i32), _mm256_set1_epi32(sxy as i32));
-    let lut = c.lut;
-    let (lut_lo, lut_scale) = (_mm256_set1_ps(lut.lo), _mm256_set1_ps(lut.scale));
-    let (half, lut_max) = (
-        _mm256_set1_ps(0.5),
-        _mm256_set1_ps((crate::tf::LUT_SIZE - 1) as f32),
-    );
-    let values = f.values.as_ptr();
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let f = c.field;
+        let [nx, ny, _] = f.dims;
+        let sxy = nx * ny;
+        let cd = f.cell_dims;
+        let ray = &m.ray;
+        let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
+        let dt = _mm256_set1_ps(c.dt);
+        let hi = axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32));
+        let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
+        // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
+        let (nxv, sxyv) = (_mm256_set1_epi32(nx as i32), _mm256_set1_epi32(sxy as i32));
+        let lut = c.lut;
+        let (lut_lo, lut_scale) = (_mm256_set1_ps(lut.lo), _mm256_set1_ps(lut.scale));
+        let (half, lut_max) = (
+            _mm256_set1_ps(0.5),
+            _mm256_set1_ps((crate::tf::LUT_SIZE - 1) as f32),
+        );
+        let values = f.values.as_ptr();
 
-    let k = m.k;
-    // Positions o + d t with t = (k + j) dt, as `Ray::t` and `Ray::at` compute them.
-    let t = _mm256_mul_ps(
-        _mm256_add_ps(
-            _mm256_add_ps(_mm256_set1_ps(k as f32), lanes),
-            _mm256_set1_ps(ray.j),
-        ),
-        dt,
-    );
-    let p = axes!(|a| _mm256_add_ps(
-        _mm256_set1_ps(ray.o.get(a)),
-        _mm256_mul_ps(_mm256_set1_ps(ray.d.get(a)), t)
-    ));
-    // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
-    // (max/min put 0 for NaN, as f32::max/min do).
-    let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
-    // Empty-space skipping is decided by the chunk's first sample; the others need no
-    // test, since a sample in an inactive cell has zero opacity anyway.
-    let c0 = axes!(|a| _mm256_cvtsi256_si32(ijk[a]) as usize / MACRO_CELL);
-    let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
-    if cell != m.cached_cell {
-        m.cached_cell = cell;
-        m.dist = c.distance[cell];
-    }
-    if m.dist != 0 {
-        stats.skips += 1;
-        m.k = c.leap(ray, c0, m.dist, k);
-        return m.k <= ray.k1;
-    }
-    let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
-    stats.samples += n as u64;
-    let fr = axes!(|a| {
-        let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
-        _mm256_min_ps(_mm256_max_ps(t, zero), one)
-    });
-    let mut base = [0i32; LANES];
-    _mm256_storeu_si256(
-        base.as_mut_ptr().cast(),
-        _mm256_add_epi32(
-            ijk[0],
-            _mm256_add_epi32(
-                _mm256_mullo_epi32(ijk[1], nxv),
-                _mm256_mullo_epi32(ijk[2], sxyv),
+        let k = m.k;
+        // Positions o + d t with t = (k + j) dt, as `Ray::t` and `Ray::at` compute them.
+        let t = _mm256_mul_ps(
+            _mm256_add_ps(
+                _mm256_add_ps(_mm256_set1_ps(k as f32), lanes),
+                _mm256_set1_ps(ray.j),
             ),
-        ),
-    );
-    // Trilinear values. SAFETY: the indices are clamped to [0, dims-2] above, so
-    // base + sxy + nx + 1 < nx ny nz.
-    let mut ptrs = [values; LANES];
-    for (p, &b) in ptrs.iter_mut().zip(&base) {
-        *p = values.add(b as usize);
-    }
-    let (c000, c100) = row(ptrs, 0);
-    let (c010, c110) = row(ptrs, nx);
-    let (c001, c101) = row(ptrs, sxy);
-    let (c011, c111) = row(ptrs, sxy + nx);
-    let x00 = lerp(c000, c100, fr[0]);
-    let x10 = lerp(c010, c110, fr[0]);
-    let x01 = lerp(c001, c101, fr[0]);
-    let x11 = lerp(c011, c111, fr[0]);
-    let y0 = lerp(x00, x10, fr[1]);
-    let y1 = lerp(x01, x11, fr[1]);
-    let v = lerp(y0, y1, fr[2]);
-    // `Lut::index`, then the opacities.
-    let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
-    let mut li = [0i32; LANES];
-    _mm256_storeu_si256(
-        li.as_mut_ptr().cast(),
-        _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max)),
-    );
-    let mut mask = 0u32;
-    for (j, &i) in li.iter().enumerate().take(n) {
-        // SAFETY: `li` was clamped to [0, LUT_SIZE-1] before the conversion.
-        mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
-    }
-    if mask != 0 {
-        let mut t = [[0.0f32; LANES]; 3];
-        for (a, v) in fr.iter().enumerate() {
-            _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+            dt,
+        );
+        let p = axes!(|a| _mm256_add_ps(
+            _mm256_set1_ps(ray.o.get(a)),
+            _mm256_mul_ps(_mm256_set1_ps(ray.d.get(a)), t)
+        ));
+        // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
+        // (max/min put 0 for NaN, as f32::max/min do).
+        let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
+        // Empty-space skipping is decided by the chunk's first sample; the others need no
+        // test, since a sample in an inactive cell has zero opacity anyway.
+        let c0 = axes!(|a| _mm256_cvtsi256_si32(ijk[a]) as usize / MACRO_CELL);
+        let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
+        if cell != m.cached_cell {
+            m.cached_cell = cell;
+            m.dist = c.distance[cell];
         }
-        while mask != 0 {
-            let j = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            // The reference loop's `w` and `alpha`, in the same order.
-            // SAFETY: as above.
-            let w = (1.0 - m.alpha) * *lut.alphas.get_unchecked(li[j] as usize);
-            kept.base.push(base[j]);
-            for (kt, t) in kept.t.iter_mut().zip(&t) {
-                kt.push(t[j]);
+        if m.dist != 0 {
+            stats.skips += 1;
+            m.k = c.leap(ray, c0, m.dist, k);
+            return m.k <= ray.k1;
+        }
+        let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
+        stats.samples += n as u64;
+        let fr = axes!(|a| {
+            let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
+            _mm256_min_ps(_mm256_max_ps(t, zero), one)
+        });
+        let mut base = [0i32; LANES];
+        _mm256_storeu_si256(
+            base.as_mut_ptr().cast(),
+            _mm256_add_epi32(
+                ijk[0],
+                _mm256_add_epi32(
+                    _mm256_mullo_epi32(ijk[1], nxv),
+                    _mm256_mullo_epi32(ijk[2], sxyv),
+                ),
+            ),
+        );
+        // Trilinear values. SAFETY: the indices are clamped to [0, dims-2] above, so
+        // base + sxy + nx + 1 < nx ny nz.
+        let mut ptrs = [values; LANES];
+        for (p, &b) in ptrs.iter_mut().zip(&base) {
+            *p = values.add(b as usize);
+        }
+        let (c000, c100) = row(ptrs, 0);
+        let (c010, c110) = row(ptrs, nx);
+        let (c001, c101) = row(ptrs, sxy);
+        let (c011, c111) = row(ptrs, sxy + nx);
+        let x00 = lerp(c000, c100, fr[0]);
+        let x10 = lerp(c010, c110, fr[0]);
+        let x01 = lerp(c001, c101, fr[0]);
+        let x11 = lerp(c011, c111, fr[0]);
+        let y0 = lerp(x00, x10, fr[1]);
+        let y1 = lerp(x01, x11, fr[1]);
+        let v = lerp(y0, y1, fr[2]);
+        // `Lut::index`, then the opacities.
+        let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
+        let mut li = [0i32; LANES];
+        _mm256_storeu_si256(
+            li.as_mut_ptr().cast(),
+            _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max)),
+        );
+        let mut mask = 0u32;
+        for (j, &i) in li.iter().enumerate().take(n) {
+            // SAFETY: `li` was clamped to [0, LUT_SIZE-1] before the conversion.
+            mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
+        }
+        if mask != 0 {
+            let mut t = [[0.0f32; LANES]; 3];
+            for (a, v) in fr.iter().enumerate() {
+                _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
             }
-            kept.entry.push(li[j] as u32);
-            kept.weight.push(w);
-            kept.ray.push(m.id);
-            stats.shaded += 1;
-            m.alpha += w;
-            if m.alpha >= TERMINATION_OPACITY {
-                return false;
+            while mask != 0 {
+                let j = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                // The reference loop's `w` and `alpha`, in the same order.
+                // SAFETY: as above.
+                let w = (1.0 - m.alpha) * *lut.alphas.get_unchecked(li[j] as usize);
+                kept.base.push(base[j]);
+                for (kt, t) in kept.t.iter_mut().zip(&t) {
+                    kt.push(t[j]);
+                }
+                kept.entry.push(li[j] as u32);
+                kept.weight.push(w);
+                kept.ray.push(m.id);
+                stats.shaded += 1;
+                m.alpha += w;
+                if m.alpha >= TERMINATION_OPACITY {
+                    return false;
+                }
             }
         }
+        m.k = k + n as i64;
+        m.k <= ray.k1
     }
-    m.k = k + n as i64;
-    m.k <= ray.k1
 }
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
@@ -430,44 +449,48 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
 /// AVX2 must be available; the samples must come from clamped positions.
 #[target_feature(enable = "avx2,fma")]
 unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3] {
-    let f = c.field;
-    let [nx, ny, _] = f.dims;
-    let sxy = nx * ny;
-    let data = f.gradients.as_ptr();
-    let mut g = [_mm_setzero_ps(); LANES];
-    for (j, gj) in g.iter_mut().enumerate() {
-        let r = r0 + j;
-        // One 128-bit load holds voxels (i, i+1) of a row: [gx, gy, gz, 0] twice, as
-        // i16, converted exactly to f32.
-        // SAFETY: the base is clamped to [0, dims-2] per axis, so base + sxy + nx + 1
-        // is a voxel.
-        let p = data.add(*kept.base.get_unchecked(r) as usize);
-        let tx = _mm_set1_ps(*kept.t[0].get_unchecked(r));
-        let x = |off: usize| {
-            let v = _mm_loadu_si128(p.add(off).cast());
-            let v = _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(v));
-            lerp4(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v), tx)
-        };
-        let (x00, x10, x01, x11) = (x(0), x(nx), x(sxy), x(sxy + nx));
-        let ty = _mm_set1_ps(*kept.t[1].get_unchecked(r));
-        let y0 = lerp4(x00, x10, ty);
-        let y1 = lerp4(x01, x11, ty);
-        *gj = lerp4(y0, y1, _mm_set1_ps(*kept.t[2].get_unchecked(r)));
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let f = c.field;
+        let [nx, ny, _] = f.dims;
+        let sxy = nx * ny;
+        let data = f.gradients.as_ptr();
+        let mut g = [_mm_setzero_ps(); LANES];
+        for (j, gj) in g.iter_mut().enumerate() {
+            let r = r0 + j;
+            // One 128-bit load holds voxels (i, i+1) of a row: [gx, gy, gz, 0] twice, as
+            // i16, converted exactly to f32.
+            // SAFETY: the base is clamped to [0, dims-2] per axis, so base + sxy + nx + 1
+            // is a voxel.
+            let p = data.add(*kept.base.get_unchecked(r) as usize);
+            let tx = _mm_set1_ps(*kept.t[0].get_unchecked(r));
+            let x = |off: usize| {
+                let v = _mm_loadu_si128(p.add(off).cast());
+                let v = _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(v));
+                lerp4(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v), tx)
+            };
+            let (x00, x10, x01, x11) = (x(0), x(nx), x(sxy), x(sxy + nx));
+            let ty = _mm_set1_ps(*kept.t[1].get_unchecked(r));
+            let y0 = lerp4(x00, x10, ty);
+            let y1 = lerp4(x01, x11, ty);
+            *gj = lerp4(y0, y1, _mm_set1_ps(*kept.t[2].get_unchecked(r)));
+        }
+        // Transpose the eight [gx, gy, gz, 0] records into gx, gy, gz vectors, scaled as
+        // `Field::gradient_at` scales them.
+        let r = |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(g[a]), g[b]);
+        let (r0, r1, r2, r3) = (r(0, 4), r(1, 5), r(2, 6), r(3, 7));
+        let t0 = _mm256_unpacklo_ps(r0, r1); // gx0 gx1 gy0 gy1 | gx4 gx5 gy4 gy5
+        let t1 = _mm256_unpackhi_ps(r0, r1); // gz0 gz1 0 0 | ...
+        let t2 = _mm256_unpacklo_ps(r2, r3);
+        let t3 = _mm256_unpackhi_ps(r2, r3);
+        let scale = _mm256_set1_ps(f.gradient_scale);
+        [
+            _mm256_mul_ps(_mm256_shuffle_ps::<0b01_00_01_00>(t0, t2), scale),
+            _mm256_mul_ps(_mm256_shuffle_ps::<0b11_10_11_10>(t0, t2), scale),
+            _mm256_mul_ps(_mm256_shuffle_ps::<0b01_00_01_00>(t1, t3), scale),
+        ]
     }
-    // Transpose the eight [gx, gy, gz, 0] records into gx, gy, gz vectors, scaled as
-    // `Field::gradient_at` scales them.
-    let r = |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(g[a]), g[b]);
-    let (r0, r1, r2, r3) = (r(0, 4), r(1, 5), r(2, 6), r(3, 7));
-    let t0 = _mm256_unpacklo_ps(r0, r1); // gx0 gx1 gy0 gy1 | gx4 gx5 gy4 gy5
-    let t1 = _mm256_unpackhi_ps(r0, r1); // gz0 gz1 0 0 | ...
-    let t2 = _mm256_unpacklo_ps(r2, r3);
-    let t3 = _mm256_unpackhi_ps(r2, r3);
-    let scale = _mm256_set1_ps(f.gradient_scale);
-    [
-        _mm256_mul_ps(_mm256_shuffle_ps::<0b01_00_01_00>(t0, t2), scale),
-        _mm256_mul_ps(_mm256_shuffle_ps::<0b11_10_11_10>(t0, t2), scale),
-        _mm256_mul_ps(_mm256_shuffle_ps::<0b01_00_01_00>(t1, t3), scale),
-    ]
 }
 
 /// Lights the `kept` samples of a tile whose rays have the view vectors `views`, and
@@ -484,185 +507,191 @@ unsafe fn light(
     colors: &mut [[f32; 3]],
     buffers: &mut LightBuffers,
 ) {
-    let shader = c.shader;
-    let m = &shader.material;
-    let lut = c.lut;
-    let flat = m.ambient + m.diffuse;
-    let n = kept.len();
-    if !m.shade {
-        for r in 0..n {
-            let e = lut.entry_at(kept.entry[r] as usize);
-            let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
-            for ch in 0..3 {
-                col[ch] += w * e[ch];
-            }
-        }
-        return;
-    }
-    kept.pad();
-    let padded = kept.len();
-    let lights = &shader.lights;
-    let zero = _mm256_setzero_ps();
-    let g0 = shader.gate;
-    // Per sample: diffuse sum, gradient magnitude; per vector: valid-gradient lanes;
-    // per light and sample: the cosine, and whether the light faces the surface.
-    let LightBuffers {
-        diffuse,
-        magnitude,
-        valid,
-        cos,
-        lobe,
-        facing,
-    } = buffers;
-    refill(diffuse, padded, 0.0);
-    refill(magnitude, padded, 0.0);
-    refill(valid, padded / LANES, 0);
-    refill(cos, padded * lights.len(), 0.0);
-    refill(facing, padded / LANES * lights.len(), 0);
-    for (b, r0) in (0..padded).step_by(LANES).enumerate() {
-        let grad = gradients(c, kept, r0);
-        let mut lane_views = [Vec3::ZERO; LANES];
-        for (j, v) in lane_views.iter_mut().enumerate() {
-            *v = views[*kept.ray.get_unchecked((r0 + j).min(n - 1)) as usize];
-        }
-        let view = axes!(|a| {
-            let v = &lane_views;
-            _mm256_setr_ps(
-                v[0].get(a),
-                v[1].get(a),
-                v[2].get(a),
-                v[3].get(a),
-                v[4].get(a),
-                v[5].get(a),
-                v[6].get(a),
-                v[7].get(a),
-            )
-        });
-        let gm2 = dot(grad, grad);
-        let ok = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(gm2, _mm256_set1_ps(g0 * g0)),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(gm2, _mm256_set1_ps(f32::INFINITY)),
-        );
-        valid[b] = _mm256_movemask_ps(ok) as u8;
-        let gm = _mm256_sqrt_ps(gm2);
-        _mm256_storeu_ps(magnitude.as_mut_ptr().add(r0), gm);
-        // Normal points from high to low values; two-sided: flipped to face the viewer.
-        let inv = _mm256_div_ps(_mm256_set1_ps(-1.0), gm);
-        let mut nrm = axes!(|a| _mm256_mul_ps(grad[a], inv));
-        let mut n_dot_v = dot(nrm, view);
-        let flip = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(n_dot_v, zero),
-            _mm256_set1_ps(-0.0),
-        );
-        nrm = axes!(|a| _mm256_xor_ps(nrm[a], flip));
-        n_dot_v = _mm256_xor_ps(n_dot_v, flip);
-        let mut dif = zero;
-        for (i, &(l, intensity)) in lights.iter().enumerate() {
-            let lv = axes!(|a| _mm256_set1_ps(l.get(a)));
-            let n_dot_l = dot(nrm, lv);
-            let faces = _mm256_cmp_ps::<_CMP_GT_OQ>(n_dot_l, zero);
-            dif = _mm256_blendv_ps(
-                dif,
-                _mm256_add_ps(dif, _mm256_mul_ps(_mm256_set1_ps(intensity), n_dot_l)),
-                faces,
-            );
-            // `Shader::for_ray`'s per-ray terms, per lane: L·V, or the half vector.
-            let cv = match shader.geometry {
-                Geometry::Phong => _mm256_sub_ps(
-                    _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(2.0), n_dot_l), n_dot_v),
-                    dot(lv, view),
-                ),
-                Geometry::Blinn => {
-                    let sum = axes!(|a| _mm256_add_ps(lv[a], view[a]));
-                    let len = _mm256_sqrt_ps(dot(sum, sum));
-                    // normalize_or_zero: finite and positive length, else zero.
-                    let usable = _mm256_and_ps(
-                        _mm256_cmp_ps::<_CMP_GT_OQ>(len, zero),
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(len, _mm256_set1_ps(f32::INFINITY)),
-                    );
-                    let inv_len = _mm256_div_ps(_mm256_set1_ps(1.0), len);
-                    let h = axes!(|a| _mm256_and_ps(_mm256_mul_ps(sum[a], inv_len), usable));
-                    dot(nrm, h)
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let shader = c.shader;
+        let m = &shader.material;
+        let lut = c.lut;
+        let flat = m.ambient + m.diffuse;
+        let n = kept.len();
+        if !m.shade {
+            for r in 0..n {
+                let e = lut.entry_at(kept.entry[r] as usize);
+                let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
+                for ch in 0..3 {
+                    col[ch] += w * e[ch];
                 }
-            };
-            _mm256_storeu_ps(cos.as_mut_ptr().add(i * padded + r0), cv);
-            facing[i * (padded / LANES) + b] = _mm256_movemask_ps(faces) as u8;
+            }
+            return;
         }
-        _mm256_storeu_ps(diffuse.as_mut_ptr().add(r0), dif);
-    }
-    refill(lobe, cos.len(), 0.0);
-    shader.specular.eval_slice(cos, lobe);
-    // Lane j's bit of an eight-bit mask, as a vector mask.
-    let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    let bits = |m: u8| {
-        let v = _mm256_and_si256(_mm256_set1_epi32(i32::from(m)), lane_bits);
-        _mm256_castsi256_ps(_mm256_cmpeq_epi32(v, lane_bits))
-    };
-    let (ambient, diffuse_k, specular_k) = (
-        _mm256_set1_ps(m.ambient),
-        _mm256_set1_ps(m.diffuse),
-        _mm256_set1_ps(m.specular),
-    );
-    let (flat_v, g0v, one) = (
-        _mm256_set1_ps(flat),
-        _mm256_set1_ps(g0),
-        _mm256_set1_ps(1.0),
-    );
-    let entries = lut.entries.as_ptr().cast::<f32>();
-    for (b, r0) in (0..padded).step_by(LANES).enumerate() {
-        let mut specular = zero;
-        for (i, &(_, intensity)) in lights.iter().enumerate() {
-            let s = _mm256_loadu_ps(lobe.as_ptr().add(i * padded + r0));
-            specular = _mm256_blendv_ps(
-                specular,
-                _mm256_add_ps(specular, _mm256_mul_ps(_mm256_set1_ps(intensity), s)),
-                bits(facing[i * (padded / LANES) + b]),
+        kept.pad();
+        let padded = kept.len();
+        let lights = &shader.lights;
+        let zero = _mm256_setzero_ps();
+        let g0 = shader.gate;
+        // Per sample: diffuse sum, gradient magnitude; per vector: valid-gradient lanes;
+        // per light and sample: the cosine, and whether the light faces the surface.
+        let LightBuffers {
+            diffuse,
+            magnitude,
+            valid,
+            cos,
+            lobe,
+            facing,
+        } = buffers;
+        refill(diffuse, padded, 0.0);
+        refill(magnitude, padded, 0.0);
+        refill(valid, padded / LANES, 0);
+        refill(cos, padded * lights.len(), 0.0);
+        refill(facing, padded / LANES * lights.len(), 0);
+        for (b, r0) in (0..padded).step_by(LANES).enumerate() {
+            let grad = gradients(c, kept, r0);
+            let mut lane_views = [Vec3::ZERO; LANES];
+            for (j, v) in lane_views.iter_mut().enumerate() {
+                *v = views[*kept.ray.get_unchecked((r0 + j).min(n - 1)) as usize];
+            }
+            let view = axes!(|a| {
+                let v = &lane_views;
+                _mm256_setr_ps(
+                    v[0].get(a),
+                    v[1].get(a),
+                    v[2].get(a),
+                    v[3].get(a),
+                    v[4].get(a),
+                    v[5].get(a),
+                    v[6].get(a),
+                    v[7].get(a),
+                )
+            });
+            let gm2 = dot(grad, grad);
+            let ok = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(gm2, _mm256_set1_ps(g0 * g0)),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(gm2, _mm256_set1_ps(f32::INFINITY)),
             );
+            valid[b] = _mm256_movemask_ps(ok) as u8;
+            let gm = _mm256_sqrt_ps(gm2);
+            _mm256_storeu_ps(magnitude.as_mut_ptr().add(r0), gm);
+            // Normal points from high to low values; two-sided: flipped to face the viewer.
+            let inv = _mm256_div_ps(_mm256_set1_ps(-1.0), gm);
+            let mut nrm = axes!(|a| _mm256_mul_ps(grad[a], inv));
+            let mut n_dot_v = dot(nrm, view);
+            let flip = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LT_OQ>(n_dot_v, zero),
+                _mm256_set1_ps(-0.0),
+            );
+            nrm = axes!(|a| _mm256_xor_ps(nrm[a], flip));
+            n_dot_v = _mm256_xor_ps(n_dot_v, flip);
+            let mut dif = zero;
+            for (i, &(l, intensity)) in lights.iter().enumerate() {
+                let lv = axes!(|a| _mm256_set1_ps(l.get(a)));
+                let n_dot_l = dot(nrm, lv);
+                let faces = _mm256_cmp_ps::<_CMP_GT_OQ>(n_dot_l, zero);
+                dif = _mm256_blendv_ps(
+                    dif,
+                    _mm256_add_ps(dif, _mm256_mul_ps(_mm256_set1_ps(intensity), n_dot_l)),
+                    faces,
+                );
+                // `Shader::for_ray`'s per-ray terms, per lane: L·V, or the half vector.
+                let cv = match shader.geometry {
+                    Geometry::Phong => _mm256_sub_ps(
+                        _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(2.0), n_dot_l), n_dot_v),
+                        dot(lv, view),
+                    ),
+                    Geometry::Blinn => {
+                        let sum = axes!(|a| _mm256_add_ps(lv[a], view[a]));
+                        let len = _mm256_sqrt_ps(dot(sum, sum));
+                        // normalize_or_zero: finite and positive length, else zero.
+                        let usable = _mm256_and_ps(
+                            _mm256_cmp_ps::<_CMP_GT_OQ>(len, zero),
+                            _mm256_cmp_ps::<_CMP_LT_OQ>(len, _mm256_set1_ps(f32::INFINITY)),
+                        );
+                        let inv_len = _mm256_div_ps(_mm256_set1_ps(1.0), len);
+                        let h = axes!(|a| _mm256_and_ps(_mm256_mul_ps(sum[a], inv_len), usable));
+                        dot(nrm, h)
+                    }
+                };
+                _mm256_storeu_ps(cos.as_mut_ptr().add(i * padded + r0), cv);
+                facing[i * (padded / LANES) + b] = _mm256_movemask_ps(faces) as u8;
+            }
+            _mm256_storeu_ps(diffuse.as_mut_ptr().add(r0), dif);
         }
-        let lit = _mm256_add_ps(
-            ambient,
-            _mm256_mul_ps(diffuse_k, _mm256_loadu_ps(diffuse.as_ptr().add(r0))),
+        refill(lobe, cos.len(), 0.0);
+        shader.specular.eval_slice(cos, lobe);
+        // Lane j's bit of an eight-bit mask, as a vector mask.
+        let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        let bits = |m: u8| {
+            let v = _mm256_and_si256(_mm256_set1_epi32(i32::from(m)), lane_bits);
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(v, lane_bits))
+        };
+        let (ambient, diffuse_k, specular_k) = (
+            _mm256_set1_ps(m.ambient),
+            _mm256_set1_ps(m.diffuse),
+            _mm256_set1_ps(m.specular),
         );
-        let spec = _mm256_mul_ps(specular_k, specular);
-        let w = if g0 > 0.0 {
-            let gm = _mm256_loadu_ps(magnitude.as_ptr().add(r0));
-            _mm256_min_ps(_mm256_div_ps(_mm256_sub_ps(gm, g0v), g0v), one)
-        } else {
-            one
-        };
-        // The eight samples' table entries [r, g, b, alpha], transposed to r, g, b.
-        // SAFETY: entry indices were clamped to [0, LUT_SIZE-1] when marching.
-        let e = |j: usize| {
-            let i = *kept.entry.get_unchecked(r0 + j) as usize;
-            _mm_loadu_ps(entries.add(4 * i))
-        };
-        let q = |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e(a)), e(b));
-        let (q0, q1, q2, q3) = (q(0, 4), q(1, 5), q(2, 6), q(3, 7));
-        let t0 = _mm256_unpacklo_ps(q0, q1); // r0 r1 g0 g1 | r4 r5 g4 g5
-        let t1 = _mm256_unpackhi_ps(q0, q1); // b0 b1 a0 a1 | ...
-        let t2 = _mm256_unpacklo_ps(q2, q3);
-        let t3 = _mm256_unpackhi_ps(q2, q3);
-        let base = [
-            _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2),
-            _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2),
-            _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
-        ];
-        let usable = bits(valid[b]);
-        let weight = _mm256_loadu_ps(kept.weight.as_ptr().add(r0));
-        let mut add = [[0.0f32; LANES]; 3];
-        for (ch, out) in add.iter_mut().enumerate() {
-            let shaded = _mm256_add_ps(_mm256_mul_ps(base[ch], lit), spec);
-            let unshaded = _mm256_mul_ps(base[ch], flat_v);
-            let mixed = _mm256_add_ps(unshaded, _mm256_mul_ps(w, _mm256_sub_ps(shaded, unshaded)));
-            let rgb = _mm256_blendv_ps(unshaded, mixed, usable);
-            _mm256_storeu_ps(out.as_mut_ptr(), _mm256_mul_ps(weight, rgb));
-        }
-        // In sample order, as the reference loop adds them.
-        for j in 0..LANES.min(n - r0) {
-            let col = &mut colors[*kept.ray.get_unchecked(r0 + j) as usize];
-            col[0] += add[0][j];
-            col[1] += add[1][j];
-            col[2] += add[2][j];
+        let (flat_v, g0v, one) = (
+            _mm256_set1_ps(flat),
+            _mm256_set1_ps(g0),
+            _mm256_set1_ps(1.0),
+        );
+        let entries = lut.entries.as_ptr().cast::<f32>();
+        for (b, r0) in (0..padded).step_by(LANES).enumerate() {
+            let mut specular = zero;
+            for (i, &(_, intensity)) in lights.iter().enumerate() {
+                let s = _mm256_loadu_ps(lobe.as_ptr().add(i * padded + r0));
+                specular = _mm256_blendv_ps(
+                    specular,
+                    _mm256_add_ps(specular, _mm256_mul_ps(_mm256_set1_ps(intensity), s)),
+                    bits(facing[i * (padded / LANES) + b]),
+                );
+            }
+            let lit = _mm256_add_ps(
+                ambient,
+                _mm256_mul_ps(diffuse_k, _mm256_loadu_ps(diffuse.as_ptr().add(r0))),
+            );
+            let spec = _mm256_mul_ps(specular_k, specular);
+            let w = if g0 > 0.0 {
+                let gm = _mm256_loadu_ps(magnitude.as_ptr().add(r0));
+                _mm256_min_ps(_mm256_div_ps(_mm256_sub_ps(gm, g0v), g0v), one)
+            } else {
+                one
+            };
+            // The eight samples' table entries [r, g, b, alpha], transposed to r, g, b.
+            // SAFETY: entry indices were clamped to [0, LUT_SIZE-1] when marching.
+            let e = |j: usize| {
+                let i = *kept.entry.get_unchecked(r0 + j) as usize;
+                _mm_loadu_ps(entries.add(4 * i))
+            };
+            let q =
+                |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e(a)), e(b));
+            let (q0, q1, q2, q3) = (q(0, 4), q(1, 5), q(2, 6), q(3, 7));
+            let t0 = _mm256_unpacklo_ps(q0, q1); // r0 r1 g0 g1 | r4 r5 g4 g5
+            let t1 = _mm256_unpackhi_ps(q0, q1); // b0 b1 a0 a1 | ...
+            let t2 = _mm256_unpacklo_ps(q2, q3);
+            let t3 = _mm256_unpackhi_ps(q2, q3);
+            let base = [
+                _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2),
+                _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2),
+                _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
+            ];
+            let usable = bits(valid[b]);
+            let weight = _mm256_loadu_ps(kept.weight.as_ptr().add(r0));
+            let mut add = [[0.0f32; LANES]; 3];
+            for (ch, out) in add.iter_mut().enumerate() {
+                let shaded = _mm256_add_ps(_mm256_mul_ps(base[ch], lit), spec);
+                let unshaded = _mm256_mul_ps(base[ch], flat_v);
+                let mixed =
+                    _mm256_add_ps(unshaded, _mm256_mul_ps(w, _mm256_sub_ps(shaded, unshaded)));
+                let rgb = _mm256_blendv_ps(unshaded, mixed, usable);
+                _mm256_storeu_ps(out.as_mut_ptr(), _mm256_mul_ps(weight, rgb));
+            }
+            // In sample order, as the reference loop adds them.
+            for j in 0..LANES.min(n - r0) {
+                let col = &mut colors[*kept.ray.get_unchecked(r0 + j) as usize];
+                col[0] += add[0][j];
+                col[1] += add[1][j];
+                col[2] += add[2][j];
+            }
         }
     }
 }

@@ -1,0 +1,391 @@
+//! The scene options shared by `glint render`, `glint compare` and `glint view`: one
+//! `#[derive(clap::Args)]` struct flattened into each command, and the one function
+//! that applies it to a [`Scene`], so the commands cannot drift apart.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::bail;
+use glint_io::ReadOptions;
+use glint_hw::Config as HwConfig;
+use glint_lobe::Geometry;
+use glint_render::{
+    Input, Light, Phantom, Projection, RenderMode, Scene, SceneLobe, TransferFunction, View,
+};
+
+use super::choice::choice;
+
+/// Scene options. Every one is optional: unset, it keeps the scene file's value or the
+/// scene default (which `Scene::resolve_for` chooses and `--dump-scene` shows).
+#[derive(clap::Args, Default)]
+pub struct SceneFlags {
+    /// Volume (any format glint's io reads); without it (and without --scene), the
+    /// built-in phantom.
+    pub input: Option<PathBuf>,
+    /// Start from this scene file; the flags below override its fields.
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
+    /// Built-in phantom when no input is given [default: head].
+    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::ALL.map(|p| p.name())))]
+    pub phantom: Option<Phantom>,
+    /// Grid edge of the built-in phantom [default: 128].
+    #[arg(long, conflicts_with = "input")]
+    pub phantom_size: Option<usize>,
+    /// Transfer-function and material preset [default: the phantom's own for a phantom,
+    /// ct-bone for CT-like volumes (robust minimum below -500), mr-t2-brain otherwise].
+    #[arg(long, conflicts_with = "tf")]
+    pub preset: Option<String>,
+    /// Custom transfer function from a JSON file (see `glint render --help`).
+    #[arg(long, value_name = "FILE")]
+    pub tf: Option<PathBuf>,
+    /// How samples make a pixel [default: composite].
+    #[arg(long, value_parser = choice::<RenderMode>(RenderMode::ALL.map(|m| m.name())))]
+    pub mode: Option<RenderMode>,
+    /// Iso value for --mode iso [default: the middle of the volume's robust range].
+    #[arg(long, allow_negative_numbers = true)]
+    pub iso: Option<f32>,
+    /// Named view in the volume's world frame (RAS+) [default: anterior].
+    #[arg(long, value_parser = choice::<View>(View::ALL.map(|v| v.name())))]
+    pub view: Option<View>,
+    /// Orbit the camera this many degrees about the view's up axis (towards the image's
+    /// right) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub azimuth: Option<f64>,
+    /// Orbit the camera this many degrees upwards [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub elevation: Option<f64>,
+    /// Magnification; 1 frames what the transfer function makes visible [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    pub zoom: Option<f64>,
+    /// Projection (perspective: 30° field of view) [default: perspective].
+    #[arg(long, value_parser = choice::<Projection>(["perspective", "orthographic"]))]
+    pub projection: Option<Projection>,
+    /// Sample distance along rays, in voxels of the smallest spacing [default: 0.5].
+    #[arg(long, allow_negative_numbers = true)]
+    pub step: Option<f64>,
+    /// Shininess n [default: the preset's specular power].
+    #[arg(long, allow_negative_numbers = true)]
+    pub n: Option<f64>,
+    /// The power fits raise their base to 2^v [default: 4].
+    #[arg(long)]
+    pub v: Option<u32>,
+    /// The hardware unit of `--lobe hw`: a `glint hw` configuration file (JSON; missing
+    /// fields take the default's, see `glint hw eval --print-config`) [default: the
+    /// scene's unit, else the default unit]. The unit's v is the lobe's: --v must agree.
+    #[arg(long, value_name = "FILE")]
+    pub hw_config: Option<PathBuf>,
+    /// Highlight geometry: phong (R·V) or blinn (N·H) [default: phong].
+    #[arg(long, value_parser = choice::<Geometry>(["phong", "blinn"]))]
+    pub geometry: Option<Geometry>,
+    /// Override the preset's ambient coefficient.
+    #[arg(long, allow_negative_numbers = true)]
+    pub ambient: Option<f32>,
+    /// Override the preset's diffuse coefficient.
+    #[arg(long, allow_negative_numbers = true)]
+    pub diffuse: Option<f32>,
+    /// Override the preset's specular coefficient.
+    #[arg(long, allow_negative_numbers = true)]
+    pub specular: Option<f32>,
+    /// Extra directional light at AZ,EL degrees from the view direction (towards the
+    /// image's right and top), optionally with an intensity; repeatable.
+    #[arg(long = "light", value_name = "AZ,EL[,I]", allow_hyphen_values = true, value_parser = parse_light)]
+    pub lights: Vec<Light>,
+    /// Turn the headlight off (then give at least one --light).
+    #[arg(long)]
+    pub no_headlight: bool,
+    /// Gradient-magnitude gate, a fraction of the value range per voxel: weaker
+    /// gradients get no directional shading (no random highlights in flat regions)
+    /// [default: 0.01].
+    #[arg(long, allow_negative_numbers = true)]
+    pub gate: Option<f64>,
+    /// Image size WxH [default: 512x512].
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<[u32; 2]>,
+    /// Refuse what lenient readers accept with a note (DICOM without preamble or meta
+    /// group, multi-frame DICOM without frame positions).
+    #[arg(long)]
+    pub strict: bool,
+    /// Testing: turn empty-space skipping off.
+    #[arg(long, hide = true)]
+    pub no_skip: bool,
+}
+
+impl SceneFlags {
+    /// Makes `scene`'s lobe `kind`; a `hw` lobe takes its unit's v unless --v was
+    /// given (a --v that contradicts the unit is refused when the scene is resolved).
+    pub fn set_lobe(&self, scene: &mut Scene, kind: SceneLobe) {
+        scene.lobe.kind = kind;
+        if kind == SceneLobe::Hw && self.v.is_none() {
+            scene.lobe.v = scene.lobe.hw.as_ref().map_or(HwConfig::default().v, |c| c.v);
+        }
+    }
+
+    /// The scene file (or the default scene) with every given flag applied. Checks what
+    /// can be checked before the volume is read (preset name, transfer-function file,
+    /// n and v, lights).
+    pub fn scene(&self) -> anyhow::Result<Scene> {
+        let mut scene = match &self.scene {
+            Some(path) => load_scene(path)?,
+            None => Scene::default(),
+        };
+        self.apply(&mut scene)?;
+        Ok(scene)
+    }
+
+    /// How to read the input volume.
+    pub fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            strict: self.strict,
+            ..ReadOptions::default()
+        }
+    }
+
+    /// Applies every given flag to `scene`.
+    pub fn apply(&self, scene: &mut Scene) -> anyhow::Result<()> {
+        self.apply_input(scene);
+        self.apply_classification(scene)?;
+        self.apply_lighting(scene)?;
+        let camera = &mut scene.camera;
+        set(&mut camera.view, self.view);
+        set(&mut camera.azimuth, self.azimuth);
+        set(&mut camera.elevation, self.elevation);
+        set(&mut camera.zoom, self.zoom);
+        set(&mut camera.projection, self.projection);
+        set(&mut scene.size, self.size);
+        set(&mut scene.step, self.step);
+        if self.no_skip {
+            scene.skip_empty = false;
+        }
+        Ok(())
+    }
+
+    fn apply_input(&self, scene: &mut Scene) {
+        if let Some(path) = &self.input {
+            scene.input = Input::Path(path.clone());
+        } else if self.phantom.is_some() || self.phantom_size.is_some() {
+            let (name, size) = match scene.input {
+                Input::Phantom { name, size } => (name, size),
+                Input::Path(_) => (Phantom::default(), Phantom::DEFAULT_SIZE),
+            };
+            scene.input = Input::Phantom {
+                name: self.phantom.unwrap_or(name),
+                size: self.phantom_size.unwrap_or(size),
+            };
+        }
+    }
+
+    fn apply_classification(&self, scene: &mut Scene) -> anyhow::Result<()> {
+        if let Some(p) = &self.preset {
+            glint_render::preset(p)?; // fail before reading the volume
+            scene.preset = Some(p.clone());
+            scene.transfer_function = None;
+        }
+        if let Some(path) = &self.tf {
+            let file = TransferFunction::from_json_file(path)?;
+            scene.transfer_function = Some(file.tf);
+            scene.preset = None;
+            let m = &mut scene.material;
+            set(&mut m.ambient, file.material.ambient.map(Some));
+            set(&mut m.diffuse, file.material.diffuse.map(Some));
+            set(&mut m.specular, file.material.specular.map(Some));
+            set(&mut m.shade, file.material.shade.map(Some));
+            if file.power.is_some() {
+                scene.lobe.n = file.power;
+            }
+        }
+        set(&mut scene.mode, self.mode);
+        if self.iso.is_some() {
+            scene.iso = self.iso;
+        } else if self.mode.is_some_and(|m| m != RenderMode::Iso) {
+            scene.iso = None;
+        }
+        let m = &mut scene.material;
+        set(&mut m.ambient, self.ambient.map(Some));
+        set(&mut m.diffuse, self.diffuse.map(Some));
+        set(&mut m.specular, self.specular.map(Some));
+        Ok(())
+    }
+
+    fn apply_lighting(&self, scene: &mut Scene) -> anyhow::Result<()> {
+        if let Some(n) = self.n {
+            glint_analysis::check_n(n)?;
+        }
+        if let Some(v) = self.v {
+            glint_analysis::check_v(v)?;
+        }
+        let lobe = &mut scene.lobe;
+        if let Some(path) = &self.hw_config {
+            lobe.hw = Some(super::hw::load_config(Some(path))?);
+        }
+        set(&mut lobe.n, self.n.map(Some));
+        set(&mut lobe.v, self.v);
+        set(&mut lobe.geometry, self.geometry);
+        set(&mut scene.gate, self.gate);
+        if self.no_headlight {
+            scene
+                .lights
+                .retain(|l| (l.azimuth, l.elevation) != (0.0, 0.0));
+            if self.lights.is_empty() && scene.lights.is_empty() {
+                bail!("--no-headlight leaves no light: add at least one --light AZ,EL");
+            }
+        }
+        scene.lights.extend(self.lights.iter().copied());
+        Ok(())
+    }
+}
+
+/// `*field = value` when the flag was given.
+pub fn set<T>(field: &mut T, value: Option<T>) {
+    if let Some(v) = value {
+        *field = v;
+    }
+}
+
+/// Reads a scene file; a relative input path in it is relative to the file.
+pub fn load_scene(path: &Path) -> anyhow::Result<Scene> {
+    let mut scene = Scene::from_json_file(path)?;
+    if let Input::Path(p) = &mut scene.input {
+        if p.is_relative() {
+            if let Some(dir) = path.parent() {
+                *p = dir.join(&*p);
+            }
+        }
+    }
+    Ok(scene)
+}
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
+    let bad = || format!("'{s}': expected WxH, e.g. 512x512");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    Ok([
+        w.trim().parse().map_err(|_| bad())?,
+        h.trim().parse().map_err(|_| bad())?,
+    ])
+}
+
+/// Parses `AZ,EL` or `AZ,EL,INTENSITY` (degrees) into a camera-relative light.
+pub fn parse_light(s: &str) -> Result<Light, String> {
+    let bad = || format!("'{s}': expected AZ,EL or AZ,EL,INTENSITY in degrees, e.g. 45,30");
+    let parts: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    let (azimuth, elevation, intensity) = match parts[..] {
+        [a, e] => (a, e, 1.0),
+        [a, e, i] => (a, e, i as f32),
+        _ => return Err(bad()),
+    };
+    let light = Light {
+        azimuth,
+        elevation,
+        intensity,
+    };
+    light.validate().map_err(|e| e.to_string())?;
+    Ok(light)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        flags: SceneFlags,
+    }
+
+    fn scene(argv: &[&str]) -> anyhow::Result<Scene> {
+        let mut full = vec!["glint"];
+        full.extend_from_slice(argv);
+        Cli::try_parse_from(full)?.flags.scene()
+    }
+
+    #[test]
+    fn no_flags_give_the_default_scene() {
+        let s = scene(&[]).unwrap();
+        assert_eq!(s.to_json().unwrap(), Scene::default().to_json().unwrap());
+    }
+
+    #[test]
+    fn flags_set_their_fields() {
+        let s = scene(&[
+            "--phantom",
+            "shepp-logan",
+            "--view",
+            "left",
+            "--azimuth",
+            "-30",
+            "--n",
+            "40",
+            "--v",
+            "3",
+            "--light",
+            "45,-20,0.5",
+            "--size",
+            "64x32",
+            "--step",
+            "0.25",
+            "--specular",
+            "0.7",
+        ])
+        .unwrap();
+        assert!(matches!(
+            s.input,
+            Input::Phantom {
+                name: Phantom::SheppLogan,
+                size: Phantom::DEFAULT_SIZE
+            }
+        ));
+        assert_eq!(s.camera.view, View::Left);
+        assert_eq!(s.camera.azimuth, -30.0);
+        assert_eq!((s.lobe.n, s.lobe.v), (Some(40.0), 3));
+        assert_eq!(s.size, [64, 32]);
+        assert_eq!(s.step, 0.25);
+        assert_eq!(s.material.specular, Some(0.7));
+        let extra = s.lights.last().unwrap();
+        assert_eq!(
+            (extra.azimuth, extra.elevation, extra.intensity),
+            (45.0, -20.0, 0.5)
+        );
+    }
+
+    #[test]
+    fn bad_values_are_refused_before_any_work() {
+        for argv in [
+            &["--preset", "no-such-preset"][..],
+            &["--n", "-3"],
+            &["--v", "99"],
+            &["--no-headlight"],
+            &["--size", "64"],
+            &["--light", "1,2,3,4"],
+        ] {
+            assert!(scene(argv).is_err(), "{argv:?} was accepted");
+        }
+    }
+
+    #[test]
+    fn a_mode_other_than_iso_drops_the_iso_value() {
+        let mut s = Scene {
+            iso: Some(3.0),
+            ..Scene::default()
+        };
+        let flags = SceneFlags {
+            mode: Some(RenderMode::Mip),
+            ..SceneFlags::default()
+        };
+        flags.apply(&mut s).unwrap();
+        assert_eq!((s.mode, s.iso), (RenderMode::Mip, None));
+    }
+
+    #[test]
+    fn size_and_light_parsing() {
+        assert_eq!(parse_size("640x480").unwrap(), [640, 480]);
+        assert_eq!(parse_size("64X48").unwrap(), [64, 48]);
+        assert!(parse_size("64").is_err());
+        let l = parse_light("-30,15").unwrap();
+        assert_eq!((l.azimuth, l.elevation, l.intensity), (-30.0, 15.0, 1.0));
+        assert_eq!(parse_light("10,20,0.5").unwrap().intensity, 0.5);
+        assert!(parse_light("1,2,3,4").is_err());
+    }
+}

@@ -1,0 +1,98 @@
+//! `glint render` end to end on DICOM that other readers accept leniently.
+
+use std::path::Path;
+use std::process::Command;
+
+use dicom_core::value::PrimitiveValue;
+use dicom_core::{dicom_value, DataElement, Tag, VR};
+use dicom_dictionary_std::tags;
+use dicom_object::{FileMetaTableBuilder, InMemDicomObject};
+
+const CT_STORAGE: &str = "1.2.840.10008.5.1.4.1.1.2";
+const EXPLICIT_LE: &str = "1.2.840.10008.1.2.1";
+
+/// An 8x8, 4-frame, 16-bit CT image with PixelSpacing and SpacingBetweenSlices but no
+/// ImagePositionPatient or ImageOrientationPatient: a stack in frame order whose
+/// geometry the reader must assume.
+fn write_frames_without_positions(path: &Path) {
+    let mut o = InMemDicomObject::new_empty();
+    let mut put = |tag: Tag, vr: VR, v: PrimitiveValue| o.put(DataElement::new(tag, vr, v));
+    put(tags::SOP_CLASS_UID, VR::UI, dicom_value!(Str, CT_STORAGE));
+    put(tags::SOP_INSTANCE_UID, VR::UI, dicom_value!(Str, "1.2.3.4"));
+    put(
+        tags::SERIES_INSTANCE_UID,
+        VR::UI,
+        dicom_value!(Str, "1.2.3"),
+    );
+    put(tags::MODALITY, VR::CS, dicom_value!(Str, "CT"));
+    put(tags::ROWS, VR::US, dicom_value!(U16, [8]));
+    put(tags::COLUMNS, VR::US, dicom_value!(U16, [8]));
+    put(tags::NUMBER_OF_FRAMES, VR::IS, dicom_value!(Str, "4"));
+    put(tags::SAMPLES_PER_PIXEL, VR::US, dicom_value!(U16, [1]));
+    put(
+        tags::PHOTOMETRIC_INTERPRETATION,
+        VR::CS,
+        dicom_value!(Str, "MONOCHROME2"),
+    );
+    put(tags::BITS_ALLOCATED, VR::US, dicom_value!(U16, [16]));
+    put(tags::BITS_STORED, VR::US, dicom_value!(U16, [16]));
+    put(tags::HIGH_BIT, VR::US, dicom_value!(U16, [15]));
+    put(tags::PIXEL_REPRESENTATION, VR::US, dicom_value!(U16, [0]));
+    put(tags::PIXEL_SPACING, VR::DS, dicom_value!(Strs, ["1", "1"]));
+    put(tags::SPACING_BETWEEN_SLICES, VR::DS, dicom_value!(Str, "2"));
+    // A bright block in the middle, so the render has something to show.
+    let px: Vec<u16> = (0..8 * 8 * 4)
+        .map(|i| {
+            let (x, y) = (i % 8, i / 8 % 8);
+            if (2..6).contains(&x) && (2..6).contains(&y) {
+                1000
+            } else {
+                0
+            }
+        })
+        .collect();
+    put(tags::PIXEL_DATA, VR::OW, PrimitiveValue::U16(px.into()));
+    let meta = FileMetaTableBuilder::new()
+        .transfer_syntax(EXPLICIT_LE)
+        .media_storage_sop_class_uid(CT_STORAGE);
+    o.with_meta(meta).unwrap().write_to_file(path).unwrap();
+}
+
+fn render(args: &[&str], input: &Path, out: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["render", "-q", "--size", "32x32"])
+        .args(args)
+        .arg("-o")
+        .arg(out)
+        .arg(input)
+        .output()
+        .unwrap()
+}
+
+/// Issue 17: what the DICOM reader assumed reaches the user of `glint render` (as it
+/// does with `glint info`) and the image is written; `--strict` refuses the file
+/// with one line and writes nothing.
+#[test]
+fn render_prints_the_geometry_the_reader_assumed() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("frames.dcm");
+    write_frames_without_positions(&input);
+    let out = dir.path().join("frames.png");
+    let run = render(&[], &input, &out);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("frames.dcm: geometry assumed: no ImagePositionPatient")
+            && stderr.contains("SpacingBetweenSlices"),
+        "{stderr}"
+    );
+    assert!(out.is_file());
+
+    let strict_out = dir.path().join("strict.png");
+    let run = render(&["--strict"], &input, &strict_out);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("--strict"), "{stderr}");
+    assert!(!strict_out.exists());
+}
