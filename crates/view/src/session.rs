@@ -246,7 +246,10 @@ mod tests {
         assert_eq!(s.lobe.hw.as_ref().map(|c| c.out_bits), Some(10));
         // The frame's scene names the whole unit, and the image is not float K_4's.
         let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 1).unwrap();
-        assert_eq!(f.scene.lobe.hw.as_ref().map(|c| c.square_frac.len()), Some(4));
+        assert_eq!(
+            f.scene.lobe.hw.as_ref().map(|c| c.square_frac.len()),
+            Some(4)
+        );
         let k = Scene {
             lobe: glint_render::LobeSpec {
                 kind: LobeKind::EnergyFit.into(),
@@ -260,7 +263,9 @@ mod tests {
         );
         // The scene's v (4) contradicts a v = 3 unit: refused, saying why.
         let v3 = r#"{"lobe": {"kind": "hw", "hw": {"v": 3, "square_frac": [14, 14, 12]}}}"#;
-        let err = apply_patch(&r, &scene(), &patch(v3)).unwrap_err().to_string();
+        let err = apply_patch(&r, &scene(), &patch(v3))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("contradicts"), "{err}");
     }
 

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::bail;
-use glint_io::ReadOptions;
 use glint_hw::Config as HwConfig;
+use glint_io::ReadOptions;
 use glint_lobe::Geometry;
 use glint_render::{
     Input, Light, Phantom, Projection, RenderMode, Scene, SceneLobe, TransferFunction, View,
@@ -115,7 +115,11 @@ impl SceneFlags {
     pub fn set_lobe(&self, scene: &mut Scene, kind: SceneLobe) {
         scene.lobe.kind = kind;
         if kind == SceneLobe::Hw && self.v.is_none() {
-            scene.lobe.v = scene.lobe.hw.as_ref().map_or(HwConfig::default().v, |c| c.v);
+            scene.lobe.v = scene
+                .lobe
+                .hw
+                .as_ref()
+                .map_or(HwConfig::default().v, |c| c.v);
         }
     }
 
