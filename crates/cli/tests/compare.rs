@@ -184,3 +184,48 @@ fn bad_input_fails_with_one_line_and_no_file() {
         );
     }
 }
+
+#[test]
+fn the_hardware_unit_is_compared_like_any_lobe() {
+    let dir = tempfile::tempdir().unwrap();
+    let unit = dir.path().join("unit.json");
+    std::fs::write(&unit, r#"{"out_bits": 12}"#).unwrap();
+    let doc = json_compare(
+        dir.path(),
+        &[
+            "--lobe",
+            "hw",
+            "--lobe",
+            "k",
+            "--hw-config",
+            unit.to_str().unwrap(),
+            "--n",
+            "40",
+        ],
+    );
+    let rows = doc["comparisons"].as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{doc}");
+    assert_eq!(
+        (&rows[0]["lobe"], &rows[1]["lobe"]),
+        (&"hw".into(), &"k".into())
+    );
+    assert_eq!(rows[0]["v"], 4, "the unit's v");
+    for row in rows {
+        // n = 40 is far from cos^n's shape at v = 4: both differ from exact.
+        assert!(
+            row["image"]["delta_e"]["max"].as_f64().unwrap() > 0.0,
+            "{row}"
+        );
+    }
+    // The sweep varies v, which a unit fixes.
+    let out = glint(&[
+        "-q",
+        "--sweep",
+        "--lobe",
+        "hw",
+        "-o",
+        dir.path().join("s").to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("hw"));
+}

@@ -141,3 +141,15 @@ def test_renders_from_threads(mni_path, brain_scene):
     assert len(got) == 4
     for g in got:
         assert np.array_equal(g, want)
+
+
+def test_a_hw_lobe_renders_like_the_cli(glint_bin, mni_path, brain_scene, tmp_path):
+    """The scene JSON's hardware-unit lobe: v from the unit, a contradiction refused,
+    and the same image as `glint render --scene`."""
+    scene = brain_scene.replace(lobe={"kind": "hw", "n": 40, "hw": {"out_bits": 10}})
+    assert scene.lobe["kind"] == "hw" and scene.lobe["v"] == 4
+    assert scene.lobe["hw"]["out_bits"] == 10
+    assert np.array_equal(glint.render(mni_path, scene), cli_render(glint_bin, scene, tmp_path))
+    bad = brain_scene.replace(lobe={"kind": "hw", "v": 3})
+    with pytest.raises(ValueError, match="contradicts"):
+        glint.render(mni_path, bad)

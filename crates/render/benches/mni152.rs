@@ -1,5 +1,6 @@
 //! Criterion bench: the MNI152 T1 template at 512x512, step 0.5 voxel, composite with
-//! shading (mr-t2-brain preset), view from the left, with `--lobe exact` and `--lobe k`.
+//! shading (mr-t2-brain preset), view from the left, with `--lobe exact`, `--lobe k` and
+//! `--lobe hw` (the default unit's table).
 //!
 //! The template comes from scripts/fetch-samples (path in `GLINT_MNI152`, default
 //! `~/.cache/glint/samples/mni152_t1_09a.nii.gz`); without it the bench uses the
@@ -10,7 +11,7 @@ use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glint_lobe::LobeKind;
-use glint_render::{CameraSpec, Input, LobeSpec, Phantom, Renderer, Scene, View};
+use glint_render::{CameraSpec, Input, LobeSpec, Phantom, Renderer, Scene, SceneLobe, View};
 
 /// The benchmark scene: the MNI152 template, or the phantom at 192^3 without it.
 fn scene() -> Scene {
@@ -53,9 +54,17 @@ fn bench(c: &mut Criterion) {
     let mut renderer = Renderer::open(&scene.input).unwrap();
     let mut group = c.benchmark_group("render_mni152_512");
     group.sample_size(10);
-    for kind in [LobeKind::Exact, LobeKind::EnergyFit] {
+    // `hw`: the default unit's table (glint_hw::Config::default(), v = 4).
+    for kind in [
+        SceneLobe::Float(LobeKind::Exact),
+        SceneLobe::Float(LobeKind::EnergyFit),
+        SceneLobe::Hw,
+    ] {
         let scene = Scene {
-            lobe: LobeSpec { kind, ..scene.lobe },
+            lobe: LobeSpec {
+                kind,
+                ..scene.lobe.clone()
+            },
             ..scene.clone()
         };
         // Classified once (the first render), as `glint render --repeat` and an

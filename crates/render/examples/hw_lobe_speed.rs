@@ -1,4 +1,4 @@
-//! Frame time of the hardware unit's lobe table (`Specular::Table` from
+//! Frame time of the `hw` lobe (the hardware unit's table over its cosine codes,
 //! `glint_hw::Unit::cos_table`) against float K_4 (`--lobe k`) on the MNI152 scene of
 //! `benches/mni152.rs` (512x512, step 0.5 voxel, mr-t2-brain, view left), in one run.
 //!
@@ -12,8 +12,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glint_hw::{Config, Unit};
-use glint_lobe::Specular;
-use glint_render::{CameraSpec, Input, Phantom, Renderer, Scene, View};
+use glint_render::{CameraSpec, Input, LobeSpec, Phantom, Renderer, Scene, View};
 
 /// The scene of `benches/mni152.rs`: the MNI152 template, or the phantom at 192^3.
 fn scene() -> Scene {
@@ -59,7 +58,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => Config::default(),
     };
     let mut scene = scene();
-    let unit = Unit::new(config)?;
+    let unit = Unit::new(config.clone())?;
     scene.lobe.v = unit.config().v;
     let mut renderer = Renderer::open(&scene.input)?;
     let k = renderer.resolve(&scene)?;
@@ -67,11 +66,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // K_v at the unit's integer n, so both lobes have the same shininess.
     scene.lobe.n = Some(f64::from(n));
     let k = renderer.resolve(&scene)?;
+    // The scene's `hw` lobe, as `glint render --lobe hw` resolves it.
+    let hw_scene = Scene {
+        lobe: LobeSpec {
+            n: scene.lobe.n,
+            geometry: scene.lobe.geometry,
+            ..LobeSpec::hw(config)
+        },
+        ..scene.clone()
+    };
     let t0 = Instant::now();
-    let table = unit.cos_table(n)?;
+    let hw = renderer.resolve(&hw_scene)?;
     let build = t0.elapsed().as_secs_f64();
-    let mut hw = k.clone();
-    hw.shader.set_specular(Specular::from(table));
     // One warm-up frame each (the first also classifies).
     renderer.render_resolved(k.clone(), &|_| {})?;
     renderer.render_resolved(hw.clone(), &|_| {})?;
@@ -85,7 +91,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mk, mh) = (median(tk), median(th));
     println!(
         "n = {n}, {frames} frames each, alternating: k {mk:.1} ms, hw table {mh:.1} ms \
-         (median frame), hw/k = {:.3}; table built in {:.2} ms",
+         (median frame), hw/k = {:.3}; hw scene resolved (unit and table built) in {:.2} ms",
         mh / mk,
         build * 1e3
     );

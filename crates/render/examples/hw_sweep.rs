@@ -1,68 +1,69 @@
-//! Issue 19, item 2: the image-level effect of the unit's widths. For the phantom and
-//! the MNI152 template (the scene of `benches/mni152.rs`, n from the preset), renders
-//! with the unit's table for output widths 8, 10, 12 bits and the energy-fit (`k`) and
-//! minimax ROMs (every other width the default's), and compares each with the float
-//! lobe of the same coefficient and with exact `cos^n`: mean and max absolute
-//! difference of the 8-bit sRGB codes (`Image::encode_srgb`) over all pixels and
-//! channels, and the share of pixels that differ at all. Prints a markdown table.
+//! Issue 19, item 2: the image-level effect of the unit's widths. For the default
+//! phantom scene (`glint render`'s defaults) and the MNI152 template (mr-t2-brain,
+//! view left), n from the preset, renders with the `hw` lobe for output widths 8, 10,
+//! 12 bits and the energy-fit (`k`) and minimax ROMs (every other width the
+//! default's, `glint_hw::Config::default()`), and compares each with the float lobe of
+//! the same coefficient and with exact `cos^n`: CIEDE2000 ΔE of the 8-bit sRGB images
+//! (`glint_analysis::image`, as `glint compare` measures), mean, 99th percentile and
+//! the share of pixels above 1. Prints a markdown table.
 //!
 //! `cargo run --release -p glint-render --example hw_sweep`
+//!
+//! `glint compare --lobe hw` measures against exact only; the comparison with the
+//! float lobe of the same ROM is why this is an example.
 
 use std::path::PathBuf;
 
-use glint_hw::{Coefficients, Config, Unit};
-use glint_lobe::{LobeKind, Specular};
-use glint_render::{CameraSpec, Depth, Image, Input, Phantom, Renderer, Scene, View};
+use glint_analysis::image::{DeltaEStats, Srgb8Image};
+use glint_hw::{Coefficients, Config};
+use glint_lobe::LobeKind;
+use glint_render::{CameraSpec, Depth, Image, Input, LobeSpec, Renderer, Scene, View};
 
 /// Output widths of the sweep (issue 19).
 const OUT_BITS: [u32; 3] = [8, 10, 12];
 
 fn scenes() -> Vec<(&'static str, Scene)> {
-    let base = Scene {
-        camera: CameraSpec {
-            view: View::Left,
-            ..Default::default()
-        },
-        size: [512, 512],
-        step: 0.5,
-        ..Scene::default()
-    };
-    let phantom = Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 192,
-        },
-        preset: Some("phantom".into()),
-        ..base.clone()
-    };
+    let mut out = vec![("phantom (default scene)", Scene::default())];
     let home = std::env::var_os("HOME").unwrap_or_default();
     let path = PathBuf::from(home).join(".cache/glint/samples/mni152_t1_09a.nii.gz");
-    let mut out = vec![("phantom 192^3", phantom)];
     if path.is_file() {
         let mni = Scene {
             input: Input::Path(path),
             preset: Some("mr-t2-brain".into()),
-            ..base
+            camera: CameraSpec {
+                view: View::Left,
+                ..Default::default()
+            },
+            ..Scene::default()
         };
-        out.push(("MNI152 T1", mni));
+        out.push(("MNI152 T1, left", mni));
     } else {
         eprintln!("hw_sweep: {} missing; phantom only", path.display());
     }
     out
 }
 
-/// Mean and max |a - b| of 8-bit sRGB codes, and the share of pixels that differ.
-fn diff(a: &Image, b: &Image) -> (f64, u8, f64) {
-    let (a, b) = (a.encode_srgb(Depth::Eight), b.encode_srgb(Depth::Eight));
-    let d: Vec<u8> = a.iter().zip(&b).map(|(x, y)| x.abs_diff(*y)).collect();
-    let mean = d.iter().map(|&x| f64::from(x)).sum::<f64>() / d.len() as f64;
-    let max = d.iter().copied().max().unwrap_or(0);
-    let px = d.chunks(3).filter(|p| p.iter().any(|&x| x > 0)).count();
-    (mean, max, px as f64 / (d.len() / 3) as f64)
+fn srgb(image: &Image) -> Result<Srgb8Image, Box<dyn std::error::Error>> {
+    let bytes = image.encode_srgb(Depth::Eight);
+    Ok(Srgb8Image::from_bytes(image.width, image.height, &bytes)?)
+}
+
+/// `mean / p99 / share > 1` of ΔE00 of `test` against `reference`.
+fn delta_e(
+    reference: &Srgb8Image,
+    test: &Srgb8Image,
+) -> Result<String, Box<dyn std::error::Error>> {
+    let s = DeltaEStats::compare(reference, test, None)?.ok_or("no pixels")?;
+    Ok(format!(
+        "{:.3} / {:.2} / {:.2}%",
+        s.mean,
+        s.p99,
+        100.0 * s.above_1
+    ))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    println!("| volume | n | ROM | out bits | vs float (same a): mean / max / pixels | vs exact: mean / max / pixels |");
+    println!("| volume | n | ROM | output | vs float lobe (same ROM): mean / p99 / ΔE>1 | vs exact: mean / p99 / ΔE>1 |");
     println!("|---|---|---|---|---|---|");
     for (name, mut scene) in scenes() {
         let mut renderer = Renderer::open(&scene.input)?;
@@ -74,41 +75,38 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .unwrap_or_default()
             .round();
         scene.lobe.n = Some(n);
-        let render = |renderer: &mut Renderer, kind: LobeKind, spec: Option<Specular>| {
-            let mut s = scene.clone();
-            s.lobe.kind = kind;
-            let mut resolved = renderer.resolve(&s)?;
-            if let Some(spec) = spec {
-                resolved.shader.set_specular(spec);
-            }
-            renderer.render_resolved(resolved, &|_| {}).map(|r| r.image)
+        let mut render = |lobe: LobeSpec| -> Result<Srgb8Image, Box<dyn std::error::Error>> {
+            let s = Scene {
+                lobe: LobeSpec { n: Some(n), ..lobe },
+                ..scene.clone()
+            };
+            srgb(&renderer.render(&s, &|_| {})?.image)
         };
-        let exact = render(&mut renderer, LobeKind::Exact, None)?;
+        let float = |kind: LobeKind| LobeSpec {
+            kind: kind.into(),
+            ..LobeSpec::default()
+        };
+        let exact = render(float(LobeKind::Exact))?;
         for (coefficients, kind) in [
             (Coefficients::EnergyFit, LobeKind::EnergyFit),
             (Coefficients::Minimax, LobeKind::Minimax),
         ] {
-            let float = render(&mut renderer, kind, None)?;
+            let reference = render(float(kind))?;
             for out_bits in OUT_BITS {
-                let unit = Unit::new(Config {
+                let hw = render(LobeSpec::hw(Config {
                     out_bits,
                     coefficients,
                     ..Config::default()
-                })?;
-                let table = unit.cos_table(unit.n_code(n)?)?;
-                let hw = render(&mut renderer, kind, Some(Specular::from(table)))?;
-                let (fm, fx, fp) = diff(&hw, &float);
-                let (em, ex, ep) = diff(&hw, &exact);
+                }))?;
                 println!(
-                    "| {name} | {n} | {coefficients} | {out_bits} | {fm:.4} / {fx} / {:.2}% | {em:.4} / {ex} / {:.2}% |",
-                    100.0 * fp,
-                    100.0 * ep
+                    "| {name} | {n} | {coefficients} | {out_bits} bits | {} | {} |",
+                    delta_e(&reference, &hw)?,
+                    delta_e(&exact, &hw)?
                 );
             }
-            let (em, ex, ep) = diff(&float, &exact);
             println!(
-                "| {name} | {n} | {coefficients} | float f32 | - | {em:.4} / {ex} / {:.2}% |",
-                100.0 * ep
+                "| {name} | {n} | {coefficients} | float (f32) | - | {} |",
+                delta_e(&exact, &reference)?
             );
         }
     }

@@ -34,6 +34,29 @@ pub enum RenderError {
     /// The lobe parameters were rejected by glint-lobe.
     #[error(transparent)]
     Lobe(#[from] glint_lobe::LobeError),
+    /// The hardware unit of a `hw` lobe (`lobe.hw`) is not a valid configuration.
+    #[error("invalid hardware unit configuration (lobe.hw)")]
+    HwConfig(#[source] glint_hw::HwError),
+    /// The shininess does not fit the hardware unit's integer `n` input.
+    #[error("shininess n = {n} cannot be given to the hardware unit")]
+    HwN {
+        /// The scene's shininess.
+        n: f64,
+        /// The unit's refusal (names the input's range).
+        #[source]
+        source: glint_hw::HwError,
+    },
+    /// A `hw` lobe's `lobe.v` differs from its unit's `v` (`lobe.hw.v`).
+    #[error("lobe.v = {lobe} contradicts the hardware unit's v = {unit} (lobe.hw.v): a hw lobe squares as often as its unit does; give the same v or leave lobe.v out")]
+    HwV {
+        /// `lobe.v`.
+        lobe: u32,
+        /// The unit's `v`.
+        unit: u32,
+    },
+    /// The unit's output could not be tabulated over its cosine codes.
+    #[error("the hardware unit cannot be tabulated")]
+    HwTable(#[source] glint_hw::CosTableError),
     /// A mesh cannot be rendered or meshed (non-finite coordinates, bad indices,
     /// scalars that do not match the vertices, no triangles).
     #[error("mesh cannot be rendered")]

@@ -9,7 +9,7 @@
 //! // that the resolved scene names.
 //! let scene = Scene {
 //!     input: Input::Phantom { name: Phantom::SheppLogan, size: 32 },
-//!     lobe: LobeSpec { kind: LobeKind::EnergyFit, n: Some(40.0), ..LobeSpec::default() },
+//!     lobe: LobeSpec { kind: LobeKind::EnergyFit.into(), n: Some(40.0), ..LobeSpec::default() },
 //!     size: [32, 32],
 //!     ..Scene::default()
 //! };
@@ -41,6 +41,7 @@ pub mod camera;
 mod colormap;
 mod error;
 mod field;
+mod hwlobe;
 mod image;
 pub mod isosurface;
 pub mod math;
@@ -68,9 +69,8 @@ pub use raycast::{
     TERMINATION_OPACITY,
 };
 pub use scene::{
-    Derived, Input, LobeSpec, OpenedVolume, Plan, RenderMode, Rendered, Renderer, Resolved,
-    Scene,
-    DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
+    Derived, Input, LobeSpec, OpenedVolume, Plan, RenderMode, Rendered, Renderer, Resolved, Scene,
+    SceneLobe, DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
 };
 pub use shading::{Light, Shader, MAX_LIGHTS};
 pub use tf::{

@@ -11,14 +11,16 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
+use glint_hw::Config as HwConfig;
 use glint_io::{open_volume, ReadOptions, Volume};
-use glint_lobe::{Geometry, LobeKind};
+use glint_lobe::{Geometry, Lobe, LobeKind, Specular};
 use serde::{Deserialize, Serialize};
 
 use crate::camera::{Camera, CameraSpec, Projection};
 use crate::colormap::ScalarColors;
 use crate::error::RenderError;
 use crate::field::Field;
+use crate::hwlobe::HwCache;
 use crate::image::Image;
 use crate::isosurface::extract_field;
 use crate::meshes::{
@@ -263,31 +265,190 @@ impl std::str::FromStr for RenderMode {
     }
 }
 
+/// Which lobe a scene uses: one of glint-lobe's closed-form lobes, evaluated in f32,
+/// or the bit-accurate hardware unit of glint-hw. In scene JSON and on the command line
+/// it is a name: a [`LobeKind`]'s (`exact`, `k`, ...) or `hw`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SceneLobe {
+    /// A closed-form lobe of glint-lobe.
+    Float(LobeKind),
+    /// The hardware unit of [`LobeSpec::hw`]: per sample, the cosine is quantised to
+    /// the unit's input code, n rounded to its integer input, and the specular value is
+    /// the unit's output code over full scale, as `glint_hw::Unit::eval` gives it.
+    Hw,
+}
+
+impl SceneLobe {
+    /// Every lobe, in the order `--help` lists them: glint-lobe's, then `hw`.
+    pub const ALL: [SceneLobe; 7] = [
+        SceneLobe::Float(LobeKind::Exact),
+        SceneLobe::Float(LobeKind::EnergyFit),
+        SceneLobe::Float(LobeKind::SlopeFit),
+        SceneLobe::Float(LobeKind::Schlick),
+        SceneLobe::Float(LobeKind::Gauss),
+        SceneLobe::Float(LobeKind::Minimax),
+        SceneLobe::Hw,
+    ];
+
+    /// The name users type (`exact`, `k`, ..., `hw`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SceneLobe::Float(kind) => kind.name(),
+            SceneLobe::Hw => "hw",
+        }
+    }
+
+    /// The closed-form lobe, `None` for the unit.
+    pub fn float(self) -> Option<LobeKind> {
+        match self {
+            SceneLobe::Float(kind) => Some(kind),
+            SceneLobe::Hw => None,
+        }
+    }
+}
+
+impl From<LobeKind> for SceneLobe {
+    fn from(kind: LobeKind) -> Self {
+        SceneLobe::Float(kind)
+    }
+}
+
+impl std::fmt::Display for SceneLobe {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SceneLobe {
+    type Err = RenderError;
+    /// A [`LobeKind`] name (and its aliases) or `hw`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.trim().eq_ignore_ascii_case("hw") {
+            return Ok(SceneLobe::Hw);
+        }
+        s.parse::<LobeKind>().map(SceneLobe::Float).map_err(|_| {
+            RenderError::Parameter(format!(
+                "unknown lobe '{s}': expected one of exact, k, g, schlick, gauss, minimax, hw"
+            ))
+        })
+    }
+}
+
+/// The `v` of the default lobe, K_4 (the paper's).
+const DEFAULT_V: u32 = 4;
+
 /// The specular lobe of a scene.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+///
+/// For a `hw` lobe, the unit is [`LobeSpec::hw`] (resolution writes
+/// `glint_hw::Config::default()` there when it is unset) and `v` is the unit's: scene
+/// JSON that leaves `v` out takes `hw.v`, and a `v` that differs from it is refused
+/// when the scene is resolved ([`RenderError::HwV`]). Other lobes ignore `hw` (and keep
+/// it, so a front end may switch between `k` and `hw` without losing the unit).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "LobeFields")]
 pub struct LobeSpec {
     /// Which lobe.
     #[serde(with = "by_name")]
-    pub kind: LobeKind,
+    pub kind: SceneLobe,
     /// Shininess n (default: the preset's specular power).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub n: Option<f64>,
-    /// The power fits raise their base to 2^v.
+    /// The power fits raise their base to 2^v (for `hw`: the unit's `v`).
     pub v: u32,
     /// Phong (R·V) or Blinn (N·H).
     #[serde(with = "by_name")]
     pub geometry: Geometry,
+    /// The hardware unit of a `hw` lobe: every field of `glint_hw::Config`, missing
+    /// ones taking the default's (`glint hw eval --print-config`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hw: Option<HwConfig>,
 }
 
 impl Default for LobeSpec {
     /// The paper's lobe: K_4, Phong geometry, n from the preset.
     fn default() -> Self {
         LobeSpec {
-            kind: LobeKind::EnergyFit,
+            kind: SceneLobe::Float(LobeKind::EnergyFit),
             n: None,
-            v: 4,
+            v: DEFAULT_V,
             geometry: Geometry::Phong,
+            hw: None,
+        }
+    }
+}
+
+impl LobeSpec {
+    /// The hardware unit `config` as a lobe (its `v`, n from the preset, Phong).
+    pub fn hw(config: HwConfig) -> LobeSpec {
+        LobeSpec {
+            kind: SceneLobe::Hw,
+            v: config.v,
+            hw: Some(config),
+            ..LobeSpec::default()
+        }
+    }
+}
+
+/// [`LobeSpec`] as scene JSON gives it: `v` may be left out, and then follows the
+/// lobe (the unit's for `hw`, else [`DEFAULT_V`]).
+#[derive(Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct LobeFields {
+    #[serde(with = "by_name")]
+    kind: SceneLobe,
+    n: Option<f64>,
+    v: Option<u32>,
+    #[serde(with = "by_name")]
+    geometry: Geometry,
+    hw: Option<HwConfig>,
+}
+
+impl Default for LobeFields {
+    fn default() -> Self {
+        let d = LobeSpec::default();
+        LobeFields {
+            kind: d.kind,
+            n: d.n,
+            v: None,
+            geometry: d.geometry,
+            hw: d.hw,
+        }
+    }
+}
+
+impl From<LobeFields> for LobeSpec {
+    fn from(f: LobeFields) -> Self {
+        let v = f.v.unwrap_or(match (f.kind, &f.hw) {
+            (SceneLobe::Hw, Some(config)) => config.v,
+            (SceneLobe::Hw, None) => HwConfig::default().v,
+            (SceneLobe::Float(_), _) => DEFAULT_V,
+        });
+        LobeSpec {
+            kind: f.kind,
+            n: f.n,
+            v,
+            geometry: f.geometry,
+            hw: f.hw,
+        }
+    }
+}
+
+impl LobeSpec {
+    /// The specular term for shininess `n`: the closed-form lobe, or the unit's table
+    /// (from `cache`), writing the default unit into [`LobeSpec::hw`] when unset.
+    fn specular(&mut self, n: f64, cache: &HwCache) -> Result<Specular, RenderError> {
+        match self.kind {
+            SceneLobe::Float(kind) => Ok(Lobe::<f32>::new(kind, n, self.v)?.into()),
+            SceneLobe::Hw => {
+                let config = self.hw.get_or_insert_with(HwConfig::default);
+                if self.v != config.v {
+                    return Err(RenderError::HwV {
+                        lobe: self.v,
+                        unit: config.v,
+                    });
+                }
+                Ok(Specular::Table(cache.table(config, n)?))
+            }
         }
     }
 }
@@ -469,6 +630,7 @@ impl Scene {
         &self,
         field: Option<&Field>,
         set: &MeshSet,
+        hw: &HwCache,
     ) -> Result<Resolved, RenderError> {
         let mut scene = self.clone();
         scene.derived = None;
@@ -523,12 +685,10 @@ impl Scene {
         };
         settings.validate()?;
         scene.camera.validate()?;
-        let lobe = scene.lobe;
-        let shader = Shader::new(
-            lobe.kind,
-            n,
-            lobe.v,
-            lobe.geometry,
+        let specular = scene.lobe.specular(n, hw)?;
+        let shader = Shader::with_specular(
+            specular,
+            scene.lobe.geometry,
             material,
             scene.lights.clone(),
             0.0,
@@ -547,6 +707,11 @@ impl Scene {
     /// Chooses every default for `field` and builds the settings and shader: the one
     /// place where glint picks anything the user did not say.
     pub fn resolve_for(&self, field: &Field) -> Result<Resolved, RenderError> {
+        self.resolve_cached(field, &HwCache::default())
+    }
+
+    /// [`Scene::resolve_for`], taking a `hw` lobe's table from `hw` when it has it.
+    fn resolve_cached(&self, field: &Field, hw: &HwCache) -> Result<Resolved, RenderError> {
         if self.is_surface() {
             return Err(RenderError::Parameter(
                 "a surface scene is resolved by a Renderer, which reads its meshes".into(),
@@ -603,12 +768,10 @@ impl Scene {
         };
         frame.validate()?;
         scene.camera.validate()?;
-        let lobe = scene.lobe;
-        let shader = Shader::new(
-            lobe.kind,
-            n,
-            lobe.v,
-            lobe.geometry,
+        let specular = scene.lobe.specular(n, hw)?;
+        let shader = Shader::with_specular(
+            specular,
+            scene.lobe.geometry,
             material,
             scene.lights.clone(),
             gate,
@@ -710,6 +873,8 @@ pub struct Renderer {
     field: Option<Arc<Field>>,
     classification: Option<(TransferFunction, Arc<Classification>)>,
     meshes: Option<(MeshKey, Arc<MeshSet>)>,
+    /// The last `hw` lobe's unit and table.
+    hw: HwCache,
     /// Which compositing loop frames use (the SIMD one by default).
     pub kernel: Kernel,
     opened: Timings,
@@ -730,6 +895,7 @@ impl Renderer {
                 field: None,
                 classification: None,
                 meshes: None,
+                hw: HwCache::default(),
                 kernel: Kernel::Auto,
                 opened: Timings::default(),
                 notes: Vec::new(),
@@ -780,6 +946,7 @@ impl Renderer {
             field: Some(field),
             classification: None,
             meshes: None,
+            hw: HwCache::default(),
             kernel: Kernel::Auto,
             notes: Vec::new(),
         }
@@ -826,14 +993,15 @@ impl Renderer {
     }
 
     /// Resolves `scene` against this renderer's volume ([`Scene::resolve_for`]) or,
-    /// for a surface scene, its meshes (read now if the scene names others).
+    /// for a surface scene, its meshes (read now if the scene names others); a `hw`
+    /// lobe's table is built once per (configuration, n) and kept.
     pub fn resolve(&mut self, scene: &Scene) -> Result<Resolved, RenderError> {
         if scene.is_surface() || self.field.is_none() {
             let set = self.mesh_set(scene)?;
-            return scene.resolve_surface(self.field.as_deref(), &set);
+            return scene.resolve_surface(self.field.as_deref(), &set, &self.hw);
         }
         let field = self.field.as_ref().expect("checked above");
-        let mut resolved = scene.resolve_for(field)?;
+        let mut resolved = scene.resolve_cached(field, &self.hw)?;
         if let Plan::Volume { frame, .. } = &mut resolved.plan {
             frame.kernel = self.kernel;
         }
@@ -985,10 +1153,11 @@ mod tests {
         scene.mode = RenderMode::Iso;
         scene.iso = Some(0.25);
         scene.lobe = LobeSpec {
-            kind: LobeKind::Schlick,
+            kind: LobeKind::Schlick.into(),
             n: Some(33.0),
             v: 3,
             geometry: Geometry::Blinn,
+            hw: None,
         };
         scene.lights.push(Light {
             azimuth: -40.0,
@@ -1020,6 +1189,177 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("cosine"), "{err}");
+    }
+
+    #[test]
+    fn hw_lobes_parse_by_name_and_take_v_from_the_unit() {
+        let parse = |lobe: &str| Scene::from_json(&format!(r#"{{"lobe": {lobe}}}"#));
+        let plain = parse(r#"{"kind": "hw", "n": 40}"#).unwrap().lobe;
+        assert_eq!(plain.kind, SceneLobe::Hw);
+        assert_eq!((plain.v, plain.hw), (HwConfig::default().v, None));
+        // v left out: the unit's; given: kept as written (resolution checks it).
+        let v3 = r#""hw": {"v": 3, "square_frac": [14, 14, 12]}"#;
+        let lobe = parse(&format!(r#"{{"kind": "HW", {v3}}}"#)).unwrap().lobe;
+        assert_eq!(lobe.v, 3);
+        assert_eq!(lobe.hw.as_ref().unwrap().square_frac, [14, 14, 12]);
+        assert_eq!(
+            lobe.hw.as_ref().unwrap().out_bits,
+            HwConfig::default().out_bits
+        );
+        let lobe = parse(&format!(r#"{{"kind": "hw", "v": 5, {v3}}}"#))
+            .unwrap()
+            .lobe;
+        assert_eq!(lobe.v, 5);
+        // Float lobes keep the default v whatever the unit says.
+        let lobe = parse(&format!(r#"{{"kind": "g", {v3}}}"#)).unwrap().lobe;
+        assert_eq!((lobe.kind, lobe.v), (LobeKind::SlopeFit.into(), 4));
+        // Unknown fields of the unit are refused, naming the path.
+        let err = parse(r#"{"kind": "hw", "hw": {"out_bitz": 8}}"#).unwrap_err();
+        assert!(err.to_string().contains("lobe.hw"), "{err}");
+        let err = parse(r#"{"kind": "hardware"}"#).unwrap_err().to_string();
+        assert!(err.contains("hardware") && err.contains("hw"), "{err}");
+        for lobe in SceneLobe::ALL {
+            assert_eq!(lobe.name().parse::<SceneLobe>().unwrap(), lobe);
+        }
+    }
+
+    #[test]
+    fn a_resolved_hw_scene_names_the_whole_unit_and_round_trips() {
+        let field = Field::new(&small().input.open().unwrap()).unwrap();
+        let scene = Scene::from_json(
+            r#"{"input": {"phantom": {"name": "shepp-logan", "size": 24}},
+            "size": [24, 20], "lobe": {"kind": "hw", "n": 40}}"#,
+        )
+        .unwrap();
+        let resolved = scene.resolve_for(&field).unwrap();
+        assert_eq!(resolved.scene.lobe.hw, Some(HwConfig::default()));
+        let json = resolved.scene.to_json().unwrap();
+        for field in ["\"hw\"", "out_bits", "square_frac", "coefficients"] {
+            assert!(json.contains(field), "{field} missing: {json}");
+        }
+        let again = Scene::from_json(&json).unwrap();
+        assert_eq!(again, resolved.scene);
+        assert_eq!(again.resolve_for(&field).unwrap().scene, resolved.scene);
+    }
+
+    #[test]
+    fn a_resolved_hw_lobe_is_the_units_output_per_cosine() {
+        use glint_hw::{Input as HwInput, Unit};
+        let field = Field::new(&small().input.open().unwrap()).unwrap();
+        for (config, n) in [
+            (HwConfig::default(), 40.4),
+            (
+                HwConfig {
+                    out_bits: 12,
+                    ..HwConfig::default()
+                },
+                100.0,
+            ),
+        ] {
+            let scene = Scene {
+                lobe: LobeSpec {
+                    n: Some(n),
+                    geometry: Geometry::Blinn,
+                    ..LobeSpec::hw(config.clone())
+                },
+                ..small()
+            };
+            let resolved = scene.resolve_for(&field).unwrap();
+            let specular = resolved.shader.specular();
+            let unit = Unit::new(config).unwrap();
+            let full = unit.full_scale();
+            // n is rounded to the unit's integer input.
+            let n_in = n.round() as u32;
+            let mut distinct = std::collections::BTreeSet::new();
+            for i in 0..=20_000 {
+                let c = 0.9f32 + 0.1 * i as f32 / 20_000.0;
+                let out = unit
+                    .eval(&HwInput {
+                        cos: unit.cos_code(f64::from(c)).unwrap(),
+                        n: n_in,
+                        ks: [full; 3],
+                    })
+                    .unwrap();
+                let want = (out.rgb[0] as f64 / full as f64) as f32;
+                assert_eq!(specular.eval(c).to_bits(), want.to_bits(), "n {n}, c {c}");
+                distinct.insert(out.rgb[0]);
+            }
+            assert!(distinct.len() > 100, "{} output codes", distinct.len());
+        }
+    }
+
+    #[test]
+    fn contradictory_or_bad_hw_lobes_are_typed_errors() {
+        let field = Field::new(&small().input.open().unwrap()).unwrap();
+        let hw = |v: u32, config: Option<HwConfig>, n: f64| Scene {
+            lobe: LobeSpec {
+                kind: SceneLobe::Hw,
+                v,
+                n: Some(n),
+                hw: config,
+                ..LobeSpec::default()
+            },
+            ..small()
+        };
+        let err = hw(3, None, 40.0).resolve_for(&field).unwrap_err();
+        assert!(
+            matches!(err, RenderError::HwV { lobe: 3, unit: 4 }),
+            "{err:?}"
+        );
+        let v3 = HwConfig {
+            v: 3,
+            square_frac: vec![14, 14, 12],
+            ..HwConfig::default()
+        };
+        assert!(hw(3, Some(v3.clone()), 40.0).resolve_for(&field).is_ok());
+        let err = hw(4, Some(v3), 40.0).resolve_for(&field).unwrap_err();
+        assert!(
+            matches!(err, RenderError::HwV { lobe: 4, unit: 3 }),
+            "{err:?}"
+        );
+        let bad = HwConfig {
+            out_bits: 0,
+            ..HwConfig::default()
+        };
+        let err = hw(4, Some(bad), 40.0).resolve_for(&field).unwrap_err();
+        assert!(matches!(err, RenderError::HwConfig(_)), "{err:?}");
+        let err = hw(4, None, 1024.0).resolve_for(&field).unwrap_err();
+        assert!(matches!(err, RenderError::HwN { .. }), "{err:?}");
+        // A float lobe ignores the unit, even an invalid one.
+        let mut k = hw(
+            4,
+            Some(HwConfig {
+                v: 11,
+                ..HwConfig::default()
+            }),
+            40.0,
+        );
+        k.lobe.kind = LobeKind::EnergyFit.into();
+        assert!(k.resolve_for(&field).is_ok());
+    }
+
+    #[test]
+    fn a_renderer_builds_a_units_table_once_per_configuration_and_n() {
+        let scene = Scene {
+            lobe: LobeSpec {
+                n: Some(30.0),
+                ..LobeSpec::hw(HwConfig::default())
+            },
+            ..small()
+        };
+        let mut r = Renderer::open(&scene.input).unwrap();
+        let mut table = |s: &Scene| match r.resolve(s).unwrap().shader.specular() {
+            Specular::Table(t) => t.clone(),
+            Specular::Lobe(l) => panic!("a hw scene resolved to {l:?}"),
+        };
+        let first = table(&scene);
+        // Another frame of the viewer: the camera moved.
+        let mut moved = scene.clone();
+        moved.camera.azimuth = 20.0;
+        assert!(Arc::ptr_eq(&first, &table(&moved)));
+        // Another n: another table.
+        moved.lobe.n = Some(31.0);
+        assert!(!Arc::ptr_eq(&first, &table(&moved)));
     }
 
     #[test]
@@ -1110,8 +1450,8 @@ mod tests {
                 ..scene.camera
             },
             lobe: LobeSpec {
-                kind: LobeKind::Exact,
-                ..scene.lobe
+                kind: LobeKind::Exact.into(),
+                ..scene.lobe.clone()
             },
             ..scene.clone()
         };

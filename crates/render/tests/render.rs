@@ -38,10 +38,11 @@ fn scene(width: u32, height: u32) -> Scene {
 /// The lobe `kind` with shininess `n`, v = 4.
 fn lobe(kind: LobeKind, n: f64, geometry: Geometry) -> LobeSpec {
     LobeSpec {
-        kind,
+        kind: kind.into(),
         n: Some(n),
         v: 4,
         geometry,
+        hw: None,
     }
 }
 

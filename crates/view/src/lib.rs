@@ -40,8 +40,7 @@ use axum::http::header;
 use axum::response::{Html, IntoResponse};
 use axum::routing::get;
 use axum::Router;
-use glint_lobe::LobeKind;
-use glint_render::{RenderError, Renderer, Scene, View, PRESETS};
+use glint_render::{RenderError, Renderer, Scene, SceneLobe, View, PRESETS};
 
 pub use session::{apply_patch, render_frame, Frame, MAX_VIEW_SIDE};
 
@@ -56,6 +55,19 @@ pub enum ViewError {
     /// A client message was refused.
     #[error("{0}")]
     Message(String),
+}
+
+/// The error and its sources joined with `": "` (what `glint` prints, anyhow's `{:#}`),
+/// on one line: e.g. an invalid hardware unit names the field at fault.
+fn one_line(err: &dyn std::error::Error) -> String {
+    let mut line = err.to_string();
+    let mut source = err.source();
+    while let Some(s) = source {
+        line.push_str(": ");
+        line.push_str(&s.to_string());
+        source = s.source();
+    }
+    line.replace('\n', " ")
 }
 
 /// Limits and timing of a viewer.
@@ -198,7 +210,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     let hello = ServerMessage::Hello {
         scene: serde_json::to_value(&viewer.scene).expect("scenes serialise"),
         presets: PRESETS.iter().map(|p| p.name).collect(),
-        lobes: LobeKind::ALL.map(|k| k.name()).to_vec(),
+        lobes: SceneLobe::ALL.map(|k| k.name()).to_vec(),
         views: View::ALL.map(|v| v.name()).to_vec(),
         range: viewer.range,
     };
@@ -263,7 +275,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                     }
                     Ok(Action::Save) => save = true,
                     Err(e) => {
-                        let message = e.to_string().replace('\n', " ");
+                        let message = one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
                     }
                 }
@@ -280,7 +292,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                         }
                     }
                     Ok(Err(e)) => {
-                        let message = e.to_string().replace('\n', " ");
+                        let message = one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
                     }
                     Err(_) => {

@@ -101,7 +101,7 @@ pub fn render_frame(
         Split::Off => main.image,
         Split::Side | Split::Diff => {
             let mut exact = main.scene.clone();
-            exact.lobe.kind = LobeKind::Exact;
+            exact.lobe.kind = LobeKind::Exact.into();
             let reference = renderer.render(&exact, &|_| {})?.image;
             if split == Split::Side {
                 side_by_side(&reference, &main.image)
@@ -235,6 +235,39 @@ mod tests {
                 .to_string();
             assert!(err.contains(needle), "{bad}: '{err}'");
         }
+    }
+
+    #[test]
+    fn a_patch_can_make_the_lobe_the_hardware_unit() {
+        let mut r = Renderer::open(&scene().input).unwrap();
+        let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
+        let hw = r#"{"lobe": {"kind": "hw", "n": 30, "hw": {"out_bits": 10}}}"#;
+        let s = apply_patch(&r, &scene(), &patch(hw)).unwrap();
+        assert_eq!(s.lobe.kind, glint_render::SceneLobe::Hw);
+        assert_eq!(s.lobe.hw.as_ref().map(|c| c.out_bits), Some(10));
+        // The frame's scene names the whole unit, and the image is not float K_4's.
+        let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 1).unwrap();
+        assert_eq!(
+            f.scene.lobe.hw.as_ref().map(|c| c.square_frac.len()),
+            Some(4)
+        );
+        let k = Scene {
+            lobe: glint_render::LobeSpec {
+                kind: LobeKind::EnergyFit.into(),
+                ..s.lobe.clone()
+            },
+            ..s.clone()
+        };
+        assert_ne!(
+            r.render(&s, &|_| {}).unwrap().image.rgb,
+            r.render(&k, &|_| {}).unwrap().image.rgb
+        );
+        // The scene's v (4) contradicts a v = 3 unit: refused, saying why.
+        let v3 = r#"{"lobe": {"kind": "hw", "hw": {"v": 3, "square_frac": [14, 14, 12]}}}"#;
+        let err = apply_patch(&r, &scene(), &patch(v3))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("contradicts"), "{err}");
     }
 
     #[test]

@@ -13,7 +13,7 @@ use glint_analysis::image::{
 };
 use glint_analysis::{fmt_num, lobe_label, Staging};
 use glint_lobe::LobeKind;
-use glint_render::{Depth, Input, Rendered, Renderer, Scene};
+use glint_render::{Depth, Input, Rendered, Renderer, Scene, SceneLobe};
 use serde_json::{json, Value};
 
 use super::choice::choice;
@@ -56,9 +56,10 @@ struct Options {
     /// directory [default: compare-sweep].
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Lobe to compare against exact; repeatable [default: k; with --sweep: k and g].
-    #[arg(long = "lobe", value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
-    lobes: Vec<LobeKind>,
+    /// Lobe to compare against exact; repeatable; `hw` is the unit of --hw-config
+    /// [default: k; with --sweep: k and g; --sweep takes no hw].
+    #[arg(long = "lobe", value_parser = choice::<SceneLobe>(SceneLobe::ALL.map(|k| k.name())))]
+    lobes: Vec<SceneLobe>,
     /// Print the metrics (and the resolved scene) as JSON instead of a table.
     #[arg(long, conflicts_with = "sweep")]
     json: bool,
@@ -91,7 +92,7 @@ fn build_scene(o: &Options) -> anyhow::Result<Scene> {
         bail!("--sweep chooses n and v itself: drop --n and --v (or use --sweep-n, --sweep-v)");
     }
     let mut scene = o.scene.scene()?;
-    scene.lobe.kind = LobeKind::Exact;
+    scene.lobe.kind = LobeKind::Exact.into();
     Ok(scene)
 }
 
@@ -145,7 +146,9 @@ fn dark_scene(scene: &Scene) -> Scene {
 
 /// One lobe compared with exact.
 struct Comparison {
-    kind: LobeKind,
+    kind: SceneLobe,
+    /// The unit of a `hw` row.
+    hw: Option<glint_hw::Config>,
     n: f64,
     v: u32,
     frame: Duration,
@@ -158,18 +161,21 @@ struct Comparison {
 fn compare_lobe(
     renderer: &mut Renderer,
     reference: &Reference,
-    kind: LobeKind,
+    flags: &SceneFlags,
+    kind: SceneLobe,
     v: u32,
 ) -> anyhow::Result<Comparison> {
     let mut scene = reference.shot.rendered.scene.clone();
     scene.derived = None;
-    scene.lobe.kind = kind;
     scene.lobe.v = v;
+    flags.set_lobe(&mut scene, kind);
+    let v = scene.lobe.v;
     let shot = shoot(renderer, &scene)?;
     let exact = &reference.shot.srgb;
     let (whole, highlight) = compare(exact, &shot.srgb, Some(&reference.mask))?;
     Ok(Comparison {
         kind,
+        hw: scene.lobe.hw.filter(|_| kind == SceneLobe::Hw),
         n: scene.lobe.n.unwrap_or_default(),
         v,
         frame: shot.rendered.timings.get("frame"),
@@ -193,7 +199,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let output = o.output.clone().unwrap_or_else(|| "compare.png".into());
     check_output_dir(&output)?;
     let lobes = if o.lobes.is_empty() {
-        vec![LobeKind::EnergyFit]
+        vec![LobeKind::EnergyFit.into()]
     } else {
         o.lobes.clone()
     };
@@ -203,7 +209,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let v = reference.shot.rendered.scene.lobe.v;
     let mut rows = Vec::new();
     for &kind in &lobes {
-        rows.push(compare_lobe(&mut renderer, &reference, kind, v)?);
+        rows.push(compare_lobe(&mut renderer, &reference, &o.scene, kind, v)?);
     }
     write_figure(&output, &reference, &rows, o.scale_max)?;
     if o.json {
@@ -218,12 +224,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Whether the lobe has a v to show (the power fits and the unit).
+fn uses_v(kind: SceneLobe) -> bool {
+    kind.float().is_none_or(|k| k.uses_v())
+}
+
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
-/// A row title: the lobe with its parameters.
-fn lobe_title(kind: LobeKind, n: f64, v: u32) -> String {
+/// A row title: the lobe with its parameters (for the unit: its ROM and output width).
+fn lobe_title(c: &Comparison) -> String {
+    let (n, v) = (c.n, c.v);
+    let kind = match (c.kind, &c.hw) {
+        (SceneLobe::Float(kind), _) => kind,
+        (SceneLobe::Hw, hw) => {
+            let hw = hw.clone().unwrap_or_default();
+            return format!(
+                "hw unit ({} ROM, {}-bit output, v = {v}), n = {}",
+                hw.coefficients,
+                hw.out_bits,
+                fmt_num(n.round())
+            );
+        }
+    };
     let label = lobe_label(kind, n, v);
     if kind == LobeKind::Exact {
         label
@@ -244,7 +268,7 @@ fn write_figure(
             let de = c.whole.delta_e.map(|d| (d.mean, d.p99)).unwrap_or_default();
             format!(
                 "{}: mean ΔE {:.3}, p99 {:.3}{}",
-                lobe_title(c.kind, c.n, c.v),
+                lobe_title(c),
                 de.0,
                 de.1,
                 match c.highlight.and_then(|h| h.delta_e) {
@@ -287,7 +311,7 @@ fn table_row(c: &Comparison, scope: &str, m: &ImageMetrics) -> String {
         "{:<9} {:<5} {:<2} {:<10.1} {:<7} {:<10} {:<8} {:<8} {:<8} {:<7} {:<7} {:<7} {:<7} {}\n",
         c.kind.name(),
         fmt_num(c.n),
-        if c.kind.uses_v() {
+        if uses_v(c.kind) {
             c.v.to_string()
         } else {
             "-".into()
@@ -371,7 +395,7 @@ fn json_report(
             json!({
                 "lobe": c.kind.name(),
                 "n": c.n,
-                "v": c.kind.uses_v().then_some(c.v),
+                "v": uses_v(c.kind).then_some(c.v),
                 "render_ms": ms(c.frame),
                 "image": metrics_json(&c.whole),
                 "highlight": c.highlight.as_ref().map(metrics_json),
@@ -418,7 +442,13 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
     let lobes = if o.lobes.is_empty() {
         SWEEP_LOBES.to_vec()
     } else {
-        o.lobes.clone()
+        o.lobes
+            .iter()
+            .map(|l| match l.float() {
+                Some(kind) => Ok(kind),
+                None => bail!("--sweep varies v, which a hw unit fixes: compare --lobe hw without --sweep (one unit per run)"),
+            })
+            .collect::<anyhow::Result<_>>()?
     };
     let out = o.output.clone().unwrap_or_else(|| "compare-sweep".into());
     let staging = Staging::new(&out)?;
@@ -436,7 +466,13 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
                 vec![None]
             };
             for v in kind_vs {
-                let c = compare_lobe(&mut renderer, &reference, kind, v.unwrap_or(s.lobe.v))?;
+                let c = compare_lobe(
+                    &mut renderer,
+                    &reference,
+                    &o.scene,
+                    kind.into(),
+                    v.unwrap_or(s.lobe.v),
+                )?;
                 if !o.quiet {
                     eprintln!(
                         "glint compare: {} n = {} v = {:?}",

@@ -237,7 +237,8 @@ pub fn run(command: Command) -> anyhow::Result<()> {
 /// bounded so that `--config /dev/zero` or a huge file fails instead of filling memory.
 const MAX_CONFIG_BYTES: u64 = 1 << 20;
 
-fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
+/// The configuration in `path` (bounded read, typed parse), or the default.
+pub(crate) fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
     match path {
         None => Ok(Config::default()),
         Some(p) => {

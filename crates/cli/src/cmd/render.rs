@@ -8,11 +8,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
 use glint_io::ReadOptions;
-use glint_lobe::LobeKind;
-use glint_render::{Depth, Input, Kernel, Rendered, Renderer, Scene};
+use glint_render::{Depth, Input, Kernel, Rendered, Renderer, Scene, SceneLobe};
 
 use super::choice::choice;
-use super::scene_flags::{set, SceneFlags};
+use super::scene_flags::SceneFlags;
 
 /// Arguments of `glint render`.
 #[derive(clap::Args)]
@@ -66,9 +65,10 @@ struct Options {
     #[arg(long, value_name = "FILE")]
     dump_scene: Option<PathBuf>,
     /// Specular lobe: exact (cos^n), k (energy fit K_v), g (slope fit G_v), schlick,
-    /// gauss, minimax [default: k].
-    #[arg(long, value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
-    lobe: Option<LobeKind>,
+    /// gauss, minimax, or hw (the hardware unit's output, bit for bit; --hw-config)
+    /// [default: k].
+    #[arg(long, value_parser = choice::<SceneLobe>(SceneLobe::ALL.map(|k| k.name())))]
+    lobe: Option<SceneLobe>,
     /// Bits per PNG channel.
     #[arg(long, default_value = "8", value_parser = ["8", "16"])]
     depth: String,
@@ -179,7 +179,9 @@ pub(crate) fn check_output_dir(output: &Path) -> anyhow::Result<()> {
 /// The scene of the flags, with the lobe.
 fn build_scene(args: &Options) -> anyhow::Result<Scene> {
     let mut scene = args.scene.scene()?;
-    set(&mut scene.lobe.kind, args.lobe);
+    if let Some(kind) = args.lobe {
+        args.scene.set_lobe(&mut scene, kind);
+    }
     Ok(scene)
 }
 
@@ -433,6 +435,67 @@ mod tests {
         );
         let base = render_to(dir.path(), "d.png", &["--scene", json.to_str().unwrap()]);
         assert_ne!(other, base);
+    }
+
+    #[test]
+    fn a_hw_lobe_scene_dumps_its_unit_and_renders_again_bit_for_bit() {
+        let dir = tempfile::tempdir().unwrap();
+        let unit = dir.path().join("unit.json");
+        std::fs::write(&unit, r#"{"out_bits": 10}"#).unwrap();
+        let json = dir.path().join("scene.json");
+        // 16-bit PNGs: the unit's difference from float K_4 is below 8-bit sRGB's step
+        // on this small scene.
+        let small = [
+            "--size",
+            "40x32",
+            "--phantom-size",
+            "40",
+            "--n",
+            "40",
+            "--depth",
+            "16",
+        ];
+        let hw = [
+            small.as_slice(),
+            &["--lobe", "hw", "--hw-config", unit.to_str().unwrap()],
+        ]
+        .concat();
+        let dump = [hw.as_slice(), &["--dump-scene", json.to_str().unwrap()]].concat();
+        let first = render_to(dir.path(), "a.png", &dump);
+        let again = render_to(
+            dir.path(),
+            "b.png",
+            &["--scene", json.to_str().unwrap(), "--depth", "16"],
+        );
+        assert_eq!(first, again);
+        // The dump holds the whole unit: the file's width, the default's other fields.
+        let scene = Scene::from_json(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(scene.lobe.kind, SceneLobe::Hw);
+        let want = glint_hw::Config {
+            out_bits: 10,
+            ..glint_hw::Config::default()
+        };
+        assert_eq!((scene.lobe.hw, scene.lobe.v), (Some(want), 4));
+        // Float K_4 of the same n is another image.
+        let k = render_to(
+            dir.path(),
+            "c.png",
+            &[small.as_slice(), &["--lobe", "k"]].concat(),
+        );
+        assert!(first != k, "the unit's image equals float K_4's");
+        // A v = 3 unit gives the lobe v = 3; --v 4 with it is a contradiction.
+        std::fs::write(&unit, r#"{"v": 3, "square_frac": [14, 14, 12]}"#).unwrap();
+        render_to(dir.path(), "d.png", &hw);
+        let (result, left, _out) = run_in_tmp(&[hw.as_slice(), &["--v", "4"]].concat());
+        let err = format!("{:#}", result.unwrap_err());
+        assert!(err.contains("contradicts") && !err.contains('\n'), "{err}");
+        assert!(!left);
+        // A bad unit: one line naming the file and the field, no output.
+        std::fs::write(&unit, r#"{"out_bits": 0}"#).unwrap();
+        let (result, left, _out) = run_in_tmp(&hw);
+        let err = format!("{:#}", result.unwrap_err());
+        assert!(err.contains("out_bits") && !err.contains('\n'), "{err}");
+        assert!(!left);
     }
 
     #[test]

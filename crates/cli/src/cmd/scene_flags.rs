@@ -6,10 +6,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::bail;
 use clap::builder::TypedValueParser;
+use glint_hw::Config as HwConfig;
 use glint_io::{Format, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    ColorMap, Input, Light, MeshSpec, Overlay, Phantom, Projection, RenderMode, Scene,
+    ColorMap, Input, Light, MeshSpec, Overlay, Phantom, Projection, RenderMode, Scene, SceneLobe,
     TransferFunction, View,
 };
 
@@ -88,6 +89,11 @@ pub struct SceneFlags {
     /// The power fits raise their base to 2^v [default: 4].
     #[arg(long)]
     pub v: Option<u32>,
+    /// The hardware unit of `--lobe hw`: a `glint hw` configuration file (JSON; missing
+    /// fields take the default's, see `glint hw eval --print-config`) [default: the
+    /// scene's unit, else the default unit]. The unit's v is the lobe's: --v must agree.
+    #[arg(long, value_name = "FILE")]
+    pub hw_config: Option<PathBuf>,
     /// Highlight geometry: phong (R·V) or blinn (N·H) [default: phong].
     #[arg(long, value_parser = choice::<Geometry>(["phong", "blinn"]))]
     pub geometry: Option<Geometry>,
@@ -125,6 +131,19 @@ pub struct SceneFlags {
 }
 
 impl SceneFlags {
+    /// Makes `scene`'s lobe `kind`; a `hw` lobe takes its unit's v unless --v was
+    /// given (a --v that contradicts the unit is refused when the scene is resolved).
+    pub fn set_lobe(&self, scene: &mut Scene, kind: SceneLobe) {
+        scene.lobe.kind = kind;
+        if kind == SceneLobe::Hw && self.v.is_none() {
+            scene.lobe.v = scene
+                .lobe
+                .hw
+                .as_ref()
+                .map_or(HwConfig::default().v, |c| c.v);
+        }
+    }
+
     /// The scene file (or the default scene) with every given flag applied. Checks what
     /// can be checked before the volume is read (preset name, transfer-function file,
     /// n and v, lights).
@@ -265,6 +284,9 @@ impl SceneFlags {
             glint_analysis::check_v(v)?;
         }
         let lobe = &mut scene.lobe;
+        if let Some(path) = &self.hw_config {
+            lobe.hw = Some(super::hw::load_config(Some(path))?);
+        }
         set(&mut lobe.n, self.n.map(Some));
         set(&mut lobe.v, self.v);
         set(&mut lobe.geometry, self.geometry);

@@ -4,12 +4,11 @@ use std::net::IpAddr;
 use std::sync::Arc;
 
 use anyhow::Context;
-use glint_lobe::LobeKind;
-use glint_render::Input;
+use glint_render::{Input, SceneLobe};
 use glint_view::{Viewer, ViewerConfig};
 
 use super::choice::choice;
-use super::scene_flags::{set, SceneFlags};
+use super::scene_flags::SceneFlags;
 
 /// Arguments of `glint view`.
 #[derive(clap::Args)]
@@ -24,9 +23,9 @@ pub struct Args {
     // Boxed: the options are many, and main's subcommand enum should stay small.
     #[command(flatten)]
     scene: Box<SceneFlags>,
-    /// Lobe to start with [default: k].
-    #[arg(long, value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
-    lobe: Option<LobeKind>,
+    /// Lobe to start with (hw: the unit of --hw-config) [default: k].
+    #[arg(long, value_parser = choice::<SceneLobe>(SceneLobe::ALL.map(|k| k.name())))]
+    lobe: Option<SceneLobe>,
     /// Port to listen on (0 picks a free one).
     #[arg(long, default_value_t = 8080)]
     port: u16,
@@ -41,7 +40,9 @@ pub struct Args {
 /// Runs `glint view` until interrupted.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut scene = args.scene.scene()?;
-    set(&mut scene.lobe.kind, args.lobe);
+    if let Some(kind) = args.lobe {
+        args.scene.set_lobe(&mut scene, kind);
+    }
     if let Input::Path(p) = &mut scene.input {
         // Saved scenes name the volume absolutely, so they render from anywhere.
         *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
