@@ -375,7 +375,15 @@ pub fn write_atomic(
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(os)?;
+    let mut builder = tempfile::Builder::new();
+    // A temporary file is private (0600); an output is an ordinary file, created with
+    // 0666 less the umask like any other.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(&dir).map_err(os)?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());
         body(&mut w).map_err(os)?;
@@ -392,4 +400,22 @@ pub(crate) fn has_dicom_magic(path: &Path) -> bool {
         .and_then(|mut f| f.read_exact(&mut head))
         .is_ok()
         && &head[128..] == b"DICM"
+}
+
+#[cfg(test)]
+mod tests {
+    /// An atomically written output gets the permissions of any file the user creates
+    /// (0666 less the umask), not the temporary file's private 0600.
+    #[cfg(unix)]
+    #[test]
+    fn atomic_outputs_have_ordinary_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let ours = dir.path().join("ours.png");
+        super::write_atomic(&ours, |w| w.write_all(b"x")).unwrap();
+        let plain = dir.path().join("plain.png");
+        std::fs::write(&plain, b"x").unwrap();
+        let mode = |p: &std::path::Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&ours), mode(&plain));
+    }
 }
