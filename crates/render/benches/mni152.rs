@@ -7,46 +7,16 @@
 //! built-in phantom at 192^3 so it still runs. The comparison with VTK in the same run
 //! is scripts/bench-vtk.
 
-use std::path::PathBuf;
-
 use criterion::{criterion_group, criterion_main, Criterion};
 use glint_lobe::LobeKind;
-use glint_render::{CameraSpec, Input, LobeSpec, Phantom, Renderer, Scene, SceneLobe, View};
+use glint_render::{LobeSpec, Renderer, Scene, SceneLobe};
 
-/// The benchmark scene: the MNI152 template, or the phantom at 192^3 without it.
+#[path = "common/mni152_scene.rs"]
+mod common;
+
+/// The benchmark scene (`common::mni152_scene`).
 fn scene() -> Scene {
-    let path = std::env::var_os("GLINT_MNI152")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            let home = std::env::var_os("HOME").unwrap_or_default();
-            PathBuf::from(home).join(".cache/glint/samples/mni152_t1_09a.nii.gz")
-        });
-    let (input, preset) = if path.is_file() {
-        (Input::Path(path), "mr-t2-brain")
-    } else {
-        eprintln!(
-            "mni152 bench: {} is missing; using the phantom (run scripts/fetch-samples)",
-            path.display()
-        );
-        (
-            Input::Phantom {
-                name: Phantom::SheppLogan,
-                size: 192,
-            },
-            "phantom",
-        )
-    };
-    Scene {
-        input,
-        preset: Some(preset.into()),
-        camera: CameraSpec {
-            view: View::Left,
-            ..Default::default()
-        },
-        size: [512, 512],
-        step: 0.5,
-        ..Scene::default()
-    }
+    common::mni152_scene("mni152 bench")
 }
 
 fn bench(c: &mut Criterion) {

@@ -8,41 +8,17 @@
 //! the medians are compared. Without the template (`GLINT_MNI152`, default
 //! `~/.cache/glint/samples/mni152_t1_09a.nii.gz`) it uses the phantom at 192^3.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use glint_hw::{Config, Unit};
-use glint_render::{CameraSpec, Input, LobeSpec, Phantom, Renderer, Scene, View};
+use glint_render::{LobeSpec, Renderer, Scene};
 
-/// The scene of `benches/mni152.rs`: the MNI152 template, or the phantom at 192^3.
+#[path = "../benches/common/mni152_scene.rs"]
+mod common;
+
+/// The benchmark scene (`common::mni152_scene`).
 fn scene() -> Scene {
-    let path = std::env::var_os("GLINT_MNI152")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            let home = std::env::var_os("HOME").unwrap_or_default();
-            PathBuf::from(home).join(".cache/glint/samples/mni152_t1_09a.nii.gz")
-        });
-    let (input, preset) = if path.is_file() {
-        (Input::Path(path), "mr-t2-brain")
-    } else {
-        eprintln!(
-            "hw_lobe_speed: {} is missing; using the phantom",
-            path.display()
-        );
-        let name = Phantom::SheppLogan;
-        (Input::Phantom { name, size: 192 }, "phantom")
-    };
-    Scene {
-        input,
-        preset: Some(preset.into()),
-        camera: CameraSpec {
-            view: View::Left,
-            ..Default::default()
-        },
-        size: [512, 512],
-        step: 0.5,
-        ..Scene::default()
-    }
+    common::mni152_scene("hw_lobe_speed")
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
