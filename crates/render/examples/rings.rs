@@ -5,7 +5,7 @@
 //! [PRESET] [STEP] [VIEW] [REPEAT] [OUT.png]` (defaults: the `head` phantom, its
 //! preset, 0.5, anterior, 5, no PNG). Environment: `RINGS_SIZE` (phantom grid),
 //! `RINGS_ORTHO`, `RINGS_NOSKIP`, `RINGS_NOSHADE`, `RINGS_LIGHT=AZ,EL[,I]` (an extra
-//! light).
+//! light), `RINGS_PREFILTER=binomial|none`.
 
 use std::time::Instant;
 
@@ -36,6 +36,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scene.camera.view = arg(3, "anterior").parse()?;
     if env("RINGS_ORTHO") {
         scene.camera.projection = Projection::Orthographic;
+    }
+    if let Ok(p) = std::env::var("RINGS_PREFILTER") {
+        scene.prefilter = p.parse()?;
     }
     if env("RINGS_NOSHADE") {
         scene.material.shade = Some(false);

@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::camera::{Camera, CameraSpec, Projection};
 use crate::colormap::ScalarColors;
 use crate::error::RenderError;
-use crate::field::Field;
+use crate::field::{Field, Prefilter};
 use crate::hwlobe::HwCache;
 use crate::image::Image;
 use crate::isosurface::extract_field;
@@ -111,6 +111,9 @@ pub struct Scene {
     pub gate: f64,
     /// Empty-space skipping (never changes the image, only the speed).
     pub skip_empty: bool,
+    /// How the volume's samples are filtered before trilinear reconstruction
+    /// ([`Prefilter`]; `binomial` by default: no "wood grain" rings).
+    pub prefilter: Prefilter,
     /// Background colour, linear RGB.
     pub background: [f32; 3],
     /// Written by a render for other tools (e.g. scripts/bench_vtk.py): the camera
@@ -140,6 +143,7 @@ impl Default for Scene {
             step: 0.5,
             gate: 0.01,
             skip_empty: true,
+            prefilter: Prefilter::default(),
             background: [0.0; 3],
             derived: None,
         }
@@ -879,6 +883,9 @@ pub struct Renderer {
     pub kernel: Kernel,
     opened: Timings,
     notes: Vec<String>,
+    /// The volume the field was built from, kept to rebuild the field when a scene
+    /// asks for another [`Prefilter`]; `None` for a renderer made from a field.
+    volume: Option<Arc<Volume>>,
 }
 
 impl Renderer {
@@ -899,6 +906,7 @@ impl Renderer {
                 kernel: Kernel::Auto,
                 opened: Timings::default(),
                 notes: Vec::new(),
+                volume: None,
             });
         }
         let start = Instant::now();
@@ -910,7 +918,7 @@ impl Renderer {
         if let Some(inflate) = opened.inflate {
             read.record("read: inflate", inflate);
         }
-        let mut renderer = Renderer::from_volume(&opened.volume)?;
+        let mut renderer = Renderer::from_shared_volume(Arc::new(opened.volume))?;
         read.extend(&renderer.opened);
         renderer.opened = read;
         renderer.notes = opened.notes;
@@ -933,9 +941,42 @@ impl Renderer {
         Ok(renderer)
     }
 
-    /// A renderer of a volume already in memory.
+    /// A renderer of a volume already in memory (copied: the renderer keeps it to
+    /// rebuild the field for another [`Prefilter`]).
     pub fn from_volume(volume: &Volume) -> Result<Renderer, RenderError> {
-        Ok(Renderer::from_field(Arc::new(Field::new(volume)?)))
+        Renderer::from_shared_volume(Arc::new(volume.clone()))
+    }
+
+    /// A renderer of a shared volume, its field built with the default [`Prefilter`].
+    pub fn from_shared_volume(volume: Arc<Volume>) -> Result<Renderer, RenderError> {
+        let field = Field::with_prefilter(&volume, Prefilter::default())?;
+        let mut renderer = Renderer::from_field(Arc::new(field));
+        renderer.volume = Some(volume);
+        Ok(renderer)
+    }
+
+    /// Rebuilds the field when `prefilter` is not the one it was built with (and
+    /// forgets what depended on it).
+    fn use_prefilter(&mut self, prefilter: Prefilter) -> Result<(), RenderError> {
+        let Some(field) = &self.field else {
+            return Ok(());
+        };
+        if field.prefilter() == prefilter {
+            return Ok(());
+        }
+        let Some(volume) = &self.volume else {
+            return Err(RenderError::Parameter(format!(
+                "prefilter {}: this renderer was given a field built with prefilter {}",
+                prefilter.name(),
+                field.prefilter().name()
+            )));
+        };
+        let field = Field::with_prefilter(volume, prefilter)?;
+        self.opened.extend(field.timings());
+        self.field = Some(Arc::new(field));
+        self.classification = None;
+        self.meshes = None;
+        Ok(())
     }
 
     /// A renderer of a field already built (several renderers, each with its own
@@ -949,6 +990,7 @@ impl Renderer {
             hw: HwCache::default(),
             kernel: Kernel::Auto,
             notes: Vec::new(),
+            volume: None,
         }
     }
 
@@ -996,6 +1038,7 @@ impl Renderer {
     /// for a surface scene, its meshes (read now if the scene names others); a `hw`
     /// lobe's table is built once per (configuration, n) and kept.
     pub fn resolve(&mut self, scene: &Scene) -> Result<Resolved, RenderError> {
+        self.use_prefilter(scene.prefilter)?;
         if scene.is_surface() || self.field.is_none() {
             let set = self.mesh_set(scene)?;
             return scene.resolve_surface(self.field.as_deref(), &set, &self.hw);

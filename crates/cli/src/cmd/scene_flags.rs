@@ -10,8 +10,8 @@ use glint_hw::Config as HwConfig;
 use glint_io::{Format, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    ColorMap, Input, Light, MeshSpec, Overlay, Phantom, Projection, RenderMode, Scene, SceneLobe,
-    TransferFunction, View,
+    ColorMap, Input, Light, MeshSpec, Overlay, Phantom, Prefilter, Projection, RenderMode, Scene,
+    SceneLobe, TransferFunction, View,
 };
 
 use super::choice::choice;
@@ -125,6 +125,11 @@ pub struct SceneFlags {
     /// group, multi-frame DICOM without frame positions).
     #[arg(long)]
     pub strict: bool,
+    /// Filter applied to the volume before trilinear reconstruction: binomial (a
+    /// [1 2 1]/4 low-pass per axis; no "wood grain" rings on surfaces) or none (the
+    /// samples as stored) [default: binomial].
+    #[arg(long, value_parser = choice::<Prefilter>(Prefilter::ALL.map(|p| p.name())))]
+    pub prefilter: Option<Prefilter>,
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     pub no_skip: bool,
@@ -177,6 +182,7 @@ impl SceneFlags {
         set(&mut camera.projection, self.projection);
         set(&mut scene.size, self.size);
         set(&mut scene.step, self.step);
+        set(&mut scene.prefilter, self.prefilter);
         if self.no_skip {
             scene.skip_empty = false;
         }
