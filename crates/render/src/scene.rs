@@ -1190,6 +1190,31 @@ mod tests {
         }
     }
 
+    /// The field follows the scene's prefilter: rebuilt from the kept volume when a
+    /// scene asks for another one, with a different image; a renderer given only a
+    /// field refuses another prefilter with a typed error.
+    #[test]
+    fn the_field_follows_the_scenes_prefilter() {
+        let scene = small();
+        assert_eq!(scene.prefilter, Prefilter::Binomial);
+        let mut r = Renderer::open(&scene.input).unwrap();
+        let smooth = r.render(&scene, &|_| {}).unwrap();
+        assert_eq!(r.field().unwrap().prefilter(), Prefilter::Binomial);
+        let raw_scene = Scene {
+            prefilter: Prefilter::None,
+            ..scene.clone()
+        };
+        let raw = r.render(&raw_scene, &|_| {}).unwrap();
+        assert_eq!(r.field().unwrap().prefilter(), Prefilter::None);
+        assert_ne!(smooth.image.rgb, raw.image.rgb);
+        assert_eq!(raw.scene.prefilter, Prefilter::None);
+        let volume = scene.input.open().unwrap();
+        let mut fixed = Renderer::from_field(Arc::new(Field::new(&volume).unwrap()));
+        let err = fixed.render(&scene, &|_| {}).unwrap_err();
+        assert!(matches!(err, RenderError::Parameter(_)), "{err}");
+        assert!(fixed.render(&raw_scene, &|_| {}).is_ok());
+    }
+
     #[test]
     fn json_round_trip_keeps_every_field() {
         let mut scene = small();
