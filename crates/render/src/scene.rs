@@ -897,6 +897,20 @@ impl Renderer {
     /// [`Renderer::open`] with reader options (e.g. `strict`); the reader's notes are
     /// kept ([`Renderer::notes`]).
     pub fn open_with(input: &Input, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        Renderer::open_prefiltered(input, options, Prefilter::default())
+    }
+
+    /// [`Renderer::open_with`] for `scene`: its input, its field built with the scene's
+    /// prefilter (so rendering it builds no second field).
+    pub fn open_for(scene: &Scene, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        Renderer::open_prefiltered(&scene.input, options, scene.prefilter)
+    }
+
+    fn open_prefiltered(
+        input: &Input,
+        options: &ReadOptions,
+        prefilter: Prefilter,
+    ) -> Result<Renderer, RenderError> {
         if *input == Input::None {
             return Ok(Renderer {
                 field: None,
@@ -918,7 +932,7 @@ impl Renderer {
         if let Some(inflate) = opened.inflate {
             read.record("read: inflate", inflate);
         }
-        let mut renderer = Renderer::from_shared_volume(Arc::new(opened.volume))?;
+        let mut renderer = Renderer::from_shared_volume(Arc::new(opened.volume), prefilter)?;
         read.extend(&renderer.opened);
         renderer.opened = read;
         renderer.notes = opened.notes;
@@ -944,12 +958,16 @@ impl Renderer {
     /// A renderer of a volume already in memory (copied: the renderer keeps it to
     /// rebuild the field for another [`Prefilter`]).
     pub fn from_volume(volume: &Volume) -> Result<Renderer, RenderError> {
-        Renderer::from_shared_volume(Arc::new(volume.clone()))
+        Renderer::from_shared_volume(Arc::new(volume.clone()), Prefilter::default())
     }
 
-    /// A renderer of a shared volume, its field built with the default [`Prefilter`].
-    pub fn from_shared_volume(volume: Arc<Volume>) -> Result<Renderer, RenderError> {
-        let field = Field::with_prefilter(&volume, Prefilter::default())?;
+    /// A renderer of a shared volume, its field built with `prefilter` (a scene asking
+    /// for another one rebuilds it).
+    pub fn from_shared_volume(
+        volume: Arc<Volume>,
+        prefilter: Prefilter,
+    ) -> Result<Renderer, RenderError> {
+        let field = Field::with_prefilter(&volume, prefilter)?;
         let mut renderer = Renderer::from_field(Arc::new(field));
         renderer.volume = Some(volume);
         Ok(renderer)
@@ -1213,6 +1231,9 @@ mod tests {
         let err = fixed.render(&scene, &|_| {}).unwrap_err();
         assert!(matches!(err, RenderError::Parameter(_)), "{err}");
         assert!(fixed.render(&raw_scene, &|_| {}).is_ok());
+        // Opened for the scene, the field is built once, with its prefilter.
+        let opened = Renderer::open_for(&raw_scene, &ReadOptions::default()).unwrap();
+        assert_eq!(opened.field().unwrap().prefilter(), Prefilter::None);
     }
 
     #[test]

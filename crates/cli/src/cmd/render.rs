@@ -148,12 +148,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// reader assumed (e.g. DICOM frames without positions) to stderr. Meshes are read
 /// when the scene is resolved (their errors name the file).
 pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Result<Renderer> {
-    let renderer =
-        Renderer::open_with(&scene.input, options).with_context(|| match &scene.input {
-            Input::Path(p) => format!("cannot read volume {}", p.display()),
-            Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
-            Input::None => "cannot open the scene".into(),
-        })?;
+    let renderer = Renderer::open_for(scene, options).with_context(|| match &scene.input {
+        Input::Path(p) => format!("cannot read volume {}", p.display()),
+        Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
+        Input::None => "cannot open the scene".into(),
+    })?;
     if let Input::Path(path) = &scene.input {
         for note in renderer.notes().iter().filter(|n| n.contains("assumed")) {
             eprintln!("glint: {}: {note}", path.display());
