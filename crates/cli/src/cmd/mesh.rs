@@ -117,16 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if taubin.iterations > 0 {
         taubin_smooth(&mut mesh, &taubin)?;
     }
-    write(&args.output, &mesh)?;
-    if !args.quiet {
-        eprintln!(
-            "glint: wrote {} ({} vertices, {} triangles)",
-            args.output.display(),
-            mesh.positions.len(),
-            mesh.triangles.len()
-        );
-    }
-    Ok(())
+    write_and_report(&args, &mesh, write)
 }
 
 /// A surface file written in another format (e.g. GIFTI to PLY for VTK, in
@@ -155,7 +146,12 @@ fn convert(args: &Args, taubin: &Taubin, write: MeshWriter) -> anyhow::Result<()
         let normals = vertex_normals(&positions, &mesh.triangles);
         mesh.normals = Some(normals.iter().map(|n| n.to_array()).collect());
     }
-    write(&args.output, &mesh)?;
+    write_and_report(args, &mesh, write)
+}
+
+/// Writes the mesh (atomically, by the writer) and says so unless `--quiet`.
+fn write_and_report(args: &Args, mesh: &Mesh, write: MeshWriter) -> anyhow::Result<()> {
+    write(&args.output, mesh)?;
     if !args.quiet {
         eprintln!(
             "glint: wrote {} ({} vertices, {} triangles)",
