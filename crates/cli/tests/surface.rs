@@ -270,6 +270,71 @@ fn compare_works_on_a_mesh() {
     assert!(out.is_file());
 }
 
+/// A volume with a mesh in the default (composite) mode: the mesh, in front of the
+/// volume, shows at the centre; the dump keeps both and the composite mode.
+#[test]
+fn a_ray_cast_volume_composites_over_a_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 32^3 ball of 200 in 0, 1 mm voxels centred on the origin, as NRRD.
+    let mut nrrd = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 32 32 32\nspace: RAS\n\
+space directions: (1,0,0) (0,1,0) (0,0,1)\nspace origin: (-15.5,-15.5,-15.5)\n\
+encoding: raw\n\n"
+        .to_vec();
+    for z in 0..32 {
+        for y in 0..32 {
+            for x in 0..32 {
+                let r2 = [x, y, z]
+                    .map(|i| (i as f32 - 15.5).powi(2))
+                    .iter()
+                    .sum::<f32>();
+                nrrd.push(if r2 < 144.0 { 200 } else { 0 });
+            }
+        }
+    }
+    let volume = dir.path().join("ball.nrrd");
+    std::fs::write(&volume, nrrd).unwrap();
+    // The octahedron scaled by 8 mm and moved 40 mm anterior, before the ball.
+    let obj: String = OCTAHEDRON
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(v) => {
+                let p: Vec<f32> = v.split(' ').map(|x| x.parse().unwrap()).collect();
+                format!("v {} {} {}\n", 8.0 * p[0], 40.0 + 8.0 * p[1], 8.0 * p[2])
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let mesh = dir.path().join("front.obj");
+    std::fs::write(&mesh, obj).unwrap();
+    let (with, without) = (dir.path().join("with.png"), dir.path().join("without.png"));
+    let scene = dir.path().join("s.json");
+    let common = ["--view", "anterior", "--size", "48x48", "-q"];
+    let vol = volume.to_str().unwrap();
+    ok(&[
+        &["render", vol, mesh.to_str().unwrap()],
+        &common[..],
+        &["-o", with.to_str().unwrap()],
+        &["--dump-scene", scene.to_str().unwrap()],
+    ]
+    .concat());
+    ok(&[
+        &["render", vol],
+        &common[..],
+        &["-o", without.to_str().unwrap()],
+    ]
+    .concat());
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    assert_eq!(s["mode"], "composite");
+    assert_eq!(s["meshes"].as_array().map(Vec::len), Some(1), "{s}");
+    let ((_, _, ch, a), (_, _, _, b)) = (decode(&with), decode(&without));
+    let k = (24 * 48 + 24) * ch;
+    assert_ne!(a[k..k + 3], b[k..k + 3], "the mesh shows at the centre");
+    assert!(b[k..k + 3].iter().any(|&c| c > 20), "the ball shows alone");
+    // The corners show the background alone, the same in both.
+    assert_eq!(a[..3], b[..3]);
+}
+
 #[test]
 fn a_volume_isosurface_renders_in_surface_mode() {
     let dir = tempfile::tempdir().unwrap();

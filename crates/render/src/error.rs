@@ -64,10 +64,6 @@ pub enum RenderError {
     /// Reading the input volume failed.
     #[error(transparent)]
     Read(#[from] glint_io::IoError),
-    /// The combination asked for is not implemented (e.g. a ray-cast volume with
-    /// meshes).
-    #[error("not supported: {0}")]
-    Unsupported(String),
     /// A scene is malformed (bad JSON, unknown field, unsupported version).
     #[error("{0}")]
     Scene(String),

@@ -69,8 +69,8 @@ pub use raycast::{
     TERMINATION_OPACITY,
 };
 pub use scene::{
-    Derived, Input, LobeSpec, OpenedVolume, Plan, RenderMode, Rendered, Renderer, Resolved, Scene,
-    SceneLobe, DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
+    Derived, Input, LobeSpec, MeshLayer, OpenedVolume, Plan, RenderMode, Rendered, Renderer,
+    Resolved, Scene, SceneLobe, DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
 };
 pub use shading::{Light, Shader, MAX_LIGHTS};
 pub use tf::{

@@ -534,17 +534,41 @@ impl Classification {
         settings: &FrameSettings,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Image, RenderError> {
-        self.render_jittered(shader, settings, progress, true)
+        self.render_jittered(shader, settings, progress, true, None)
+    }
+
+    /// [`Classification::render`] with each ray stopped at a per-pixel distance:
+    /// `far[y * width + x]` is the distance (mm, along the pixel's ray from the
+    /// camera's eye, or from the image plane for orthographic cameras) past which the
+    /// volume is hidden (e.g. by an opaque surface drawn with the same camera);
+    /// `f32::INFINITY` where nothing hides it.
+    pub fn render_in_front(
+        &self,
+        shader: &Shader,
+        settings: &FrameSettings,
+        progress: &(dyn Fn(u64) + Sync),
+        far: &[f32],
+    ) -> Result<Image, RenderError> {
+        let pixels = settings.width as usize * settings.height as usize;
+        if far.len() != pixels {
+            return Err(RenderError::Parameter(format!(
+                "{} ray limits for {pixels} pixels",
+                far.len()
+            )));
+        }
+        self.render_jittered(shader, settings, progress, true, Some(far))
     }
 
     /// [`Classification::render`] with the per-pixel [`jitter`] on or off (off only
-    /// in tests that compare the two).
+    /// in tests that compare the two), and rays stopped at `far` when given
+    /// ([`Classification::render_in_front`]; `width * height` long).
     pub(crate) fn render_jittered(
         &self,
         shader: &Shader,
         settings: &FrameSettings,
         progress: &(dyn Fn(u64) + Sync),
         jitter: bool,
+        far: Option<&[f32]>,
     ) -> Result<Image, RenderError> {
         let camera = self.camera(settings)?;
         let shader = &shader.placed(&camera);
@@ -581,6 +605,13 @@ impl Classification {
                     Some(s) => s.tile(t, (x0, x1), (y0, y1)),
                     None => [0.0; TILE * TILE],
                 };
+                let mut end = [f32::INFINITY; TILE * TILE];
+                if let Some(far) = far {
+                    let tw = x1 - x0;
+                    for (y, row) in (y0..y1).zip(end.chunks_mut(tw)) {
+                        row.copy_from_slice(&far[y * w + x0..y * w + x1]);
+                    }
+                }
                 let mut rgb = Vec::with_capacity(n);
                 let mut alpha = Vec::with_capacity(n);
                 let mut stats = RenderStats::default();
@@ -588,6 +619,7 @@ impl Classification {
                     xs: (x0, x1),
                     ys: (y0, y1),
                     start: &start,
+                    end: &end,
                 };
                 #[cfg(target_arch = "x86_64")]
                 if caster.simd {
@@ -955,8 +987,8 @@ impl Caster<'_> {
         let tw = xs.1 - xs.0;
         for y in ys.0..ys.1 {
             for x in xs.0..xs.1 {
-                let start = px.start[(y - ys.0) * tw + (x - xs.0)];
-                let (c, op) = self.cast(x as f32, y as f32, start, stats);
+                let i = (y - ys.0) * tw + (x - xs.0);
+                let (c, op) = self.cast(x as f32, y as f32, (px.start[i], px.end[i]), stats);
                 rgb.push([
                     c[0] + (1.0 - op) * bg[0],
                     c[1] + (1.0 - op) * bg[1],
@@ -995,10 +1027,10 @@ impl Caster<'_> {
     }
 
     /// Premultiplied colour and opacity of the ray through pixel `(x, y)`, whose
-    /// samples before `start` (mm) cannot show.
+    /// samples outside `range` (mm) cannot show.
     #[inline(always)]
-    fn cast(&self, x: f32, y: f32, start: f32, stats: &mut RenderStats) -> ([f32; 3], f32) {
-        let Some((ray, view)) = self.ray(x, y, start) else {
+    fn cast(&self, x: f32, y: f32, range: (f32, f32), stats: &mut RenderStats) -> ([f32; 3], f32) {
+        let Some((ray, view)) = self.ray(x, y, range) else {
             return ([0.0; 3], 0.0);
         };
         match self.mode {
@@ -1010,9 +1042,9 @@ impl Caster<'_> {
 
     /// The ray through pixel `(x, y)` in index space with its sample range, and its
     /// view vector (unit, world, towards the eye); `None` when it takes no sample.
-    /// Samples before `start` (mm) cannot show.
+    /// Samples before `start` or past `end` (mm) cannot show.
     #[inline(always)]
-    fn ray(&self, x: f32, y: f32, start: f32) -> Option<(Ray, Vec3)> {
+    fn ray(&self, x: f32, y: f32, (start, end): (f32, f32)) -> Option<(Ray, Vec3)> {
         if start == f32::INFINITY {
             return None;
         }
@@ -1042,6 +1074,7 @@ impl Caster<'_> {
         }
         let t_entry = t0;
         let t0 = t0.max(start);
+        let t1 = t1.min(end);
         if t0 > t1 {
             return None;
         }
@@ -1307,6 +1340,9 @@ struct Pixels<'a> {
     ys: (usize, usize),
     /// Row-major over the tile: [`StartBounds::tile`].
     start: &'a [f32; TILE * TILE],
+    /// Row-major over the tile: where each ray stops (mm; infinite unless a surface
+    /// hides what lies behind, [`Classification::render_in_front`]).
+    end: &'a [f32; TILE * TILE],
 }
 
 /// `ceil(x)` as an integer without libm (baseline x86-64 has no rounding
@@ -1404,10 +1440,10 @@ mod jitter_tests {
         )
         .unwrap();
         let on = class
-            .render_jittered(&shader, &settings, &|_| {}, true)
+            .render_jittered(&shader, &settings, &|_| {}, true, None)
             .unwrap();
         let off = class
-            .render_jittered(&shader, &settings, &|_| {}, false)
+            .render_jittered(&shader, &settings, &|_| {}, false, None)
             .unwrap();
         assert_ne!(on.rgb, off.rgb, "jitter changed nothing");
         // Away from edges: pixels whose 5x5 neighbourhood is all nearly opaque.

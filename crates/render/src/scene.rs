@@ -529,6 +529,9 @@ pub enum Plan {
         classify: ClassifySettings,
         /// What the frame depends on.
         frame: FrameSettings,
+        /// Meshes drawn in the volume with the same camera, when the scene has any:
+        /// rays stop at the nearest surface and the volume composites over it.
+        meshes: Option<MeshLayer>,
     },
     /// Rasterising the meshes (and the volume's isosurface).
     Surface {
@@ -539,6 +542,49 @@ pub enum Plan {
         /// The colours of the scalar overlays, when any.
         colors: Option<ScalarColors>,
     },
+}
+
+/// Meshes rasterised into a ray-cast volume's frame ([`Plan::Volume`]).
+#[derive(Clone, Debug)]
+pub struct MeshLayer {
+    /// The meshes, read.
+    pub surfaces: Arc<Surfaces>,
+    /// Size, supersampling, colours (the camera is the volume's).
+    pub settings: SurfaceSettings,
+    /// The colours of the scalar overlays, when any.
+    pub colors: Option<ScalarColors>,
+}
+
+impl MeshLayer {
+    /// Draws the meshes with `camera`, then composites `frame` (rendered by `volume`,
+    /// given each pixel's distance to the surfaces) over them: volume colour plus
+    /// (1 - volume opacity) times what lies behind (the surfaces over the background).
+    fn render(
+        &self,
+        camera: &Camera,
+        shader: &Shader,
+        volume: impl FnOnce(&[f32]) -> Result<Image, RenderError>,
+    ) -> Result<Image, RenderError> {
+        let (behind, far) =
+            self.surfaces
+                .render_layer(camera, shader, &self.settings, self.colors.as_ref())?;
+        let mut image = volume(&far)?;
+        let bg = self.settings.background;
+        for ((rgb, a), (b_rgb, b_a)) in image
+            .rgb
+            .iter_mut()
+            .zip(image.alpha.iter_mut())
+            .zip(behind.rgb.iter().zip(&behind.alpha))
+        {
+            let t = 1.0 - *a;
+            for i in 0..3 {
+                rgb[i] += t * (b_rgb[i] - bg[i]);
+            }
+            *a += t * b_a;
+        }
+        image.stats.shaded += behind.stats.shaded;
+        Ok(image)
+    }
 }
 
 impl Scene {
@@ -649,8 +695,8 @@ impl Scene {
                 )))
             }
             (_, mode) => {
-                return Err(RenderError::Unsupported(format!(
-                    "a volume {} rendering with meshes: compositing ray-cast volumes and meshes is not implemented; render the volume's isosurface with the meshes (mode surface, iso value)",
+                return Err(RenderError::Parameter(format!(
+                    "mode {} needs the volume, which this renderer does not hold",
                     mode.name()
                 )))
             }
@@ -671,23 +717,7 @@ impl Scene {
             shade: Some(material.shade),
         };
         let n = *scene.lobe.n.get_or_insert(SURFACE_SHININESS);
-        let ssaa = *scene.ssaa.get_or_insert(DEFAULT_SSAA);
-        let mesh_colors = scene
-            .meshes
-            .iter_mut()
-            .map(|m| *m.color.get_or_insert(SURFACE_COLOR))
-            .collect();
-        let colors = set.resolve_overlays(&mut scene.meshes)?;
-        let settings = SurfaceSettings {
-            width: scene.size[0],
-            height: scene.size[1],
-            ssaa,
-            camera: scene.camera,
-            background: scene.background,
-            color: SURFACE_COLOR,
-            mesh_colors,
-        };
-        settings.validate()?;
+        let layer = scene.resolve_mesh_layer(set)?;
         scene.camera.validate()?;
         let specular = scene.lobe.specular(n, hw)?;
         let shader = Shader::with_specular(
@@ -701,11 +731,60 @@ impl Scene {
             scene,
             shader,
             plan: Plan::Surface {
-                surfaces: set.surfaces.clone(),
-                settings,
-                colors,
+                surfaces: layer.surfaces,
+                settings: layer.settings,
+                colors: layer.colors,
             },
         })
+    }
+
+    /// The meshes' part of a scene with meshes, `set` as read for it: writes the
+    /// supersampling, mesh colours, colour maps and ranges back into the scene.
+    fn resolve_mesh_layer(&mut self, set: &MeshSet) -> Result<MeshLayer, RenderError> {
+        let ssaa = *self.ssaa.get_or_insert(DEFAULT_SSAA);
+        let mesh_colors = self
+            .meshes
+            .iter_mut()
+            .map(|m| *m.color.get_or_insert(SURFACE_COLOR))
+            .collect();
+        let colors = set.resolve_overlays(&mut self.meshes)?;
+        let settings = SurfaceSettings {
+            width: self.size[0],
+            height: self.size[1],
+            ssaa,
+            camera: self.camera,
+            background: self.background,
+            color: SURFACE_COLOR,
+            mesh_colors,
+        };
+        settings.validate()?;
+        Ok(MeshLayer {
+            surfaces: set.surfaces.clone(),
+            settings,
+            colors,
+        })
+    }
+
+    /// Resolves a scene of a volume with meshes in a ray-cast mode: the volume's
+    /// settings as [`Scene::resolve_for`] chooses them, and the meshes drawn in its
+    /// frame.
+    fn resolve_hybrid(
+        &self,
+        field: &Field,
+        set: &MeshSet,
+        hw: &HwCache,
+    ) -> Result<Resolved, RenderError> {
+        let mut volume = self.clone();
+        let meshes = std::mem::take(&mut volume.meshes);
+        volume.ssaa = None;
+        let mut resolved = volume.resolve_cached(field, hw)?;
+        resolved.scene.meshes = meshes;
+        resolved.scene.ssaa = self.ssaa;
+        let layer = resolved.scene.resolve_mesh_layer(set)?;
+        if let Plan::Volume { meshes, .. } = &mut resolved.plan {
+            *meshes = Some(layer);
+        }
+        Ok(resolved)
     }
 
     /// Chooses every default for `field` and builds the settings and shader: the one
@@ -787,6 +866,7 @@ impl Scene {
                 tf,
                 classify,
                 frame,
+                meshes: None,
             },
         })
     }
@@ -1057,12 +1137,19 @@ impl Renderer {
     /// lobe's table is built once per (configuration, n) and kept.
     pub fn resolve(&mut self, scene: &Scene) -> Result<Resolved, RenderError> {
         self.use_prefilter(scene.prefilter)?;
-        if scene.is_surface() || self.field.is_none() {
+        let hybrid = !scene.meshes.is_empty() && scene.mode != RenderMode::Surface;
+        if (scene.is_surface() && !hybrid) || self.field.is_none() {
             let set = self.mesh_set(scene)?;
             return scene.resolve_surface(self.field.as_deref(), &set, &self.hw);
         }
-        let field = self.field.as_ref().expect("checked above");
-        let mut resolved = scene.resolve_cached(field, &self.hw)?;
+        let mut resolved = if hybrid {
+            let set = self.mesh_set(scene)?;
+            let field = self.field.as_ref().expect("checked above");
+            scene.resolve_hybrid(field, &set, &self.hw)?
+        } else {
+            let field = self.field.as_ref().expect("checked above");
+            scene.resolve_cached(field, &self.hw)?
+        };
         if let Plan::Volume { frame, .. } = &mut resolved.plan {
             frame.kernel = self.kernel;
         }
@@ -1078,6 +1165,7 @@ impl Renderer {
                 tf,
                 classify,
                 frame,
+                ..
             } => {
                 let (class, _) = self.classification(&tf, &classify)?;
                 class.camera(&frame)
@@ -1135,15 +1223,21 @@ impl Renderer {
                 tf,
                 classify,
                 frame,
+                meshes,
             } => {
                 let start = Instant::now();
                 let (class, built) = self.classification(&tf, &classify)?;
                 if built {
                     timings.record("classify", start.elapsed());
                 }
-                let image =
-                    timings.time("frame", || class.render(&resolved.shader, &frame, progress))?;
                 let camera = class.camera(&frame)?;
+                let shader = &resolved.shader;
+                let image = timings.time("frame", || match &meshes {
+                    None => class.render(shader, &frame, progress),
+                    Some(layer) => layer.render(&camera, shader, |far| {
+                        class.render_in_front(shader, &frame, progress, far)
+                    }),
+                })?;
                 let field = self.field.as_deref().expect("a volume plan has a field");
                 let step_mm = scene.step * field.min_spacing();
                 let mut d = derived(&camera);
@@ -1617,22 +1711,115 @@ mod tests {
         assert_eq!(r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m)), before);
     }
 
+    /// An octahedron of radius `r` about `c` (mm) as OBJ in `dir`.
+    fn octahedron_at(dir: &std::path::Path, c: [f32; 3], r: f32) -> PathBuf {
+        let path = dir.join("octa-at.obj");
+        let mut text = String::new();
+        for a in 0..3 {
+            for sign in [1.0, -1.0] {
+                let mut p = c;
+                p[a] += sign * r;
+                text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+            }
+        }
+        text += "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    /// A volume with meshes in a ray-cast mode: the meshes are drawn with the
+    /// volume's camera and the volume composited over them. Pixels no mesh covers are
+    /// the volume's alone; a mesh between the eye and the volume hides it, so there
+    /// the image is the meshes' alone (the surface renderer with the same camera).
     #[test]
-    fn a_volume_with_meshes_renders_only_as_surfaces() {
+    fn a_volume_with_meshes_composites_the_volume_over_them() {
+        let dir = tempfile::tempdir().unwrap();
+        let base = Scene {
+            size: [40, 40],
+            ssaa: Some(1),
+            ..small()
+        };
+        // In front of the phantom (it spans +-100 mm; anterior is +y).
+        let scene = Scene {
+            meshes: vec![MeshSpec::new(octahedron_at(
+                dir.path(),
+                [0.0, 160.0, 0.0],
+                40.0,
+            ))],
+            ..base.clone()
+        };
+        let mut r = Renderer::open_scene(&scene).unwrap();
+        let resolved = r.resolve(&scene).unwrap();
+        let Plan::Volume {
+            meshes: Some(layer),
+            ..
+        } = &resolved.plan
+        else {
+            panic!("a volume plan with meshes expected");
+        };
+        let layer = layer.clone();
+        let shader = resolved.shader.clone();
+        let both = r.render(&scene, &|_| {}).unwrap();
+        let alone = r.render(&base, &|_| {}).unwrap();
+        let camera = r.camera(&base).unwrap();
+        let meshes = layer
+            .surfaces
+            .render(&camera, &shader, &layer.settings, None)
+            .unwrap();
+        let (mut covered, mut uncovered) = (0, 0);
+        for i in 0..40 * 40 {
+            if meshes.alpha[i] == 0.0 {
+                assert_eq!(both.image.rgb[i], alone.image.rgb[i], "pixel {i}");
+                assert_eq!(both.image.alpha[i], alone.image.alpha[i], "pixel {i}");
+                uncovered += 1;
+            } else if meshes.alpha[i] == 1.0 {
+                for c in 0..3 {
+                    let d = (both.image.rgb[i][c] - meshes.rgb[i][c]).abs();
+                    assert!(
+                        d < 1e-6,
+                        "pixel {i}: {:?} vs {:?}",
+                        both.image.rgb[i],
+                        meshes.rgb[i]
+                    );
+                }
+                assert_eq!(both.image.alpha[i], 1.0);
+                covered += 1;
+            }
+        }
+        // The mesh covers the middle of the image and the volume shows around it.
+        assert!(
+            meshes.alpha[20 * 40 + 20] == 1.0 && covered > 50,
+            "{covered}"
+        );
+        assert!(
+            (0..1600).any(|i| meshes.alpha[i] == 0.0 && alone.image.alpha[i] > 0.5),
+            "{uncovered}"
+        );
+        // The dumped scene names the meshes and renders again bit for bit.
+        let mut again = both.scene.clone();
+        again.derived = None;
+        assert_eq!(again.meshes.len(), 1);
+        assert_eq!(again.mode, RenderMode::Composite);
+        let text = again.to_json().unwrap();
+        let reread = Scene::from_json(&text).unwrap();
+        let fresh = Renderer::open_scene(&reread)
+            .unwrap()
+            .render(&reread, &|_| {})
+            .unwrap();
+        assert_eq!(fresh.image, both.image);
+    }
+
+    #[test]
+    fn a_volume_with_meshes_in_surface_mode_joins_its_isosurface() {
         let dir = tempfile::tempdir().unwrap();
         let scene = Scene {
             meshes: vec![MeshSpec::new(octahedron(dir.path()))],
+            mode: RenderMode::Surface,
             ..small()
         };
         let mut r = Renderer::open_scene(&scene).unwrap();
-        let err = r.resolve(&scene).unwrap_err();
-        assert!(matches!(err, RenderError::Unsupported(_)), "{err}");
-        // In surface mode the phantom's isosurface joins the octahedron.
-        let surface = Scene {
-            mode: RenderMode::Surface,
-            ..scene
-        };
-        let resolved = r.resolve(&surface).unwrap();
+        // The phantom's isosurface joins the octahedron.
+        let resolved = r.resolve(&scene).unwrap();
         assert!(resolved.scene.iso.is_some());
         let Plan::Surface { surfaces, .. } = &resolved.plan else {
             panic!("a surface plan expected");

@@ -9,8 +9,8 @@ use glint_lobe::{Geometry, LobeKind};
 use glint_render::isosurface::{extract, taubin_smooth, Taubin};
 use glint_render::math::Vec3;
 use glint_render::{
-    CameraSpec, ColorMap, Light, Material, RenderError, ScalarColors, Shader, SurfaceSettings,
-    Surfaces, View,
+    CameraSpec, ColorMap, Light, Material, Projection, RenderError, ScalarColors, Shader,
+    SurfaceSettings, Surfaces, View,
 };
 
 /// A latitude-longitude sphere with exact normals; the poles' rings collapse, so the
@@ -55,6 +55,57 @@ fn shader(material: Material, lights: Vec<Light>, n: f64) -> Shader {
         0.0,
     )
     .unwrap()
+}
+
+/// `Surfaces::render_layer`'s per-pixel distance is where the pixel's ray meets the
+/// sphere (analytic, within the tessellation's chord error), infinite exactly where
+/// no surface is drawn, for both projections.
+#[test]
+fn layer_distances_are_the_rays_hits_on_a_sphere() {
+    let (c, r) = (Vec3::new(-4.0, 7.0, 1.0), 12.0f32);
+    let mesh = uv_sphere([c.x, c.y, c.z], r, 128, 256);
+    let surfaces = Surfaces::new([&mesh]).unwrap();
+    for projection in [Projection::Perspective, Projection::Orthographic] {
+        let settings = SurfaceSettings {
+            width: 64,
+            height: 48,
+            ssaa: 1,
+            camera: CameraSpec {
+                view: View::Superior,
+                azimuth: 30.0,
+                projection,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let camera = surfaces.camera(&settings).unwrap();
+        let shader = shader(Material::default(), vec![Light::HEADLIGHT], 10.0);
+        let (image, far) = surfaces
+            .render_layer(&camera, &shader, &settings, None)
+            .unwrap();
+        let mut hits = 0;
+        for y in 0..48 {
+            for x in 0..64 {
+                let k = y * 64 + x;
+                assert_eq!(far[k].is_finite(), image.alpha[k] > 0.0, "pixel {x},{y}");
+                let (o, d) = camera.ray(x as f32, y as f32, 64, 48);
+                let oc = o - c;
+                let b = oc.dot(d);
+                let disc = b * b - (oc.dot(oc) - r * r);
+                // Away from the silhouette, where the polygon and the sphere differ.
+                if disc > 0.05 * r * r {
+                    let t = -b - disc.sqrt();
+                    assert!(
+                        (far[k] - t).abs() < 0.01 * r,
+                        "{projection:?} pixel {x},{y}: {} vs {t}",
+                        far[k]
+                    );
+                    hits += 1;
+                }
+            }
+        }
+        assert!(hits > 500, "{hits}");
+    }
 }
 
 #[test]

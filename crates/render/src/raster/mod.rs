@@ -269,6 +269,21 @@ impl Surfaces {
         settings: &SurfaceSettings,
         colors: Option<&ScalarColors>,
     ) -> Result<Image, RenderError> {
+        Ok(self.render_layer(camera, shader, settings, colors)?.0)
+    }
+
+    /// [`Surfaces::render`], also giving each pixel's distance (mm) to the nearest
+    /// surface it shows, along the pixel's ray from the eye (from the image plane for
+    /// orthographic cameras), `f32::INFINITY` where it shows none: what a volume drawn
+    /// with the same camera is hidden behind
+    /// ([`Classification::render_in_front`](crate::Classification::render_in_front)).
+    pub fn render_layer(
+        &self,
+        camera: &Camera,
+        shader: &Shader,
+        settings: &SurfaceSettings,
+        colors: Option<&ScalarColors>,
+    ) -> Result<(Image, Vec<f32>), RenderError> {
         settings.validate()?;
         let shader = &shader.placed(camera);
         let frame = Frame::new(self, camera, settings);
@@ -285,6 +300,7 @@ impl Surfaces {
             alpha: vec![0.0; w * h],
             stats: RenderStats::default(),
         };
+        let mut depth = vec![f32::INFINITY; w * h];
         for (t, out) in tiles {
             let (px0, py0) = frame.tile_origin_px(t);
             for (row, (rgb, alpha)) in out
@@ -296,10 +312,11 @@ impl Surfaces {
                 let k = (py0 + row) * w + px0;
                 image.rgb[k..k + out.w].copy_from_slice(rgb);
                 image.alpha[k..k + out.w].copy_from_slice(alpha);
+                depth[k..k + out.w].copy_from_slice(&out.depth[row * out.w..][..out.w]);
             }
             image.stats.shaded += out.shaded;
         }
-        Ok(image)
+        Ok((image, depth))
     }
 }
 
@@ -369,6 +386,8 @@ struct TileOut {
     w: usize,
     rgb: Vec<[f32; 3]>,
     alpha: Vec<f32>,
+    /// Per pixel: the distance to its nearest covered sample ([`Surfaces::render_layer`]).
+    depth: Vec<f32>,
     shaded: u64,
 }
 
@@ -485,7 +504,37 @@ impl Frame {
                 );
             }
         }
-        self.resolve(s, [sx0, sy0, tw, th], &ids, shader, colors, settings)
+        let mut out = self.resolve(s, [sx0, sy0, tw, th], &ids, shader, colors, settings);
+        out.depth = self.pixel_distances([sx0, sy0, tw, th], &depth);
+        out
+    }
+
+    /// Per pixel of the tile `[x0, y0, w, h]` (samples): the distance along the ray
+    /// to the nearest of its covered samples, whose depth keys are `keys`.
+    fn pixel_distances(&self, rect: [usize; 4], keys: &[f32]) -> Vec<f32> {
+        let [sx0, sy0, tw, th] = rect;
+        let n = self.ssaa;
+        let (pw, ph) = (tw / n, th / n);
+        let [u0, du, v0, dv] = self.plane;
+        let mut out = vec![f32::INFINITY; pw * ph];
+        for (k, &key) in keys.iter().enumerate() {
+            if key == f32::NEG_INFINITY {
+                continue;
+            }
+            let (x, y) = (k % tw, k / tw);
+            let t = match self.camera.projection {
+                // key = 1/z, z along `forward`; the ray's direction is forward + u right
+                // + v up, an orthonormal frame.
+                Projection::Perspective => {
+                    let (u, v) = (u0 + (sx0 + x) as f32 * du, v0 + (sy0 + y) as f32 * dv);
+                    (1.0 + u * u + v * v).sqrt() / key
+                }
+                Projection::Orthographic => -key,
+            };
+            let p = &mut out[(y / n) * pw + x / n];
+            *p = p.min(t);
+        }
+        out
     }
 
     /// Keeps, per sample of the tile `[x0, y0, w, h]`, the nearest of triangle `id`
@@ -575,6 +624,7 @@ impl Frame {
             w: pw,
             rgb,
             alpha,
+            depth: Vec::new(),
             shaded,
         }
     }

@@ -252,7 +252,7 @@ pub(super) unsafe fn composite_tile(
                     let i = next;
                     next += 1;
                     let (x, y) = (xs.0 + i % tw, ys.0 + i / tw);
-                    if let Some((ray, view)) = c.ray(x as f32, y as f32, px.start[i]) {
+                    if let Some((ray, view)) = c.ray(x as f32, y as f32, (px.start[i], px.end[i])) {
                         views[i] = view;
                         *slot = Some(Marcher {
                             k: ray.k0,
