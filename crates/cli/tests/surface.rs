@@ -369,10 +369,66 @@ fn a_volume_isosurface_renders_in_surface_mode() {
     );
 }
 
+/// A GIFTI shape file with two per-vertex arrays of `n` values: `i` and `n - 1 - i`.
+fn gifti_two_arrays(n: usize) -> String {
+    let data = |f: &dyn Fn(usize) -> usize| {
+        let v: Vec<String> = (0..n).map(|i| f(i).to_string()).collect();
+        format!(
+            "<DataArray Intent=\"NIFTI_INTENT_SHAPE\" DataType=\"NIFTI_TYPE_FLOAT32\" \
+ArrayIndexingOrder=\"RowMajorOrder\" Dimensionality=\"1\" Dim0=\"{n}\" Encoding=\"ASCII\" \
+Endian=\"LittleEndian\" ExternalFileName=\"\" ExternalFileOffset=\"\"><Data>{}</Data></DataArray>\n",
+            v.join(" ")
+        )
+    };
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<GIFTI Version=\"1.0\" NumberOfDataArrays=\"2\">\n{}{}</GIFTI>\n",
+        data(&|i| i),
+        data(&|i| n - 1 - i)
+    )
+}
+
+/// `--overlay-array` picks a GIFTI file's array (written into the scene); the two
+/// arrays of a file colour the mesh differently.
+#[test]
+fn overlay_array_chooses_the_files_array() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, _) = octahedron(dir.path());
+    let two = dir.path().join("two.shape.gii");
+    std::fs::write(&two, gifti_two_arrays(6)).unwrap();
+    let render = |array: &str| {
+        let out = dir.path().join(format!("a{array}.png"));
+        let scene = dir.path().join(format!("a{array}.json"));
+        ok(&[
+            "render",
+            &mesh,
+            "--overlay",
+            two.to_str().unwrap(),
+            "--overlay-array",
+            array,
+            "--view",
+            "left",
+            "--size",
+            "48x48",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+            "--dump-scene",
+            scene.to_str().unwrap(),
+        ]);
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+        (s["meshes"][0]["overlay"]["array"].clone(), decode(&out).3)
+    };
+    let (a0, img0) = render("0");
+    let (a1, img1) = render("1");
+    assert_eq!((a0, a1), (0.into(), 1.into()));
+    assert_ne!(img0, img1, "the two arrays gave the same picture");
+}
+
 #[test]
 fn bad_overlays_and_mesh_scenes_fail_with_one_line_and_no_file() {
     let dir = tempfile::tempdir().unwrap();
-    let (mesh, _) = octahedron(dir.path());
+    let (mesh, overlay) = octahedron(dir.path());
     let short = dir.path().join("short.ply");
     std::fs::write(&short, ply_scalars(4)).unwrap();
     let no_scalar = dir.path().join("plain.ply");
@@ -408,6 +464,14 @@ property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_he
         (vec![&mesh, "--iso", "3"], "iso value needs a volume"),
         (vec!["/nonexistent/lh.pial.gii"], "lh.pial.gii"),
         (vec![&mesh, "--overlay-range", "2,1"], "LO,HI"),
+        (
+            vec![&mesh, "--overlay", &overlay, "--overlay-array", "1"],
+            "array 1: a PLY file has one (0)",
+        ),
+        (
+            vec![&mesh, "--overlay-array", "0"],
+            "1 --overlay-array for 0 overlays",
+        ),
     ];
     for (argv, needle) in cases {
         let mut args = vec!["render", "-q", "-o", o];

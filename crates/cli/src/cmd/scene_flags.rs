@@ -26,10 +26,15 @@ pub struct SceneFlags {
     #[arg(value_name = "INPUT")]
     pub input: Vec<PathBuf>,
     /// Per-vertex values for the meshes, one per mesh in order: a GIFTI shape or label
-    /// array (the file's first per-vertex array) or a PLY file's vertex scalar;
+    /// array (the file's first per-vertex array unless --overlay-array says) or a PLY
+    /// file's vertex scalar;
     /// repeatable.
     #[arg(long, value_name = "FILE")]
     pub overlay: Vec<PathBuf>,
+    /// Which per-vertex array of each --overlay file (0-based, `glint info FILE` lists
+    /// them), one per --overlay in order [default: 0]; repeatable.
+    #[arg(long, value_name = "INDEX")]
+    pub overlay_array: Vec<usize>,
     /// Colour map of the scalar overlays [default: viridis].
     #[arg(long, value_parser = choice::<ColorMap>(ColorMap::ALL.map(|m| m.name())))]
     pub colormap: Option<ColorMap>,
@@ -229,8 +234,18 @@ impl SceneFlags {
                 scene.meshes.len()
             );
         }
-        for (mesh, path) in scene.meshes.iter_mut().zip(&self.overlay) {
-            mesh.overlay = Some(Overlay::new(path));
+        if self.overlay_array.len() > self.overlay.len() {
+            bail!(
+                "{} --overlay-array for {} overlays: give at most one per --overlay, in order",
+                self.overlay_array.len(),
+                self.overlay.len()
+            );
+        }
+        for (k, (mesh, path)) in scene.meshes.iter_mut().zip(&self.overlay).enumerate() {
+            mesh.overlay = Some(Overlay {
+                array: self.overlay_array.get(k).copied(),
+                ..Overlay::new(path)
+            });
         }
         if self.colormap.is_some() || self.overlay_range.is_some() {
             let mut any = false;
