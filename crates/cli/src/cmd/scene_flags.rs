@@ -27,8 +27,7 @@ pub struct SceneFlags {
     pub input: Vec<PathBuf>,
     /// Per-vertex values for the meshes, one per mesh in order: a GIFTI shape or label
     /// array (the file's first per-vertex array unless --overlay-array says) or a PLY
-    /// file's vertex scalar;
-    /// repeatable.
+    /// file's vertex scalar; repeatable.
     #[arg(long, value_name = "FILE")]
     pub overlay: Vec<PathBuf>,
     /// Which per-vertex array of each --overlay file (0-based, `glint info FILE` lists
