@@ -67,8 +67,9 @@ pub enum RenderError {
     /// A scene is malformed (bad JSON, unknown field, unsupported version).
     #[error("{0}")]
     Scene(String),
-    /// A scene file could not be used.
-    #[error("{}: {source}", path.display())]
+    /// A scene file could not be used (the file; what was wrong is the source, which
+    /// error chains print after it).
+    #[error("{}", path.display())]
     SceneFile {
         /// The file.
         path: PathBuf,

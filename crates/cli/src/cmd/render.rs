@@ -529,10 +529,24 @@ mod tests {
                 "{name}: '{err}'"
             );
             assert!(!err.contains('\n'), "{name}: one line expected: {err}");
+            // Said once: not "FILE: X: X".
+            let rest = err
+                .strip_prefix(&format!("{}: ", path.display()))
+                .unwrap_or_else(|| panic!("{name}: the file first: {err}"));
+            let half = rest.len().saturating_sub(2) / 2;
+            assert!(
+                !(rest.len() > 2
+                    && rest.is_char_boundary(half)
+                    && rest[half..].starts_with(": ")
+                    && rest[..half] == rest[half + 2..]),
+                "{name}: said twice: {err}"
+            );
             assert!(!left, "{name} left a file");
         }
         let (result, left, _out) = run_in_tmp(&["--scene", "/nonexistent/scene.json"]);
-        assert!(format!("{:#}", result.unwrap_err()).contains("/nonexistent/scene.json"));
+        let err = format!("{:#}", result.unwrap_err());
+        assert!(err.contains("/nonexistent/scene.json"), "{err}");
+        assert_eq!(err.matches("os error").count(), 1, "said once: {err}");
         assert!(!left);
     }
 }
