@@ -164,8 +164,9 @@ impl<S: Source> Grid<'_, S> {
             .par_chunks_mut(ny)
             .enumerate()
             .for_each(|(k, counts)| {
+                let mut cases = Cases::new(t);
                 for (j, c) in counts.iter_mut().enumerate() {
-                    self.count(t, &trims, j, k, c);
+                    self.count(&trims, j, k, c, &mut cases);
                 }
             });
         // Pass 3: first vertex and triangle of each row, and the totals at the end.
@@ -208,7 +209,7 @@ impl<S: Source> Grid<'_, S> {
             starts: &starts,
         };
         planes.into_par_iter().for_each(|(k, p, n, tri)| {
-            self.emit_plane(&ctx, k, p, n, tri);
+            self.emit_plane(&ctx, k, p, n, tri, &mut Cases::new(t));
         });
         Ok(out)
     }
@@ -216,20 +217,26 @@ impl<S: Source> Grid<'_, S> {
     /// Pass 1 on one row: its trim and number of crossed x edges.
     fn trim(&self, row: &[S::T]) -> (Trim, u32) {
         let s = &self.src;
-        let crossed = |w: &[S::T]| s.inside(w[0]) != s.inside(w[1]);
-        let count: u32 = row
+        let (first, last) = (s.inside(row[0]), s.inside(row[row.len() - 1]));
+        // The first grid point not in the first state ends the first crossed edge;
+        // the last one not in the last state starts the last crossed edge.
+        let Some(after) = find(row, false, |x| s.inside(x) != first) else {
+            let none = Trim {
+                xmin: row.len() as u32 - 1,
+                xmax: 0,
+                first,
+                last,
+            };
+            return (none, 0);
+        };
+        let xmin = after - 1;
+        let xmax = find(row, true, |x| s.inside(x) != last).map_or(row.len() - 1, |x| x + 1);
+        let span = &row[xmin..=xmax];
+        let count: u32 = span
             .iter()
-            .zip(&row[1..])
+            .zip(&span[1..])
             .map(|(&a, &b)| u32::from(s.inside(a) != s.inside(b)))
             .sum();
-        let (first, last) = (s.inside(row[0]), s.inside(row[row.len() - 1]));
-        let (xmin, xmax) = if count == 0 {
-            (row.len() - 1, 0)
-        } else {
-            let xmin = row.windows(2).position(crossed).unwrap_or(0);
-            let xmax = row.windows(2).rposition(crossed).map_or(0, |x| x + 1);
-            (xmin, xmax)
-        };
         let trim = Trim {
             xmin: xmin as u32,
             xmax: xmax as u32,
@@ -239,8 +246,9 @@ impl<S: Source> Grid<'_, S> {
         (trim, count)
     }
 
-    /// Pass 2 on row `(j, k)`: crossed y and z edges, and the triangles of its cells.
-    fn count(&self, t: &Table, trims: &[Trim], j: usize, k: usize, c: &mut Counts) {
+    /// Pass 2 on row `(j, k)`: crossed y and z edges, and the triangles of its cells
+    /// (`cases` is scratch space).
+    fn count(&self, trims: &[Trim], j: usize, k: usize, c: &mut Counts, cases: &mut Cases) {
         let [nx, ny, nz] = self.dims();
         let s = &self.src;
         let at = |j: usize, k: usize| trims[j + ny * k];
@@ -259,47 +267,46 @@ impl<S: Source> Grid<'_, S> {
             c.z = pair(j, k + 1);
         }
         if j + 1 < ny && k + 1 < nz {
-            let cells = span(
-                &[at(j, k), at(j + 1, k), at(j, k + 1), at(j + 1, k + 1)],
-                nx,
-                true,
-            );
-            let mut tris = 0;
-            self.cells(j, k, cells, |_, mask| tris += u32::from(t.cases[mask].1));
-            c.tris = tris;
+            let quad = [at(j, k), at(j + 1, k), at(j, k + 1), at(j + 1, k + 1)];
+            self.cases(j, k, span(&quad, nx, true), cases);
+            let t = &cases.table.cases;
+            c.tris = cases
+                .masks
+                .iter()
+                .map(|&m| u32::from(t[m as usize].1))
+                .sum();
         }
     }
 
-    /// Calls `f(i, case)` for the cut cells `i` in `cells` of the cell row `(j, k)`.
-    #[inline]
-    fn cells(
-        &self,
-        j: usize,
-        k: usize,
-        cells: std::ops::Range<usize>,
-        mut f: impl FnMut(usize, usize),
-    ) {
+    /// The cases of the cells `cells` of the cell row `(j, k)`, into `out.masks`
+    /// (bit `c` set when corner `c` is inside; see the table).
+    fn cases(&self, j: usize, k: usize, cells: std::ops::Range<usize>, out: &mut Cases) {
+        out.bits.clear();
+        out.masks.clear();
         if cells.is_empty() {
             return;
         }
         let s = &self.src;
-        let rows = [(j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1)].map(|(j, k)| self.row(j, k));
-        // Inside bits of the cell's left corners, carried along the row.
-        let bits = |i: usize| -> u8 {
-            u8::from(s.inside(rows[0][i]))
-                | u8::from(s.inside(rows[1][i])) << 2
-                | u8::from(s.inside(rows[2][i])) << 4
-                | u8::from(s.inside(rows[3][i])) << 6
-        };
-        let mut left = bits(cells.start);
-        for i in cells {
-            let right = bits(i + 1);
-            let mask = left | right << 1;
-            left = right;
-            if mask != 0 && mask != 255 {
-                f(i, mask as usize);
-            }
-        }
+        let points = cells.start..cells.end + 1;
+        let [r0, r1, r2, r3] = [(j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1)]
+            .map(|(j, k)| &self.row(j, k)[points.clone()]);
+        // Inside bits of each grid point's four rows, then each cell's left and right
+        // points; plain loops over slices, which vectorise.
+        out.bits.extend(
+            r0.iter()
+                .zip(r1)
+                .zip(r2)
+                .zip(r3)
+                .map(|(((&a, &b), &c), &d)| {
+                    u8::from(s.inside(a))
+                        | u8::from(s.inside(b)) << 2
+                        | u8::from(s.inside(c)) << 4
+                        | u8::from(s.inside(d)) << 6
+                }),
+        );
+        let bits = &out.bits;
+        out.masks
+            .extend(bits.iter().zip(&bits[1..]).map(|(&l, &r)| l | r << 1));
     }
 
     /// Pass 4 on plane `k`: the vertices and triangles of its rows, into its parts of
@@ -311,6 +318,7 @@ impl<S: Source> Grid<'_, S> {
         mut p: &mut [[f32; 3]],
         mut n: &mut [[f32; 3]],
         mut tri: &mut [[u32; 3]],
+        cases: &mut Cases,
     ) {
         let [nx, ny, nz] = self.dims();
         for j in 0..ny {
@@ -347,14 +355,21 @@ impl<S: Source> Grid<'_, S> {
                 }
             }
             if j + 1 < ny && k + 1 < nz {
-                self.emit_triangles(ctx, j, k, t0);
+                self.emit_triangles(ctx, j, k, t0, cases);
             }
         }
     }
 
     /// The triangles of the cell row `(j, k)`: each cut cell's edges get their vertex
     /// from counters of the crossed edges of the four rows met so far.
-    fn emit_triangles(&self, ctx: &Emit, j: usize, k: usize, out: &mut [[u32; 3]]) {
+    fn emit_triangles(
+        &self,
+        ctx: &Emit,
+        j: usize,
+        k: usize,
+        out: &mut [[u32; 3]],
+        cases: &mut Cases,
+    ) {
         let [nx, ny, _] = self.dims();
         let row = |j: usize, k: usize| j + ny * k;
         let rx = [row(j, k), row(j + 1, k), row(j, k + 1), row(j + 1, k + 1)];
@@ -368,8 +383,12 @@ impl<S: Source> Grid<'_, S> {
         let cells = span(&rx.map(|r| ctx.trims[r]), nx, true);
         let mut slots = out.iter_mut();
         let flip = self.frame.flip;
-        self.cells(j, k, cells, |_, mask| {
-            let m = mask as u32;
+        self.cases(j, k, cells, cases);
+        for &mask in &cases.masks {
+            if mask == 0 || mask == 255 {
+                continue;
+            }
+            let m = u32::from(mask);
             let cut = |a: u32, b: u32| (m >> a ^ m >> b) & 1;
             // Crossed y edges at the cell's left corners (z = 0, 1), z edges (y = 0, 1).
             let (y0, y1) = (cut(0, 2), cut(4, 6));
@@ -388,7 +407,7 @@ impl<S: Source> Grid<'_, S> {
                 cz[1],
                 cz[1] + z1,
             ];
-            let (start, count) = ctx.table.cases[mask];
+            let (start, count) = ctx.table.cases[mask as usize];
             for t in &ctx.table.triangles[start as usize..][..count as usize] {
                 let mut v = t.map(|e| ids[e as usize]);
                 if flip {
@@ -405,7 +424,7 @@ impl<S: Source> Grid<'_, S> {
             cy[1] += y1;
             cz[0] += z0;
             cz[1] += z1;
-        });
+        }
     }
 
     #[inline]
@@ -429,15 +448,14 @@ impl<S: Source> Grid<'_, S> {
         };
         let mut idx = p.map(|x| x as f64);
         idx[axis] += f64::from(t);
-        let pos = std::array::from_fn(|r| {
+        let pos = [0, 1, 2].map(|r| {
             let row = &f.affine[r];
             (row[0] * idx[0] + row[1] * idx[1] + row[2] * idx[2] + row[3]) as f32
         });
         let (ga, gb) = (self.gradient(p), self.gradient(q));
-        let g: [f32; 3] = std::array::from_fn(|d| ga[d] + t * (gb[d] - ga[d]));
+        let g = [0, 1, 2].map(|d| ga[d] + t * (gb[d] - ga[d]));
         let m = &f.grad_to_world;
-        let w: [f32; 3] =
-            std::array::from_fn(|r| -(m[r][0] * g[0] + m[r][1] * g[1] + m[r][2] * g[2]));
+        let w = [0, 1, 2].map(|r| -(m[r][0] * g[0] + m[r][1] * g[1] + m[r][2] * g[2]));
         let len = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
         let normal = if len > 0.0 && len.is_finite() {
             w.map(|x| x / len)
@@ -449,21 +467,80 @@ impl<S: Source> Grid<'_, S> {
 
     /// Index-space gradient at grid point `p`: central differences, one-sided at the
     /// border.
+    #[inline]
     fn gradient(&self, p: [usize; 3]) -> [f32; 3] {
-        let dims = self.dims();
-        std::array::from_fn(|d| {
+        let [nx, ny, nz] = self.dims();
+        let inner = (1..nx - 1).contains(&p[0])
+            && (1..ny - 1).contains(&p[1])
+            && (1..nz - 1).contains(&p[2]);
+        if inner {
+            // The common case, without the border's clamping: neighbours at fixed
+            // strides. `(b - a) * 0.5` equals the border path's `(b - a) / 2.0`.
+            let at = p[0] + nx * (p[1] + ny * p[2]);
+            let v = |i: usize| self.src.value(self.values[i]);
+            let d = |s: usize| (v(at + s) - v(at - s)) * 0.5;
+            return [d(1), d(nx), d(nx * ny)];
+        }
+        let dims = [nx, ny, nz];
+        let along = |d: usize| {
             let (mut lo, mut hi) = (p, p);
             lo[d] = p[d].saturating_sub(1);
             hi[d] = (p[d] + 1).min(dims[d] - 1);
             let span = (hi[d] - lo[d]) as f32;
             (self.at(hi) - self.at(lo)) / span
-        })
+        };
+        [along(0), along(1), along(2)]
     }
+}
+
+/// A task's scratch space for the cases of a row of cells.
+struct Cases {
+    table: &'static Table,
+    /// Per grid point, the inside bits of its four rows (corner bits 0, 2, 4, 6).
+    bits: Vec<u8>,
+    /// Per cell, its case.
+    masks: Vec<u8>,
+}
+
+impl Cases {
+    fn new(table: &'static Table) -> Cases {
+        Cases {
+            table,
+            bits: Vec::new(),
+            masks: Vec::new(),
+        }
+    }
+}
+
+/// The index of the first (or, if `last`, the last) element of `row` for which `f`
+/// holds. Chunks are tested whole first (a loop without early exit, which
+/// vectorises), then the chunk that holds one is searched.
+fn find<T: Copy>(row: &[T], last: bool, f: impl Fn(T) -> bool) -> Option<usize> {
+    const CHUNK: usize = 32;
+    let any = |c: &[T]| c.iter().fold(false, |a, &x| a | f(x));
+    if last {
+        let mut end = row.len();
+        for c in row.rchunks(CHUNK) {
+            end -= c.len();
+            if any(c) {
+                return c.iter().rposition(|&x| f(x)).map(|i| end + i);
+            }
+        }
+    } else {
+        let mut start = 0;
+        for c in row.chunks(CHUNK) {
+            if any(c) {
+                return c.iter().position(|&x| f(x)).map(|i| start + i);
+            }
+            start += c.len();
+        }
+    }
+    None
 }
 
 /// What pass 4 reads: the case table and passes 1 to 3's results.
 struct Emit<'a> {
-    table: &'a Table,
+    table: &'static Table,
     trims: &'a [Trim],
     counts: &'a [Counts],
     starts: &'a [(u32, u32)],
