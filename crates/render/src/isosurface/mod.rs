@@ -3,7 +3,7 @@
 //! from the volume's gradient (central differences, as VTK's vtkFlyingEdges3D and
 //! vtkMarchingCubes compute them); optional Taubin smoothing.
 //!
-//! The passes over the volume are those of flying edges (see [`flying`]): parallel
+//! The passes over the volume are those of flying edges (isosurface/flying.rs): parallel
 //! over rows of voxels, the output written at offsets from a prefix sum, so the mesh
 //! is the same bytes whatever the number of threads.
 
