@@ -3,20 +3,19 @@
 //! from the volume's gradient (central differences, as VTK's vtkFlyingEdges3D and
 //! vtkMarchingCubes compute them); optional Taubin smoothing.
 //!
-//! Slabs of cell layers run in parallel; each creates the vertices of the edges it
-//! owns once (shared edges are looked up in per-layer tables) and refers to the
-//! vertices on its top plane, which the next slab owns, until the slabs are joined.
+//! The passes over the volume are those of flying edges (isosurface/flying.rs): parallel
+//! over rows of voxels, the output written at offsets from a prefix sum, so the mesh
+//! is the same bytes whatever the number of threads.
 
+mod flying;
 mod table;
 
-use glint_io::{IoError, Mesh, Volume};
+use glint_io::{IoError, Mesh, Samples, Volume};
 use rayon::prelude::*;
 
 use crate::error::RenderError;
 use crate::field::{Field, MAX_FIELD_VOXELS};
 use crate::math::{det3, inverse3, linear_part, transpose3, Mat3};
-
-use table::{table, EDGES};
 
 /// Taubin's λ|μ smoothing (Taubin 1995, "A signal processing approach to fair
 /// surface design"): a shrinking step of `lambda` then an inflating step of `mu`
@@ -64,14 +63,13 @@ impl Taubin {
     }
 }
 
-/// Marks a vertex reference that belongs to the next slab (its bottom-plane table).
-const FOREIGN: u32 = 1 << 31;
-const NONE: u32 = u32::MAX;
-
 /// The isosurface of `volume` at `iso` (physical values): triangles counter-clockwise
 /// seen from the side of lower values, unit normals pointing there (down the
 /// gradient), positions in world mm. Values at least `iso` are inside; NaN samples are
 /// outside. Closed wherever the surface does not reach the volume's border.
+///
+/// Reads the stored samples in place (integers scaled by a positive slope, or f32
+/// without scaling); other volumes are converted to f32 first.
 pub fn extract(volume: &Volume, iso: f32) -> Result<Mesh, RenderError> {
     if volume.len() > MAX_FIELD_VOXELS {
         return Err(RenderError::Volume(format!(
@@ -79,7 +77,19 @@ pub fn extract(volume: &Volume, iso: f32) -> Result<Mesh, RenderError> {
             volume.len()
         )));
     }
-    extract_values(&volume.to_f32(), volume.dims, &volume.affine, iso)
+    let frame = Frame::new(volume.dims, &volume.affine, iso)?;
+    let (s, b) = (volume.slope, volume.intercept);
+    let scaled = s.is_finite() && s > 0.0 && b.is_finite();
+    match &volume.samples {
+        Samples::U8(v) if scaled => extract_ints(v, s, b, &frame),
+        Samples::I8(v) if scaled => extract_ints(v, s, b, &frame),
+        Samples::U16(v) if scaled => extract_ints(v, s, b, &frame),
+        Samples::I16(v) if scaled => extract_ints(v, s, b, &frame),
+        Samples::U32(v) if scaled => extract_ints(v, s, b, &frame),
+        Samples::I32(v) if scaled => extract_ints(v, s, b, &frame),
+        Samples::F32(v) if s == 1.0 && b == 0.0 => extract_f32(v, &frame),
+        _ => extract_f32(&volume.to_f32(), &frame),
+    }
 }
 
 /// The isosurface of a [`Field`]'s values at `iso`, like [`extract`] (the field has
@@ -92,58 +102,11 @@ pub fn extract_field(field: &Field, iso: f32) -> Result<Mesh, RenderError> {
         row[3] = field.origin[r];
     }
     affine[3][3] = 1.0;
-    extract_values(&field.values, field.dims, &affine, iso)
+    extract_f32(&field.values, &Frame::new(field.dims, &affine, iso)?)
 }
 
-/// [`extract`] on samples already in f32 (x fastest) with their voxel-to-world affine.
-fn extract_values(
-    values: &[f32],
-    dims: [usize; 3],
-    affine: &[[f64; 4]; 4],
-    iso: f32,
-) -> Result<Mesh, RenderError> {
-    if dims.iter().any(|&d| d < 2) {
-        return Err(RenderError::Volume(format!(
-            "dims {dims:?}: an isosurface needs at least 2 samples along each axis"
-        )));
-    }
-    if !iso.is_finite() {
-        return Err(RenderError::Parameter(format!(
-            "iso value {iso}: expected a finite number"
-        )));
-    }
-    let m = linear_part(affine);
-    let det = det3(&m);
-    let inv = inverse3(&m)
-        .filter(|_| det.is_finite() && det != 0.0)
-        .ok_or_else(|| RenderError::Volume("the voxel-to-world affine is singular".into()))?;
-    let grid = Grid {
-        values,
-        dims,
-        iso,
-        affine: *affine,
-        grad_to_world: to_f32(&transpose3(&inv)),
-        flip: det < 0.0,
-    };
-    let layers = dims[2] - 1;
-    let slabs = (4 * rayon::current_num_threads()).min(layers);
-    let bounds: Vec<(usize, usize)> = (0..slabs)
-        .map(|s| (s * layers / slabs, (s + 1) * layers / slabs))
-        .collect();
-    let parts: Vec<Slab> = bounds
-        .par_iter()
-        .map(|&(k0, k1)| grid.slab(k0, k1, k1 == layers))
-        .collect();
-    Ok(join(parts))
-}
-
-fn to_f32(m: &Mat3) -> [[f32; 3]; 3] {
-    m.map(|r| r.map(|x| x as f32))
-}
-
-/// The sampled volume and what every slab needs.
-struct Grid<'a> {
-    values: &'a [f32],
+/// The grid's shape and placement, the iso value, and what the vertices need.
+struct Frame {
     dims: [usize; 3],
     iso: f32,
     affine: [[f64; 4]; 4],
@@ -154,212 +117,124 @@ struct Grid<'a> {
     flip: bool,
 }
 
-/// One slab's vertices and triangles; `bottom` maps its bottom plane's x and y edges
-/// to its vertex indices.
-struct Slab {
-    positions: Vec<[f32; 3]>,
-    normals: Vec<[f32; 3]>,
-    triangles: Vec<[u32; 3]>,
-    bottom: Vec<u32>,
-}
-
-/// Per-layer edge-to-vertex tables.
-struct Layer {
-    /// x and y edges of the lower and upper plane (`2 * nx * ny` each).
-    lo: Vec<u32>,
-    hi: Vec<u32>,
-    /// z edges between the planes (`nx * ny`).
-    z: Vec<u32>,
-}
-
-impl Grid<'_> {
-    #[inline]
-    fn at(&self, i: usize, j: usize, k: usize) -> f32 {
-        self.values[i + self.dims[0] * (j + self.dims[1] * k)]
-    }
-
-    /// Cell layers `k0..k1`; `last` when the slab owns its top plane.
-    fn slab(&self, k0: usize, k1: usize, last: bool) -> Slab {
-        let [nx, ny, _] = self.dims;
-        let plane = nx * ny;
-        let mut out = Slab {
-            positions: Vec::new(),
-            normals: Vec::new(),
-            triangles: Vec::new(),
-            bottom: Vec::new(),
-        };
-        let mut layer = Layer {
-            lo: vec![NONE; 2 * plane],
-            hi: vec![NONE; 2 * plane],
-            z: vec![NONE; plane],
-        };
-        for k in k0..k1 {
-            let top_foreign = !last && k + 1 == k1;
-            self.layer(k, top_foreign, &mut layer, &mut out);
-            if k == k0 {
-                out.bottom = layer.lo.clone();
-            }
-            std::mem::swap(&mut layer.lo, &mut layer.hi);
-            layer.hi.fill(NONE);
-            layer.z.fill(NONE);
+impl Frame {
+    /// Checks the dims (at least 2 samples per axis), the iso value and the affine.
+    fn new(dims: [usize; 3], affine: &[[f64; 4]; 4], iso: f32) -> Result<Frame, RenderError> {
+        if dims.iter().any(|&d| d < 2) {
+            return Err(RenderError::Volume(format!(
+                "dims {dims:?}: an isosurface needs at least 2 samples along each axis"
+            )));
         }
-        out
-    }
-
-    /// The triangles of the cells between planes `k` and `k + 1`.
-    fn layer(&self, k: usize, top_foreign: bool, layer: &mut Layer, out: &mut Slab) {
-        let [nx, ny, _] = self.dims;
-        let t = table();
-        let iso = self.iso;
-        for j in 0..ny - 1 {
-            let rows = [(j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1)]
-                .map(|(j, k)| &self.values[nx * (j + ny * k)..][..nx]);
-            // Inside bits of the cell's left corners, carried along the row.
-            let bits = |i: usize| -> u8 {
-                (rows[0][i] >= iso) as u8
-                    | ((rows[1][i] >= iso) as u8) << 2
-                    | ((rows[2][i] >= iso) as u8) << 4
-                    | ((rows[3][i] >= iso) as u8) << 6
-            };
-            let mut left = bits(0);
-            for i in 0..nx - 1 {
-                let right = bits(i + 1);
-                let mask = left | right << 1;
-                left = right;
-                if mask == 0 || mask == 255 {
-                    continue;
-                }
-                let (start, count) = t.cases[mask as usize];
-                for tri in &t.triangles[start as usize..][..count as usize] {
-                    let mut ids = tri.map(|e| self.vertex([i, j, k], e, top_foreign, layer, out));
-                    if self.flip {
-                        ids.swap(1, 2);
-                    }
-                    out.triangles.push(ids);
-                }
-            }
+        if !iso.is_finite() {
+            return Err(RenderError::Parameter(format!(
+                "iso value {iso}: expected a finite number"
+            )));
         }
-    }
-
-    /// The vertex on edge `e` of cell `cell`, created on first use.
-    #[inline]
-    fn vertex(
-        &self,
-        cell: [usize; 3],
-        e: u8,
-        top_foreign: bool,
-        layer: &mut Layer,
-        out: &mut Slab,
-    ) -> u32 {
-        let [nx, ny, _] = self.dims;
-        let (c, _) = EDGES[e as usize];
-        let axis = e as usize / 4;
-        let p = [
-            cell[0] + (c & 1) as usize,
-            cell[1] + (c >> 1 & 1) as usize,
-            cell[2] + (c >> 2 & 1) as usize,
-        ];
-        let at = p[1] * nx + p[0];
-        let (slot, table) = match (axis, p[2] > cell[2]) {
-            (2, _) => (at, &mut layer.z),
-            (a, false) => (a * nx * ny + at, &mut layer.lo),
-            (a, true) if top_foreign => return FOREIGN | (a * nx * ny + at) as u32,
-            (a, true) => (a * nx * ny + at, &mut layer.hi),
-        };
-        if table[slot] == NONE {
-            table[slot] = out.positions.len() as u32;
-            let (pos, normal) = self.edge_point(p, axis);
-            out.positions.push(pos);
-            out.normals.push(normal);
-        }
-        table[slot]
-    }
-
-    /// Position and unit normal where the iso value crosses the edge from grid point
-    /// `p` along `axis`.
-    fn edge_point(&self, p: [usize; 3], axis: usize) -> ([f32; 3], [f32; 3]) {
-        let mut q = p;
-        q[axis] += 1;
-        let (a, b) = (self.at(p[0], p[1], p[2]), self.at(q[0], q[1], q[2]));
-        let t = (self.iso - a) / (b - a);
-        let t = if t.is_finite() {
-            t.clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
-        let mut idx = p.map(|x| x as f64);
-        idx[axis] += f64::from(t);
-        let pos = std::array::from_fn(|r| {
-            let row = &self.affine[r];
-            (row[0] * idx[0] + row[1] * idx[1] + row[2] * idx[2] + row[3]) as f32
-        });
-        let (ga, gb) = (self.gradient(p), self.gradient(q));
-        let g: [f32; 3] = std::array::from_fn(|d| ga[d] + t * (gb[d] - ga[d]));
-        let m = &self.grad_to_world;
-        let w: [f32; 3] =
-            std::array::from_fn(|r| -(m[r][0] * g[0] + m[r][1] * g[1] + m[r][2] * g[2]));
-        let len = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-        let normal = if len > 0.0 && len.is_finite() {
-            w.map(|x| x / len)
-        } else {
-            [0.0; 3]
-        };
-        (pos, normal)
-    }
-
-    /// Index-space gradient at grid point `p`: central differences, one-sided at the
-    /// border.
-    fn gradient(&self, p: [usize; 3]) -> [f32; 3] {
-        std::array::from_fn(|d| {
-            let (mut lo, mut hi) = (p, p);
-            lo[d] = p[d].saturating_sub(1);
-            hi[d] = (p[d] + 1).min(self.dims[d] - 1);
-            let span = (hi[d] - lo[d]) as f32;
-            (self.at(hi[0], hi[1], hi[2]) - self.at(lo[0], lo[1], lo[2])) / span
+        let m = linear_part(affine);
+        let det = det3(&m);
+        let inv = inverse3(&m)
+            .filter(|_| det.is_finite() && det != 0.0)
+            .ok_or_else(|| RenderError::Volume("the voxel-to-world affine is singular".into()))?;
+        Ok(Frame {
+            dims,
+            iso,
+            affine: *affine,
+            grad_to_world: to_f32(&transpose3(&inv)),
+            flip: det < 0.0,
         })
     }
 }
 
-/// Joins the slabs: concatenates their vertices and resolves top-plane references
-/// to the next slab's vertices.
-fn join(parts: Vec<Slab>) -> Mesh {
-    let mut offsets = Vec::with_capacity(parts.len() + 1);
-    let mut total = 0u32;
-    for p in &parts {
-        offsets.push(total);
-        total += p.positions.len() as u32;
+fn to_f32(m: &Mat3) -> [[f32; 3]; 3] {
+    m.map(|r| r.map(|x| x as f32))
+}
+
+/// Integer sample types, with their range.
+trait Int: flying::Raw {
+    const MIN: i64;
+    const MAX: i64;
+    /// `x`, which is within `MIN..=MAX`.
+    fn from_i64(x: i64) -> Self;
+}
+
+macro_rules! int {
+    ($($t:ty),*) => {$(
+        impl Int for $t {
+            const MIN: i64 = <$t>::MIN as i64;
+            const MAX: i64 = <$t>::MAX as i64;
+            #[inline]
+            fn from_i64(x: i64) -> Self {
+                x as $t
+            }
+        }
+    )*};
+}
+int!(u8, i8, u16, i16, u32, i32);
+
+/// Integer samples with physical values `slope * x + intercept`, `slope > 0`: the
+/// physical value (computed in f64, rounded to f32) never decreases with `x`, so the
+/// inside samples are those at least the smallest inside one, found by bisection.
+fn extract_ints<T: Int>(
+    values: &[T],
+    slope: f64,
+    intercept: f64,
+    frame: &Frame,
+) -> Result<Mesh, RenderError> {
+    let inside = |x: i64| (slope * x as f64 + intercept) as f32 >= frame.iso;
+    if !inside(T::MAX) {
+        return Ok(empty());
     }
-    offsets.push(total);
-    let triangles: Vec<Vec<[u32; 3]>> = parts
-        .par_iter()
-        .enumerate()
-        .map(|(s, p)| {
-            let map = |v: u32| {
-                if v & FOREIGN == 0 {
-                    offsets[s] + v
-                } else {
-                    // The next slab uses every crossed edge of its bottom plane (its
-                    // first layer of cells has them all), so the entry is set.
-                    offsets[s + 1] + parts[s + 1].bottom[(v & !FOREIGN) as usize]
-                }
-            };
-            p.triangles.iter().map(|t| t.map(map)).collect()
-        })
-        .collect();
-    let mut mesh = Mesh {
-        positions: Vec::with_capacity(total as usize),
-        triangles: Vec::with_capacity(triangles.iter().map(Vec::len).sum()),
-        normals: Some(Vec::with_capacity(total as usize)),
-        scalars: None,
+    // Invariant: `hi` is inside, `lo` is not (or lo == hi == MIN).
+    let (mut lo, mut hi) = (T::MIN, T::MAX);
+    if inside(lo) {
+        hi = lo;
+    }
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if inside(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let src = flying::Scaled {
+        slope,
+        intercept,
+        lo: T::from_i64(hi),
     };
-    for (p, t) in parts.iter().zip(&triangles) {
-        mesh.positions.extend_from_slice(&p.positions);
-        if let Some(n) = &mut mesh.normals {
-            n.extend_from_slice(&p.normals);
-        }
-        mesh.triangles.extend_from_slice(t);
+    run(values, src, frame)
+}
+
+/// f32 samples, their own physical values.
+fn extract_f32(values: &[f32], frame: &Frame) -> Result<Mesh, RenderError> {
+    let src = flying::Scaled {
+        slope: 1.0,
+        intercept: 0.0,
+        lo: frame.iso,
+    };
+    run(values, src, frame)
+}
+
+fn run<S: flying::Source>(values: &[S::T], src: S, frame: &Frame) -> Result<Mesh, RenderError> {
+    let grid = flying::Grid { values, src, frame };
+    let out = grid.extract().map_err(|_| {
+        RenderError::Volume("the isosurface has more than 2^32 vertices or triangles".into())
+    })?;
+    Ok(Mesh {
+        positions: out.positions,
+        triangles: out.triangles,
+        normals: Some(out.normals),
+        scalars: None,
+    })
+}
+
+fn empty() -> Mesh {
+    Mesh {
+        positions: Vec::new(),
+        triangles: Vec::new(),
+        normals: Some(Vec::new()),
+        scalars: None,
     }
-    mesh
 }
 
 /// Smooths `mesh` in place with Taubin's λ|μ steps (each vertex moves towards the
