@@ -6,7 +6,8 @@
 //! <https://teem.sourceforge.net/nrrd/format.html>. Supported: dimension 2 or 3, the
 //! eight sample types, `raw`, `gzip` and `text` encodings, `byte skip` (including -1 for
 //! raw data), `line skip`, `space` (RAS/LPS/LAS, converted to RAS), `space directions`,
-//! `space origin`, or `spacings` without a space.
+//! `space origin`, or `spacings` without a space. The time spent inflating gzip data is
+//! reported as [`VolumeFile::inflate`](crate::VolumeFile::inflate).
 
 use std::collections::HashMap;
 use std::fs::File;
@@ -14,6 +15,8 @@ use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use flate2::read::MultiGzDecoder;
+
+use crate::clock::Clock;
 
 use crate::common::{
     check_affine, check_spacing, checked_voxels, decode_samples, diagonal_affine, encode_samples,
@@ -113,7 +116,8 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     let fields = read_fields(path)?;
     let layout = Layout::parse(path, &fields, options)?;
     let (dpath, data) = open_data(path, &fields, layout.line_skip)?;
-    let samples = decode(path, &dpath, data, &layout)?;
+    let clock = Clock::default();
+    let samples = decode(path, &dpath, data, &layout, &clock)?;
     let (affine, notes) = geometry(path, &fields, layout.dimension)?;
     let spacing = check_affine(path, &affine)?;
     Ok(VolumeFile {
@@ -128,7 +132,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         },
         format: Format::Nrrd,
         notes,
-        inflate: None,
+        inflate: clock.spent(),
     })
 }
 
@@ -431,16 +435,18 @@ fn data_location(path: &Path, fields: &Fields) -> Result<(PathBuf, u64), IoError
 }
 
 /// Decodes the samples from `data` (the data file `dpath` after its skipped lines); an
-/// unsupported encoding is reported against the header `path`.
+/// unsupported encoding is reported against the header `path`. Time spent inflating
+/// gzip data goes to `clock`.
 fn decode(
     path: &Path,
     dpath: &Path,
     data: BufReader<File>,
     layout: &Layout,
+    clock: &Clock,
 ) -> Result<Samples, IoError> {
     match &layout.codec {
         Codec::Raw => decode_raw(dpath, data, layout),
-        Codec::Gzip => decode_gzip(path, dpath, data, layout),
+        Codec::Gzip => decode_gzip(path, dpath, data, layout, clock),
         Codec::Text => decode_text(dpath, data, layout),
         Codec::Other(e) => Err(IoError::Unsupported {
             path: path.into(),
@@ -499,12 +505,13 @@ fn decode_raw(
 }
 
 /// Gzip-compressed samples (concatenated members allowed); `byte skip` counts bytes
-/// after decompression.
+/// after decompression. The inflater is timed by `clock`.
 fn decode_gzip(
     path: &Path,
     dpath: &Path,
     data: BufReader<File>,
     layout: &Layout,
+    clock: &Clock,
 ) -> Result<Samples, IoError> {
     let ByteSkip::Bytes(byte_skip) = layout.byte_skip else {
         return Err(invalid(
@@ -512,7 +519,7 @@ fn decode_gzip(
             "'byte skip: -1' is only allowed with raw encoding",
         ));
     };
-    let mut gz = BufReader::new(MultiGzDecoder::new(data));
+    let mut gz = BufReader::new(clock.timed(MultiGzDecoder::new(data)));
     let skipped = std::io::copy(&mut (&mut gz).take(byte_skip), &mut std::io::sink())
         .map_err(|e| os_or_invalid(dpath, e))?;
     if skipped < byte_skip {
