@@ -172,7 +172,8 @@ pub struct VolumeFile {
     /// dropped dimensions, ...).
     pub notes: Vec<String>,
     /// Time spent inflating gzip data (with reading the compressed bytes), for
-    /// compressed NIfTI; `None` when nothing was inflated or it was not measured.
+    /// compressed NIfTI and gzip-encoded NRRD; `None` when nothing was inflated or it
+    /// was not measured.
     pub inflate: Option<std::time::Duration>,
 }
 

@@ -6,11 +6,17 @@
 //! <https://teem.sourceforge.net/nrrd/format.html>. Supported: dimension 2 or 3, the
 //! eight sample types, `raw`, `gzip` and `text` encodings, `byte skip` (including -1 for
 //! raw data), `line skip`, `space` (RAS/LPS/LAS, converted to RAS), `space directions`,
-//! `space origin`, or `spacings` without a space.
+//! `space origin`, or `spacings` without a space. The time spent inflating gzip data is
+//! reported as [`VolumeFile::inflate`](crate::VolumeFile::inflate).
 
 use std::collections::HashMap;
+use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+
+use flate2::read::MultiGzDecoder;
+
+use crate::clock::Clock;
 
 use crate::common::{
     check_affine, check_spacing, checked_voxels, decode_samples, diagonal_affine, encode_samples,
@@ -102,15 +108,101 @@ fn vectors(s: &str) -> Vec<&str> {
 }
 
 /// Reads a NRRD volume (attached or detached header).
+///
+/// The steps, in the order their errors are reported: the header's fields, the sample
+/// layout they announce (checked against `options.max_voxels` before anything is
+/// allocated), the data file, the samples, then the geometry.
 pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
+    let fields = read_fields(path)?;
+    let layout = Layout::parse(path, &fields, options)?;
+    let (dpath, data) = open_data(path, &fields, layout.line_skip)?;
+    let clock = Clock::default();
+    let samples = decode(path, &dpath, data, &layout, &clock)?;
+    let (affine, notes) = geometry(path, &fields, layout.dimension)?;
+    let spacing = check_affine(path, &affine)?;
+    Ok(VolumeFile {
+        volume: Volume {
+            dims: layout.dims,
+            spacing,
+            affine,
+            samples,
+            slope: 1.0,
+            intercept: 0.0,
+            units: None,
+        },
+        format: Format::Nrrd,
+        notes,
+        inflate: clock.spent(),
+    })
+}
+
+/// The `field: value` lines of a header, and where the header ended.
+struct Fields {
+    /// Values by field name, names lower-cased; the last of a repeated field wins.
+    map: HashMap<String, String>,
+    /// Whether a blank line ended the header (attached data may follow it).
+    ended: bool,
+    /// Bytes read from the header file, the blank line included: where attached data
+    /// starts.
+    len: u64,
+}
+
+impl Fields {
+    fn get(&self, key: &str) -> Option<&str> {
+        self.map.get(key).map(String::as_str)
+    }
+
+    fn required(&self, path: &Path, key: &str) -> Result<&str, IoError> {
+        self.get(key)
+            .ok_or_else(|| invalid(path, format!("missing required field '{key}'")))
+    }
+}
+
+/// Reads the magic line and the header's fields, up to the blank line that ends it (or
+/// the end of the file, for a detached header); at most [`MAX_HEADER_BYTES`].
+fn read_fields(path: &Path) -> Result<Fields, IoError> {
     let file = open(path)?;
     let mut reader = BufReader::new(file).take(MAX_HEADER_BYTES);
+    let mut fields = Fields {
+        map: HashMap::new(),
+        ended: false,
+        len: check_magic(path, &mut reader)?,
+    };
+    let mut line = String::new();
+    loop {
+        line.clear();
+        let n = reader
+            .read_line(&mut line)
+            .map_err(|e| os_or_invalid(path, e))?;
+        fields.len += n as u64;
+        if n == 0 {
+            break;
+        }
+        if !line.ends_with('\n') && fields.len >= MAX_HEADER_BYTES {
+            return Err(invalid(
+                path,
+                format!("header longer than {MAX_HEADER_BYTES} bytes"),
+            ));
+        }
+        let l = line.trim_end_matches(['\n', '\r']);
+        if l.is_empty() {
+            fields.ended = true;
+            break;
+        }
+        if let Some((k, v)) = parse_line(path, l)? {
+            fields.map.insert(k, v);
+        }
+    }
+    Ok(fields)
+}
+
+/// Checks the first line is `NRRD0001` .. `NRRD0005`; returns its length in bytes.
+fn check_magic(path: &Path, reader: &mut impl BufRead) -> Result<u64, IoError> {
     let mut first = Vec::new();
-    let n = (&mut reader)
+    let n = reader
         .take(64)
         .read_until(b'\n', &mut first)
         .map_err(|e| os_or_invalid(path, e))?;
-    let mut consumed = n as u64;
     let magic = String::from_utf8_lossy(&first);
     let magic = magic.trim_end();
     if !(magic.len() == 8
@@ -126,54 +218,107 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             ),
         });
     }
-    let mut line = String::new();
-    let mut fields: HashMap<String, String> = HashMap::new();
-    let mut ended = false;
-    loop {
-        line.clear();
-        let n = reader
-            .read_line(&mut line)
-            .map_err(|e| os_or_invalid(path, e))?;
-        consumed += n as u64;
-        if n == 0 {
-            break;
-        }
-        if !line.ends_with('\n') && consumed >= MAX_HEADER_BYTES {
-            return Err(invalid(
-                path,
-                format!("header longer than {MAX_HEADER_BYTES} bytes"),
-            ));
-        }
-        let l = line.trim_end_matches(['\n', '\r']);
-        if l.is_empty() {
-            ended = true;
-            break;
-        }
-        if l.starts_with('#') || l.contains(":=") {
-            continue; // comment or key/value pair
-        }
-        // A carriage return or other control character inside a field would be quoted
-        // into an error message over several lines (found by fuzzing, issue 17).
-        if l.chars().any(|c| c.is_control() && c != '\t') {
-            return Err(invalid(
-                path,
-                format!("header line {:?} contains control characters", truncate(l)),
-            ));
-        }
-        let (k, v) = l.split_once(": ").ok_or_else(|| {
-            invalid(
-                path,
-                format!("header line {:?} is not 'field: value'", truncate(l)),
-            )
-        })?;
-        fields.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
-    }
-    let field = |k: &str| fields.get(k).map(String::as_str);
-    let required =
-        |k: &str| field(k).ok_or_else(|| invalid(path, format!("missing required field '{k}'")));
+    Ok(n as u64)
+}
 
-    let ty = scalar_type(path, required("type")?)?;
-    let dimension: usize = required("dimension")?
+/// Parses a non-blank header line: a `field: value` pair (name lower-cased, both
+/// trimmed), or `None` for a comment or a `key:=value` pair.
+fn parse_line(path: &Path, l: &str) -> Result<Option<(String, String)>, IoError> {
+    if l.starts_with('#') || l.contains(":=") {
+        return Ok(None);
+    }
+    // A carriage return or other control character inside a field would be quoted
+    // into an error message over several lines (found by fuzzing, issue 17).
+    if l.chars().any(|c| c.is_control() && c != '\t') {
+        return Err(invalid(
+            path,
+            format!("header line {:?} contains control characters", truncate(l)),
+        ));
+    }
+    let (k, v) = l.split_once(": ").ok_or_else(|| {
+        invalid(
+            path,
+            format!("header line {:?} is not 'field: value'", truncate(l)),
+        )
+    })?;
+    Ok(Some((k.trim().to_ascii_lowercase(), v.trim().to_string())))
+}
+
+/// A data `encoding` field, lower-cased.
+#[derive(Debug, PartialEq)]
+enum Codec {
+    Raw,
+    Gzip,
+    Text,
+    /// Not read; refused when the samples are decoded (after the data file is opened,
+    /// the order in which errors have always been reported).
+    Other(String),
+}
+
+impl Codec {
+    fn parse(name: &str) -> Codec {
+        match name.to_ascii_lowercase().as_str() {
+            "raw" => Codec::Raw,
+            "gzip" | "gz" => Codec::Gzip,
+            "txt" | "text" | "ascii" => Codec::Text,
+            other => Codec::Other(other.to_string()),
+        }
+    }
+}
+
+/// A `byte skip` field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum ByteSkip {
+    /// Bytes to skip before the samples.
+    Bytes(u64),
+    /// `-1`: the samples are the last bytes of the (raw) data file.
+    ToEnd,
+}
+
+/// The samples a header announces and how they are stored, validated.
+struct Layout {
+    ty: ScalarType,
+    /// 2 or 3.
+    dimension: usize,
+    /// Sizes, 1 for the third of a 2D image.
+    dims: [usize; 3],
+    /// Voxels, within the reader's limit.
+    count: usize,
+    /// Bytes of the samples: `count` times the sample size, known not to overflow.
+    nbytes: usize,
+    codec: Codec,
+    endian: Endian,
+    line_skip: u64,
+    byte_skip: ByteSkip,
+}
+
+impl Layout {
+    /// Validates the fields that say what the samples are and where they start.
+    fn parse(path: &Path, fields: &Fields, options: &ReadOptions) -> Result<Layout, IoError> {
+        let ty = scalar_type(path, fields.required(path, "type")?)?;
+        let (dimension, dims) = sizes(path, fields)?;
+        let count = checked_voxels(path, dims, ty.size(), options.max_voxels)?;
+        let codec = Codec::parse(fields.required(path, "encoding")?);
+        let endian = endian(path, fields, ty, &codec)?;
+        let (line_skip, byte_skip) = skips(path, fields)?;
+        Ok(Layout {
+            ty,
+            dimension,
+            dims,
+            count,
+            nbytes: count * ty.size(),
+            codec,
+            endian,
+            line_skip,
+            byte_skip,
+        })
+    }
+}
+
+/// The `dimension` (2 or 3) and the `sizes`, padded to three.
+fn sizes(path: &Path, fields: &Fields) -> Result<(usize, [usize; 3]), IoError> {
+    let dimension: usize = fields
+        .required(path, "dimension")?
         .parse()
         .map_err(|_| invalid(path, "'dimension' is not a number"))?;
     if !(2..=3).contains(&dimension) {
@@ -182,7 +327,8 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             what: format!("dimension {dimension}; only 2D and 3D scalar volumes are read"),
         });
     }
-    let sizes: Vec<usize> = required("sizes")?
+    let sizes: Vec<usize> = fields
+        .required(path, "sizes")?
         .split_whitespace()
         .map(|s| s.parse::<usize>())
         .collect::<Result<_, _>>()
@@ -193,43 +339,78 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             format!("{} sizes for dimension {dimension}", sizes.len()),
         ));
     }
-    let dims = [sizes[0], sizes[1], sizes.get(2).copied().unwrap_or(1)];
-    let count = checked_voxels(path, dims, ty.size(), options.max_voxels)?;
-    let nbytes = count * ty.size();
+    Ok((
+        dimension,
+        [sizes[0], sizes[1], sizes.get(2).copied().unwrap_or(1)],
+    ))
+}
 
-    let encoding = required("encoding")?.to_ascii_lowercase();
-    let endian = match field("endian") {
-        Some("little") => Endian::Little,
-        Some("big") => Endian::Big,
-        None if ty.size() == 1 || matches!(encoding.as_str(), "txt" | "text" | "ascii") => {
-            Endian::Little
-        }
-        None => return Err(invalid(path, "missing 'endian' for multi-byte samples")),
-        Some(e) => {
-            return Err(invalid(
-                path,
-                format!("endian '{e}' is neither little nor big"),
-            ))
-        }
-    };
+/// The byte order; needed only for multi-byte samples stored as bytes.
+fn endian(path: &Path, fields: &Fields, ty: ScalarType, codec: &Codec) -> Result<Endian, IoError> {
+    match fields.get("endian") {
+        Some("little") => Ok(Endian::Little),
+        Some("big") => Ok(Endian::Big),
+        None if ty.size() == 1 || *codec == Codec::Text => Ok(Endian::Little),
+        None => Err(invalid(path, "missing 'endian' for multi-byte samples")),
+        Some(e) => Err(invalid(
+            path,
+            format!("endian '{e}' is neither little nor big"),
+        )),
+    }
+}
+
+/// `line skip` (lines) and `byte skip` (bytes, or -1), 0 when absent.
+fn skips(path: &Path, fields: &Fields) -> Result<(u64, ByteSkip), IoError> {
     let parse_i64 = |k: &str| -> Result<i64, IoError> {
-        field(k).map_or(Ok(0), |v| {
+        fields.get(k).map_or(Ok(0), |v| {
             v.parse()
                 .map_err(|_| invalid(path, format!("'{k}' is not an integer")))
         })
     };
     let line_skip = parse_i64("line skip")?;
     let byte_skip = parse_i64("byte skip")?;
-    if line_skip < 0 || byte_skip < -1 {
-        return Err(invalid(
-            path,
-            "negative 'line skip' or 'byte skip' (other than -1)",
-        ));
-    }
+    let negative = || invalid(path, "negative 'line skip' or 'byte skip' (other than -1)");
+    let line_skip = u64::try_from(line_skip).map_err(|_| negative())?;
+    let byte_skip = match byte_skip {
+        -1 => ByteSkip::ToEnd,
+        b => ByteSkip::Bytes(u64::try_from(b).map_err(|_| negative())?),
+    };
+    Ok((line_skip, byte_skip))
+}
 
-    // Where the data is.
-    let data_file = field("data file").or(field("datafile"));
-    let (data_path, start): (PathBuf, u64) = match data_file {
+/// Opens the file holding the samples (the header's own file after its blank line, or
+/// the detached `data file`) and skips its first `line_skip` lines.
+fn open_data(
+    path: &Path,
+    fields: &Fields,
+    line_skip: u64,
+) -> Result<(PathBuf, BufReader<File>), IoError> {
+    let (dpath, start) = data_location(path, fields)?;
+    let mut data = BufReader::new(open(&dpath)?);
+    data.seek(SeekFrom::Start(start))
+        .map_err(|e| os_or_invalid(&dpath, e))?;
+    for _ in 0..line_skip {
+        let mut skip = Vec::new();
+        // Each skipped line is bounded like a header line.
+        let n = (&mut data)
+            .take(MAX_HEADER_BYTES)
+            .read_until(b'\n', &mut skip)
+            .map_err(|e| os_or_invalid(&dpath, e))?;
+        if n == 0 {
+            return Err(IoError::Truncated {
+                path: dpath,
+                what: "the file ends within 'line skip'".into(),
+            });
+        }
+    }
+    Ok((dpath, data))
+}
+
+/// The file holding the samples and the offset where they start: a detached `data file`
+/// (relative to the header's directory) from its start, or the header's own file after
+/// the header. Multi-file data (`LIST`, `%d` patterns) is not read.
+fn data_location(path: &Path, fields: &Fields) -> Result<(PathBuf, u64), IoError> {
+    match fields.get("data file").or(fields.get("datafile")) {
         Some(name) => {
             if name.starts_with("LIST") || name.contains('%') {
                 return Err(IoError::Unsupported {
@@ -243,124 +424,135 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             } else {
                 path.parent().unwrap_or(Path::new(".")).join(p)
             };
-            (p, 0)
+            Ok((p, 0))
         }
-        None if ended => (path.to_path_buf(), consumed),
-        None => {
-            return Err(IoError::Truncated {
-                path: path.into(),
-                what: "the header has no blank line ending it and names no data file".into(),
-            })
-        }
-    };
-    let dpath = data_path.as_path();
-    let mut data = BufReader::new(open(dpath)?);
-    data.seek(SeekFrom::Start(start))
+        None if fields.ended => Ok((path.to_path_buf(), fields.len)),
+        None => Err(IoError::Truncated {
+            path: path.into(),
+            what: "the header has no blank line ending it and names no data file".into(),
+        }),
+    }
+}
+
+/// Decodes the samples from `data` (the data file `dpath` after its skipped lines); an
+/// unsupported encoding is reported against the header `path`. Time spent inflating
+/// gzip data goes to `clock`.
+fn decode(
+    path: &Path,
+    dpath: &Path,
+    data: BufReader<File>,
+    layout: &Layout,
+    clock: &Clock,
+) -> Result<Samples, IoError> {
+    match &layout.codec {
+        Codec::Raw => decode_raw(dpath, data, layout),
+        Codec::Gzip => decode_gzip(path, dpath, data, layout, clock),
+        Codec::Text => decode_text(dpath, data, layout),
+        Codec::Other(e) => Err(IoError::Unsupported {
+            path: path.into(),
+            what: format!("NRRD encoding '{e}'; supported: raw, gzip, text"),
+        }),
+    }
+}
+
+/// Raw samples: the announced size is checked against the file's length before it is
+/// read.
+fn decode_raw(
+    dpath: &Path,
+    mut data: BufReader<File>,
+    layout: &Layout,
+) -> Result<Samples, IoError> {
+    let nbytes = layout.nbytes;
+    let pos = data
+        .stream_position()
         .map_err(|e| os_or_invalid(dpath, e))?;
-    for _ in 0..line_skip {
-        let mut skip = Vec::new();
-        let n = (&mut data)
-            .take(MAX_HEADER_BYTES)
-            .read_until(b'\n', &mut skip)
-            .map_err(|e| os_or_invalid(dpath, e))?;
-        if n == 0 {
-            return Err(IoError::Truncated {
-                path: dpath.into(),
-                what: "the file ends within 'line skip'".into(),
-            });
-        }
-    }
-
-    let samples = match encoding.as_str() {
-        "raw" => {
-            let pos = data
-                .stream_position()
-                .map_err(|e| os_or_invalid(dpath, e))?;
-            let len = data
-                .get_ref()
-                .metadata()
-                .map_err(|e| os_or_invalid(dpath, e))?
-                .len();
-            let available = len.saturating_sub(pos);
-            let skip = if byte_skip == -1 {
-                available.checked_sub(nbytes as u64).ok_or_else(|| IoError::SizeMismatch {
+    let len = data
+        .get_ref()
+        .metadata()
+        .map_err(|e| os_or_invalid(dpath, e))?
+        .len();
+    let available = len.saturating_sub(pos);
+    let skip = match layout.byte_skip {
+        ByteSkip::ToEnd => {
+            available
+                .checked_sub(nbytes as u64)
+                .ok_or_else(|| IoError::SizeMismatch {
                     path: dpath.into(),
-                    what: format!("'byte skip: -1' but the file holds {available} bytes of the {nbytes} announced"),
+                    what: format!(
+                        "'byte skip: -1' but the file holds {available} bytes of the {nbytes} \
+                     announced"
+                    ),
                 })?
-            } else {
-                byte_skip as u64
-            };
-            if available < skip + nbytes as u64 {
-                return Err(IoError::SizeMismatch {
-                    path: dpath.into(),
-                    what: format!(
-                        "the header announces {nbytes} bytes of {ty} data ({}x{}x{}) after {skip} skipped, \
-                         but {available} bytes follow the header",
-                        dims[0], dims[1], dims[2]
-                    ),
-                });
-            }
-            data.seek(SeekFrom::Current(skip as i64))
-                .map_err(|e| os_or_invalid(dpath, e))?;
-            let bytes = read_exact_growing(dpath, &mut data, nbytes, "voxel data")?;
-            decode_samples(&bytes, ty, endian)
         }
-        "gzip" | "gz" => {
-            if byte_skip == -1 {
-                return Err(invalid(
-                    path,
-                    "'byte skip: -1' is only allowed with raw encoding",
-                ));
-            }
-            let mut gz = BufReader::new(flate2::read::MultiGzDecoder::new(data));
-            let skipped =
-                std::io::copy(&mut (&mut gz).take(byte_skip as u64), &mut std::io::sink())
-                    .map_err(|e| os_or_invalid(dpath, e))?;
-            if skipped < byte_skip as u64 {
-                return Err(IoError::Truncated {
-                    path: dpath.into(),
-                    what: "data ends within 'byte skip'".into(),
-                });
-            }
-            let bytes = read_exact_growing(dpath, &mut gz, nbytes, "gzip-compressed voxel data")?;
-            decode_samples(&bytes, ty, endian)
-        }
-        "txt" | "text" | "ascii" => {
-            let mut text = String::new();
-            // At most ~32 characters per number.
-            data.take(32 * count as u64 + 1024)
-                .read_to_string(&mut text)
-                .map_err(|e| os_or_invalid(dpath, e))?;
-            parse_text(dpath, &text, ty, count)?
-        }
-        e => {
-            return Err(IoError::Unsupported {
-                path: path.into(),
-                what: format!("NRRD encoding '{e}'; supported: raw, gzip, text"),
-            })
-        }
+        ByteSkip::Bytes(b) => b,
     };
-
-    // Geometry. Every axis must be spatial: a color or vector axis (kinds RGB-color,
-    // vector, list, ...) is not a voxel dimension.
-    if let Some(kinds) = field("kinds") {
-        for (i, k) in kinds.split_whitespace().take(dimension).enumerate() {
-            if !matches!(
-                k.to_ascii_lowercase().as_str(),
-                "domain" | "space" | "none" | "???"
-            ) {
-                return Err(IoError::Unsupported {
-                    path: path.into(),
-                    what: format!(
-                        "axis {i} is a non-spatial axis (kind '{k}'); only scalar volumes \
-                         with spatial axes are read"
-                    ),
-                });
-            }
-        }
+    if available < skip.saturating_add(nbytes as u64) {
+        let [x, y, z] = layout.dims;
+        return Err(IoError::SizeMismatch {
+            path: dpath.into(),
+            what: format!(
+                "the header announces {nbytes} bytes of {} data ({x}x{y}x{z}) after {skip} \
+                 skipped, but {available} bytes follow the header",
+                layout.ty
+            ),
+        });
     }
+    // skip <= available <= the file's length, which fits an i64.
+    data.seek(SeekFrom::Current(skip as i64))
+        .map_err(|e| os_or_invalid(dpath, e))?;
+    let bytes = read_exact_growing(dpath, &mut data, nbytes, "voxel data")?;
+    Ok(decode_samples(&bytes, layout.ty, layout.endian))
+}
+
+/// Gzip-compressed samples (concatenated members allowed); `byte skip` counts bytes
+/// after decompression. The inflater is timed by `clock`.
+fn decode_gzip(
+    path: &Path,
+    dpath: &Path,
+    data: BufReader<File>,
+    layout: &Layout,
+    clock: &Clock,
+) -> Result<Samples, IoError> {
+    let ByteSkip::Bytes(byte_skip) = layout.byte_skip else {
+        return Err(invalid(
+            path,
+            "'byte skip: -1' is only allowed with raw encoding",
+        ));
+    };
+    let mut gz = BufReader::new(clock.timed(MultiGzDecoder::new(data)));
+    let skipped = std::io::copy(&mut (&mut gz).take(byte_skip), &mut std::io::sink())
+        .map_err(|e| os_or_invalid(dpath, e))?;
+    if skipped < byte_skip {
+        return Err(IoError::Truncated {
+            path: dpath.into(),
+            what: "data ends within 'byte skip'".into(),
+        });
+    }
+    let bytes = read_exact_growing(dpath, &mut gz, layout.nbytes, "gzip-compressed voxel data")?;
+    Ok(decode_samples(&bytes, layout.ty, layout.endian))
+}
+
+/// Samples as text numbers separated by white space or commas.
+fn decode_text(dpath: &Path, data: BufReader<File>, layout: &Layout) -> Result<Samples, IoError> {
+    let mut text = String::new();
+    // At most ~32 characters per number.
+    data.take(32 * layout.count as u64 + 1024)
+        .read_to_string(&mut text)
+        .map_err(|e| os_or_invalid(dpath, e))?;
+    parse_text(dpath, &text, layout.ty, layout.count)
+}
+
+/// The voxel-to-RAS affine and notes on where it came from: `space directions` and
+/// `space origin`, or `spacings` (1 mm without them), converted from the header's
+/// `space` to RAS.
+fn geometry(
+    path: &Path,
+    fields: &Fields,
+    dimension: usize,
+) -> Result<([[f64; 4]; 4], Vec<String>), IoError> {
+    check_kinds(path, fields, dimension)?;
     let mut notes = Vec::new();
-    let space = field("space").map(str::to_ascii_lowercase);
+    let space = fields.get("space").map(str::to_ascii_lowercase);
     let flip = match space.as_deref() {
         Some("right-anterior-superior" | "ras") | None => [1.0, 1.0, 1.0],
         Some("left-posterior-superior" | "lps") => [-1.0, -1.0, 1.0],
@@ -370,36 +562,9 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             [1.0, 1.0, 1.0]
         }
     };
-    let affine = if let Some(dirs) = field("space directions") {
-        let items = vectors(dirs);
-        if items.len() != dimension {
-            return Err(invalid(
-                path,
-                format!("{} space directions for dimension {dimension}", items.len()),
-            ));
-        }
-        let mut cols = Vec::new();
-        for item in items {
-            cols.push(vector(path, item)?.ok_or_else(|| IoError::Unsupported {
-                path: path.into(),
-                what: "a non-spatial axis ('none' direction)".into(),
-            })?);
-        }
-        if dimension == 2 {
-            // The third axis of a single slice: unit length along the plane's normal.
-            let (a, b) = (cols[0], cols[1]);
-            let n = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            cols.push(if l > 0.0 { n.map(|x| x / l) } else { n });
-        }
-        let origin = match field("space origin") {
-            Some(o) => vector(path, o)?.unwrap_or([0.0; 3]),
-            None => [0.0; 3],
-        };
+    let affine = if let Some(dirs) = fields.get("space directions") {
+        let cols = direction_columns(path, dirs, dimension)?;
+        let origin = space_origin(path, fields)?;
         let mut a = [[0.0; 4]; 4];
         for r in 0..3 {
             for c in 0..3 {
@@ -414,38 +579,97 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         ));
         a
     } else {
-        let mut spacing = [1.0; 3];
-        match field("spacings") {
-            Some(s) => {
-                for (i, t) in s.split_whitespace().take(3).enumerate() {
-                    spacing[i] = t.parse::<f64>().unwrap_or(f64::NAN);
-                }
-                check_spacing(path, spacing)?;
-            }
-            None => notes.push("no spacings or space directions: 1 mm voxels".into()),
-        }
+        let spacing = spacings(path, fields, &mut notes)?;
         // A space origin is a world position even without space directions.
-        let origin = match field("space origin") {
-            Some(o) => vector(path, o)?.unwrap_or([0.0; 3]),
-            None => [0.0; 3],
-        };
+        let origin = space_origin(path, fields)?;
         diagonal_affine(spacing, std::array::from_fn(|r| flip[r] * origin[r]))
     };
-    let spacing = check_affine(path, &affine)?;
-    Ok(VolumeFile {
-        volume: Volume {
-            dims,
-            spacing,
-            affine,
-            samples,
-            slope: 1.0,
-            intercept: 0.0,
-            units: None,
-        },
-        format: Format::Nrrd,
-        notes,
-        inflate: None,
-    })
+    Ok((affine, notes))
+}
+
+/// Every axis must be spatial: a color or vector axis (kinds RGB-color, vector, list,
+/// ...) is not a voxel dimension.
+fn check_kinds(path: &Path, fields: &Fields, dimension: usize) -> Result<(), IoError> {
+    let Some(kinds) = fields.get("kinds") else {
+        return Ok(());
+    };
+    for (i, k) in kinds.split_whitespace().take(dimension).enumerate() {
+        if !matches!(
+            k.to_ascii_lowercase().as_str(),
+            "domain" | "space" | "none" | "???"
+        ) {
+            return Err(IoError::Unsupported {
+                path: path.into(),
+                what: format!(
+                    "axis {i} is a non-spatial axis (kind '{k}'); only scalar volumes \
+                     with spatial axes are read"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The `space directions`, one per axis, in the header's space; a 2D image gets a
+/// unit third axis along its plane's normal.
+fn direction_columns(path: &Path, dirs: &str, dimension: usize) -> Result<[[f64; 3]; 3], IoError> {
+    let items = vectors(dirs);
+    if items.len() != dimension {
+        return Err(invalid(
+            path,
+            format!("{} space directions for dimension {dimension}", items.len()),
+        ));
+    }
+    let mut cols = [[0.0; 3]; 3];
+    for (col, item) in cols.iter_mut().zip(items) {
+        *col = vector(path, item)?.ok_or_else(|| IoError::Unsupported {
+            path: path.into(),
+            what: "a non-spatial axis ('none' direction)".into(),
+        })?;
+    }
+    if dimension == 2 {
+        cols[2] = unit_normal(cols[0], cols[1]);
+    }
+    Ok(cols)
+}
+
+/// `a` x `b` scaled to unit length (left at zero when `a` and `b` are parallel).
+fn unit_normal(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    let n = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if l > 0.0 {
+        n.map(|x| x / l)
+    } else {
+        n
+    }
+}
+
+/// The `space origin`, zero when absent or `none`.
+fn space_origin(path: &Path, fields: &Fields) -> Result<[f64; 3], IoError> {
+    match fields.get("space origin") {
+        Some(o) => Ok(vector(path, o)?.unwrap_or([0.0; 3])),
+        None => Ok([0.0; 3]),
+    }
+}
+
+/// The voxel size from `spacings` (checked finite and positive), 1 mm when absent (with
+/// a note).
+fn spacings(path: &Path, fields: &Fields, notes: &mut Vec<String>) -> Result<[f64; 3], IoError> {
+    let mut spacing = [1.0; 3];
+    match fields.get("spacings") {
+        Some(s) => {
+            for (i, t) in s.split_whitespace().take(3).enumerate() {
+                spacing[i] = t.parse::<f64>().unwrap_or(f64::NAN);
+            }
+            check_spacing(path, spacing)?;
+        }
+        None => notes.push("no spacings or space directions: 1 mm voxels".into()),
+    }
+    Ok(spacing)
 }
 
 fn truncate(s: &str) -> String {

@@ -283,3 +283,26 @@ fn fuzz_crash_control_characters_in_a_field_give_a_one_line_error() {
     assert!(!msg.contains('\n') && !msg.contains('\r'), "{msg:?}");
     assert!(msg.contains("control characters"), "{msg}");
 }
+
+/// Issue 12: the time spent inflating is measured for gzip data (attached and detached)
+/// and only for it, as for NIfTI.
+#[test]
+fn inflate_time_is_reported_for_gzip_data_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = sample_volume(Samples::I16((0..24).map(|i| i * 1000 - 9000).collect()));
+    for enc in [Encoding::Raw, Encoding::Gzip] {
+        let attached = dir.path().join(format!("{enc:?}.nrrd"));
+        nrrd::write(&attached, &vol, enc, Endian::Little).unwrap();
+        let detached = dir.path().join(format!("{enc:?}.nhdr"));
+        nrrd::write_detached(&detached, &vol, enc, Endian::Little).unwrap();
+        for p in [attached, detached] {
+            let file = glint_io::open_volume(&p, &ReadOptions::default()).unwrap();
+            assert_eq!(file.inflate.is_some(), enc == Encoding::Gzip, "{p:?}");
+            assert_eq!(file.volume.samples, vol.samples, "{p:?}");
+        }
+    }
+    let text = "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 2 1\nencoding: text\n\n1 2\n";
+    let file =
+        glint_io::open_volume(&write(&dir, "t.nrrd", text), &ReadOptions::default()).unwrap();
+    assert_eq!(file.inflate, None);
+}
