@@ -660,10 +660,11 @@ impl Scene {
         Renderer::open_scene(self)?.resolve(self)
     }
 
-    /// Whether the scene is rasterised (it has meshes, or asks for the volume's
-    /// isosurface) rather than ray cast.
+    /// Whether the scene is rasterised (meshes without a volume, or the volume's
+    /// isosurface asked for) rather than ray cast (a volume, with or without meshes
+    /// drawn into its frame).
     pub fn is_surface(&self) -> bool {
-        !self.meshes.is_empty() || self.mode == RenderMode::Surface
+        self.mode == RenderMode::Surface || (!self.meshes.is_empty() && self.input == Input::None)
     }
 
     /// The iso value of the volume's isosurface in a surface scene (the scene's, else
@@ -795,9 +796,9 @@ impl Scene {
 
     /// [`Scene::resolve_for`], taking a `hw` lobe's table from `hw` when it has it.
     fn resolve_cached(&self, field: &Field, hw: &HwCache) -> Result<Resolved, RenderError> {
-        if self.is_surface() {
+        if self.is_surface() || !self.meshes.is_empty() {
             return Err(RenderError::Parameter(
-                "a surface scene is resolved by a Renderer, which reads its meshes".into(),
+                "a scene with meshes is resolved by a Renderer, which reads them".into(),
             ));
         }
         let mut scene = self.clone();
@@ -1029,7 +1030,7 @@ impl Renderer {
     /// isosurface in surface mode).
     pub fn open_scene(scene: &Scene) -> Result<Renderer, RenderError> {
         let mut renderer = Renderer::open(&scene.input)?;
-        if scene.is_surface() {
+        if !scene.meshes.is_empty() || scene.is_surface() {
             renderer.mesh_set(scene)?;
         }
         Ok(renderer)
@@ -1137,12 +1138,11 @@ impl Renderer {
     /// lobe's table is built once per (configuration, n) and kept.
     pub fn resolve(&mut self, scene: &Scene) -> Result<Resolved, RenderError> {
         self.use_prefilter(scene.prefilter)?;
-        let hybrid = !scene.meshes.is_empty() && scene.mode != RenderMode::Surface;
-        if (scene.is_surface() && !hybrid) || self.field.is_none() {
+        if scene.is_surface() || self.field.is_none() {
             let set = self.mesh_set(scene)?;
             return scene.resolve_surface(self.field.as_deref(), &set, &self.hw);
         }
-        let mut resolved = if hybrid {
+        let mut resolved = if !scene.meshes.is_empty() {
             let set = self.mesh_set(scene)?;
             let field = self.field.as_ref().expect("checked above");
             scene.resolve_hybrid(field, &set, &self.hw)?
