@@ -4,6 +4,8 @@
 
 use glint_lobe::Geometry;
 
+use super::frame::Frame;
+use crate::camera::Projection;
 use crate::math::Vec3;
 use crate::shading::Shader;
 
@@ -11,7 +13,8 @@ impl Shader {
     /// Lit linear colour of a surface point of colour `base`, unit `normal` and unit
     /// `view` (towards the eye). Two-sided: a normal facing away from the viewer is
     /// flipped, so open surfaces and inner walls are lit from the side that is seen.
-    #[inline]
+    /// The reference of [`Batch`]'s lighting, which lights many samples at once.
+    #[cfg(test)]
     pub(crate) fn shade_surface(&self, base: [f32; 3], normal: Vec3, view: Vec3) -> [f32; 3] {
         let m = &self.material;
         if !m.shade {
@@ -40,6 +43,210 @@ impl Shader {
         let lit = m.ambient + m.diffuse * diffuse;
         let spec = m.specular * specular;
         base.map(|c| c * lit + spec)
+    }
+}
+
+/// Samples a [`Batch`] lights at once.
+const BATCH: usize = 256;
+
+/// Covered samples awaiting light, as columns: each step of the lighting runs over
+/// the whole batch (vectorisable loops, one call of the lobe's SIMD
+/// [`eval_slice`](glint_lobe::Specular::eval_slice) per light).
+pub(super) struct Batch {
+    len: usize,
+    /// The pixel of the tile each sample belongs to.
+    pixel: Vec<u32>,
+    /// Sample coordinates.
+    x: Vec<f32>,
+    y: Vec<f32>,
+    /// Unit normal, then flipped to face the viewer.
+    n: [Vec<f32>; 3],
+    /// Unlit colour, then lit.
+    color: [Vec<f32>; 3],
+    /// Unit vector towards the eye.
+    view: [Vec<f32>; 3],
+    n_dot_v: Vec<f32>,
+    n_dot_l: Vec<f32>,
+    cos: Vec<f32>,
+    lobe: Vec<f32>,
+    diffuse: Vec<f32>,
+    specular: Vec<f32>,
+}
+
+impl Default for Batch {
+    fn default() -> Self {
+        let col = || vec![0.0f32; BATCH];
+        Batch {
+            len: 0,
+            pixel: vec![0; BATCH],
+            x: col(),
+            y: col(),
+            n: [col(), col(), col()],
+            color: [col(), col(), col()],
+            view: [col(), col(), col()],
+            n_dot_v: col(),
+            n_dot_l: col(),
+            cos: col(),
+            lobe: col(),
+            diffuse: col(),
+            specular: col(),
+        }
+    }
+}
+
+impl Batch {
+    /// Empties the batch.
+    pub(super) fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// Whether the batch holds [`BATCH`] samples (flush it before the next push).
+    pub(super) fn is_full(&self) -> bool {
+        self.len == BATCH
+    }
+
+    /// Adds the sample at `(x, y)` of pixel `pixel`, with its unit normal and unlit
+    /// colour.
+    #[inline(always)]
+    pub(super) fn push(&mut self, pixel: u32, x: f32, y: f32, normal: Vec3, color: [f32; 3]) {
+        let k = self.len;
+        self.pixel[k] = pixel;
+        self.x[k] = x;
+        self.y[k] = y;
+        self.n[0][k] = normal.x;
+        self.n[1][k] = normal.y;
+        self.n[2][k] = normal.z;
+        for (c, v) in self.color.iter_mut().zip(color) {
+            c[k] = v;
+        }
+        self.len += 1;
+    }
+
+    /// Lights the samples and adds each to its pixel's `sum` and `covered`; returns
+    /// how many there were and empties the batch.
+    pub(super) fn flush(
+        &mut self,
+        shader: &Shader,
+        frame: &Frame,
+        sum: &mut [[f32; 3]],
+        covered: &mut [u32],
+    ) -> u64 {
+        let n = self.len;
+        if n == 0 {
+            return 0;
+        }
+        if shader.material.shade {
+            self.views(frame);
+            self.light(shader);
+        }
+        let [r, g, b] = &self.color;
+        for (k, &p) in self.pixel[..n].iter().enumerate() {
+            let s = &mut sum[p as usize];
+            s[0] += r[k];
+            s[1] += g[k];
+            s[2] += b[k];
+            covered[p as usize] += 1;
+        }
+        self.len = 0;
+        n as u64
+    }
+
+    /// The unit vectors towards the eye ([`Frame::view`], per sample).
+    fn views(&mut self, frame: &Frame) {
+        let n = self.len;
+        let cam = &frame.camera;
+        let [vx, vy, vz] = &mut self.view;
+        let (vx, vy, vz) = (&mut vx[..n], &mut vy[..n], &mut vz[..n]);
+        if cam.projection == Projection::Orthographic {
+            let v = -cam.forward;
+            vx.fill(v.x);
+            vy.fill(v.y);
+            vz.fill(v.z);
+            return;
+        }
+        let [u0, du, v0, dv] = frame.plane;
+        let (f, r, up) = (cam.forward, cam.right, cam.up);
+        let (x, y) = (&self.x[..n], &self.y[..n]);
+        for k in 0..n {
+            let (u, v) = (u0 + x[k] * du, v0 + y[k] * dv);
+            // (forward + right u) + up v, then normalize_or_zero, negated.
+            let d = [
+                f.x + r.x * u + up.x * v,
+                f.y + r.y * u + up.y * v,
+                f.z + r.z * u + up.z * v,
+            ];
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let ok = len.is_finite() && len > 0.0;
+            let s = 1.0 / len;
+            vx[k] = if ok { -(d[0] * s) } else { -0.0 };
+            vy[k] = if ok { -(d[1] * s) } else { -0.0 };
+            vz[k] = if ok { -(d[2] * s) } else { -0.0 };
+        }
+    }
+
+    /// [`Shader::shade_surface`] over the batch, the lobe through `eval_slice`.
+    fn light(&mut self, shader: &Shader) {
+        let n = self.len;
+        let m = &shader.material;
+        let [nx, ny, nz] = &mut self.n;
+        let (nx, ny, nz) = (&mut nx[..n], &mut ny[..n], &mut nz[..n]);
+        let [vx, vy, vz] = &self.view;
+        let (vx, vy, vz) = (&vx[..n], &vy[..n], &vz[..n]);
+        let n_dot_v = &mut self.n_dot_v[..n];
+        // Two-sided: a normal facing away from the viewer is flipped.
+        for k in 0..n {
+            let d = nx[k] * vx[k] + ny[k] * vy[k] + nz[k] * vz[k];
+            let flip = d < 0.0;
+            nx[k] = if flip { -nx[k] } else { nx[k] };
+            ny[k] = if flip { -ny[k] } else { ny[k] };
+            nz[k] = if flip { -nz[k] } else { nz[k] };
+            n_dot_v[k] = if flip { -d } else { d };
+        }
+        let diffuse = &mut self.diffuse[..n];
+        let specular = &mut self.specular[..n];
+        diffuse.fill(0.0);
+        specular.fill(0.0);
+        let (n_dot_l, cos, lobe) = (
+            &mut self.n_dot_l[..n],
+            &mut self.cos[..n],
+            &mut self.lobe[..n],
+        );
+        for &(l, intensity) in &shader.lights {
+            for k in 0..n {
+                let ndl = nx[k] * l.x + ny[k] * l.y + nz[k] * l.z;
+                n_dot_l[k] = ndl;
+                cos[k] = match shader.geometry {
+                    // Phong R·V = 2(N·L)(N·V) - L·V.
+                    Geometry::Phong => {
+                        2.0 * ndl * n_dot_v[k] - (l.x * vx[k] + l.y * vy[k] + l.z * vz[k])
+                    }
+                    // Blinn N·H.
+                    Geometry::Blinn => {
+                        let h = (l + Vec3::new(vx[k], vy[k], vz[k])).normalize_or_zero();
+                        nx[k] * h.x + ny[k] * h.y + nz[k] * h.z
+                    }
+                };
+            }
+            shader.specular.eval_slice(cos, lobe);
+            for k in 0..n {
+                let lit = n_dot_l[k] > 0.0;
+                diffuse[k] = if lit {
+                    diffuse[k] + intensity * n_dot_l[k]
+                } else {
+                    diffuse[k]
+                };
+                specular[k] = if lit {
+                    specular[k] + intensity * lobe[k]
+                } else {
+                    specular[k]
+                };
+            }
+        }
+        for c in &mut self.color {
+            for (c, (d, s)) in c[..n].iter_mut().zip(diffuse.iter().zip(specular.iter())) {
+                *c = *c * (m.ambient + m.diffuse * *d) + m.specular * *s;
+            }
+        }
     }
 }
 
