@@ -92,7 +92,7 @@ unsafe fn raster_one(
     // store is of LANES elements of a slice just bounds-checked to hold them.
     unsafe {
         let sign = _mm256_set1_ps(e.sign);
-        let inv_area = _mm256_set1_ps(e.inv_area);
+        let inv_area = _mm256_set1_ps(e.inv_area());
         let (ak, bk, ck) = (
             _mm256_set1_ps(a.key),
             _mm256_set1_ps(b.key),
@@ -100,7 +100,8 @@ unsafe fn raster_one(
         );
         let lane_x = _mm256_loadu_ps(LANE_X.as_ptr());
         let zero = _mm256_setzero_ps();
-        let id = _mm256_castsi256_ps(_mm256_set1_epi32(t.id as i32));
+        let id = _mm256_set1_epi32(t.id as i32);
+        let neg_inf = _mm256_set1_ps(f32::NEG_INFINITY);
         for y in y0..=y1 {
             let [e0, e1, e2] = e.row(y as f32);
             let (e0, e1, e2) = (EdgeVec::new(e0), EdgeVec::new(e1), EdgeVec::new(e2));
@@ -136,12 +137,18 @@ unsafe fn raster_one(
                         _mm256_cmp_ps::<_CMP_GT_OQ>(key, old),
                     ),
                 );
-                _mm256_storeu_ps(d.as_mut_ptr(), _mm256_blendv_ps(old, key, hit));
-                let old_id = _mm256_loadu_ps(i.as_ptr().cast::<f32>());
-                _mm256_storeu_ps(
-                    i.as_mut_ptr().cast::<f32>(),
-                    _mm256_blendv_ps(old_id, id, hit),
+                // The updates are written as max and xor rather than blends: LLVM turns
+                // a blend of the loaded value into a masked store (vmaskmovps), which
+                // costs tens of cycles on AMD's cores. `hit` implies key > old, so the
+                // max is the blend.
+                let candidate = _mm256_blendv_ps(neg_inf, key, hit);
+                _mm256_storeu_ps(d.as_mut_ptr(), _mm256_max_ps(old, candidate));
+                let old_id = _mm256_loadu_si256(i.as_ptr().cast::<__m256i>());
+                let new_id = _mm256_xor_si256(
+                    old_id,
+                    _mm256_and_si256(_mm256_xor_si256(old_id, id), _mm256_castps_si256(hit)),
                 );
+                _mm256_storeu_si256(i.as_mut_ptr().cast::<__m256i>(), new_id);
                 xs += LANES;
             }
         }

@@ -170,21 +170,26 @@ pub(super) struct Edges {
     pub(super) b: ScreenVertex,
     pub(super) c: ScreenVertex,
     pub(super) sign: f32,
-    pub(super) inv_area: f32,
 }
 
 impl Edges {
     #[inline(always)]
     pub(super) fn new(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex) -> Edges {
-        let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-        let sign = if area < 0.0 { -1.0 } else { 1.0 };
-        Edges {
-            a,
-            b,
-            c,
-            sign,
-            inv_area: 1.0 / (area * sign),
-        }
+        let sign = if Self::area(a, b, c) < 0.0 { -1.0 } else { 1.0 };
+        Edges { a, b, c, sign }
+    }
+
+    /// The doubled signed area.
+    #[inline(always)]
+    fn area(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex) -> f32 {
+        (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)
+    }
+
+    /// The reciprocal of the doubled (positive) area, which turns the edge functions
+    /// into barycentric weights.
+    #[inline(always)]
+    pub(super) fn inv_area(&self) -> f32 {
+        1.0 / (Self::area(self.a, self.b, self.c) * self.sign)
     }
 
     /// The three edge functions at `(x, y)`: `w0` opposite `a`, `w1` opposite `b`,

@@ -291,19 +291,28 @@ impl Surfaces {
             avx2: false,
         };
         let (w, h) = (settings.width as usize, settings.height as usize);
-        // Zeroed allocations are left to the pages' first touch, which the bands make
-        // in parallel: every pixel is written once, by its band.
-        let mut rgb = vec![[0.0f32; 3]; w * h];
-        let mut alpha = vec![0.0f32; w * h];
+        // The bands write every pixel once, in parallel, into uninitialised memory:
+        // filling the image first (with zeros or the background) would be a serial
+        // pass over 16 bytes a pixel.
+        let mut rgb: Vec<[f32; 3]> = Vec::with_capacity(w * h);
+        let mut alpha: Vec<f32> = Vec::with_capacity(w * h);
         let band = TILE_PIXELS as usize * w;
-        let shaded = rgb
+        let shaded = rgb.spare_capacity_mut()[..w * h]
             .par_chunks_mut(band)
-            .zip(alpha.par_chunks_mut(band))
+            .zip(alpha.spare_capacity_mut()[..w * h].par_chunks_mut(band))
             .enumerate()
             .map_init(Scratch::default, |scratch, (b, (rgb, alpha))| {
                 ctx.band(&bands, b, rgb, alpha, scratch)
             })
             .sum();
+        // SAFETY: `Ctx::band` initialises every element of the chunks it is given
+        // (every pixel of every tile of its band: `Ctx::write`), and the chunks cover
+        // the first w * h elements of both buffers, which their capacity holds. Had a
+        // band panicked, the lengths would have stayed 0.
+        unsafe {
+            rgb.set_len(w * h);
+            alpha.set_len(w * h);
+        }
         Ok(Image {
             width: settings.width,
             height: settings.height,

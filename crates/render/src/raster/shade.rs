@@ -5,6 +5,8 @@
 use glint_lobe::Geometry;
 
 use super::frame::Frame;
+use super::tile::Ctx;
+use super::Surfaces;
 use crate::camera::Projection;
 use crate::math::Vec3;
 use crate::shading::Shader;
@@ -54,13 +56,17 @@ const BATCH: usize = 256;
 /// [`eval_slice`](glint_lobe::Specular::eval_slice) per light).
 pub(super) struct Batch {
     len: usize,
+    /// The triangle of each sample.
+    id: Vec<u32>,
     /// The pixel of the tile each sample belongs to.
     pixel: Vec<u32>,
     /// Sample coordinates.
     x: Vec<f32>,
     y: Vec<f32>,
-    /// Unit normal, then flipped to face the viewer.
+    /// The interpolated normal, then unit, then flipped to face the viewer.
     n: [Vec<f32>; 3],
+    /// Samples whose interpolated normal is zero or not finite.
+    degenerate: Vec<bool>,
     /// Unlit colour, then lit.
     color: [Vec<f32>; 3],
     /// Unit vector towards the eye.
@@ -78,7 +84,9 @@ impl Default for Batch {
         let col = || vec![0.0f32; BATCH];
         Batch {
             len: 0,
+            id: vec![0; BATCH],
             pixel: vec![0; BATCH],
+            degenerate: vec![false; BATCH],
             x: col(),
             y: col(),
             n: [col(), col(), col()],
@@ -105,11 +113,20 @@ impl Batch {
         self.len == BATCH
     }
 
-    /// Adds the sample at `(x, y)` of pixel `pixel`, with its unit normal and unlit
-    /// colour.
+    /// Adds the sample at `(x, y)` of pixel `pixel` on triangle `id`, with its
+    /// interpolated normal (not normalised) and unlit colour.
     #[inline(always)]
-    pub(super) fn push(&mut self, pixel: u32, x: f32, y: f32, normal: Vec3, color: [f32; 3]) {
+    pub(super) fn push(
+        &mut self,
+        id: u32,
+        pixel: u32,
+        x: f32,
+        y: f32,
+        normal: Vec3,
+        color: [f32; 3],
+    ) {
         let k = self.len;
+        self.id[k] = id;
         self.pixel[k] = pixel;
         self.x[k] = x;
         self.y[k] = y;
@@ -124,20 +141,15 @@ impl Batch {
 
     /// Lights the samples and adds each to its pixel's `sum` and `covered`; returns
     /// how many there were and empties the batch.
-    pub(super) fn flush(
-        &mut self,
-        shader: &Shader,
-        frame: &Frame,
-        sum: &mut [[f32; 3]],
-        covered: &mut [u32],
-    ) -> u64 {
+    pub(super) fn flush(&mut self, ctx: &Ctx, sum: &mut [[f32; 3]], covered: &mut [u32]) -> u64 {
         let n = self.len;
         if n == 0 {
             return 0;
         }
-        if shader.material.shade {
-            self.views(frame);
-            self.light(shader);
+        self.normalize(ctx.s);
+        if ctx.shader.material.shade {
+            self.views(ctx.frame);
+            self.light(ctx.shader);
         }
         let [r, g, b] = &self.color;
         for (k, &p) in self.pixel[..n].iter().enumerate() {
@@ -149,6 +161,41 @@ impl Batch {
         }
         self.len = 0;
         n as u64
+    }
+
+    /// Makes the normals unit ([`Vec3::normalize_or_zero`]); a sample whose normal
+    /// is zero or not finite gets its triangle's face normal.
+    fn normalize(&mut self, s: &Surfaces) {
+        let n = self.len;
+        let [nx, ny, nz] = &mut self.n;
+        let (nx, ny, nz) = (&mut nx[..n], &mut ny[..n], &mut nz[..n]);
+        let degenerate = &mut self.degenerate[..n];
+        let mut any = false;
+        for k in 0..n {
+            let (x, y, z) = (nx[k], ny[k], nz[k]);
+            let len = (x * x + y * y + z * z).sqrt();
+            let ok = len.is_finite() && len > 0.0;
+            let inv = 1.0 / len;
+            let (x, y, z) = if ok {
+                (x * inv, y * inv, z * inv)
+            } else {
+                (0.0, 0.0, 0.0)
+            };
+            (nx[k], ny[k], nz[k]) = (x, y, z);
+            let bad = (x == 0.0 && y == 0.0 && z == 0.0) || !x.is_finite();
+            degenerate[k] = bad;
+            any |= bad;
+        }
+        if !any {
+            return;
+        }
+        for k in 0..n {
+            if degenerate[k] {
+                let [pa, pb, pc] = s.triangles[self.id[k] as usize].map(|i| s.positions[i as usize]);
+                let f = (pb - pa).cross(pc - pa).normalize_or_zero();
+                (nx[k], ny[k], nz[k]) = (f.x, f.y, f.z);
+            }
+        }
     }
 
     /// The unit vectors towards the eye ([`Frame::view`], per sample).

@@ -2,6 +2,8 @@
 //! into a depth and triangle buffer, then every covered sample lit once (deferred
 //! shading, a batch of samples at a time) and box-filtered into the image's pixels.
 
+use std::mem::MaybeUninit;
+
 use super::frame::{Bands, Binned, Edges, Frame, ScreenVertex};
 use super::shade::Batch;
 use super::{SurfaceSettings, Surfaces};
@@ -59,14 +61,14 @@ impl Rect {
 }
 
 impl Ctx<'_> {
-    /// Draws band `b` into `rgb` and `alpha`, its rows of pixels; returns the number
-    /// of samples lit.
+    /// Draws band `b` into `rgb` and `alpha`, its rows of pixels, writing every
+    /// element; returns the number of samples lit.
     pub(super) fn band(
         &self,
         bands: &Bands,
         b: usize,
-        rgb: &mut [[f32; 3]],
-        alpha: &mut [f32],
+        rgb: &mut [MaybeUninit<[f32; 3]>],
+        alpha: &mut [MaybeUninit<f32>],
         scratch: &mut Scratch,
     ) -> u64 {
         let f = self.frame;
@@ -133,18 +135,21 @@ impl Ctx<'_> {
         }
     }
 
-    /// Box-filters the tile's pixel sums into the band's rows of pixels.
+    /// Box-filters the tile's pixel sums into the band's rows of pixels, writing every
+    /// pixel of the tile.
     fn write(
         &self,
         rect: Rect,
         sum: &[[f32; 3]],
         covered: &[u32],
-        rgb: &mut [[f32; 3]],
-        alpha: &mut [f32],
+        rgb: &mut [MaybeUninit<[f32; 3]>],
+        alpha: &mut [MaybeUninit<f32>],
     ) {
         let f = self.frame;
         let n = f.ssaa;
         let per_pixel = (n * n) as f32;
+        // Exactly the division by per_pixel: it is a power of two (1, 4 or 16).
+        let scale = 1.0 / per_pixel;
         let bg = self.settings.background;
         let pw = rect.w / n;
         let px0 = rect.x0 / n;
@@ -153,8 +158,12 @@ impl Ctx<'_> {
             let (out, out_alpha) = (&mut rgb[k..k + pw], &mut alpha[k..k + pw]);
             for (((o, a), c), &k) in out.iter_mut().zip(out_alpha).zip(sum).zip(covered) {
                 let empty = per_pixel - k as f32;
-                *o = [0, 1, 2].map(|i| (c[i] + empty * bg[i]) / per_pixel);
-                *a = k as f32 / per_pixel;
+                o.write([
+                    (c[0] + empty * bg[0]) * scale,
+                    (c[1] + empty * bg[1]) * scale,
+                    (c[2] + empty * bg[2]) * scale,
+                ]);
+                a.write(k as f32 * scale);
             }
         }
     }
@@ -187,6 +196,7 @@ impl Ctx<'_> {
                 }
                 let (normal, base) = self.surface_at(&tri, (rect.x0 + x) as f32, fy);
                 batch.push(
+                    id,
                     (prow + x / n) as u32,
                     (rect.x0 + x) as f32,
                     fy,
@@ -194,11 +204,11 @@ impl Ctx<'_> {
                     base,
                 );
                 if batch.is_full() {
-                    shaded += batch.flush(self.shader, f, sum, covered);
+                    shaded += batch.flush(self, sum, covered);
                 }
             }
         }
-        shaded + batch.flush(self.shader, f, sum, covered)
+        shaded + batch.flush(self, sum, covered)
     }
 
     /// What the resolve needs of triangle `id`.
@@ -221,8 +231,9 @@ impl Ctx<'_> {
         }
     }
 
-    /// The unit normal (interpolated perspective-correctly) and unlit colour of the
-    /// triangle at sample `(x, y)`.
+    /// The normal interpolated perspective-correctly, not yet normalised (the batch
+    /// does it, [`Batch::flush`]), and the unlit colour of the triangle at sample
+    /// `(x, y)`.
     #[inline]
     fn surface_at(&self, tri: &TriCache, x: f32, y: f32) -> (Vec3, [f32; 3]) {
         let s = self.s;
@@ -233,12 +244,8 @@ impl Ctx<'_> {
         let inv = 1.0 / (p0 + p1 + p2);
         let beta = [p0 * inv, p1 * inv, p2 * inv];
         let [n0, n1, n2] = tri.normals;
-        let mut normal = (n0 * beta[0] + n1 * beta[1] + n2 * beta[2]).normalize_or_zero();
+        let normal = n0 * beta[0] + n1 * beta[1] + n2 * beta[2];
         let [i0, i1, i2] = tri.idx;
-        if normal == Vec3::ZERO || !normal.x.is_finite() {
-            let [pa, pb, pc] = tri.idx.map(|i| s.positions[i]);
-            normal = (pb - pa).cross(pc - pa).normalize_or_zero();
-        }
         if s.colors.is_none() && (s.scalars.is_none() || self.colors.is_none()) {
             return (normal, tri.color);
         }
@@ -294,7 +301,6 @@ impl TriCache {
                 b: v,
                 c: v,
                 sign: 1.0,
-                inv_area: 0.0,
             },
             idx: [0; 3],
             normals: [Vec3::ZERO; 3],
@@ -330,6 +336,7 @@ fn raster_scalar(
         return;
     };
     let e = Edges::new(a, b, c);
+    let inv_area = e.inv_area();
     let stride = rect.stride();
     let id = t.id;
     for y in y0..=y1 {
@@ -346,7 +353,7 @@ fn raster_scalar(
                 let w0 = e0.at(x, e.sign);
                 let w1 = e1.at(x, e.sign);
                 let w2 = e2.at(x, e.sign);
-                let key = (w0 * a.key + w1 * b.key + w2 * c.key) * e.inv_area;
+                let key = (w0 * a.key + w1 * b.key + w2 * c.key) * inv_area;
                 let hit = LANE_X[l] <= last && w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0 && key > d[l];
                 if hit {
                     d[l] = key;
