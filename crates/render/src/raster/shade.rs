@@ -142,6 +142,33 @@ impl Batch {
     /// Lights the samples and adds each to its pixel's `sum` and `covered`; returns
     /// how many there were and empties the batch.
     pub(super) fn flush(&mut self, ctx: &Ctx, sum: &mut [[f32; 3]], covered: &mut [u32]) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if ctx.avx2 {
+            // SAFETY: `avx2` is set only when the CPU supports AVX2
+            // (`super::avx2::supported`).
+            return unsafe { self.flush_avx2(ctx, sum, covered) };
+        }
+        self.flush_body(ctx, sum, covered)
+    }
+
+    /// [`Batch::flush`] compiled for AVX2: the same loops, eight lanes wide (no FMA,
+    /// so the results are the same).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn flush_avx2(
+        &mut self,
+        ctx: &Ctx,
+        sum: &mut [[f32; 3]],
+        covered: &mut [u32],
+    ) -> u64 {
+        self.flush_body(ctx, sum, covered)
+    }
+
+    #[inline(always)]
+    fn flush_body(&mut self, ctx: &Ctx, sum: &mut [[f32; 3]], covered: &mut [u32]) -> u64 {
         let n = self.len;
         if n == 0 {
             return 0;
@@ -165,6 +192,7 @@ impl Batch {
 
     /// Makes the normals unit ([`Vec3::normalize_or_zero`]); a sample whose normal
     /// is zero or not finite gets its triangle's face normal.
+    #[inline(always)]
     fn normalize(&mut self, s: &Surfaces) {
         let n = self.len;
         let [nx, ny, nz] = &mut self.n;
@@ -199,6 +227,7 @@ impl Batch {
     }
 
     /// The unit vectors towards the eye ([`Frame::view`], per sample).
+    #[inline(always)]
     fn views(&mut self, frame: &Frame) {
         let n = self.len;
         let cam = &frame.camera;
@@ -232,6 +261,7 @@ impl Batch {
     }
 
     /// [`Shader::shade_surface`] over the batch, the lobe through `eval_slice`.
+    #[inline(always)]
     fn light(&mut self, shader: &Shader) {
         let n = self.len;
         let m = &shader.material;

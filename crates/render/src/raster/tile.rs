@@ -100,20 +100,22 @@ impl Ctx<'_> {
                 w: (f.sw - x0).min(f.tile),
                 h: (f.sh - y0).min(f.tile),
             };
+            if tris.is_empty() {
+                self.write_empty(rect, rgb, alpha);
+                continue;
+            }
             let pixels = (rect.w / f.ssaa) * (rect.h / f.ssaa);
             sum.clear();
             sum.resize(pixels, [0.0; 3]);
             covered.clear();
             covered.resize(pixels, 0);
-            if !tris.is_empty() {
-                let len = rect.stride() * rect.h;
-                depth.clear();
-                depth.resize(len, f32::NEG_INFINITY);
-                ids.clear();
-                ids.resize(len, u32::MAX);
-                self.raster(tris, rect, depth, ids);
-                shaded += self.resolve(rect, ids, batch, sum, covered);
-            }
+            let len = rect.stride() * rect.h;
+            depth.clear();
+            depth.resize(len, f32::NEG_INFINITY);
+            ids.clear();
+            ids.resize(len, u32::MAX);
+            self.raster(tris, rect, depth, ids);
+            shaded += self.resolve(rect, ids, batch, sum, covered);
             self.write(rect, sum, covered, rgb, alpha);
         }
         shaded
@@ -132,6 +134,31 @@ impl Ctx<'_> {
         for t in tris {
             let tri = triangles[t.id as usize].map(|i| verts[i as usize]);
             raster_scalar(tri, t, rect, depth, ids);
+        }
+    }
+
+    /// Writes the pixels of a tile no triangle meets: what [`Ctx::write`] makes of
+    /// pixels without samples.
+    fn write_empty(
+        &self,
+        rect: Rect,
+        rgb: &mut [MaybeUninit<[f32; 3]>],
+        alpha: &mut [MaybeUninit<f32>],
+    ) {
+        let f = self.frame;
+        let n = f.ssaa;
+        let per_pixel = (n * n) as f32;
+        let bg = self.settings.background.map(|b| (0.0 + per_pixel * b) * (1.0 / per_pixel));
+        let (pw, ph) = (rect.w / n, rect.h / n);
+        let px0 = rect.x0 / n;
+        for row in 0..ph {
+            let k = row * f.width + px0;
+            rgb[k..k + pw].iter_mut().for_each(|o| {
+                o.write(bg);
+            });
+            alpha[k..k + pw].iter_mut().for_each(|a| {
+                a.write(0.0);
+            });
         }
     }
 
