@@ -84,7 +84,7 @@ impl Frame {
     /// The sample-space bounding box of triangle `tri` clipped to the image, or `None`
     /// when it covers no sample centre (off screen, behind the eye, degenerate).
     #[inline]
-    fn bbox(&self, tri: [u32; 3]) -> Option<[u16; 4]> {
+    pub(super) fn bbox(&self, tri: [u32; 3]) -> Option<[u16; 4]> {
         let [a, b, c] = tri.map(|i| self.verts[i as usize]);
         if !(a.w.is_finite() && b.w.is_finite() && c.w.is_finite()) {
             return None;

@@ -275,6 +275,23 @@ impl Surfaces {
         settings: &SurfaceSettings,
         colors: Option<&ScalarColors>,
     ) -> Result<Image, RenderError> {
+        #[cfg(target_arch = "x86_64")]
+        let simd = avx2::supported();
+        #[cfg(not(target_arch = "x86_64"))]
+        let simd = false;
+        self.render_with(camera, shader, settings, colors, simd)
+    }
+
+    /// [`Surfaces::render`], on the AVX2 loops when `avx2` (which the CPU must
+    /// support) or the scalar ones.
+    fn render_with(
+        &self,
+        camera: &Camera,
+        shader: &Shader,
+        settings: &SurfaceSettings,
+        colors: Option<&ScalarColors>,
+        avx2: bool,
+    ) -> Result<Image, RenderError> {
         settings.validate()?;
         let shader = &shader.placed(camera);
         let frame = Frame::new(self, camera, settings);
@@ -285,10 +302,7 @@ impl Surfaces {
             shader,
             colors,
             settings,
-            #[cfg(target_arch = "x86_64")]
-            avx2: avx2::supported(),
-            #[cfg(not(target_arch = "x86_64"))]
-            avx2: false,
+            avx2,
         };
         let (w, h) = (settings.width as usize, settings.height as usize);
         // The bands write every pixel once, in parallel, into uninitialised memory:
@@ -325,6 +339,9 @@ impl Surfaces {
         })
     }
 }
+
+#[cfg(test)]
+mod tests;
 
 /// Area-weighted unit vertex normals of a triangle mesh (the cross product of two
 /// edges is twice the area times the unit normal, so summing them weights by area).

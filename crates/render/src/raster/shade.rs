@@ -158,12 +158,7 @@ impl Batch {
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn flush_avx2(
-        &mut self,
-        ctx: &Ctx,
-        sum: &mut [[f32; 3]],
-        covered: &mut [u32],
-    ) -> u64 {
+    unsafe fn flush_avx2(&mut self, ctx: &Ctx, sum: &mut [[f32; 3]], covered: &mut [u32]) -> u64 {
         self.flush_body(ctx, sum, covered)
     }
 
@@ -219,7 +214,8 @@ impl Batch {
         }
         for k in 0..n {
             if degenerate[k] {
-                let [pa, pb, pc] = s.triangles[self.id[k] as usize].map(|i| s.positions[i as usize]);
+                let [pa, pb, pc] =
+                    s.triangles[self.id[k] as usize].map(|i| s.positions[i as usize]);
                 let f = (pb - pa).cross(pc - pa).normalize_or_zero();
                 (nx[k], ny[k], nz[k]) = (f.x, f.y, f.z);
             }

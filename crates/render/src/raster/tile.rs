@@ -148,7 +148,10 @@ impl Ctx<'_> {
         let f = self.frame;
         let n = f.ssaa;
         let per_pixel = (n * n) as f32;
-        let bg = self.settings.background.map(|b| (0.0 + per_pixel * b) * (1.0 / per_pixel));
+        let bg = self
+            .settings
+            .background
+            .map(|b| (0.0 + per_pixel * b) * (1.0 / per_pixel));
         let (pw, ph) = (rect.w / n, rect.h / n);
         let px0 = rect.x0 / n;
         for row in 0..ph {
