@@ -42,8 +42,12 @@ pub(super) struct Frame {
     /// Sample grid size.
     pub(super) sw: usize,
     pub(super) sh: usize,
-    /// Tile edge in samples.
+    /// Tile edge in samples, a power of two, and its log2 (shifts rather than
+    /// divisions in the per-triangle and per-sample loops).
     pub(super) tile: usize,
+    pub(super) tile_shift: u32,
+    /// log2 of `ssaa` (1, 2 or 4).
+    pub(super) ssaa_shift: u32,
     pub(super) tiles_x: usize,
     pub(super) tiles_y: usize,
     /// Image width in pixels.
@@ -75,6 +79,8 @@ impl Frame {
             sw,
             sh,
             tile,
+            tile_shift: tile.trailing_zeros(),
+            ssaa_shift: ssaa.trailing_zeros(),
             tiles_x: sw.div_ceil(tile),
             tiles_y: sh.div_ceil(tile),
             width,
@@ -119,7 +125,7 @@ impl Frame {
                     };
                     let id = (c * chunk + k) as u32;
                     let (y0, y1) = (usize::from(bbox[1]), usize::from(bbox[3]));
-                    for band in &mut bands[y0 / self.tile..=y1 / self.tile] {
+                    for band in &mut bands[y0 >> self.tile_shift..=y1 >> self.tile_shift] {
                         band.push(Binned { id, bbox });
                     }
                 }

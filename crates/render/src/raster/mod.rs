@@ -31,7 +31,9 @@ pub const SSAA_FACTORS: [u32; 3] = [1, 2, 4];
 
 /// Tile edge in output pixels: 32 x 32 pixels (up to 128 x 128 samples at 4x SSAA)
 /// keeps a tile's depth and triangle buffers (8 bytes a sample) within L2.
+/// A power of two, so tile and pixel indices are shifts.
 const TILE_PIXELS: u32 = 32;
+const _: () = assert!(TILE_PIXELS.is_power_of_two());
 
 /// Default surface colour, linear RGB: a light bone white (sRGB about 0.93, 0.89, 0.82).
 pub const SURFACE_COLOR: [f32; 3] = [0.85, 0.77, 0.64];

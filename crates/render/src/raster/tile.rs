@@ -85,7 +85,7 @@ impl Ctx<'_> {
         for chunk in bands {
             for t in &chunk[b] {
                 let (x0, x1) = (usize::from(t.bbox[0]), usize::from(t.bbox[2]));
-                for tile in &mut tiles[x0 / f.tile..=x1 / f.tile] {
+                for tile in &mut tiles[x0 >> f.tile_shift..=x1 >> f.tile_shift] {
                     tile.push(*t);
                 }
             }
@@ -216,7 +216,7 @@ impl Ctx<'_> {
         batch.clear();
         for (y, row) in ids.chunks(rect.stride()).enumerate() {
             let fy = (rect.y0 + y) as f32;
-            let prow = (y / n) * pw;
+            let prow = (y >> f.ssaa_shift) * pw;
             for (x, &id) in row[..rect.w].iter().enumerate() {
                 if id == u32::MAX {
                     continue;
@@ -227,7 +227,7 @@ impl Ctx<'_> {
                 let (normal, base) = self.surface_at(&tri, (rect.x0 + x) as f32, fy);
                 batch.push(
                     id,
-                    (prow + x / n) as u32,
+                    (prow + (x >> f.ssaa_shift)) as u32,
                     (rect.x0 + x) as f32,
                     fy,
                     normal,
