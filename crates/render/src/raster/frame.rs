@@ -99,10 +99,10 @@ impl Frame {
         if area == 0.0 || !area.is_finite() {
             return None;
         }
-        let x0 = a.x.min(b.x).min(c.x).ceil().max(0.0);
-        let y0 = a.y.min(b.y).min(c.y).ceil().max(0.0);
-        let x1 = a.x.max(b.x).max(c.x).floor().min(self.sw as f32 - 1.0);
-        let y1 = a.y.max(b.y).max(c.y).floor().min(self.sh as f32 - 1.0);
+        let x0 = ceil(a.x.min(b.x).min(c.x)).max(0.0);
+        let y0 = ceil(a.y.min(b.y).min(c.y)).max(0.0);
+        let x1 = floor(a.x.max(b.x).max(c.x)).min(self.sw as f32 - 1.0);
+        let y1 = floor(a.y.max(b.y).max(c.y)).min(self.sh as f32 - 1.0);
         // The grid is at most 2^16 samples a side, so the bounds fit in u16.
         (x0 <= x1 && y0 <= y1).then_some([x0 as u16, y0 as u16, x1 as u16, y1 as u16])
     }
@@ -150,6 +150,38 @@ impl Frame {
     }
 }
 
+/// `x.ceil()`, but for zero's sign (-0.5 gives +0), by truncation: without SSE4.1
+/// (not in the x86-64 baseline) `f32::ceil` is a library call, 4 of them a triangle.
+#[inline(always)]
+fn ceil(x: f32) -> f32 {
+    // From 2^23 on every f32 is an integer (and NaN fails the test, staying NaN).
+    if x.abs() < 8_388_608.0 {
+        let t = x as i32 as f32;
+        if t < x {
+            t + 1.0
+        } else {
+            t
+        }
+    } else {
+        x
+    }
+}
+
+/// `x.floor()` by truncation, like [`ceil`].
+#[inline(always)]
+fn floor(x: f32) -> f32 {
+    if x.abs() < 8_388_608.0 {
+        let t = x as i32 as f32;
+        if t > x {
+            t - 1.0
+        } else {
+            t
+        }
+    } else {
+        x
+    }
+}
+
 /// Projects world point `p` to the sample grid of `plane`.
 fn project(camera: &Camera, plane: [f32; 4], near: f32, p: Vec3) -> ScreenVertex {
     let d = p - camera.eye;
@@ -165,6 +197,26 @@ fn project(camera: &Camera, plane: [f32; 4], near: f32, p: Vec3) -> ScreenVertex
         y: (v - v0) / dv,
         key,
         w,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn ceil_and_floor_by_truncation_are_the_library_ones() {
+        let mut xs = vec![0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, 2.5, -2.5, 1e-30, -1e-30];
+        xs.extend([8_388_607.5, -8_388_607.5, 8_388_608.0, 1e10, -1e10]);
+        xs.extend([f32::INFINITY, f32::NEG_INFINITY, f32::MAX, f32::MIN]);
+        for k in 0..2000 {
+            let x = (k as f32 - 1000.0) * 0.37 + 0.001 * k as f32;
+            xs.extend([x, x.next_up(), x.next_down(), x.round()]);
+        }
+        for x in xs {
+            // Equal as numbers: only zero's sign may differ.
+            assert_eq!(super::ceil(x), x.ceil(), "ceil {x}");
+            assert_eq!(super::floor(x), x.floor(), "floor {x}");
+        }
+        assert!(super::ceil(f32::NAN).is_nan() && super::floor(f32::NAN).is_nan());
     }
 }
 
