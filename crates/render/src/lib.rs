@@ -47,6 +47,7 @@ pub mod isosurface;
 pub mod math;
 mod meshes;
 pub mod phantom;
+mod preint;
 pub mod presets;
 mod raster;
 mod raycast;

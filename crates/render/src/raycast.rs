@@ -12,6 +12,7 @@ use crate::error::RenderError;
 use crate::field::{Field, MACRO_CELL};
 use crate::image::Image;
 use crate::math::Vec3;
+use crate::preint::Last;
 use crate::shading::{RayLighting, Shader};
 use crate::tf::{Lut, TransferFunction};
 
@@ -1139,18 +1140,25 @@ impl Caster<'_> {
         ceil_i64(q - ray.j - 1.0 / 64.0).max(k + 1)
     }
 
-    /// Front-to-back compositing, one sample at a time (the reference loop).
+    /// Front-to-back compositing, one sample at a time (the reference loop). Each
+    /// sample composites the pre-integrated segment from the previous sample
+    /// ([`crate::preint`]); after a leap, or at the ray's first sample, the previous
+    /// sample is read for that alone ([`Caster::before`]).
     fn composite(
         &self,
         ray: &Ray,
         lighting: &RayLighting,
         stats: &mut RenderStats,
     ) -> ([f32; 3], f32) {
+        let pre = &self.lut.pre;
         let mut color = [0.0f32; 3];
         let mut alpha = 0.0f32;
         let mut k = ray.k0;
         let mut cached_cell = usize::MAX;
         let mut dist = 0;
+        // The last sample read, and its table coordinate.
+        let mut prev: Option<(i64, f32)> = None;
+        let mut last = Last::default();
         while k <= ray.k1 {
             let p = ray.at(ray.t(k, self.dt));
             let loc = self.field.locate(p);
@@ -1159,31 +1167,50 @@ impl Caster<'_> {
                 cached_cell = cell;
                 dist = self.distance[cell];
             }
-            if dist != 0 {
-                stats.skips += 1;
-                k = self.leap(ray, loc.ijk.map(|x| x / MACRO_CELL), dist, k);
-                continue;
-            }
-            stats.samples += 1;
-            let v = self.field.value_at(&loc);
-            let li = self.lut.index(v);
-            if self.lut.alpha_at(li) > 0.0 {
-                let e = self.lut.entry_at(li);
-                stats.shaded += 1;
-                let g = self.field.gradient_at(&loc);
-                let rgb = self.shader.shade([e[0], e[1], e[2]], g, lighting);
-                let w = (1.0 - alpha) * e[3];
-                color[0] += w * rgb[0];
-                color[1] += w * rgb[1];
-                color[2] += w * rgb[2];
-                alpha += w;
-                if alpha >= TERMINATION_OPACITY {
-                    break;
+            // A sample in empty space still ends the segment from the sample before it,
+            // when that one was read (the segment may leave a visible cell); the
+            // segments between samples inside the leap's empty cells cross no opacity.
+            let leap = dist != 0;
+            let front = match prev {
+                Some((pk, u)) if pk == k - 1 => Some(u),
+                _ => None,
+            };
+            if !leap || front.is_some() {
+                stats.samples += 1;
+                let front = front.unwrap_or_else(|| self.before(ray, k));
+                let back = self.lut.position(self.field.value_at(&loc));
+                prev = Some((k, back));
+                if let Some((a, c)) = pre.segment(front, back, &mut last) {
+                    stats.shaded += 1;
+                    let g = self.field.gradient_at(&loc);
+                    let rgb = self.shader.shade(c, g, lighting);
+                    let w = (1.0 - alpha) * a;
+                    color[0] += w * rgb[0];
+                    color[1] += w * rgb[1];
+                    color[2] += w * rgb[2];
+                    alpha += w;
+                    if alpha >= TERMINATION_OPACITY {
+                        break;
+                    }
                 }
             }
-            k += 1;
+            if leap {
+                stats.skips += 1;
+                k = self.leap(ray, loc.ijk.map(|x| x / MACRO_CELL), dist, k);
+            } else {
+                k += 1;
+            }
         }
         (color, alpha)
+    }
+
+    /// The table coordinate of sample `k - 1` of `ray`: the front of the segment
+    /// ending at sample `k`, when `k - 1` was not read (a leap or the ray's start just
+    /// before `k`). The SIMD loop reads it as the first lane of its next chunk, with
+    /// the same arithmetic.
+    fn before(&self, ray: &Ray, k: i64) -> f32 {
+        let loc = self.field.locate(ray.at(ray.t(k - 1, self.dt)));
+        self.lut.position(self.field.value_at(&loc))
     }
 
     fn iso(&self, ray: &Ray, view: Vec3, threshold: f32) -> ([f32; 3], f32) {

@@ -5,6 +5,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::RenderError;
+use crate::preint::PreIntegrated;
 
 /// Phong-style material coefficients, as in VTK's `vtkVolumeProperty` (and 3D Slicer's
 /// presets): `colour · (ambient + diffuse · N·L) + specular · lobe`. The specular power
@@ -352,6 +353,8 @@ pub struct Lut {
     pub(crate) alphas: Vec<f32>,
     /// `nonzero[i]` = number of entries below `i` with alpha' > 0, for O(1) range tests.
     nonzero: Vec<u32>,
+    /// The same entries integrated, for compositing segments between samples.
+    pub(crate) pre: PreIntegrated,
 }
 
 impl Lut {
@@ -359,12 +362,18 @@ impl Lut {
     pub fn new(tf: &TransferFunction, lo: f32, hi: f32, step_voxels: f64) -> Lut {
         let hi = if hi > lo { hi } else { lo + 1.0 };
         let scale = (LUT_SIZE - 1) as f32 / (hi - lo);
-        let entries: Vec<[f32; 4]> = (0..LUT_SIZE)
+        let (opacity, color): (Vec<f64>, Vec<[f64; 3]>) = (0..LUT_SIZE)
             .map(|i| {
                 let x = lo as f64 + i as f64 / scale as f64;
                 let a = tf.opacity_at(x).clamp(0.0, 1.0);
+                (a, tf.color_at(x).map(srgb_to_linear))
+            })
+            .unzip();
+        let entries: Vec<[f32; 4]> = opacity
+            .iter()
+            .zip(&color)
+            .map(|(&a, c)| {
                 let a = 1.0 - (1.0 - a).powf(step_voxels);
-                let c = tf.color_at(x).map(srgb_to_linear);
                 [c[0] as f32, c[1] as f32, c[2] as f32, a as f32]
             })
             .collect();
@@ -381,15 +390,23 @@ impl Lut {
             alphas: entries.iter().map(|e| e[3]).collect(),
             entries,
             nonzero,
+            pre: PreIntegrated::new(&opacity, &color, step_voxels),
         }
+    }
+
+    /// Table coordinate of value `v` for [`PreIntegrated::at`]: the argument
+    /// [`Lut::index`] truncates (the same operations, so the same entry).
+    #[inline(always)]
+    pub fn position(&self, v: f32) -> f32 {
+        ((v - self.lo) * self.scale + 0.5)
+            .max(0.0)
+            .min((LUT_SIZE - 1) as f32)
     }
 
     /// Table index of value `v` (nearest entry, clamped).
     #[inline(always)]
     pub fn index(&self, v: f32) -> usize {
-        let x = ((v - self.lo) * self.scale + 0.5)
-            .max(0.0)
-            .min((LUT_SIZE - 1) as f32);
+        let x = self.position(v);
         // SAFETY: x is finite (max/min drop NaN) and in [0, LUT_SIZE-1].
         unsafe { x.to_int_unchecked::<u32>() as usize }
     }

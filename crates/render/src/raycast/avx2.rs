@@ -1,10 +1,11 @@
 //! The composite loops on AVX2 + FMA, in two passes over a tile of rays.
 //!
 //! March: each ray takes eight consecutive samples at a time (positions, cell indices,
-//! trilinear values and transfer-function indices in vector registers) and composites
-//! their opacities front to back, stopping at the same sample as the reference loop
-//! (`Caster::composite`). Opacity needs no lighting, so the march only records the
-//! samples it keeps: where they are, their table entry and their weight.
+//! trilinear values and transfer-function coordinates in vector registers) and
+//! composites the pre-integrated segments that end at them ([`crate::preint`]) front to
+//! back, stopping at the same sample as the reference loop (`Caster::composite`).
+//! Opacity needs no lighting, so the march only records the samples it keeps: where
+//! they are, their segment's colour and their weight.
 //!
 //! Light: the tile's kept samples, from all its rays, eight at a time: gradients,
 //! normals, the lighting cosines; one call of [`glint_lobe::Specular::eval_slice`] (the
@@ -30,6 +31,7 @@ use std::arch::x86_64::*;
 use super::{Caster, Pixels, Ray, RenderStats, TERMINATION_OPACITY};
 use crate::field::MACRO_CELL;
 use crate::math::Vec3;
+use crate::preint::{bin, Last};
 use glint_lobe::Geometry;
 
 /// `[e(0), e(1), e(2)]` with `$a` bound to the axis: per-axis vector code written
@@ -141,8 +143,8 @@ struct Kept {
     base: Vec<i32>,
     /// Fractions inside the trilinear cell, per axis.
     t: [Vec<f32>; 3],
-    /// Transfer-function table index.
-    entry: Vec<u32>,
+    /// Linear colour of the sample's segment ([`crate::preint`]), per channel.
+    rgb: [Vec<f32>; 3],
     /// Front-to-back weight `(1 - alpha) alpha_sample`.
     weight: Vec<f32>,
     /// The ray's index in the tile.
@@ -159,7 +161,9 @@ impl Kept {
         for t in &mut self.t {
             t.clear();
         }
-        self.entry.clear();
+        for c in &mut self.rgb {
+            c.clear();
+        }
         self.weight.clear();
         self.ray.clear();
     }
@@ -172,7 +176,9 @@ impl Kept {
             for t in &mut self.t {
                 t.push(t[0]);
             }
-            self.entry.push(self.entry[0]);
+            for c in &mut self.rgb {
+                c.push(c[0]);
+            }
             self.weight.push(self.weight[0]);
             self.ray.push(self.ray[0]);
         }
@@ -261,6 +267,8 @@ pub(super) unsafe fn composite_tile(
                             alpha: 0.0,
                             cached_cell: usize::MAX,
                             dist: 0,
+                            prev: None,
+                            last: Last::default(),
                         });
                     }
                 }
@@ -306,10 +314,19 @@ struct Marcher {
     /// The macro cell last looked up, and its distance-map entry.
     cached_cell: usize,
     dist: u8,
+    /// The last sample read and its table coordinate: the front of the next segment.
+    prev: Option<(i64, f32)>,
+    /// [`PreIntegrated::segment`]'s cache.
+    last: Last,
 }
 
 /// One step of the march of `m`: a leap over empty space, or a chunk of eight samples
 /// whose kept ones (those composited) go to `kept`. Returns whether the ray goes on.
+///
+/// Each sample composites the segment from the sample before ([`crate::preint`]).
+/// When that one was not read (after a leap, or at the ray's start), the chunk starts
+/// a sample early and its first lane reads only the front of the first segment (the
+/// reference loop's `Caster::before`, with the same arithmetic).
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA (inlined into [`composite_tile`]).
@@ -338,10 +355,15 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
         let values = f.values.as_ptr();
 
         let k = m.k;
-        // Positions o + d t with t = (k + j) dt, as `Ray::t` and `Ray::at` compute them.
+        let lead = match m.prev {
+            Some((pk, _)) if pk == k - 1 => 0,
+            _ => 1,
+        };
+        // Positions o + d t with t = (k0 + j) dt, as `Ray::t` and `Ray::at` compute them
+        // for sample k0 = k - lead + lane.
         let t = _mm256_mul_ps(
             _mm256_add_ps(
-                _mm256_add_ps(_mm256_set1_ps(k as f32), lanes),
+                _mm256_add_ps(_mm256_set1_ps((k - lead as i64) as f32), lanes),
                 _mm256_set1_ps(ray.j),
             ),
             dt,
@@ -353,20 +375,34 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
         // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
         // (max/min put 0 for NaN, as f32::max/min do).
         let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
-        // Empty-space skipping is decided by the chunk's first sample; the others need no
-        // test, since a sample in an inactive cell has zero opacity anyway.
-        let c0 = axes!(|a| _mm256_cvtsi256_si32(ijk[a]) as usize / MACRO_CELL);
+        // Empty-space skipping is decided by sample k; the others need no test, since a
+        // segment between samples in inactive cells has zero opacity anyway.
+        let c0 = axes!(|a| {
+            let first = if lead == 0 {
+                _mm256_cvtsi256_si32(ijk[a])
+            } else {
+                _mm256_extract_epi32::<1>(ijk[a])
+            };
+            first as usize / MACRO_CELL
+        });
         let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
         if cell != m.cached_cell {
             m.cached_cell = cell;
             m.dist = c.distance[cell];
         }
-        if m.dist != 0 {
+        // In empty space: a leap, after the segment that ends at sample k when the
+        // sample before was read (as the reference loop does).
+        let leap = m.dist != 0;
+        if leap && lead == 1 {
             stats.skips += 1;
             m.k = c.leap(ray, c0, m.dist, k);
             return m.k <= ray.k1;
         }
-        let n = (ray.k1 - k + 1).min(LANES as i64) as usize;
+        let n = if leap {
+            1
+        } else {
+            (ray.k1 - k + 1).min((LANES - lead) as i64) as usize
+        };
         stats.samples += n as u64;
         let fr = axes!(|a| {
             let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
@@ -400,44 +436,64 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
         let y0 = lerp(x00, x10, fr[1]);
         let y1 = lerp(x01, x11, fr[1]);
         let v = lerp(y0, y1, fr[2]);
-        // `Lut::index`, then the opacities.
+        // `Lut::position`, then each sample's segment from the one before, in order.
         let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
-        let mut li = [0i32; LANES];
-        _mm256_storeu_si256(
-            li.as_mut_ptr().cast(),
-            _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max)),
-        );
+        let uv = _mm256_min_ps(_mm256_max_ps(x, zero), lut_max);
+        let (mut u, mut bins) = ([0.0f32; LANES], [0u32; LANES]);
+        _mm256_storeu_ps(u.as_mut_ptr(), uv);
+        // `preint::bin` of each lane.
+        _mm256_storeu_si256(bins.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
+        let pre = &lut.pre;
+        let front = match m.prev {
+            Some((_, u)) if lead == 0 => u,
+            _ => u[0],
+        };
+        // Which segments cross opacity, without branches; then those alone, in order.
         let mut mask = 0u32;
-        for (j, &i) in li.iter().enumerate().take(n) {
-            // SAFETY: `li` was clamped to [0, LUT_SIZE-1] before the conversion.
-            mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
+        let mut fb = bin(front);
+        for (j, &b) in bins.iter().enumerate().skip(lead).take(n) {
+            mask |= (pre.crosses_opacity(fb, b) as u32) << j;
+            fb = b;
         }
-        if mask != 0 {
-            let mut t = [[0.0f32; LANES]; 3];
-            for (a, v) in fr.iter().enumerate() {
-                _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+        let mut t: Option<[[f32; LANES]; 3]> = None;
+        while mask != 0 {
+            let j = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let f = if j == lead { front } else { u[j - 1] };
+            let Some((a, col)) = pre.segment_through_opacity(f, u[j], &mut m.last) else {
+                continue;
+            };
+            let t = t.get_or_insert_with(|| {
+                let mut t = [[0.0f32; LANES]; 3];
+                for (a, v) in fr.iter().enumerate() {
+                    _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+                }
+                t
+            });
+            // The reference loop's `w` and `alpha`, in the same order.
+            let w = (1.0 - m.alpha) * a;
+            kept.base.push(base[j]);
+            for (kt, t) in kept.t.iter_mut().zip(t.iter()) {
+                kt.push(t[j]);
             }
-            while mask != 0 {
-                let j = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                // The reference loop's `w` and `alpha`, in the same order.
-                // SAFETY: as above.
-                let w = (1.0 - m.alpha) * *lut.alphas.get_unchecked(li[j] as usize);
-                kept.base.push(base[j]);
-                for (kt, t) in kept.t.iter_mut().zip(&t) {
-                    kt.push(t[j]);
-                }
-                kept.entry.push(li[j] as u32);
-                kept.weight.push(w);
-                kept.ray.push(m.id);
-                stats.shaded += 1;
-                m.alpha += w;
-                if m.alpha >= TERMINATION_OPACITY {
-                    return false;
-                }
+            for (kc, c) in kept.rgb.iter_mut().zip(col) {
+                kc.push(c);
+            }
+            kept.weight.push(w);
+            kept.ray.push(m.id);
+            stats.shaded += 1;
+            m.alpha += w;
+            if m.alpha >= TERMINATION_OPACITY {
+                return false;
             }
         }
-        m.k = k + n as i64;
+        m.prev = Some((k + n as i64 - 1, u[lead + n - 1]));
+        m.k = if leap {
+            stats.skips += 1;
+            c.leap(ray, c0, m.dist, k)
+        } else {
+            k + n as i64
+        };
         m.k <= ray.k1
     }
 }
@@ -512,15 +568,13 @@ unsafe fn light(
     unsafe {
         let shader = c.shader;
         let m = &shader.material;
-        let lut = c.lut;
         let flat = m.ambient + m.diffuse;
         let n = kept.len();
         if !m.shade {
             for r in 0..n {
-                let e = lut.entry_at(kept.entry[r] as usize);
                 let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
-                for ch in 0..3 {
-                    col[ch] += w * e[ch];
+                for (c, rgb) in col.iter_mut().zip(&kept.rgb) {
+                    *c += w * rgb[r];
                 }
             }
             return;
@@ -634,7 +688,6 @@ unsafe fn light(
             _mm256_set1_ps(g0),
             _mm256_set1_ps(1.0),
         );
-        let entries = lut.entries.as_ptr().cast::<f32>();
         for (b, r0) in (0..padded).step_by(LANES).enumerate() {
             let mut specular = zero;
             for (i, &(_, intensity)) in lights.iter().enumerate() {
@@ -656,24 +709,7 @@ unsafe fn light(
             } else {
                 one
             };
-            // The eight samples' table entries [r, g, b, alpha], transposed to r, g, b.
-            // SAFETY: entry indices were clamped to [0, LUT_SIZE-1] when marching.
-            let e = |j: usize| {
-                let i = *kept.entry.get_unchecked(r0 + j) as usize;
-                _mm_loadu_ps(entries.add(4 * i))
-            };
-            let q =
-                |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e(a)), e(b));
-            let (q0, q1, q2, q3) = (q(0, 4), q(1, 5), q(2, 6), q(3, 7));
-            let t0 = _mm256_unpacklo_ps(q0, q1); // r0 r1 g0 g1 | r4 r5 g4 g5
-            let t1 = _mm256_unpackhi_ps(q0, q1); // b0 b1 a0 a1 | ...
-            let t2 = _mm256_unpacklo_ps(q2, q3);
-            let t3 = _mm256_unpackhi_ps(q2, q3);
-            let base = [
-                _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2),
-                _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2),
-                _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
-            ];
+            let base = axes!(|ch| _mm256_loadu_ps(kept.rgb[ch].as_ptr().add(r0)));
             let usable = bits(valid[b]);
             let weight = _mm256_loadu_ps(kept.weight.as_ptr().add(r0));
             let mut add = [[0.0f32; LANES]; 3];
