@@ -5,7 +5,8 @@
 //! [PRESET] [STEP] [VIEW] [REPEAT] [OUT.png]` (defaults: the `head` phantom, its
 //! preset, 0.5, anterior, 5, no PNG). Environment: `RINGS_SIZE` (phantom grid),
 //! `RINGS_ORTHO`, `RINGS_NOSKIP`, `RINGS_NOSHADE`, `RINGS_LIGHT=AZ,EL[,I]` (an extra
-//! light), `RINGS_PREFILTER=binomial|none`.
+//! light), `RINGS_PREFILTER=binomial|none`, `RINGS_DEPTHS` (the measure at depths of
+//! 6, 15, 30 and 60 px inside the silhouette).
 
 use std::time::Instant;
 
@@ -68,6 +69,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         image.ring_measure().unwrap_or(f64::NAN),
         frame.as_secs_f64() * 1e3,
     );
+    if env("RINGS_DEPTHS") {
+        // The measure over the pixels at least d px inside the silhouette, and what
+        // each band between two depths adds to the whole measure (at 6 px).
+        let depths = [6usize, 15, 30, 60];
+        let at: Vec<(f64, usize)> = depths
+            .iter()
+            .map(|&d| image.ring_measure_inside(d).unwrap_or((0.0, 0)))
+            .collect();
+        let total = at[0].1.max(1) as f64;
+        for (i, &d) in depths.iter().enumerate() {
+            let (m, n) = at[i];
+            let (m_in, n_in) = at.get(i + 1).copied().unwrap_or((0.0, 0));
+            let band = m * n as f64 - m_in * n_in as f64;
+            println!(
+                "  from {d} px inside: measure {m:.3} over {n} px; the band to the next depth adds {:.3}",
+                band / total
+            );
+        }
+    }
     let mut t = first.timings.clone();
     if let Some(out) = args.get(5) {
         let bytes = t.time("encode", || image.encode_png(Depth::Eight))?;

@@ -106,6 +106,13 @@ impl Image {
     /// its silhouette (a square erosion). Smooth shading gives almost 0; slicing rings,
     /// noise and fine texture raise it. `None` when no pixel is that deep inside.
     pub fn ring_measure(&self) -> Option<f64> {
+        self.ring_measure_inside(RING_ERODE_PX).map(|(m, _)| m)
+    }
+
+    /// [`Image::ring_measure`] over the pixels at least `erode` pixels inside the
+    /// silhouette, and how many there are: measures at growing depths tell the
+    /// silhouette's own edges from what covers the object's inside.
+    pub fn ring_measure_inside(&self, erode: usize) -> Option<(f64, usize)> {
         let (w, h) = (self.width as usize, self.height as usize);
         let srgb = self.encode_srgb(Depth::Eight);
         let luma: Vec<f64> = srgb
@@ -115,18 +122,13 @@ impl Image {
         let blurred = gaussian_blur(&luma, w, h, RING_BLUR_SIGMA);
         let inside: Vec<bool> = self.alpha.iter().map(|&a| a > RING_OBJECT_ALPHA).collect();
         // Each pass erodes rows and transposes, so two give the square erosion.
-        let deep = erode_rows(
-            &erode_rows(&inside, w, h, RING_ERODE_PX),
-            h,
-            w,
-            RING_ERODE_PX,
-        );
+        let deep = erode_rows(&erode_rows(&inside, w, h, erode), h, w, erode);
         let (mut sum, mut n) = (0.0, 0usize);
         for (i, _) in deep.iter().enumerate().filter(|(_, d)| **d) {
             sum += (luma[i] - blurred[i]).abs();
             n += 1;
         }
-        (n > 0).then(|| sum / n as f64)
+        (n > 0).then(|| (sum / n as f64, n))
     }
 }
 
