@@ -5,7 +5,8 @@
 //! [PRESET] [STEP] [VIEW] [REPEAT] [OUT.png]` (defaults: the `head` phantom, its
 //! preset, 0.5, anterior, 5, no PNG). Environment: `RINGS_SIZE` (phantom grid),
 //! `RINGS_ORTHO`, `RINGS_NOSKIP`, `RINGS_NOSHADE`, `RINGS_LIGHT=AZ,EL[,I]` (an extra
-//! light), `RINGS_PREFILTER=binomial|none`, `RINGS_DEPTHS` (the measure at depths of
+//! light), `RINGS_PREFILTER=binomial|none`, `RINGS_SAMPLING=point|pre-integrated`,
+//! `RINGS_DEPTHS` (the measure at depths of
 //! 6, 15, 30 and 60 px inside the silhouette).
 
 use std::time::Instant;
@@ -40,6 +41,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Ok(p) = std::env::var("RINGS_PREFILTER") {
         scene.prefilter = p.parse()?;
+    }
+    if let Ok(p) = std::env::var("RINGS_SAMPLING") {
+        scene.sampling = p.parse()?;
     }
     if env("RINGS_NOSHADE") {
         scene.material.shade = Some(false);

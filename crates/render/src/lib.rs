@@ -63,6 +63,7 @@ pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use image::{Depth, Image, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use phantom::Phantom;
+pub use preint::Sampling;
 pub use presets::{preset, Preset, PRESETS};
 pub use raster::{vertex_normals, SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
 pub use raycast::{

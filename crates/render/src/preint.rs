@@ -21,7 +21,51 @@
 //! nearest-entry bins of [`crate::tf::Lut::index`], so empty-space skipping, decided
 //! per bin, stays exact.
 
+use crate::error::RenderError;
 use crate::tf::LUT_SIZE;
+
+/// How a composite render classifies its samples: the transfer function read at each
+/// sample, or integrated over the segment between samples.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Sampling {
+    /// The transfer function at each sample (opacity corrected for the step): the
+    /// fastest; a shell of opacity thinner than the step is hit or missed.
+    #[default]
+    Point,
+    /// Each segment between samples integrated ([`PreIntegrated`]): thin shells show
+    /// whatever the step, for about a third more frame time on the MNI152 scene.
+    PreIntegrated,
+}
+
+impl Sampling {
+    /// Every choice, the default first.
+    pub const ALL: [Sampling; 2] = [Sampling::Point, Sampling::PreIntegrated];
+
+    /// The name scenes and the command line use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Sampling::Point => "point",
+            Sampling::PreIntegrated => "pre-integrated",
+        }
+    }
+}
+
+impl std::str::FromStr for Sampling {
+    type Err = RenderError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Sampling::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| {
+                RenderError::Parameter(format!(
+                    "unknown sampling '{s}': expected point or pre-integrated"
+                ))
+            })
+    }
+}
 
 /// Largest opacity per voxel the extinction is taken from (`alpha = 1` would give an
 /// infinite extinction): a voxel of it lets through one part in a million.
@@ -137,34 +181,36 @@ impl PreIntegrated {
     /// them), or `None` when no value between them has opacity. `last` keeps the
     /// integral at `b` for the next segment of the ray, which starts there.
     #[inline(always)]
-    pub fn segment(&self, f: f32, b: f32, last: &mut Last) -> Option<(f32, [f32; 3])> {
-        if !self.crosses_opacity(bin(f), bin(b)) {
+    pub fn segment(&self, f: f32, b: f32, last: &mut Last) -> Option<[f32; 4]> {
+        let (bf, bb) = (bin(f), bin(b));
+        let (lo, hi) = (bf.min(bb), bf.max(bb));
+        if !self.crosses_opacity(lo, hi) {
             return None;
         }
         self.segment_through_opacity(f, b, last)
     }
 
-    /// Whether some bin from `bf` to `bb` (either order, each below `LUT_SIZE`) has
-    /// opacity: [`PreIntegrated::segment`]'s first test, apart for a branch-free pass
-    /// over many segments.
+    /// Whether some bin from `lo` to `hi` (`lo <= hi < LUT_SIZE`) has opacity:
+    /// [`PreIntegrated::segment`]'s first test, apart for a branch-free pass over many
+    /// segments.
     #[inline(always)]
-    pub fn crosses_opacity(&self, bf: u32, bb: u32) -> bool {
-        let (lo, hi) = (bf.min(bb) as usize, bf.max(bb) as usize);
-        self.visible[hi + 1] != self.visible[lo]
+    pub fn crosses_opacity(&self, lo: u32, hi: u32) -> bool {
+        debug_assert!(lo <= hi && (hi as usize) < LUT_SIZE);
+        // SAFETY: hi < LUT_SIZE (this function's contract) and `visible` has
+        // LUT_SIZE + 1 entries.
+        unsafe {
+            self.visible.get_unchecked(hi as usize + 1) != self.visible.get_unchecked(lo as usize)
+        }
     }
 
-    /// [`PreIntegrated::segment`] for a segment that [`PreIntegrated::crosses_opacity`].
+    /// [`PreIntegrated::segment`] for a segment that [`PreIntegrated::crosses_opacity`]:
+    /// `[r, g, b, alpha]`, colour linear.
     #[inline(always)]
-    pub fn segment_through_opacity(
-        &self,
-        f: f32,
-        b: f32,
-        last: &mut Last,
-    ) -> Option<(f32, [f32; 3])> {
+    pub fn segment_through_opacity(&self, f: f32, b: f32, last: &mut Last) -> Option<[f32; 4]> {
         let (bf, bb) = (bin(f), bin(b));
         if bf == bb {
-            let e = self.point[bb as usize];
-            return Some((e[3], [e[0], e[1], e[2]]));
+            // SAFETY: bins are below LUT_SIZE, the length of `point`.
+            return Some(unsafe { *self.point.get_unchecked(bb as usize) });
         }
         let kf = if last.u.to_bits() == f.to_bits() {
             last.integral
@@ -180,8 +226,12 @@ impl PreIntegrated {
         }
         let dt = d[3] as f32;
         let inv = 1.0 / dt;
-        let color = [d[0] as f32 * inv, d[1] as f32 * inv, d[2] as f32 * inv];
-        Some((self.opacity_of(dt / (b - f)), color))
+        Some([
+            d[0] as f32 * inv,
+            d[1] as f32 * inv,
+            d[2] as f32 * inv,
+            self.opacity_of(dt / (b - f)),
+        ])
     }
 
     /// `[K_r, K_g, K_b, T]` at coordinate `u` of bin `bin`.
@@ -189,7 +239,13 @@ impl PreIntegrated {
     fn integral(&self, u: f32, bin: u32) -> [f64; 4] {
         // Exact: u and its integer part are within a factor of two (or the part is 0).
         let frac = (u - bin as f32) as f64;
-        let (c, s) = (self.cum[bin as usize], self.slope[bin as usize]);
+        // SAFETY: bins are below LUT_SIZE, the length of `slope` (`cum` has one more).
+        let (c, s) = unsafe {
+            (
+                self.cum.get_unchecked(bin as usize),
+                self.slope.get_unchecked(bin as usize),
+            )
+        };
         [
             c[0] + frac * s[0],
             c[1] + frac * s[1],
@@ -206,7 +262,13 @@ impl PreIntegrated {
         // m is a positive integral over a non-zero length).
         let i = unsafe { x.to_int_unchecked::<usize>() }.min(OPACITY_TABLE - 2);
         let t = x - i as f32;
-        let (a, b) = (self.opacity[i], self.opacity[i + 1]);
+        // SAFETY: i + 1 < OPACITY_TABLE, the table's length.
+        let (a, b) = unsafe {
+            (
+                *self.opacity.get_unchecked(i),
+                *self.opacity.get_unchecked(i + 1),
+            )
+        };
         a + t * (b - a)
     }
 }
@@ -216,7 +278,7 @@ mod tests {
     use super::*;
 
     impl PreIntegrated {
-        fn segment_once(&self, f: f32, b: f32) -> Option<(f32, [f32; 3])> {
+        fn segment_once(&self, f: f32, b: f32) -> Option<[f32; 4]> {
             self.segment(f, b, &mut Last::default())
         }
     }
@@ -237,7 +299,8 @@ mod tests {
         // Bins 1000..1010 opaque at 0.5 per voxel; a half-voxel step whose scalar goes
         // from 900 to 1100 spends 10/200 of its length in the band.
         let p = band(1000, 1010, 0.5, 0.5);
-        let (a, c) = p.segment_once(900.25, 1100.25).unwrap();
+        let [r, g, b, a] = p.segment_once(900.25, 1100.25).unwrap();
+        let c = [r, g, b];
         let want = 1.0 - (-(0.5 * 10.0 / 200.0) * -(0.5f64.ln())).exp();
         assert!((a as f64 - want).abs() < 1e-6, "{a} {want}");
         // The band's mean colour: bins 1000..1009.
@@ -248,7 +311,7 @@ mod tests {
             "{c:?}"
         );
         // The same either way along the ray; nothing when the band is not crossed.
-        let (back, _) = p.segment_once(1100.25, 900.25).unwrap();
+        let back = p.segment_once(1100.25, 900.25).unwrap()[3];
         assert!((back - a).abs() < 1e-6);
         assert_eq!(p.segment_once(10.0, 999.5), None);
         assert_eq!(p.segment_once(1010.0, 4000.0), None);
@@ -257,19 +320,20 @@ mod tests {
     #[test]
     fn a_segment_inside_one_bin_is_the_point_sample() {
         let p = band(0, LUT_SIZE, 0.3, 0.5);
-        let (a, c) = p.segment_once(2000.1, 2000.9).unwrap();
+        let [r, g, b, a] = p.segment_once(2000.1, 2000.9).unwrap();
+        let c = [r, g, b];
         let point = 1.0 - 0.7f64.powf(0.5);
         assert!((a as f64 - point).abs() < 1e-6, "{a} {point}");
         assert_eq!(c, [2000.0 / LUT_SIZE as f32, 0.5, 1.0]);
         // Across bins of one opacity the opacity is the same as within one.
-        let (a2, _) = p.segment_once(100.5, 3000.5).unwrap();
+        let a2 = p.segment_once(100.5, 3000.5).unwrap()[3];
         assert!((a2 - a).abs() < 1e-6, "{a2} {a}");
     }
 
     #[test]
     fn opaque_bins_stay_opaque() {
         let p = band(0, LUT_SIZE, 1.0, 0.5);
-        let (a, _) = p.segment_once(10.0, 10.5).unwrap();
+        let a = p.segment_once(10.0, 10.5).unwrap()[3];
         assert!(a > 0.999, "{a}");
     }
 }

@@ -9,10 +9,10 @@ use rayon::prelude::*;
 
 use crate::camera::{Camera, CameraSpec};
 use crate::error::RenderError;
-use crate::field::{Field, MACRO_CELL};
+use crate::field::{Field, Loc, MACRO_CELL};
 use crate::image::Image;
 use crate::math::Vec3;
-use crate::preint::Last;
+use crate::preint::{Last, Sampling};
 use crate::shading::{RayLighting, Shader};
 use crate::tf::{Lut, TransferFunction};
 
@@ -76,6 +76,8 @@ pub struct ClassifySettings {
     pub step: f64,
     /// Empty-space skipping on (it never changes the image, only the speed).
     pub skip_empty: bool,
+    /// Composite mode: the transfer function at samples or integrated between them.
+    pub sampling: Sampling,
 }
 
 impl Default for ClassifySettings {
@@ -84,6 +86,7 @@ impl Default for ClassifySettings {
             mode: Mode::Composite,
             step: 0.5,
             skip_empty: true,
+            sampling: Sampling::default(),
         }
     }
 }
@@ -594,6 +597,7 @@ impl Classification {
             dt: (self.settings.step * field.min_spacing()) as f32,
             simd: settings.kernel == Kernel::Auto && simd_supported(),
             jitter,
+            sampling: self.settings.sampling,
         };
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
@@ -682,6 +686,8 @@ struct Caster<'a> {
     simd: bool,
     /// Offset each ray's samples by [`jitter`].
     jitter: bool,
+    /// [`ClassifySettings::sampling`].
+    sampling: Sampling,
 }
 
 /// Whether the CPU runs the SIMD compositing loop.
@@ -1175,21 +1181,21 @@ impl Caster<'_> {
                 Some((pk, u)) if pk == k - 1 => Some(u),
                 _ => None,
             };
-            if !leap || front.is_some() {
+            if self.sampling == Sampling::Point {
+                if !leap {
+                    stats.samples += 1;
+                    let e = self.lut.get(self.field.value_at(&loc));
+                    if e[3] > 0.0 && self.add(&loc, e, lighting, &mut color, &mut alpha, stats) {
+                        break;
+                    }
+                }
+            } else if !leap || front.is_some() {
                 stats.samples += 1;
                 let front = front.unwrap_or_else(|| self.before(ray, k));
                 let back = self.lut.position(self.field.value_at(&loc));
                 prev = Some((k, back));
-                if let Some((a, c)) = pre.segment(front, back, &mut last) {
-                    stats.shaded += 1;
-                    let g = self.field.gradient_at(&loc);
-                    let rgb = self.shader.shade(c, g, lighting);
-                    let w = (1.0 - alpha) * a;
-                    color[0] += w * rgb[0];
-                    color[1] += w * rgb[1];
-                    color[2] += w * rgb[2];
-                    alpha += w;
-                    if alpha >= TERMINATION_OPACITY {
+                if let Some(e) = pre.segment(front, back, &mut last) {
+                    if self.add(&loc, e, lighting, &mut color, &mut alpha, stats) {
                         break;
                     }
                 }
@@ -1202,6 +1208,31 @@ impl Caster<'_> {
             }
         }
         (color, alpha)
+    }
+
+    /// Shades the sample at `loc` with colour and opacity `rgba` and adds it behind
+    /// `color` and `alpha`; returns whether the ray is now opaque enough to stop.
+    #[inline(always)]
+    fn add(
+        &self,
+        loc: &Loc,
+        rgba: [f32; 4],
+        lighting: &RayLighting,
+        color: &mut [f32; 3],
+        alpha: &mut f32,
+        stats: &mut RenderStats,
+    ) -> bool {
+        stats.shaded += 1;
+        let grad = self.field.gradient_at(loc);
+        let rgb = self
+            .shader
+            .shade([rgba[0], rgba[1], rgba[2]], grad, lighting);
+        let w = (1.0 - *alpha) * rgba[3];
+        color[0] += w * rgb[0];
+        color[1] += w * rgb[1];
+        color[2] += w * rgb[2];
+        *alpha += w;
+        *alpha >= TERMINATION_OPACITY
     }
 
     /// The table coordinate of sample `k - 1` of `ray`: the front of the segment

@@ -27,6 +27,7 @@ use crate::meshes::{
     MeshKey, MeshSet, MeshSpec, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS,
 };
 use crate::phantom::Phantom;
+use crate::preint::Sampling;
 use crate::presets::preset;
 use crate::raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
 use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel, Mode};
@@ -114,6 +115,10 @@ pub struct Scene {
     /// How the volume's samples are filtered before trilinear reconstruction
     /// ([`Prefilter`]; `binomial` by default: no "wood grain" rings).
     pub prefilter: Prefilter,
+    /// Composite mode: the transfer function read at each sample (`point`, the
+    /// default) or integrated over the segments between samples (`pre-integrated`:
+    /// thin shells of opacity show whatever the step) ([`Sampling`]).
+    pub sampling: Sampling,
     /// Background colour, linear RGB.
     pub background: [f32; 3],
     /// Written by a render for other tools (e.g. scripts/bench_vtk.py): the camera
@@ -144,6 +149,7 @@ impl Default for Scene {
             gate: 0.01,
             skip_empty: true,
             prefilter: Prefilter::default(),
+            sampling: Sampling::default(),
             background: [0.0; 3],
             derived: None,
         }
@@ -841,6 +847,7 @@ impl Scene {
             mode,
             step: scene.step,
             skip_empty: scene.skip_empty,
+            sampling: scene.sampling,
         };
         classify.validate()?;
         let frame = FrameSettings {

@@ -6,7 +6,7 @@ use glint_io::{Samples, Volume};
 use glint_lobe::{Geometry, Lobe, LobeKind};
 use glint_render::{
     phantom, Camera, CameraSpec, Input, Kernel, Light, LobeSpec, MaterialOverrides, Projection,
-    RenderMode, Rendered, Renderer, Scene, TransferFunction, View,
+    RenderMode, Rendered, Renderer, Sampling, Scene, TransferFunction, View,
 };
 
 fn ortho(view: View) -> CameraSpec {
@@ -130,24 +130,33 @@ fn a_shell_thinner_than_a_step_is_integrated_not_sampled() {
         .sum::<f64>()
         / 0.1;
     let expect = 1.0 - (-depth).exp();
-    let scene = Scene {
+    let mut scene = Scene {
         camera: ortho(View::Anterior),
         transfer_function: Some(tf),
         material: flat_material(),
         prefilter: glint_render::Prefilter::None,
+        sampling: Sampling::PreIntegrated,
         ..scene(48, 48)
     };
-    let img = render(&volume, &scene).image;
-    let centre: Vec<f64> = (12..36)
-        .flat_map(|y| (12..36).map(move |x| (x, y)))
-        .map(|(x, y)| img.alpha[y * 48 + x] as f64)
-        .collect();
-    let (lo, hi) = centre
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    let mut renderer = Renderer::from_volume(&volume).unwrap();
+    let mut centre_alpha = |scene: &Scene| {
+        let img = renderer.render(scene, &|_| {}).unwrap().image;
+        (12..36)
+            .flat_map(|y| (12..36).map(move |x| (x, y)))
+            .map(|(x, y)| img.alpha[y * 48 + x] as f64)
+            .fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)))
+    };
+    let (lo, hi) = centre_alpha(&scene);
     assert!(
         hi - lo < 1e-3,
         "alpha from {lo} to {hi}: depends on the phase"
+    );
+    // Point sampling hits or misses the shell.
+    scene.sampling = Sampling::Point;
+    let (plo, phi) = centre_alpha(&scene);
+    assert!(
+        plo < 0.01 && phi > 0.8,
+        "point-sampled alpha from {plo} to {phi}"
     );
     // The table holds 4096 bins over the value range, each taking its nearest entry's
     // opacity: the shell's two edges may move by half a bin each, at most one bin of
@@ -350,7 +359,12 @@ fn empty_space_skipping_never_changes_the_image() {
     // taken. Off-centre, zoomed views put block footprints across tile borders and
     // partly off the image.
     let mut renderer = Renderer::from_volume(&shepp_logan(48)).unwrap();
-    for projection in [Projection::Perspective, Projection::Orthographic] {
+    for (projection, sampling) in [
+        (Projection::Perspective, Sampling::Point),
+        (Projection::Orthographic, Sampling::Point),
+        (Projection::Perspective, Sampling::PreIntegrated),
+        (Projection::Orthographic, Sampling::PreIntegrated),
+    ] {
         for zoom in [1.0, 2.5] {
             for (mode, iso) in [
                 (RenderMode::Composite, None),
@@ -370,12 +384,13 @@ fn empty_space_skipping_never_changes_the_image() {
                     },
                     lobe: lobe(LobeKind::EnergyFit, 40.0, Geometry::Blinn),
                     gate: 0.0,
+                    sampling,
                     ..scene(48, 40)
                 };
                 let fast = renderer.render(&scene, &|_| {}).unwrap().image;
                 scene.skip_empty = false;
                 let slow = renderer.render(&scene, &|_| {}).unwrap().image;
-                let what = format!("{mode:?} {projection:?} zoom {zoom}");
+                let what = format!("{mode:?} {projection:?} {sampling:?} zoom {zoom}");
                 assert_eq!(fast.rgb, slow.rgb, "{what}");
                 assert_eq!(fast.alpha, slow.alpha, "{what}");
                 let covered = fast.alpha.iter().filter(|&&a| a > 0.0).count();
@@ -426,8 +441,14 @@ fn simd_loop_gives_the_scalar_loops_image() {
             for geometry in [Geometry::Phong, Geometry::Blinn] {
                 // A gate of 0.5 value/mm (the phantom's range is 1) blends
                 // weak-gradient samples towards flat.
-                for gate in [0.0, 0.5] {
+                for (gate, sampling) in [
+                    (0.0, Sampling::Point),
+                    (0.5, Sampling::Point),
+                    (0.0, Sampling::PreIntegrated),
+                    (0.5, Sampling::PreIntegrated),
+                ] {
                     let scene = Scene {
+                        sampling,
                         camera: CameraSpec {
                             azimuth: 33.0,
                             elevation: -21.0,
@@ -443,7 +464,7 @@ fn simd_loop_gives_the_scalar_loops_image() {
                     let fast = renderer.render(&scene, &|_| {}).unwrap().image;
                     renderer.kernel = Kernel::Scalar;
                     let slow = renderer.render(&scene, &|_| {}).unwrap().image;
-                    let what = format!("{kind} {geometry} gate {gate} {projection:?}");
+                    let what = format!("{kind} {geometry} gate {gate} {sampling:?} {projection:?}");
                     assert_eq!(fast.alpha, slow.alpha, "{what}");
                     assert_eq!(fast.stats.shaded, slow.stats.shaded, "{what}");
                     if matches!(kind, LobeKind::Exact | LobeKind::Gauss) {
@@ -546,28 +567,34 @@ fn mni152_brain_renders_the_same_with_every_shortcut_off() {
 }
 
 /// Ring measure the Shepp-Logan phantom's image (its `phantom` preset, 512x512,
-/// anterior, step 0.5) stays under. Measured 0.88 with pre-integrated classification
+/// anterior, step 0.5) stays under with pre-integrated sampling. Measured 0.88
 /// (examples/rings.rs); point-sampled, the same image measured 1.23, its wood grain
 /// the thin shells that samples half a voxel apart hit or miss.
 const SHEPP_LOGAN_RING_BOUND: f64 = 1.0;
 
 #[test]
-fn the_shepp_logan_phantom_shows_no_slicing_rings() {
-    let scene = Scene {
+fn pre_integration_takes_the_slicing_rings_off_the_shepp_logan_phantom() {
+    let mut scene = Scene {
         input: Input::Phantom {
             name: phantom::Phantom::SheppLogan,
             size: phantom::Phantom::DEFAULT_SIZE,
         },
+        sampling: Sampling::PreIntegrated,
         ..Scene::default()
     };
-    let rendered = Renderer::open(&scene.input)
-        .unwrap()
-        .render(&scene, &|_| {})
-        .unwrap();
+    let mut renderer = Renderer::open(&scene.input).unwrap();
+    let rendered = renderer.render(&scene, &|_| {}).unwrap();
     assert_eq!(rendered.scene.preset.as_deref(), Some("phantom"));
     assert_eq!(rendered.scene.step, 0.5);
     let m = rendered.image.ring_measure().unwrap();
     assert!(m < SHEPP_LOGAN_RING_BOUND, "ring measure {m}");
+    scene.sampling = Sampling::Point;
+    let point = renderer.render(&scene, &|_| {}).unwrap().image;
+    let mp = point.ring_measure().unwrap();
+    assert!(
+        mp > SHEPP_LOGAN_RING_BOUND,
+        "point-sampled ring measure {mp}"
+    );
 }
 
 /// The default scene ([`Scene::default`]: the head phantom with its preset, 512x512,

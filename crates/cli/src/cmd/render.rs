@@ -351,6 +351,7 @@ mod tests {
             (vec!["--light".into(), "10,95".into()], "elevation"),
             (vec!["--no-headlight".into()], "no light"),
             (vec!["--specular".into(), "NaN".into()], "specular"),
+            (vec!["--sampling".into(), "linear".into()], "--sampling"),
         ];
         for (extra, needle) in cases {
             let extra: Vec<&str> = extra.iter().map(|s| s.as_str()).collect();
@@ -403,6 +404,7 @@ mod tests {
                 "--light",
                 "-40,20,0.5",
             ][..],
+            &["--sampling", "pre-integrated", "--phantom", "shepp-logan"][..],
         ] {
             let mut argv = small.to_vec();
             argv.extend_from_slice(extra);
@@ -418,6 +420,12 @@ mod tests {
                 "{text}"
             );
             assert!(scene.derived.is_some(), "{text}");
+            let sampling = if extra.contains(&"pre-integrated") {
+                glint_render::Sampling::PreIntegrated
+            } else {
+                glint_render::Sampling::Point
+            };
+            assert_eq!(scene.sampling, sampling, "{text}");
         }
         // Flags override the file: another lobe changes the image.
         let other = render_to(

@@ -31,7 +31,7 @@ use std::arch::x86_64::*;
 use super::{Caster, Pixels, Ray, RenderStats, TERMINATION_OPACITY};
 use crate::field::MACRO_CELL;
 use crate::math::Vec3;
-use crate::preint::{bin, Last};
+use crate::preint::{bin, Last, Sampling};
 use glint_lobe::Geometry;
 
 /// `[e(0), e(1), e(2)]` with `$a` bound to the axis: per-axis vector code written
@@ -143,8 +143,8 @@ struct Kept {
     base: Vec<i32>,
     /// Fractions inside the trilinear cell, per axis.
     t: [Vec<f32>; 3],
-    /// Linear colour of the sample's segment ([`crate::preint`]), per channel.
-    rgb: [Vec<f32>; 3],
+    /// The sample's segment ([`crate::preint`]): linear colour and opacity.
+    rgba: Vec<[f32; 4]>,
     /// Front-to-back weight `(1 - alpha) alpha_sample`.
     weight: Vec<f32>,
     /// The ray's index in the tile.
@@ -161,9 +161,7 @@ impl Kept {
         for t in &mut self.t {
             t.clear();
         }
-        for c in &mut self.rgb {
-            c.clear();
-        }
+        self.rgba.clear();
         self.weight.clear();
         self.ray.clear();
     }
@@ -176,9 +174,7 @@ impl Kept {
             for t in &mut self.t {
                 t.push(t[0]);
             }
-            for c in &mut self.rgb {
-                c.push(c[0]);
-            }
+            self.rgba.push(self.rgba[0]);
             self.weight.push(self.weight[0]);
             self.ray.push(self.ray[0]);
         }
@@ -278,7 +274,12 @@ pub(super) unsafe fn composite_tile(
             }
             for slot in slots.iter_mut() {
                 if let Some(m) = slot {
-                    if !step(c, m, kept, stats) {
+                    let goes_on = if c.sampling == Sampling::PreIntegrated {
+                        step::<true>(c, m, kept, stats)
+                    } else {
+                        step::<false>(c, m, kept, stats)
+                    };
+                    if !goes_on {
                         alpha[start + m.id as usize] = m.alpha;
                         *slot = None;
                     }
@@ -331,7 +332,12 @@ struct Marcher {
 /// # Safety
 /// The CPU must support AVX2 and FMA (inlined into [`composite_tile`]).
 #[inline(always)]
-unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderStats) -> bool {
+unsafe fn step<const PRE: bool>(
+    c: &Caster,
+    m: &mut Marcher,
+    kept: &mut Kept,
+    stats: &mut RenderStats,
+) -> bool {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
@@ -356,6 +362,7 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
 
         let k = m.k;
         let lead = match m.prev {
+            _ if !PRE => 0,
             Some((pk, _)) if pk == k - 1 => 0,
             _ => 1,
         };
@@ -391,18 +398,32 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
             m.dist = c.distance[cell];
         }
         // In empty space: a leap, after the segment that ends at sample k when the
-        // sample before was read (as the reference loop does).
-        let leap = m.dist != 0;
-        if leap && lead == 1 {
+        // sample before was read (as the reference loop does; one sample, so read
+        // with the reference loop's scalar code).
+        if m.dist != 0 {
+            if let Some((_, front)) = m.prev.filter(|_| PRE && lead == 0) {
+                let loc = f.locate(ray.at(ray.t(k, c.dt)));
+                let back = lut.position(f.value_at(&loc));
+                stats.samples += 1;
+                m.prev = Some((k, back));
+                if let Some(rgba) = lut.pre.segment(front, back, &mut m.last) {
+                    if keep(
+                        kept,
+                        (&mut m.alpha, m.id),
+                        loc.base as i32,
+                        loc.t,
+                        rgba,
+                        stats,
+                    ) {
+                        return false;
+                    }
+                }
+            }
             stats.skips += 1;
             m.k = c.leap(ray, c0, m.dist, k);
             return m.k <= ray.k1;
         }
-        let n = if leap {
-            1
-        } else {
-            (ray.k1 - k + 1).min((LANES - lead) as i64) as usize
-        };
+        let n = (ray.k1 - k + 1).min((LANES - lead) as i64) as usize;
         stats.samples += n as u64;
         let fr = axes!(|a| {
             let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
@@ -439,63 +460,105 @@ unsafe fn step(c: &Caster, m: &mut Marcher, kept: &mut Kept, stats: &mut RenderS
         // `Lut::position`, then each sample's segment from the one before, in order.
         let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
         let uv = _mm256_min_ps(_mm256_max_ps(x, zero), lut_max);
-        let (mut u, mut bins) = ([0.0f32; LANES], [0u32; LANES]);
+        let fractions = || {
+            let mut t = [[0.0f32; LANES]; 3];
+            for (a, v) in fr.iter().enumerate() {
+                _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+            }
+            t
+        };
+        if !PRE {
+            // Point sampling: each sample's own entry (`Lut::index`), the lanes with
+            // opacity found without branches.
+            let mut li = [0i32; LANES];
+            _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
+            let mut mask = 0u32;
+            for (j, &i) in li.iter().enumerate().take(n) {
+                // SAFETY: uv was clamped to [0, LUT_SIZE-1] before the conversion.
+                mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
+            }
+            let mut t: Option<[[f32; LANES]; 3]> = None;
+            while mask != 0 {
+                let j = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let t = t.get_or_insert_with(fractions);
+                // SAFETY: as above.
+                let rgba = *lut.entries.get_unchecked(li[j] as usize);
+                let tj = [t[0][j], t[1][j], t[2][j]];
+                if keep(kept, (&mut m.alpha, m.id), base[j], tj, rgba, stats) {
+                    return false;
+                }
+            }
+            m.k = k + n as i64;
+            return m.k <= ray.k1;
+        }
+        let mut u = [0.0f32; LANES];
         _mm256_storeu_ps(u.as_mut_ptr(), uv);
-        // `preint::bin` of each lane.
-        _mm256_storeu_si256(bins.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
         let pre = &lut.pre;
         let front = match m.prev {
             Some((_, u)) if lead == 0 => u,
             _ => u[0],
         };
-        // Which segments cross opacity, without branches; then those alone, in order.
+        // Which segments cross opacity, without branches: each lane's bins and the lane
+        // before's (lane 0's front from the chunk before); then those alone, in order.
+        let bv = _mm256_cvttps_epi32(uv);
+        let before = _mm256_blend_epi32::<1>(
+            _mm256_permutevar8x32_epi32(bv, _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6)),
+            _mm256_set1_epi32(bin(front) as i32),
+        );
+        let (mut lo, mut hi) = ([0u32; LANES], [0u32; LANES]);
+        _mm256_storeu_si256(lo.as_mut_ptr().cast(), _mm256_min_epi32(before, bv));
+        _mm256_storeu_si256(hi.as_mut_ptr().cast(), _mm256_max_epi32(before, bv));
         let mut mask = 0u32;
-        let mut fb = bin(front);
-        for (j, &b) in bins.iter().enumerate().skip(lead).take(n) {
-            mask |= (pre.crosses_opacity(fb, b) as u32) << j;
-            fb = b;
+        for j in 0..LANES {
+            mask |= (pre.crosses_opacity(lo[j], hi[j]) as u32) << j;
         }
+        // Lanes lead .. lead + n: the samples of this chunk.
+        mask &= ((1u32 << (lead + n)) - 1) & !((1u32 << lead) - 1);
         let mut t: Option<[[f32; LANES]; 3]> = None;
         while mask != 0 {
             let j = mask.trailing_zeros() as usize;
             mask &= mask - 1;
             let f = if j == lead { front } else { u[j - 1] };
-            let Some((a, col)) = pre.segment_through_opacity(f, u[j], &mut m.last) else {
+            let Some(rgba) = pre.segment_through_opacity(f, u[j], &mut m.last) else {
                 continue;
             };
-            let t = t.get_or_insert_with(|| {
-                let mut t = [[0.0f32; LANES]; 3];
-                for (a, v) in fr.iter().enumerate() {
-                    _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
-                }
-                t
-            });
-            // The reference loop's `w` and `alpha`, in the same order.
-            let w = (1.0 - m.alpha) * a;
-            kept.base.push(base[j]);
-            for (kt, t) in kept.t.iter_mut().zip(t.iter()) {
-                kt.push(t[j]);
-            }
-            for (kc, c) in kept.rgb.iter_mut().zip(col) {
-                kc.push(c);
-            }
-            kept.weight.push(w);
-            kept.ray.push(m.id);
-            stats.shaded += 1;
-            m.alpha += w;
-            if m.alpha >= TERMINATION_OPACITY {
+            let t = t.get_or_insert_with(fractions);
+            let tj = [t[0][j], t[1][j], t[2][j]];
+            if keep(kept, (&mut m.alpha, m.id), base[j], tj, rgba, stats) {
                 return false;
             }
         }
         m.prev = Some((k + n as i64 - 1, u[lead + n - 1]));
-        m.k = if leap {
-            stats.skips += 1;
-            c.leap(ray, c0, m.dist, k)
-        } else {
-            k + n as i64
-        };
+        m.k = k + n as i64;
         m.k <= ray.k1
     }
+}
+
+/// Records a composited sample of the ray `id` whose opacity so far is `alpha` (voxel
+/// `base`, fractions `t`, its segment's colour and opacity) and adds its opacity as
+/// the reference loop does, in the same order. Returns whether the ray is now opaque
+/// enough to stop.
+#[inline(always)]
+fn keep(
+    kept: &mut Kept,
+    (alpha, id): (&mut f32, u32),
+    base: i32,
+    t: [f32; 3],
+    rgba: [f32; 4],
+    stats: &mut RenderStats,
+) -> bool {
+    let w = (1.0 - *alpha) * rgba[3];
+    kept.base.push(base);
+    for (kt, t) in kept.t.iter_mut().zip(t) {
+        kt.push(t);
+    }
+    kept.rgba.push(rgba);
+    kept.weight.push(w);
+    kept.ray.push(id);
+    stats.shaded += 1;
+    *alpha += w;
+    *alpha >= TERMINATION_OPACITY
 }
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
@@ -573,8 +636,8 @@ unsafe fn light(
         if !m.shade {
             for r in 0..n {
                 let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
-                for (c, rgb) in col.iter_mut().zip(&kept.rgb) {
-                    *c += w * rgb[r];
+                for (c, x) in col.iter_mut().zip(kept.rgba[r]) {
+                    *c += w * x;
                 }
             }
             return;
@@ -709,7 +772,21 @@ unsafe fn light(
             } else {
                 one
             };
-            let base = axes!(|ch| _mm256_loadu_ps(kept.rgb[ch].as_ptr().add(r0)));
+            // The eight samples' [r, g, b, alpha], transposed to r, g, b.
+            let rgba = kept.rgba.as_ptr().cast::<f32>();
+            let e = |j: usize| _mm_loadu_ps(rgba.add(4 * (r0 + j)));
+            let q =
+                |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e(a)), e(b));
+            let (q0, q1, q2, q3) = (q(0, 4), q(1, 5), q(2, 6), q(3, 7));
+            let t0 = _mm256_unpacklo_ps(q0, q1); // r0 r1 g0 g1 | r4 r5 g4 g5
+            let t1 = _mm256_unpackhi_ps(q0, q1); // b0 b1 a0 a1 | ...
+            let t2 = _mm256_unpacklo_ps(q2, q3);
+            let t3 = _mm256_unpackhi_ps(q2, q3);
+            let base = [
+                _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2),
+                _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2),
+                _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
+            ];
             let usable = bits(valid[b]);
             let weight = _mm256_loadu_ps(kept.weight.as_ptr().add(r0));
             let mut add = [[0.0f32; LANES]; 3];
