@@ -217,8 +217,31 @@ fn refill<T: Copy>(v: &mut Vec<T>, n: usize, x: T) {
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA ([`supported`]).
-#[target_feature(enable = "avx2,fma")]
 pub(super) unsafe fn composite_tile(
+    c: &Caster,
+    px: &Pixels,
+    scratch: &mut Scratch,
+    rgb: &mut Vec<[f32; 3]>,
+    alpha: &mut Vec<f32>,
+    stats: &mut RenderStats,
+) {
+    // SAFETY: the caller upholds the same contract. One loop per sampling, so neither
+    // carries the other's code.
+    unsafe {
+        if c.sampling == Sampling::PreIntegrated {
+            composite::<true>(c, px, scratch, rgb, alpha, stats)
+        } else {
+            composite::<false>(c, px, scratch, rgb, alpha, stats)
+        }
+    }
+}
+
+/// [`composite_tile`] for pre-integrated (`PRE`) or point sampling.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA ([`supported`]).
+#[target_feature(enable = "avx2,fma")]
+unsafe fn composite<const PRE: bool>(
     c: &Caster,
     px: &Pixels,
     scratch: &mut Scratch,
@@ -274,12 +297,7 @@ pub(super) unsafe fn composite_tile(
             }
             for slot in slots.iter_mut() {
                 if let Some(m) = slot {
-                    let goes_on = if c.sampling == Sampling::PreIntegrated {
-                        step::<true>(c, m, kept, stats)
-                    } else {
-                        step::<false>(c, m, kept, stats)
-                    };
-                    if !goes_on {
+                    if !step::<PRE>(c, m, kept, stats) {
                         alpha[start + m.id as usize] = m.alpha;
                         *slot = None;
                     }
