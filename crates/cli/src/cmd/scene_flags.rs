@@ -136,7 +136,7 @@ pub struct SceneFlags {
     pub prefilter: Option<Prefilter>,
     /// Composite mode: point (the transfer function at each sample) or pre-integrated
     /// (integrated between samples, Engel et al. 2001: shells of opacity thinner than
-    /// the step show without slicing rings, for about a third more frame time)
+    /// the step show without slicing rings, for about a quarter more frame time)
     /// [default: point].
     #[arg(long, value_parser = choice::<Sampling>(Sampling::ALL.map(|p| p.name())))]
     pub sampling: Option<Sampling>,
