@@ -97,6 +97,11 @@ def test_scene_fields_json_and_pickle():
     assert "camera" in dir(s)
     with pytest.raises(AttributeError):
         s.no_such_field
+    assert default.sampling == "point" and default.prefilter == "binomial"
+    pre = glint.Scene(sampling="pre-integrated")
+    assert pre.sampling == "pre-integrated" and glint.Scene.from_json(pre.to_json()) == pre
+    with pytest.raises(ValueError):
+        glint.Scene(sampling="linear")
 
 
 def test_scene_errors_match_the_cli(glint_bin, tmp_path):

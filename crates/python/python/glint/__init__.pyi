@@ -110,6 +110,8 @@ class Scene:
     step: float
     gate: float
     skip_empty: bool
+    prefilter: Literal["binomial", "none"]
+    sampling: Literal["point", "pre-integrated"]
     background: List[float]
     derived: Optional[Dict[str, Any]]
     def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
