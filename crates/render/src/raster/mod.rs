@@ -9,6 +9,7 @@
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+mod cull;
 mod frame;
 mod shade;
 mod tile;
@@ -118,6 +119,11 @@ pub struct Surfaces {
     colors: Option<Vec<[f32; 3]>>,
     /// First vertex and first triangle of each mesh.
     mesh_starts: Vec<(u32, u32)>,
+    /// Per triangle: the orientation of its closed component, 0 where it has none
+    /// (`cull::Closure::of`); back faces of closed components are culled.
+    facing: Vec<i8>,
+    /// Per mesh: its bounding box and the caps of its holes, for culling.
+    closures: Vec<cull::Closure>,
     center: Vec3,
     radius: f32,
 }
@@ -138,6 +144,8 @@ impl Surfaces {
             triangles: Vec::new(),
             colors: None,
             mesh_starts: Vec::new(),
+            facing: Vec::new(),
+            closures: Vec::new(),
             center: Vec3::ZERO,
             radius: 0.0,
         };
@@ -182,6 +190,9 @@ impl Surfaces {
             None => vertex_normals(&positions, &mesh.triangles),
         };
         self.mesh_starts.push((base, self.triangles.len() as u32));
+        let (facing, closure) = cull::Closure::of(&positions, &mesh.triangles);
+        self.facing.extend(facing);
+        self.closures.push(closure);
         self.positions.extend(positions);
         self.normals.extend(normals);
         if let Some(s) = &mut self.scalars {
@@ -406,7 +417,8 @@ pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
     normals.iter().map(|n| n.normalize_or_zero()).collect()
 }
 
-fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
+/// The smallest box `[lo, hi]` around `positions`.
+fn bounding_box(positions: &[Vec3]) -> [Vec3; 2] {
     let (mut lo, mut hi) = (
         Vec3::new(f32::MAX, f32::MAX, f32::MAX),
         Vec3::new(f32::MIN, f32::MIN, f32::MIN),
@@ -415,6 +427,11 @@ fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
         lo = Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z));
         hi = Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z));
     }
+    [lo, hi]
+}
+
+fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
+    let [lo, hi] = bounding_box(positions);
     let center = (lo + hi) * 0.5;
     (center, ((hi - lo) * 0.5).length())
 }
