@@ -327,6 +327,7 @@ impl Surfaces {
         let shader = &shader.placed(camera);
         let frame = Frame::new(self, camera, settings);
         let bands = frame.bin(self);
+        let zeroed = settings.background.iter().all(|&b| b == 0.0);
         let ctx = Ctx {
             s: self,
             frame: &frame,
@@ -334,6 +335,7 @@ impl Surfaces {
             colors,
             settings,
             avx2,
+            zeroed,
         };
         let (w, h) = (settings.width as usize, settings.height as usize);
         // The bands write every pixel once, in parallel, into uninitialised memory:
@@ -363,9 +365,10 @@ impl Surfaces {
             })
             .sum();
         // SAFETY: `Ctx::band` initialises every element of the chunks it is given
-        // (every pixel of every tile of its band: `Ctx::write`, `Ctx::write_far`), and
-        // the chunks cover the first w * h elements of the buffers, which their
-        // capacity holds. Had a band panicked, the lengths would have stayed 0.
+        // (every pixel of every tile of its band: `Ctx::write`, `Ctx::write_far`, or
+        // zeroed first when `zeroed`), and the chunks cover the first w * h elements
+        // of the buffers, which their capacity holds. Had a band panicked, the lengths
+        // would have stayed 0.
         unsafe {
             rgb.set_len(w * h);
             alpha.set_len(w * h);

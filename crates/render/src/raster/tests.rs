@@ -439,7 +439,12 @@ fn culling_cases() -> Vec<SurfaceSettings> {
                     zoom: 1.3,
                     projection,
                 },
-                background: [0.2, 0.1, 0.05],
+                // Black (the default) too, which the bands zero rather than fill.
+                background: if view == View::Inferior {
+                    [0.0; 3]
+                } else {
+                    [0.2, 0.1, 0.05]
+                },
                 ..Default::default()
             },
         )
