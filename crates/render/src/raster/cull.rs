@@ -14,8 +14,6 @@
 //! a volume is such a surface where it is cut by the volume's boundary (the MNI152
 //! template's brain stem, with the default prefilter, at iso 60).
 
-use rayon::prelude::*;
-
 use crate::camera::{Camera, Projection};
 use crate::math::Vec3;
 
@@ -111,7 +109,7 @@ impl Closure {
             sub([p.x, p.y, p.z].map(f64::from), origin)
         };
         let mut open = vec![false; n];
-        let (mut sets, border) = neighbours(triangles, &mut open);
+        let (mut sets, border) = neighbours(positions.len(), triangles, &mut open);
         let mut parts = vec![Part::default(); n];
         for (t, tri) in triangles.iter().enumerate() {
             let part = &mut parts[sets.find(t as u32) as usize];
@@ -192,37 +190,47 @@ impl Part {
 /// Joins triangles that share an edge, used once each way, into components; marks
 /// `open` the triangles of non-manifold edges, of edges two neighbours use the same
 /// way and of repeated indices. Returns the components and the border edges (used
-/// once), directed as their triangle winds them, with the triangle.
-fn neighbours(triangles: &[[u32; 3]], open: &mut [bool]) -> (DisjointSets, Vec<(u32, u32, u32)>) {
-    // Undirected edges (lower index in the high half) with triangle and direction, so
-    // that an edge's uses sort next to each other.
-    let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * triangles.len());
-    for (t, tri) in triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            if a == b {
-                open[t] = true;
-            }
-            let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-            edges.push((key, (t as u32) << 1 | u32::from(a > b)));
+/// once), directed as their triangle winds them, with the triangle. The edges are
+/// found through each vertex's outgoing edges (a few a vertex), not by sorting them.
+fn neighbours(
+    vertices: usize,
+    triangles: &[[u32; 3]],
+    open: &mut [bool],
+) -> (DisjointSets, Vec<(u32, u32, u32)>) {
+    let directed = |tri: &[u32; 3]| [0, 1, 2].map(|k| (tri[k], tri[(k + 1) % 3]));
+    // Per vertex, its outgoing edges (head, triangle), in compressed rows.
+    let mut start = vec![0u32; vertices + 1];
+    for tri in triangles {
+        for &i in tri {
+            start[i as usize + 1] += 1;
         }
     }
-    edges.par_sort_unstable();
+    for v in 0..vertices {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut out = vec![(0u32, 0u32); 3 * triangles.len()];
+    for (t, tri) in triangles.iter().enumerate() {
+        for (a, b) in directed(tri) {
+            out[fill[a as usize] as usize] = (b, t as u32);
+            fill[a as usize] += 1;
+        }
+    }
+    let from = |a: u32| &out[start[a as usize] as usize..start[a as usize + 1] as usize];
     let mut sets = DisjointSets::new(triangles.len());
     let mut border = Vec::new();
-    for group in edges.chunk_by(|p, q| p.0 == q.0) {
-        match *group {
-            // Used twice, once each way: the two triangles are neighbours that agree.
-            [(_, p), (_, q)] if (p ^ q) & 1 == 1 => sets.union(p >> 1, q >> 1),
-            [(key, p)] => {
-                let (lo, hi) = ((key >> 32) as u32, key as u32);
-                let (from, to) = if p & 1 == 1 { (hi, lo) } else { (lo, hi) };
-                border.push((from, to, p >> 1));
+    for (t, tri) in triangles.iter().enumerate() {
+        for (a, b) in directed(tri) {
+            let same = from(a).iter().filter(|e| e.0 == b).count();
+            let mut back = from(b).iter().filter(|e| e.0 == a);
+            match (a != b && same == 1, back.next(), back.next()) {
+                // Used twice, once each way: the two triangles are neighbours that agree.
+                (true, Some(&(_, u)), None) => sets.union(t as u32, u),
+                // Used once: a border.
+                (true, None, _) => border.push((a, b, t as u32)),
+                // A repeated index, a non-manifold edge or neighbours that disagree.
+                _ => open[t] = true,
             }
-            // A non-manifold edge or neighbours that disagree.
-            _ => group
-                .iter()
-                .for_each(|&(_, p)| open[(p >> 1) as usize] = true),
         }
     }
     (sets, border)
