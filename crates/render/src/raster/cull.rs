@@ -177,7 +177,8 @@ impl Part {
     /// The component's orientation, 0 when open or (nearly) flat, like a sheet glued
     /// to its own reverse.
     fn orientation(&self) -> i8 {
-        if self.open || !(self.volume.abs() > 1e-6 * self.scale) {
+        let enclosing = self.volume.abs() > 1e-6 * self.scale;
+        if self.open || !enclosing {
             0
         } else if self.volume > 0.0 {
             1
@@ -302,7 +303,8 @@ fn cap(vertices: &[u32], at: &impl Fn(u32) -> P, diagonal: f64) -> Option<(P, P,
         cap_part.add(c, q, p);
     }
     let len = dot(area, area).sqrt();
-    if !(len > 0.0) {
+    let nonzero = len > 0.0;
+    if !nonzero {
         return None;
     }
     let normal = area.map(|x| x / len);
