@@ -98,8 +98,8 @@ impl Closure {
             };
             (vec![0; n], closure)
         };
-        // Payloads pack a triangle index with a direction bit.
-        if n == 0 || n >= 1 << 31 {
+        // Triangles are indexed by u32 in the edge lists and the disjoint sets.
+        if n == 0 || n >= u32::MAX as usize {
             return none();
         }
         // About the centroid, in f64, for the volumes' precision.
@@ -139,8 +139,8 @@ impl Closure {
                 None => roots.iter().for_each(|&r| parts[r as usize].open = true),
             }
         }
-        // Each cap's plane must have the whole mesh (its triangles) behind it, as its component's
-        // orientation turns the cap's normal out.
+        // Each cap's plane must have the whole mesh (its triangles) behind it, as its
+        // component's orientation turns the cap's normal out.
         let mut outward = Vec::new();
         for (root, point, normal) in caps {
             let part = &mut parts[root as usize];
