@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::{SurfaceSettings, Surfaces, TILE_PIXELS};
+use super::{cull, SurfaceSettings, Surfaces, TILE_PIXELS};
 use crate::camera::{Camera, Projection};
 use crate::math::Vec3;
 
@@ -52,6 +52,8 @@ pub(super) struct Frame {
     pub(super) tiles_y: usize,
     /// Image width in pixels.
     pub(super) width: usize,
+    /// Per mesh: what culls its back faces (`cull::cull_signs`), all 0 for none.
+    cull: Vec<f32>,
 }
 
 impl Frame {
@@ -71,6 +73,9 @@ impl Frame {
             .map(|&p| project(camera, plane, near, p))
             .collect();
         let tile = TILE_PIXELS as usize * ssaa;
+        // Twice `near`: a margin for rounding, the corners' depths against the
+        // vertices'.
+        let cull = cull::cull_signs(camera, plane, 2.0 * near, &s.closures);
         Frame {
             camera: *camera,
             verts,
@@ -84,19 +89,22 @@ impl Frame {
             tiles_x: sw.div_ceil(tile),
             tiles_y: sh.div_ceil(tile),
             width,
+            cull,
         }
     }
 
     /// The sample-space bounding box of triangle `tri` clipped to the image, or `None`
-    /// when it covers no sample centre (off screen, behind the eye, degenerate).
-    #[inline]
-    pub(super) fn bbox(&self, tri: [u32; 3]) -> Option<[u16; 4]> {
+    /// when it covers no sample centre (off screen, behind the eye, degenerate) or
+    /// when its doubled signed area times `cull` is positive: a back face
+    /// (`cull::cull_signs`; 0 keeps every triangle).
+    #[inline(always)]
+    pub(super) fn front_bbox(&self, tri: [u32; 3], cull: f32) -> Option<[u16; 4]> {
         let [a, b, c] = tri.map(|i| self.verts[i as usize]);
         if !(a.w.is_finite() && b.w.is_finite() && c.w.is_finite()) {
             return None;
         }
         let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-        if area == 0.0 || !area.is_finite() {
+        if area == 0.0 || !area.is_finite() || area * cull > 0.0 {
             return None;
         }
         let x0 = ceil(a.x.min(b.x).min(c.x)).max(0.0);
@@ -107,8 +115,21 @@ impl Frame {
         (x0 <= x1 && y0 <= y1).then_some([x0 as u16, y0 as u16, x1 as u16, y1 as u16])
     }
 
-    /// Bins the triangles by band, a chunk of triangles per task.
+    /// What culls triangle `id` of `s` in this frame: positive times its doubled
+    /// signed area on the sample grid for a back face that may be left out, 0 when it
+    /// is kept whatever its facing.
+    #[inline(always)]
+    pub(super) fn cull_of(&self, s: &Surfaces, id: u32) -> f32 {
+        match s.facing[id as usize] {
+            0 => 0.0,
+            o => f32::from(o) * self.cull[s.mesh_of(id)],
+        }
+    }
+
+    /// Bins the triangles by band, a chunk of triangles per task, leaving out the back
+    /// faces of closed meshes where the frame culls them.
     pub(super) fn bin(&self, s: &Surfaces) -> Bands {
+        let culling = self.cull.iter().any(|&c| c != 0.0);
         let chunk = s
             .triangles
             .len()
@@ -120,10 +141,11 @@ impl Frame {
             .map(|(c, tris)| {
                 let mut bands = vec![Vec::new(); self.tiles_y];
                 for (k, &tri) in tris.iter().enumerate() {
-                    let Some(bbox) = self.bbox(tri) else {
+                    let id = (c * chunk + k) as u32;
+                    let cull = if culling { self.cull_of(s, id) } else { 0.0 };
+                    let Some(bbox) = self.front_bbox(tri, cull) else {
                         continue;
                     };
-                    let id = (c * chunk + k) as u32;
                     let (y0, y1) = (usize::from(bbox[1]), usize::from(bbox[3]));
                     for band in &mut bands[y0 >> self.tile_shift..=y1 >> self.tile_shift] {
                         band.push(Binned { id, bbox });

@@ -9,6 +9,7 @@
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+mod cull;
 mod frame;
 mod shade;
 mod tile;
@@ -118,6 +119,11 @@ pub struct Surfaces {
     colors: Option<Vec<[f32; 3]>>,
     /// First vertex and first triangle of each mesh.
     mesh_starts: Vec<(u32, u32)>,
+    /// Per triangle: the orientation of its closed component, 0 where it has none
+    /// (`cull::Closure::of`); back faces of closed components are culled.
+    facing: Vec<i8>,
+    /// Per mesh: its bounding box and the caps of its holes, for culling.
+    closures: Vec<cull::Closure>,
     center: Vec3,
     radius: f32,
 }
@@ -138,6 +144,8 @@ impl Surfaces {
             triangles: Vec::new(),
             colors: None,
             mesh_starts: Vec::new(),
+            facing: Vec::new(),
+            closures: Vec::new(),
             center: Vec3::ZERO,
             radius: 0.0,
         };
@@ -182,6 +190,9 @@ impl Surfaces {
             None => vertex_normals(&positions, &mesh.triangles),
         };
         self.mesh_starts.push((base, self.triangles.len() as u32));
+        let (facing, closure) = cull::Closure::of(&positions, &mesh.triangles);
+        self.facing.extend(facing);
+        self.closures.push(closure);
         self.positions.extend(positions);
         self.normals.extend(normals);
         if let Some(s) = &mut self.scalars {
@@ -316,6 +327,7 @@ impl Surfaces {
         let shader = &shader.placed(camera);
         let frame = Frame::new(self, camera, settings);
         let bands = frame.bin(self);
+        let zeroed = settings.background.iter().all(|&b| b == 0.0);
         let ctx = Ctx {
             s: self,
             frame: &frame,
@@ -323,6 +335,7 @@ impl Surfaces {
             colors,
             settings,
             avx2,
+            zeroed,
         };
         let (w, h) = (settings.width as usize, settings.height as usize);
         // The bands write every pixel once, in parallel, into uninitialised memory:
@@ -352,9 +365,10 @@ impl Surfaces {
             })
             .sum();
         // SAFETY: `Ctx::band` initialises every element of the chunks it is given
-        // (every pixel of every tile of its band: `Ctx::write`, `Ctx::write_far`), and
-        // the chunks cover the first w * h elements of the buffers, which their
-        // capacity holds. Had a band panicked, the lengths would have stayed 0.
+        // (every pixel of every tile of its band: `Ctx::write`, `Ctx::write_far`, or
+        // zeroed first when `zeroed`), and the chunks cover the first w * h elements
+        // of the buffers, which their capacity holds. Had a band panicked, the lengths
+        // would have stayed 0.
         unsafe {
             rgb.set_len(w * h);
             alpha.set_len(w * h);
@@ -406,7 +420,8 @@ pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
     normals.iter().map(|n| n.normalize_or_zero()).collect()
 }
 
-fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
+/// The smallest box `[lo, hi]` around `positions`.
+fn bounding_box(positions: &[Vec3]) -> [Vec3; 2] {
     let (mut lo, mut hi) = (
         Vec3::new(f32::MAX, f32::MAX, f32::MAX),
         Vec3::new(f32::MIN, f32::MIN, f32::MIN),
@@ -415,6 +430,11 @@ fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
         lo = Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z));
         hi = Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z));
     }
+    [lo, hi]
+}
+
+fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
+    let [lo, hi] = bounding_box(positions);
     let center = (lo + hi) * 0.5;
     (center, ((hi - lo) * 0.5).length())
 }
