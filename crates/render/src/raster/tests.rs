@@ -109,11 +109,11 @@ fn reference(
             let idx = s.triangles[id].map(|i| i as usize);
             let [a, b, c] = idx.map(|i| frame.verts[i]);
             let (w0, w1, w2) = Edges::new(a, b, c).at(x, y);
+            // Perspective-correct weights; their common factor 1 / (p0 + p1 + p2)
+            // drops out when the normal is normalised.
             let (p0, p1, p2) = (w0 * a.w, w1 * b.w, w2 * c.w);
-            let inv = 1.0 / (p0 + p1 + p2);
             let [n0, n1, n2] = idx.map(|i| s.normals[i]);
-            let mut normal =
-                (n0 * (p0 * inv) + n1 * (p1 * inv) + n2 * (p2 * inv)).normalize_or_zero();
+            let mut normal = (n0 * p0 + n1 * p1 + n2 * p2).normalize_or_zero();
             if normal == Vec3::ZERO {
                 let [pa, pb, pc] = idx.map(|i| s.positions[i]);
                 normal = (pb - pa).cross(pc - pa).normalize_or_zero();

@@ -335,14 +335,18 @@ impl Ctx<'_> {
         let (w0, w1, w2) = e.at(x, y);
         // Perspective-correct barycentrics: screen weights times 1/z, renormalised.
         let (p0, p1, p2) = (w0 * e.a.w, w1 * e.b.w, w2 * e.c.w);
+        let [n0, n1, n2] = tri.normals;
+        if s.colors.is_none() && (s.scalars.is_none() || self.colors.is_none()) {
+            // The batch normalises the normal, so the weights' common factor
+            // 1 / (p0 + p1 + p2) (positive: the edge functions are signed to be
+            // non-negative inside, 1/z positive) can be left out, and with it a
+            // division per sample.
+            return (n0 * p0 + n1 * p1 + n2 * p2, tri.color);
+        }
         let inv = 1.0 / (p0 + p1 + p2);
         let beta = [p0 * inv, p1 * inv, p2 * inv];
-        let [n0, n1, n2] = tri.normals;
         let normal = n0 * beta[0] + n1 * beta[1] + n2 * beta[2];
         let [i0, i1, i2] = tri.idx;
-        if s.colors.is_none() && (s.scalars.is_none() || self.colors.is_none()) {
-            return (normal, tri.color);
-        }
         let fixed = s.colors.as_ref().map(|c| {
             // The colour of the vertex nearest the sample: labels do not blend.
             let k = if beta[0] >= beta[1] && beta[0] >= beta[2] {
