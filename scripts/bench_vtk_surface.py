@@ -21,6 +21,7 @@ Modes:
 """
 
 import json
+import statistics
 import sys
 import time
 
@@ -112,14 +113,17 @@ def render(scene_path, frames, out_png, plys):
     win.AddRenderer(ren)
     win.SetSize(*scene["size"])
     win.Render()  # warm-up: shader compilation, buffer upload
-    start = time.perf_counter()
+    times = []
     for _ in range(frames):
+        start = time.perf_counter()
         win.Render()
-    ms = (time.perf_counter() - start) * 1e3 / frames
+        times.append((time.perf_counter() - start) * 1e3)
+    ms = sum(times) / frames
     caps = win.ReportCapabilities().splitlines()
     gl = next((l.split(":", 1)[1].strip() for l in caps if "OpenGL renderer" in l), "?")
     print(f"vtk: {ms:.2f} ms/frame ({frames} frames, {scene['size'][0]}x{scene['size'][1]}, "
-          f"{triangles} triangles, {gl}, VTK {vtk.vtkVersion.GetVTKVersion()})")
+          f"{triangles} triangles, {gl}, VTK {vtk.vtkVersion.GetVTKVersion()}; "
+          f"median {statistics.median(times):.2f} ms)")
     if out_png:
         grab = vtk.vtkWindowToImageFilter()
         grab.SetInput(win)

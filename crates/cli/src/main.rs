@@ -7,6 +7,10 @@ use clap::{Parser, Subcommand};
 
 mod cmd;
 
+/// mimalloc rather than glibc's malloc: see the dependency's comment in Cargo.toml.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 /// Render 3D biomedical images with cheap, accurate specular lobes, analyse the lobes
 /// against Phong's cos^n, and model the hardware unit that computes them.
 #[derive(Parser)]

@@ -104,16 +104,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     };
     let mut rendered = renderer.render_resolved(resolved.clone(), &progress)?;
-    let start = Instant::now();
+    let mut frames = Vec::with_capacity(args.repeat as usize);
     for _ in 1..args.repeat {
+        let start = Instant::now();
         rendered = renderer.render_resolved(resolved.clone(), &progress)?;
+        frames.push(start.elapsed());
     }
-    let more = start.elapsed();
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
     if args.repeat > 1 {
-        print_repeat(&args, &rendered, more);
+        print_repeat(&rendered, &mut frames);
     }
     if let Some(colors) = &rendered.colors {
         colors.draw_bar(&mut rendered.image);
@@ -222,9 +223,15 @@ fn dump_scene(path: &Path, scene: &Scene) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `--repeat`: frames after the first (which classifies) in ms per frame.
-fn print_repeat(args: &Options, rendered: &Rendered, elapsed: Duration) {
-    let frames = args.repeat - 1;
+/// `--repeat`: the frames after the first (which classifies), in ms per frame: their
+/// mean, and their median (the steady frame, which the first few frames' allocations
+/// do not reach).
+fn print_repeat(rendered: &Rendered, frames: &mut [Duration]) {
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let mean = frames.iter().map(|&d| ms(d)).sum::<f64>() / frames.len() as f64;
+    frames.sort_unstable();
+    let n = frames.len();
+    let median = (ms(frames[(n - 1) / 2]) + ms(frames[n / 2])) / 2.0;
     eprintln!(
         "glint render: first frame (classified once): {:?}; per frame {:?}",
         rendered.timings.stages(),
@@ -237,9 +244,7 @@ fn print_repeat(args: &Options, rendered: &Rendered, elapsed: Duration) {
         format!("step {}", s.step)
     };
     println!(
-        "glint render: {:.2} ms/frame ({} frames, {}x{}, lobe {}, {detail})",
-        elapsed.as_secs_f64() * 1e3 / frames as f64,
-        frames,
+        "glint render: {mean:.2} ms/frame ({n} frames, {}x{}, lobe {}, {detail}; median {median:.2} ms)",
         s.size[0],
         s.size[1],
         s.lobe.kind.name(),
