@@ -417,18 +417,6 @@ impl Lut {
         self.entries[self.index(v)]
     }
 
-    /// Opacity at table index `i` (from [`Lut::index`]).
-    #[inline(always)]
-    pub fn alpha_at(&self, i: usize) -> f32 {
-        self.alphas[i]
-    }
-
-    /// `[r, g, b, alpha']` at table index `i`.
-    #[inline(always)]
-    pub fn entry_at(&self, i: usize) -> [f32; 4] {
-        self.entries[i]
-    }
-
     /// Whether any value in `[lo, hi]` has a non-zero opacity.
     pub fn any_opaque(&self, lo: f32, hi: f32) -> bool {
         let a = self.index(lo);
