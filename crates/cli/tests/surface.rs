@@ -23,6 +23,15 @@ fn ok(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// `glint ARGS -q -o OUT --dump-scene SCENE`, which must succeed; the dumped scene.
+fn render_dumped(args: &[&str], out: &Path, scene: &Path) -> serde_json::Value {
+    let mut argv = args.to_vec();
+    argv.extend(["-q", "-o", out.to_str().unwrap()]);
+    argv.extend(["--dump-scene", scene.to_str().unwrap()]);
+    ok(&argv);
+    serde_json::from_str(&std::fs::read_to_string(scene).unwrap()).unwrap()
+}
+
 /// A sample file, or `None` (with a note) when it is missing outside CI; in CI a
 /// missing sample fails the test.
 fn sample(name: &str) -> Option<PathBuf> {
@@ -108,16 +117,9 @@ fn fsaverage5_hemispheres_with_a_sulcal_depth_overlay() {
             "superior",
             "--size",
             "160x160",
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-            "--dump-scene",
-            scene.to_str().unwrap(),
         ];
         args.extend_from_slice(extra);
-        ok(&args);
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+        let json = render_dumped(&args, &out, &scene);
         (decode(&out), json)
     };
     let ((w, h, ch, lit), scene) = render("lit.png", &[]);
@@ -176,31 +178,28 @@ fn a_dumped_mesh_scene_renders_again_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     let (mesh, overlay) = octahedron(dir.path());
     let d = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    ok(&[
-        "render",
-        &mesh,
-        "--overlay",
-        &overlay,
-        "--colormap",
-        "rdbu",
-        "--ssaa",
-        "4",
-        "--size",
-        "96x80",
-        "--azimuth",
-        "25",
-        "--elevation",
-        "20",
-        "--lobe",
-        "exact",
-        "-q",
-        "-o",
-        &d("a.png"),
-        "--dump-scene",
-        &d("a.json"),
-    ]);
-    let text = std::fs::read_to_string(d("a.json")).unwrap();
-    let scene: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let scene = render_dumped(
+        &[
+            "render",
+            &mesh,
+            "--overlay",
+            &overlay,
+            "--colormap",
+            "rdbu",
+            "--ssaa",
+            "4",
+            "--size",
+            "96x80",
+            "--azimuth",
+            "25",
+            "--elevation",
+            "20",
+            "--lobe",
+            "exact",
+        ],
+        d("a.png").as_ref(),
+        d("a.json").as_ref(),
+    );
     assert_eq!(scene["ssaa"], 4);
     assert_eq!(scene["meshes"][0]["overlay"]["colormap"], "rdbu");
     assert_eq!(scene["meshes"][0]["overlay"]["array"], 0);
@@ -308,23 +307,19 @@ encoding: raw\n\n"
     std::fs::write(&mesh, obj).unwrap();
     let (with, without) = (dir.path().join("with.png"), dir.path().join("without.png"));
     let scene = dir.path().join("s.json");
-    let common = ["--view", "anterior", "--size", "48x48", "-q"];
+    let common = ["--view", "anterior", "--size", "48x48"];
     let vol = volume.to_str().unwrap();
-    ok(&[
-        &["render", vol, mesh.to_str().unwrap()],
-        &common[..],
-        &["-o", with.to_str().unwrap()],
-        &["--dump-scene", scene.to_str().unwrap()],
-    ]
-    .concat());
+    let s = render_dumped(
+        &[&["render", vol, mesh.to_str().unwrap()], &common[..]].concat(),
+        &with,
+        &scene,
+    );
     ok(&[
         &["render", vol],
         &common[..],
-        &["-o", without.to_str().unwrap()],
+        &["-q", "-o", without.to_str().unwrap()],
     ]
     .concat());
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
     assert_eq!(s["mode"], "composite");
     assert_eq!(s["meshes"].as_array().map(Vec::len), Some(1), "{s}");
     let ((_, _, ch, a), (_, _, _, b)) = (decode(&with), decode(&without));
@@ -340,22 +335,19 @@ fn a_volume_isosurface_renders_in_surface_mode() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("iso.png");
     let scene = dir.path().join("iso.json");
-    ok(&[
-        "render",
-        "--phantom-size",
-        "32",
-        "--mode",
-        "surface",
-        "--size",
-        "48x48",
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-        "--dump-scene",
-        scene.to_str().unwrap(),
-    ]);
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    let s = render_dumped(
+        &[
+            "render",
+            "--phantom-size",
+            "32",
+            "--mode",
+            "surface",
+            "--size",
+            "48x48",
+        ],
+        &out,
+        &scene,
+    );
     assert_eq!(s["mode"], "surface");
     assert!(
         s["iso"].is_number(),
@@ -398,25 +390,22 @@ fn overlay_array_chooses_the_files_array() {
     let render = |array: &str| {
         let out = dir.path().join(format!("a{array}.png"));
         let scene = dir.path().join(format!("a{array}.json"));
-        ok(&[
-            "render",
-            &mesh,
-            "--overlay",
-            two.to_str().unwrap(),
-            "--overlay-array",
-            array,
-            "--view",
-            "left",
-            "--size",
-            "48x48",
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-            "--dump-scene",
-            scene.to_str().unwrap(),
-        ]);
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+        let s = render_dumped(
+            &[
+                "render",
+                &mesh,
+                "--overlay",
+                two.to_str().unwrap(),
+                "--overlay-array",
+                array,
+                "--view",
+                "left",
+                "--size",
+                "48x48",
+            ],
+            &out,
+            &scene,
+        );
         (s["meshes"][0]["overlay"]["array"].clone(), decode(&out).3)
     };
     let (a0, img0) = render("0");
