@@ -505,10 +505,9 @@ fn capped_meshes_are_culled_only_from_behind_their_caps() {
     }
 }
 
-#[test]
-fn culling_changes_only_depth_ties_with_back_faces() {
-    let s = culling_scene();
-    let shader = Shader::new(
+/// K_4 with n = 30, Phong geometry, the headlight: the culling tests' shader.
+fn headlight_shader() -> Shader {
+    Shader::new(
         LobeKind::EnergyFit,
         30.0,
         4,
@@ -517,7 +516,13 @@ fn culling_changes_only_depth_ties_with_back_faces() {
         vec![Light::HEADLIGHT],
         0.0,
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn culling_changes_only_depth_ties_with_back_faces() {
+    let s = culling_scene();
+    let shader = headlight_shader();
     for settings in culling_cases() {
         let camera = s.camera(&settings).unwrap();
         let case = format!("{:?}", settings.camera);
@@ -579,16 +584,7 @@ fn no_culling_with_the_eye_inside_a_closed_mesh() {
     camera.eye = Vec3::new(0.0, 0.0, -8.0);
     let frame = Frame::new(&s, &camera, &settings);
     assert_eq!(frame.cull_of(&s, 0), 0.0);
-    let shader = Shader::new(
-        LobeKind::EnergyFit,
-        30.0,
-        4,
-        Geometry::Phong,
-        Material::default(),
-        vec![Light::HEADLIGHT],
-        0.0,
-    )
-    .unwrap();
+    let shader = headlight_shader();
     let want = reference(&s, &camera, &shader, &settings, false);
     assert!(want.stats.shaded > 100);
     for avx2 in paths() {
