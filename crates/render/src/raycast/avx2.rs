@@ -135,48 +135,41 @@ unsafe fn dot(a: [__m256; 3], b: [__m256; 3]) -> __m256 {
     }
 }
 
-/// The samples a tile's rays keep, in ray order and, within a ray, sample order
-/// (structure of arrays, for vector loads).
-#[derive(Default)]
-struct Kept {
-    /// Linear index of the sample's corner-000 voxel.
-    base: Vec<i32>,
+/// A sample a tile's ray keeps: one record, so keeping a sample is one push.
+#[derive(Clone, Copy)]
+#[repr(C)]
+struct Sample {
+    /// The sample's segment ([`crate::preint`]): linear colour and opacity (first, so
+    /// [`light`] loads it as one vector).
+    rgba: [f32; 4],
     /// Fractions inside the trilinear cell, per axis.
-    t: [Vec<f32>; 3],
-    /// The sample's segment ([`crate::preint`]): linear colour and opacity.
-    rgba: Vec<[f32; 4]>,
+    t: [f32; 3],
     /// Front-to-back weight `(1 - alpha) alpha_sample`.
-    weight: Vec<f32>,
+    weight: f32,
+    /// Linear index of the sample's corner-000 voxel.
+    base: i32,
     /// The ray's index in the tile.
-    ray: Vec<u32>,
+    ray: u32,
 }
+
+/// The samples a tile's rays keep, in ray order and, within a ray, sample order.
+#[derive(Default)]
+struct Kept(Vec<Sample>);
 
 impl Kept {
     fn len(&self) -> usize {
-        self.base.len()
+        self.0.len()
     }
 
     fn clear(&mut self) {
-        self.base.clear();
-        for t in &mut self.t {
-            t.clear();
-        }
-        self.rgba.clear();
-        self.weight.clear();
-        self.ray.clear();
+        self.0.clear();
     }
 
     /// Pads to a whole number of vectors with copies of the first sample (lit, then
     /// ignored).
     fn pad(&mut self) {
         while !self.len().is_multiple_of(LANES) {
-            self.base.push(self.base[0]);
-            for t in &mut self.t {
-                t.push(t[0]);
-            }
-            self.rgba.push(self.rgba[0]);
-            self.weight.push(self.weight[0]);
-            self.ray.push(self.ray[0]);
+            self.0.push(self.0[0]);
         }
     }
 }
@@ -269,6 +262,7 @@ unsafe fn composite<const PRE: bool>(
         // INTERLEAVE rays march side by side, one step each in turn: a ray's steps form
         // a chain of dependent loads and branches, and the core overlaps the chains of
         // independent rays.
+        let inv = Invariants::new(c);
         let mut slots: [Option<Marcher>; INTERLEAVE] = [const { None }; INTERLEAVE];
         let mut next = 0;
         loop {
@@ -297,7 +291,7 @@ unsafe fn composite<const PRE: bool>(
             }
             for slot in slots.iter_mut() {
                 if let Some(m) = slot {
-                    if !step::<PRE>(c, m, kept, stats) {
+                    if !step::<PRE>(c, &inv, m, kept, stats) {
                         alpha[start + m.id as usize] = m.alpha;
                         *slot = None;
                     }
@@ -321,6 +315,64 @@ unsafe fn composite<const PRE: bool>(
 /// Rays marched side by side in a tile (on the MNI152 scene 2 gave 6% over 1, and 3
 /// or 4 no more than 2).
 const INTERLEAVE: usize = 2;
+
+/// [`step`]'s values that are the same for every ray of a frame, computed once per
+/// tile: the loop then keeps them in registers or on the stack. Read from the caster
+/// at each step, they were reloaded and recomputed after every push of a kept sample
+/// (a call that may reallocate, after which the compiler cannot assume the field
+/// unchanged).
+#[derive(Clone, Copy)]
+struct Invariants {
+    nx: usize,
+    sxy: usize,
+    cd: [usize; 3],
+    /// 0, 1, .. 7.
+    lanes: __m256,
+    dt: __m256,
+    /// The last cell's corner per axis, `dims - 2`.
+    hi: [__m256; 3],
+    zero: __m256,
+    one: __m256,
+    nxv: __m256i,
+    sxyv: __m256i,
+    lut_lo: __m256,
+    lut_scale: __m256,
+    half: __m256,
+    lut_max: __m256,
+    values: *const f32,
+}
+
+impl Invariants {
+    /// # Safety
+    /// The CPU must support AVX2 (inlined into [`composite`]).
+    #[inline(always)]
+    unsafe fn new(c: &Caster) -> Invariants {
+        // SAFETY: the caller runs with AVX2 (this function's contract).
+        unsafe {
+            let f = c.field;
+            let [nx, ny, _] = f.dims;
+            let sxy = nx * ny;
+            Invariants {
+                nx,
+                sxy,
+                cd: f.cell_dims,
+                lanes: _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0),
+                dt: _mm256_set1_ps(c.dt),
+                hi: axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32)),
+                zero: _mm256_setzero_ps(),
+                one: _mm256_set1_ps(1.0),
+                // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
+                nxv: _mm256_set1_epi32(nx as i32),
+                sxyv: _mm256_set1_epi32(sxy as i32),
+                lut_lo: _mm256_set1_ps(c.lut.lo),
+                lut_scale: _mm256_set1_ps(c.lut.scale),
+                half: _mm256_set1_ps(0.5),
+                lut_max: _mm256_set1_ps((crate::tf::LUT_SIZE - 1) as f32),
+                values: f.values.as_ptr(),
+            }
+        }
+    }
+}
 
 /// A ray being marched: the reference loop's state.
 struct Marcher {
@@ -352,6 +404,7 @@ struct Marcher {
 #[inline(always)]
 unsafe fn step<const PRE: bool>(
     c: &Caster,
+    inv: &Invariants,
     m: &mut Marcher,
     kept: &mut Kept,
     stats: &mut RenderStats,
@@ -359,25 +412,25 @@ unsafe fn step<const PRE: bool>(
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let f = c.field;
-        let [nx, ny, _] = f.dims;
-        let sxy = nx * ny;
-        let cd = f.cell_dims;
+        let Invariants {
+            nx,
+            sxy,
+            cd,
+            lanes,
+            dt,
+            hi,
+            zero,
+            one,
+            nxv,
+            sxyv,
+            lut_lo,
+            lut_scale,
+            half,
+            lut_max,
+            values,
+        } = *inv;
+        let (f, lut) = (c.field, c.lut);
         let ray = &m.ray;
-        let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
-        let dt = _mm256_set1_ps(c.dt);
-        let hi = axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32));
-        let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
-        // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
-        let (nxv, sxyv) = (_mm256_set1_epi32(nx as i32), _mm256_set1_epi32(sxy as i32));
-        let lut = c.lut;
-        let (lut_lo, lut_scale) = (_mm256_set1_ps(lut.lo), _mm256_set1_ps(lut.scale));
-        let (half, lut_max) = (
-            _mm256_set1_ps(0.5),
-            _mm256_set1_ps((crate::tf::LUT_SIZE - 1) as f32),
-        );
-        let values = f.values.as_ptr();
-
         let k = m.k;
         let lead = match m.prev {
             _ if !PRE => 0,
@@ -567,13 +620,13 @@ fn keep(
     stats: &mut RenderStats,
 ) -> bool {
     let w = (1.0 - *alpha) * rgba[3];
-    kept.base.push(base);
-    for (kt, t) in kept.t.iter_mut().zip(t) {
-        kt.push(t);
-    }
-    kept.rgba.push(rgba);
-    kept.weight.push(w);
-    kept.ray.push(id);
+    kept.0.push(Sample {
+        rgba,
+        t,
+        weight: w,
+        base,
+        ray: id,
+    });
     stats.shaded += 1;
     *alpha += w;
     *alpha >= TERMINATION_OPACITY
@@ -600,18 +653,19 @@ unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3] {
             // i16, converted exactly to f32.
             // SAFETY: the base is clamped to [0, dims-2] per axis, so base + sxy + nx + 1
             // is a voxel.
-            let p = data.add(*kept.base.get_unchecked(r) as usize);
-            let tx = _mm_set1_ps(*kept.t[0].get_unchecked(r));
+            let s = kept.0.get_unchecked(r);
+            let p = data.add(s.base as usize);
+            let tx = _mm_set1_ps(s.t[0]);
             let x = |off: usize| {
                 let v = _mm_loadu_si128(p.add(off).cast());
                 let v = _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(v));
                 lerp4(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v), tx)
             };
             let (x00, x10, x01, x11) = (x(0), x(nx), x(sxy), x(sxy + nx));
-            let ty = _mm_set1_ps(*kept.t[1].get_unchecked(r));
+            let ty = _mm_set1_ps(s.t[1]);
             let y0 = lerp4(x00, x10, ty);
             let y1 = lerp4(x01, x11, ty);
-            *gj = lerp4(y0, y1, _mm_set1_ps(*kept.t[2].get_unchecked(r)));
+            *gj = lerp4(y0, y1, _mm_set1_ps(s.t[2]));
         }
         // Transpose the eight [gx, gy, gz, 0] records into gx, gy, gz vectors, scaled as
         // `Field::gradient_at` scales them.
@@ -652,10 +706,10 @@ unsafe fn light(
         let flat = m.ambient + m.diffuse;
         let n = kept.len();
         if !m.shade {
-            for r in 0..n {
-                let (w, col) = (kept.weight[r], &mut colors[kept.ray[r] as usize]);
-                for (c, x) in col.iter_mut().zip(kept.rgba[r]) {
-                    *c += w * x;
+            for s in &kept.0 {
+                let col = &mut colors[s.ray as usize];
+                for (c, x) in col.iter_mut().zip(s.rgba) {
+                    *c += s.weight * x;
                 }
             }
             return;
@@ -684,7 +738,7 @@ unsafe fn light(
             let grad = gradients(c, kept, r0);
             let mut lane_views = [Vec3::ZERO; LANES];
             for (j, v) in lane_views.iter_mut().enumerate() {
-                *v = views[*kept.ray.get_unchecked((r0 + j).min(n - 1)) as usize];
+                *v = views[kept.0.get_unchecked((r0 + j).min(n - 1)).ray as usize];
             }
             let view = axes!(|a| {
                 let v = &lane_views;
@@ -791,8 +845,8 @@ unsafe fn light(
                 one
             };
             // The eight samples' [r, g, b, alpha], transposed to r, g, b.
-            let rgba = kept.rgba.as_ptr().cast::<f32>();
-            let e = |j: usize| _mm_loadu_ps(rgba.add(4 * (r0 + j)));
+            let samples = kept.0.get_unchecked(r0..r0 + LANES);
+            let e = |j: usize| _mm_loadu_ps(samples[j].rgba.as_ptr());
             let q =
                 |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e(a)), e(b));
             let (q0, q1, q2, q3) = (q(0, 4), q(1, 5), q(2, 6), q(3, 7));
@@ -806,7 +860,16 @@ unsafe fn light(
                 _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
             ];
             let usable = bits(valid[b]);
-            let weight = _mm256_loadu_ps(kept.weight.as_ptr().add(r0));
+            let weight = _mm256_setr_ps(
+                samples[0].weight,
+                samples[1].weight,
+                samples[2].weight,
+                samples[3].weight,
+                samples[4].weight,
+                samples[5].weight,
+                samples[6].weight,
+                samples[7].weight,
+            );
             let mut add = [[0.0f32; LANES]; 3];
             for (ch, out) in add.iter_mut().enumerate() {
                 let shaded = _mm256_add_ps(_mm256_mul_ps(base[ch], lit), spec);
@@ -818,7 +881,7 @@ unsafe fn light(
             }
             // In sample order, as the reference loop adds them.
             for j in 0..LANES.min(n - r0) {
-                let col = &mut colors[*kept.ray.get_unchecked(r0 + j) as usize];
+                let col = &mut colors[samples[j].ray as usize];
                 col[0] += add[0][j];
                 col[1] += add[1][j];
                 col[2] += add[2][j];
