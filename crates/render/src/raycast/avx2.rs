@@ -546,7 +546,9 @@ unsafe fn step<const PRE: bool>(
             let mut mask = 0u32;
             for (j, &i) in li.iter().enumerate().take(n) {
                 // SAFETY: uv was clamped to [0, LUT_SIZE-1] before the conversion.
-                mask |= ((*lut.alphas.get_unchecked(i as usize) > 0.0) as u32) << j;
+                let i = i as usize;
+                let word = *lut.opaque.get_unchecked(i / 64);
+                mask |= (((word >> (i % 64)) & 1) as u32) << j;
             }
             let mut t: Option<[[f32; LANES]; 3]> = None;
             while mask != 0 {
