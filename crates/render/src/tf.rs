@@ -390,7 +390,9 @@ impl Lut {
             lo,
             scale,
             opaque: std::array::from_fn(|w| {
-                (0..64).fold(0, |bits, b| bits | u64::from(entries[64 * w + b][3] > 0.0) << b)
+                (0..64).fold(0, |bits, b| {
+                    bits | u64::from(entries[64 * w + b][3] > 0.0) << b
+                })
             }),
             entries,
             nonzero,
