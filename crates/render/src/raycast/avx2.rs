@@ -657,17 +657,34 @@ unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3] {
             // is a voxel.
             let s = kept.0.get_unchecked(r);
             let p = data.add(s.base as usize);
-            let tx = _mm_set1_ps(s.t[0]);
-            let x = |off: usize| {
-                let v = _mm_loadu_si128(p.add(off).cast());
-                let v = _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(v));
-                lerp4(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v), tx)
+            let v = |off: usize| {
+                _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(_mm_loadu_si128(p.add(off).cast())))
             };
-            let (x00, x10, x01, x11) = (x(0), x(nx), x(sxy), x(sxy + nx));
-            let ty = _mm_set1_ps(s.t[1]);
-            let y0 = lerp4(x00, x10, ty);
-            let y1 = lerp4(x01, x11, ty);
-            *gj = lerp4(y0, y1, _mm_set1_ps(s.t[2]));
+            let (v00, v10, v01, v11) = (v(0), v(nx), v(sxy), v(sxy + nx));
+            // Two rows' lerps along i in one vector: [first corners of rows a | b] to
+            // [second corners of rows a | b].
+            let tx = _mm256_set1_ps(s.t[0]);
+            let x0 = lerp(
+                _mm256_permute2f128_ps::<0x20>(v00, v10),
+                _mm256_permute2f128_ps::<0x31>(v00, v10),
+                tx,
+            );
+            let x1 = lerp(
+                _mm256_permute2f128_ps::<0x20>(v01, v11),
+                _mm256_permute2f128_ps::<0x31>(v01, v11),
+                tx,
+            );
+            // [x00 | x01] to [x10 | x11] along j, then the two halves along k.
+            let y = lerp(
+                _mm256_permute2f128_ps::<0x20>(x0, x1),
+                _mm256_permute2f128_ps::<0x31>(x0, x1),
+                _mm256_set1_ps(s.t[1]),
+            );
+            *gj = lerp4(
+                _mm256_castps256_ps128(y),
+                _mm256_extractf128_ps::<1>(y),
+                _mm_set1_ps(s.t[2]),
+            );
         }
         // Transpose the eight [gx, gy, gz, 0] records into gx, gy, gz vectors, scaled as
         // `Field::gradient_at` scales them.
