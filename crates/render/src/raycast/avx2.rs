@@ -205,6 +205,16 @@ fn refill<T: Copy>(v: &mut Vec<T>, n: usize, x: T) {
     v.resize(n, x);
 }
 
+/// The first `n` elements of `v`, grown with copies of `x` if it is shorter: for
+/// buffers whose every element is written before it is read, so stale values from
+/// an earlier tile need no clearing (zeroing them was 4% of a frame's instructions).
+fn first<T: Copy>(v: &mut Vec<T>, n: usize, x: T) -> &mut [T] {
+    if v.len() < n {
+        v.resize(n, x);
+    }
+    &mut v[..n]
+}
+
 /// Composites the rays of the tile `px` front to back: the same pixels as
 /// `Caster::tile`.
 ///
@@ -748,11 +758,12 @@ unsafe fn light(
             lobe,
             facing,
         } = buffers;
-        refill(diffuse, padded, 0.0);
-        refill(magnitude, padded, 0.0);
-        refill(valid, padded / LANES, 0);
-        refill(cos, padded * lights.len(), 0.0);
-        refill(facing, padded / LANES * lights.len(), 0);
+        // Every element of these is written below before it is read.
+        let diffuse = first(diffuse, padded, 0.0);
+        let magnitude = first(magnitude, padded, 0.0);
+        let valid = first(valid, padded / LANES, 0);
+        let cos = first(cos, padded * lights.len(), 0.0);
+        let facing = first(facing, padded / LANES * lights.len(), 0);
         for (b, r0) in (0..padded).step_by(LANES).enumerate() {
             let grad = gradients(c, kept, r0);
             let mut lane_views = [Vec3::ZERO; LANES];
@@ -824,7 +835,7 @@ unsafe fn light(
             }
             _mm256_storeu_ps(diffuse.as_mut_ptr().add(r0), dif);
         }
-        refill(lobe, cos.len(), 0.0);
+        let lobe = first(lobe, cos.len(), 0.0);
         shader.specular.eval_slice(cos, lobe);
         // Lane j's bit of an eight-bit mask, as a vector mask.
         let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
