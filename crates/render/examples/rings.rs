@@ -7,7 +7,9 @@
 //! `RINGS_ORTHO`, `RINGS_NOSKIP`, `RINGS_NOSHADE`, `RINGS_LIGHT=AZ,EL[,I]` (an extra
 //! light), `RINGS_PREFILTER=binomial|none`, `RINGS_SAMPLING=point|pre-integrated`,
 //! `RINGS_DEPTHS` (the measure at depths of
-//! 6, 15, 30 and 60 px inside the silhouette).
+//! 6, 15, 30 and 60 px inside the silhouette), `RINGS_RAMP_GRID=G` (the Shepp-Logan
+//! phantom with its edges ramped over two voxels of a G^3 grid, whatever `RINGS_SIZE`
+//! is: the same object on any grid).
 
 use std::time::Instant;
 
@@ -57,7 +59,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         });
     }
     let repeat: u32 = arg(4, "5").parse()?;
-    let mut renderer = Renderer::open(&scene.input)?;
+    let ramp_grid: Option<f64> = std::env::var("RINGS_RAMP_GRID")
+        .ok()
+        .map(|g| g.parse())
+        .transpose()?;
+    let mut renderer = match (&scene.input, ramp_grid) {
+        (
+            Input::Phantom {
+                name: Phantom::SheppLogan,
+                size,
+            },
+            Some(g),
+        ) => Renderer::from_volume(&glint_render::phantom::shepp_logan_with_ramp(
+            *size,
+            2.0 * 2.0 / g,
+        )?)?,
+        _ => Renderer::open(&scene.input)?,
+    };
     let first = renderer.render(&scene, &|_| {})?;
     let resolved = renderer.resolve(&scene)?;
     let start = Instant::now();

@@ -162,8 +162,19 @@ pub fn shepp_logan_blurred(p: [f64; 3], h: f64) -> f64 {
 /// in RAS+ millimetres, with edges ramped over two voxels ([`shepp_logan_blurred`]) so
 /// trilinear samples and gradients of the thin skull are smooth.
 pub fn shepp_logan(n: usize) -> Result<Volume, RenderError> {
-    let unit = 2.0 / n as f64;
-    sampled(n, |p| shepp_logan_blurred(p, 2.0 * unit))
+    shepp_logan_with_ramp(n, 2.0 * 2.0 / n as f64)
+}
+
+/// [`shepp_logan`] with the edges ramped over `ramp` phantom units whatever the grid:
+/// the same continuous object sampled on grids of different sizes (docs/performance.md
+/// compares its renders to tell reconstruction artefacts from the object's own edges).
+pub fn shepp_logan_with_ramp(n: usize, ramp: f64) -> Result<Volume, RenderError> {
+    if !(ramp.is_finite() && ramp >= 0.0) {
+        return Err(RenderError::Parameter(format!(
+            "phantom ramp {ramp}: expected a finite width >= 0"
+        )));
+    }
+    sampled(n, |p| shepp_logan_blurred(p, ramp))
 }
 
 /// `f` (phantom units in, value out) on an `n`^3 grid of voxel centres spanning
@@ -285,6 +296,36 @@ pub fn head(n: usize) -> Result<Volume, RenderError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_fixed_ramp_is_the_same_object_on_any_grid() {
+        // The 32 and 96 grids share voxel centres: 96-grid voxel 3i + 1 is 32-grid voxel i.
+        let ramp = 4.0 / 32.0;
+        let (a, b) = (
+            shepp_logan_with_ramp(32, ramp).unwrap(),
+            shepp_logan_with_ramp(96, ramp).unwrap(),
+        );
+        let (c, d) = (shepp_logan(32).unwrap(), shepp_logan(96).unwrap());
+        let (mut ramped, mut own) = (0, 0);
+        for k in 0..32 {
+            for j in 0..32 {
+                for i in 0..32 {
+                    let x = a.value(i, j, k);
+                    assert_eq!(x, b.value(3 * i + 1, 3 * j + 1, 3 * k + 1), "{i} {j} {k}");
+                    let p = [i, j, k].map(|v| -1.0 + (v as f64 + 0.5) * 2.0 / 32.0);
+                    ramped += usize::from(x != shepp_logan_value(p) as f32 as f64);
+                    own +=
+                        usize::from(c.value(i, j, k) != d.value(3 * i + 1, 3 * j + 1, 3 * k + 1));
+                }
+            }
+        }
+        // Many shared centres lie in the ramps, and each grid's own ramp differs there.
+        assert!(ramped > 1000, "{ramped}");
+        assert!(own > 1000, "{own}");
+        for bad in [f64::NAN, -0.1, f64::INFINITY] {
+            assert!(shepp_logan_with_ramp(8, bad).is_err());
+        }
+    }
 
     #[test]
     fn known_values() {
