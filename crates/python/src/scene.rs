@@ -13,7 +13,14 @@ use crate::json;
 
 /// Fields the scene JSON omits while they are unset (`Option` fields serialised with
 /// `skip_serializing_if`); reading them gives None.
-const OPTIONAL_FIELDS: [&str; 5] = ["iso", "preset", "transfer_function", "derived", "ssaa"];
+const OPTIONAL_FIELDS: [&str; 6] = [
+    "iso",
+    "preset",
+    "transfer_function",
+    "derived",
+    "ssaa",
+    "opacity_unit",
+];
 
 /// A render, described completely (volume, classification, lobe, lights, camera, size).
 /// Immutable: `scene.replace(field=value)` returns a changed copy.

@@ -100,6 +100,9 @@ def test_scene_fields_json_and_pickle():
     assert default.sampling == "point" and default.prefilter == "binomial"
     pre = glint.Scene(sampling="pre-integrated")
     assert pre.sampling == "pre-integrated" and glint.Scene.from_json(pre.to_json()) == pre
+    assert default.opacity_unit is None
+    unit = glint.Scene(opacity_unit=1.5)
+    assert unit.opacity_unit == 1.5 and glint.Scene.from_json(unit.to_json()) == unit
     with pytest.raises(ValueError):
         glint.Scene(sampling="linear")
 

@@ -6,7 +6,7 @@
 //! preset, 0.5, anterior, 5, no PNG). Environment: `RINGS_SIZE` (phantom grid),
 //! `RINGS_ORTHO`, `RINGS_NOSKIP`, `RINGS_NOSHADE`, `RINGS_LIGHT=AZ,EL[,I]` (an extra
 //! light), `RINGS_PREFILTER=binomial|none`, `RINGS_SAMPLING=point|pre-integrated`,
-//! `RINGS_DEPTHS` (the measure at depths of
+//! `RINGS_OPACITY_UNIT=MM` (the scene's `opacity_unit`), `RINGS_DEPTHS` (the measure at depths of
 //! 6, 15, 30 and 60 px inside the silhouette), `RINGS_RAMP_GRID=G` (the Shepp-Logan
 //! phantom with its edges ramped over two voxels of a G^3 grid, whatever `RINGS_SIZE`
 //! is: the same object on any grid).
@@ -46,6 +46,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Ok(p) = std::env::var("RINGS_SAMPLING") {
         scene.sampling = p.parse()?;
+    }
+    if let Ok(u) = std::env::var("RINGS_OPACITY_UNIT") {
+        scene.opacity_unit = Some(u.parse()?);
     }
     if env("RINGS_NOSHADE") {
         scene.material.shade = Some(false);

@@ -78,6 +78,10 @@ pub struct ClassifySettings {
     pub skip_empty: bool,
     /// Composite mode: the transfer function at samples or integrated between them.
     pub sampling: Sampling,
+    /// The length of matter, in mm, whose opacity the transfer function gives (VTK's
+    /// scalar opacity unit distance); `None`: one voxel of the smallest spacing, so a
+    /// finer grid of the same object is denser per millimetre.
+    pub opacity_unit: Option<f64>,
 }
 
 impl Default for ClassifySettings {
@@ -87,6 +91,7 @@ impl Default for ClassifySettings {
             step: 0.5,
             skip_empty: true,
             sampling: Sampling::default(),
+            opacity_unit: None,
         }
     }
 }
@@ -104,6 +109,13 @@ impl ClassifySettings {
             if !threshold.is_finite() {
                 return Err(RenderError::Parameter(format!(
                     "iso threshold {threshold} is not finite"
+                )));
+            }
+        }
+        if let Some(u) = self.opacity_unit {
+            if !u.is_finite() || !(1e-3..=1e4).contains(&u) {
+                return Err(RenderError::Parameter(format!(
+                    "opacity unit {u}: expected 0.001..=10000 mm"
                 )));
             }
         }
@@ -184,9 +196,11 @@ impl Kernel {
 /// opacity, not a per-step one).
 fn lut_for(field: &Field, tf: &TransferFunction, settings: &ClassifySettings) -> Lut {
     let (lo, hi) = field.range();
-    let lut_step = match settings.mode {
-        Mode::Mip => 1.0,
-        _ => settings.step,
+    // The opacity correction's exponent: the step in units of the opacity's length.
+    let lut_step = match (settings.mode, settings.opacity_unit) {
+        (Mode::Mip, _) => 1.0,
+        (_, None) => settings.step,
+        (_, Some(unit)) => settings.step * field.min_spacing() / unit,
     };
     Lut::new(tf, lo, hi, lut_step)
 }

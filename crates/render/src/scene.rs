@@ -119,6 +119,10 @@ pub struct Scene {
     /// default) or integrated over the segments between samples (`pre-integrated`:
     /// thin shells of opacity show whatever the step) ([`Sampling`]).
     pub sampling: Sampling,
+    /// The length of matter, in mm, whose opacity the transfer function gives (VTK's
+    /// scalar opacity unit distance); absent: one voxel of the smallest spacing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opacity_unit: Option<f64>,
     /// Background colour, linear RGB.
     pub background: [f32; 3],
     /// Written by a render for other tools (e.g. scripts/bench_vtk.py): the camera
@@ -150,6 +154,7 @@ impl Default for Scene {
             skip_empty: true,
             prefilter: Prefilter::default(),
             sampling: Sampling::default(),
+            opacity_unit: None,
             background: [0.0; 3],
             derived: None,
         }
@@ -848,6 +853,7 @@ impl Scene {
             step: scene.step,
             skip_empty: scene.skip_empty,
             sampling: scene.sampling,
+            opacity_unit: scene.opacity_unit,
         };
         classify.validate()?;
         let frame = FrameSettings {

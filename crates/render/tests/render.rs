@@ -5,8 +5,8 @@
 use glint_io::{Samples, Volume};
 use glint_lobe::{Geometry, Lobe, LobeKind};
 use glint_render::{
-    phantom, Camera, CameraSpec, Input, Kernel, Light, LobeSpec, MaterialOverrides, Projection,
-    RenderMode, Rendered, Renderer, Sampling, Scene, TransferFunction, View,
+    phantom, Camera, CameraSpec, Depth, Input, Kernel, Light, LobeSpec, MaterialOverrides,
+    Projection, RenderMode, Rendered, Renderer, Sampling, Scene, TransferFunction, View,
 };
 
 fn ortho(view: View) -> CameraSpec {
@@ -99,6 +99,59 @@ fn composite_follows_beer_lambert_for_any_step() {
         );
         // White colour on black: linear value equals the opacity.
         assert!((img.pixel(16, 16)[0] as f64 - got).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn the_opacity_unit_sets_the_length_the_opacity_is_for() {
+    // 2 mm voxels: 32 voxels are 64 mm of matter. By default the opacity a is per
+    // voxel (1 - (1 - a)^32 across); for a unit of 1 mm it is per mm (1 - (1 - a)^64);
+    // a unit of one voxel's 2 mm is the default, to the byte.
+    let n = 33;
+    let volume = Volume::new([n; 3], [2.0; 3], Samples::F32(vec![1.0; n * n * n])).unwrap();
+    let a = 0.03;
+    let tf = TransferFunction::from_flat(&[0.0, a, 2.0, a], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+    let base = Scene {
+        camera: ortho(View::Anterior),
+        transfer_function: Some(tf),
+        material: flat_material(),
+        ..scene(33, 33)
+    };
+    let alpha = |unit: Option<f64>| {
+        let img = render(
+            &volume,
+            &Scene {
+                opacity_unit: unit,
+                ..base.clone()
+            },
+        )
+        .image;
+        (
+            img.alpha[16 * 33 + 16] as f64,
+            img.encode_png(Depth::Eight).unwrap(),
+        )
+    };
+    let (by_voxel, png) = alpha(None);
+    let (per_mm, _) = alpha(Some(1.0));
+    let (per_two_mm, png2) = alpha(Some(2.0));
+    assert!(
+        (by_voxel - (1.0 - (1.0f64 - a).powf(32.0))).abs() < 5e-3,
+        "{by_voxel}"
+    );
+    assert!(
+        (per_mm - (1.0 - (1.0f64 - a).powf(64.0))).abs() < 5e-3,
+        "{per_mm}"
+    );
+    assert_eq!(png, png2);
+    assert_eq!(by_voxel, per_two_mm);
+    // Nonsense units are refused.
+    let mut renderer = Renderer::from_volume(&volume).unwrap();
+    for bad in [0.0, -1.0, f64::NAN, 1e9] {
+        let scene = Scene {
+            opacity_unit: Some(bad),
+            ..base.clone()
+        };
+        assert!(renderer.render(&scene, &|_| {}).is_err(), "{bad}");
     }
 }
 

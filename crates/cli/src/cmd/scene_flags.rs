@@ -140,6 +140,10 @@ pub struct SceneFlags {
     /// [default: point].
     #[arg(long, value_parser = choice::<Sampling>(Sampling::ALL.map(|p| p.name())))]
     pub sampling: Option<Sampling>,
+    /// The length of matter, in mm, whose opacity the transfer function gives (VTK's
+    /// scalar opacity unit distance) [default: one voxel of the smallest spacing].
+    #[arg(long, value_name = "MM")]
+    pub opacity_unit: Option<f64>,
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     pub no_skip: bool,
@@ -194,6 +198,9 @@ impl SceneFlags {
         set(&mut scene.step, self.step);
         set(&mut scene.prefilter, self.prefilter);
         set(&mut scene.sampling, self.sampling);
+        if self.opacity_unit.is_some() {
+            scene.opacity_unit = self.opacity_unit;
+        }
         if self.no_skip {
             scene.skip_empty = false;
         }

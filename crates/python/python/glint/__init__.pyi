@@ -112,6 +112,7 @@ class Scene:
     skip_empty: bool
     prefilter: Literal["binomial", "none"]
     sampling: Literal["point", "pre-integrated"]
+    opacity_unit: Optional[float]
     background: List[float]
     derived: Optional[Dict[str, Any]]
     def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
