@@ -7,9 +7,9 @@
 //! `RINGS_ORTHO`, `RINGS_NOSKIP`, `RINGS_NOSHADE`, `RINGS_LIGHT=AZ,EL[,I]` (an extra
 //! light), `RINGS_PREFILTER=binomial|none`, `RINGS_SAMPLING=point|pre-integrated`,
 //! `RINGS_OPACITY_UNIT=MM` (the scene's `opacity_unit`), `RINGS_DEPTHS` (the measure at depths of
-//! 6, 15, 30 and 60 px inside the silhouette), `RINGS_RAMP_GRID=G` (the Shepp-Logan
-//! phantom with its edges ramped over two voxels of a G^3 grid, whatever `RINGS_SIZE`
-//! is: the same object on any grid).
+//! 6, 15, 30 and 60 px inside the silhouette), `RINGS_RAMP_GRID=G` (the phantom's
+//! edges ramped as they are on a G^3 grid, whatever `RINGS_SIZE` is: the same object on
+//! any grid).
 
 use std::time::Instant;
 
@@ -67,16 +67,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(|g| g.parse())
         .transpose()?;
     let mut renderer = match (&scene.input, ramp_grid) {
-        (
-            Input::Phantom {
-                name: Phantom::SheppLogan,
-                size,
-            },
-            Some(g),
-        ) => Renderer::from_volume(&glint_render::phantom::shepp_logan_with_ramp(
-            *size,
-            2.0 * 2.0 / g,
-        )?)?,
+        (Input::Phantom { name, size }, Some(g)) => {
+            use glint_render::phantom;
+            Renderer::from_volume(&match name {
+                Phantom::SheppLogan => phantom::shepp_logan_with_ramp(*size, 2.0 * 2.0 / g)?,
+                Phantom::Head => phantom::head_with_ramp(
+                    *size,
+                    phantom::HEAD_RAMP_VOXELS * 2.0 * phantom::MM_PER_UNIT / g,
+                )?,
+            })?
+        }
         _ => Renderer::open(&scene.input)?,
     };
     let first = renderer.render(&scene, &|_| {})?;

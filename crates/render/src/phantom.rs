@@ -289,8 +289,19 @@ pub const HEAD_RAMP_VOXELS: f64 = 4.0;
 /// glint's head phantom ([`HEAD_LAYERS`]) on an `n`^3 grid spanning 200 mm, edges
 /// ramped over [`HEAD_RAMP_VOXELS`].
 pub fn head(n: usize) -> Result<Volume, RenderError> {
-    let h = HEAD_RAMP_VOXELS * 2.0 * MM_PER_UNIT / n as f64;
-    sampled(n, |p| head_value(p.map(|x| x * MM_PER_UNIT), h))
+    head_with_ramp(n, HEAD_RAMP_VOXELS * 2.0 * MM_PER_UNIT / n as f64)
+}
+
+/// [`head`] with the edges ramped over `ramp` mm whatever the grid: the same object on
+/// grids of different sizes (as [`shepp_logan_with_ramp`]; here the ramp must be
+/// wider than 0, the smooth step dividing by it).
+pub fn head_with_ramp(n: usize, ramp: f64) -> Result<Volume, RenderError> {
+    if !(ramp.is_finite() && ramp > 0.0) {
+        return Err(RenderError::Parameter(format!(
+            "phantom ramp {ramp} mm: expected a finite width > 0"
+        )));
+    }
+    sampled(n, |p| head_value(p.map(|x| x * MM_PER_UNIT), ramp))
 }
 
 #[cfg(test)]
@@ -324,7 +335,12 @@ mod tests {
         assert!(own > 1000, "{own}");
         for bad in [f64::NAN, -0.1, f64::INFINITY] {
             assert!(shepp_logan_with_ramp(8, bad).is_err());
+            assert!(head_with_ramp(8, bad).is_err());
         }
+        assert!(head_with_ramp(8, 0.0).is_err());
+        // The head's default ramp is HEAD_RAMP_VOXELS voxels of its grid.
+        let h = head_with_ramp(32, HEAD_RAMP_VOXELS * 200.0 / 32.0).unwrap();
+        assert_eq!(h.to_f32(), head(32).unwrap().to_f32());
     }
 
     #[test]
