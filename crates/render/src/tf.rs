@@ -349,10 +349,9 @@ pub struct Lut {
     pub(crate) scale: f32,
     /// `[r, g, b, alpha']` per entry, colour linear.
     pub(crate) entries: Vec<[f32; 4]>,
-    /// Bit `i % 64` of word `i / 64`: whether entry `i` has opacity (512 bytes, for
-    /// the march's per-sample test; a table of the opacities was 16 KiB and competed
-    /// with the entries for L1).
-    pub(crate) opaque: [u64; LUT_SIZE / 64],
+    /// Per entry, 1 where it has opacity: the SIMD march's per-sample test (4 KiB; a
+    /// table of the opacities was 16 KiB and competed with the entries for L1).
+    pub(crate) opaque: Vec<u8>,
     /// `nonzero[i]` = number of entries below `i` with alpha' > 0, for O(1) range tests.
     nonzero: Vec<u32>,
     /// The same entries integrated, for compositing segments between samples.
@@ -389,11 +388,7 @@ impl Lut {
         Lut {
             lo,
             scale,
-            opaque: std::array::from_fn(|w| {
-                (0..64).fold(0, |bits, b| {
-                    bits | u64::from(entries[64 * w + b][3] > 0.0) << b
-                })
-            }),
+            opaque: entries.iter().map(|e| u8::from(e[3] > 0.0)).collect(),
             entries,
             nonzero,
             pre: PreIntegrated::new(&opacity, &color, step_voxels),

@@ -1,11 +1,20 @@
 //! The composite loops on AVX2 + FMA, in two passes over a tile of rays.
 //!
-//! March: each ray takes eight consecutive samples at a time (positions, cell indices,
-//! trilinear values and transfer-function coordinates in vector registers) and
-//! composites the pre-integrated segments that end at them ([`crate::preint`]) front to
-//! back, stopping at the same sample as the reference loop (`Caster::composite`).
-//! Opacity needs no lighting, so the march only records the samples it keeps: where
-//! they are, their segment's colour and their weight.
+//! March, point sampling ([`composite_lanes`]): eight rays at a time, one per lane,
+//! each lane taking its own ray's next step of the reference loop (`Caster::composite`):
+//! a leap out of an empty macro cell or one sample (position, cell, trilinear value,
+//! transfer-function entry). A vector's loads then belong to eight independent chains,
+//! where marching one ray eight samples at a time made each step wait on the one
+//! before (and evaluated samples past the ray's end); a lane whose ray stops takes the
+//! tile's next ray.
+//!
+//! March, pre-integrated sampling ([`composite_segments`]): each ray takes eight
+//! consecutive samples at a time and composites the segments that end at them
+//! ([`crate::preint`]) in order, each needing the sample before.
+//!
+//! Both stop each ray at the same sample as the reference loop. Opacity needs no
+//! lighting, so the march only records the samples it keeps: where they are, their
+//! colour and their weight.
 //!
 //! Light: the tile's kept samples, from all its rays, eight at a time: gradients,
 //! normals, the lighting cosines; one call of [`glint_lobe::Specular::eval_slice`] (the
@@ -232,19 +241,20 @@ pub(super) unsafe fn composite_tile(
     // carries the other's code.
     unsafe {
         if c.sampling == Sampling::PreIntegrated {
-            composite::<true>(c, px, scratch, rgb, alpha, stats)
+            composite_segments(c, px, scratch, rgb, alpha, stats)
         } else {
-            composite::<false>(c, px, scratch, rgb, alpha, stats)
+            composite_lanes(c, px, scratch, rgb, alpha, stats)
         }
     }
 }
 
-/// [`composite_tile`] for pre-integrated (`PRE`) or point sampling.
+/// [`composite_tile`] for pre-integrated sampling: each ray in chunks of eight samples
+/// along it, whose segments are integrated in order.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA ([`supported`]).
 #[target_feature(enable = "avx2,fma")]
-unsafe fn composite<const PRE: bool>(
+unsafe fn composite_segments(
     c: &Caster,
     px: &Pixels,
     scratch: &mut Scratch,
@@ -301,7 +311,7 @@ unsafe fn composite<const PRE: bool>(
             }
             for slot in slots.iter_mut() {
                 if let Some(m) = slot {
-                    if !step::<PRE>(c, &inv, m, kept, stats) {
+                    if !segment_step(c, &inv, m, kept, stats) {
                         alpha[start + m.id as usize] = m.alpha;
                         *slot = None;
                     }
@@ -318,6 +328,317 @@ unsafe fn composite<const PRE: bool>(
                 col[1] + (1.0 - op) * bg[1],
                 col[2] + (1.0 - op) * bg[2],
             ]);
+        }
+    }
+}
+
+/// Eight rays marched together, one per lane, for point sampling: each lane takes
+/// the reference loop's next step of its own ray (a leap out of an empty macro cell,
+/// or one sample), so a vector's loads belong to eight independent chains. A lane
+/// whose ray ends takes the tile's next ray.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA ([`supported`]).
+#[target_feature(enable = "avx2,fma")]
+unsafe fn composite_lanes(
+    c: &Caster,
+    px: &Pixels,
+    scratch: &mut Scratch,
+    rgb: &mut Vec<[f32; 3]>,
+    alpha: &mut Vec<f32>,
+    stats: &mut RenderStats,
+) {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let (xs, ys) = (px.xs, px.ys);
+        let tw = xs.1 - xs.0;
+        let n = tw * (ys.1 - ys.0);
+        let Scratch {
+            views,
+            colors,
+            kept,
+            light: buffers,
+        } = scratch;
+        refill(views, n, Vec3::ZERO);
+        refill(colors, n, [0.0; 3]);
+        kept.clear();
+        let start = alpha.len();
+        alpha.resize(start + n, 0.0);
+        let inv = Invariants::new(c);
+        let mut lanes = Lanes::default();
+        let mut next = 0;
+        loop {
+            // Fill the idle lanes with the next rays that meet a visible cell.
+            for l in 0..LANES {
+                while lanes.live & (1 << l) == 0 && next < n {
+                    let i = next;
+                    next += 1;
+                    let (x, y) = (xs.0 + i % tw, ys.0 + i / tw);
+                    if let Some((ray, view)) = c.ray(x as f32, y as f32, (px.start[i], px.end[i])) {
+                        views[i] = view;
+                        lanes.set(l, &ray, i as u32);
+                    }
+                }
+            }
+            if lanes.live == 0 {
+                break;
+            }
+            for l in lanes.step(c, &inv, kept, stats) {
+                alpha[start + lanes.id[l] as usize] = lanes.alpha[l];
+            }
+        }
+        if kept.len() > 0 {
+            light(c, kept, views, colors, buffers);
+        }
+        let bg = c.frame.background;
+        for (col, &op) in colors.iter().zip(&alpha[start..]) {
+            rgb.push([
+                col[0] + (1.0 - op) * bg[0],
+                col[1] + (1.0 - op) * bg[1],
+                col[2] + (1.0 - op) * bg[2],
+            ]);
+        }
+    }
+}
+
+/// The state of eight rays marched one per lane ([`composite_lanes`]), by component.
+#[derive(Default)]
+struct Lanes {
+    /// Bit `l`: lane `l` holds a ray.
+    live: u8,
+    o: [[f32; LANES]; 3],
+    d: [[f32; LANES]; 3],
+    /// [`Ray::inv_dk`].
+    inv_dk: [[f32; LANES]; 3],
+    /// [`Ray::face_up`], as all-ones or zero.
+    up: [[i32; LANES]; 3],
+    j: [f32; LANES],
+    /// Next sample, and the last.
+    k: [i32; LANES],
+    k1: [i32; LANES],
+    alpha: [f32; LANES],
+    id: [u32; LANES],
+}
+
+impl Lanes {
+    /// Starts `ray` (the tile's ray `id`) in lane `l`.
+    fn set(&mut self, l: usize, ray: &Ray, id: u32) {
+        for a in 0..3 {
+            self.o[a][l] = ray.o.get(a);
+            self.d[a][l] = ray.d.get(a);
+            self.inv_dk[a][l] = ray.inv_dk[a];
+            self.up[a][l] = if ray.face_up[a] { -1 } else { 0 };
+        }
+        self.j[l] = ray.j;
+        // Sample indices are exact in f32 below 2^24 (as `Ray::t` assumes), so within
+        // i32; a longer ray is cut there.
+        self.k[l] = ray.k0.clamp(-(1 << 24), 1 << 24) as i32;
+        self.k1[l] = ray.k1.clamp(-(1 << 24), 1 << 24) as i32;
+        self.alpha[l] = 0.0;
+        self.id[l] = id;
+        self.live |= 1 << l;
+    }
+
+    /// One step of every live lane: a leap where the sample lies in an empty macro
+    /// cell (`Caster::leap`, lane by lane in vectors), else the sample. Returns the
+    /// lanes whose rays ended, now idle.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    unsafe fn step(
+        &mut self,
+        c: &Caster,
+        inv: &Invariants,
+        kept: &mut Kept,
+        stats: &mut RenderStats,
+    ) -> impl Iterator<Item = usize> {
+        // SAFETY: this function's `# Safety` contract, which its callers uphold,
+        // covers every unsafe operation below (CPU features, pointer ranges).
+        unsafe {
+            let Invariants {
+                nx,
+                sxy,
+                cd,
+                dt,
+                hi,
+                zero,
+                one,
+                nxv,
+                sxyv,
+                lut_lo,
+                lut_scale,
+                half,
+                lut_max,
+                values,
+                ..
+            } = *inv;
+            let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
+            let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
+            let k = ldi(&self.k);
+            // `Ray::t`, `Ray::at`, `Field::locate`, as the reference loop computes them.
+            let t = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(k), ld(&self.j)), dt);
+            let p = axes!(|a| _mm256_add_ps(ld(&self.o[a]), _mm256_mul_ps(ld(&self.d[a]), t)));
+            let ijk =
+                axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
+            let cells = axes!(|a| _mm256_srli_epi32::<2>(ijk[a]));
+            const _: () = assert!(MACRO_CELL == 4, "the shift above divides by MACRO_CELL");
+            let cell = _mm256_add_epi32(
+                cells[0],
+                _mm256_mullo_epi32(
+                    _mm256_set1_epi32(cd[0] as i32),
+                    _mm256_add_epi32(
+                        cells[1],
+                        _mm256_mullo_epi32(_mm256_set1_epi32(cd[1] as i32), cells[2]),
+                    ),
+                ),
+            );
+            // Scalar loads, not a gather (see the module's notes).
+            let mut ci = [0i32; LANES];
+            _mm256_storeu_si256(ci.as_mut_ptr().cast(), cell);
+            let mut dist = [0i32; LANES];
+            for (d, &i) in dist.iter_mut().zip(&ci) {
+                // SAFETY: positions are clamped to the cells, so each index is a cell.
+                *d = i32::from(*c.distance.get_unchecked(i as usize));
+            }
+            let dist = _mm256_loadu_si256(dist.as_ptr().cast());
+            let empty = _mm256_cmpeq_epi32(dist, _mm256_setzero_si256());
+            let leaps = !(_mm256_movemask_ps(_mm256_castsi256_ps(empty)) as u8) & self.live;
+            let samples = self.live & !leaps;
+            let mut ended = 0u8;
+            let mut k_next = _mm256_add_epi32(k, _mm256_set1_epi32(1));
+            if leaps != 0 {
+                stats.skips += u64::from(leaps.count_ones());
+                k_next = self.leap(k, k_next, cells, dist, leaps);
+            }
+            if samples != 0 {
+                stats.samples += u64::from(samples.count_ones());
+                let fr = axes!(|a| {
+                    let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
+                    _mm256_min_ps(_mm256_max_ps(t, zero), one)
+                });
+                let mut base = [0i32; LANES];
+                _mm256_storeu_si256(
+                    base.as_mut_ptr().cast(),
+                    _mm256_add_epi32(
+                        ijk[0],
+                        _mm256_add_epi32(
+                            _mm256_mullo_epi32(ijk[1], nxv),
+                            _mm256_mullo_epi32(ijk[2], sxyv),
+                        ),
+                    ),
+                );
+                // SAFETY: base + sxy + nx + 1 is a voxel (clamped above).
+                let mut ptrs = [values; LANES];
+                for (p, &b) in ptrs.iter_mut().zip(&base) {
+                    *p = values.add(b as usize);
+                }
+                let (c000, c100) = row(ptrs, 0);
+                let (c010, c110) = row(ptrs, nx);
+                let (c001, c101) = row(ptrs, sxy);
+                let (c011, c111) = row(ptrs, sxy + nx);
+                let x00 = lerp(c000, c100, fr[0]);
+                let x10 = lerp(c010, c110, fr[0]);
+                let x01 = lerp(c001, c101, fr[0]);
+                let x11 = lerp(c011, c111, fr[0]);
+                let y0 = lerp(x00, x10, fr[1]);
+                let y1 = lerp(x01, x11, fr[1]);
+                let v = lerp(y0, y1, fr[2]);
+                let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
+                let liv = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max));
+                let lut = c.lut;
+                let mut li = [0i32; LANES];
+                _mm256_storeu_si256(li.as_mut_ptr().cast(), liv);
+                let mut opaque = 0u8;
+                for (l, &i) in li.iter().enumerate() {
+                    // SAFETY: the index was clamped to the table.
+                    opaque |= *lut.opaque.get_unchecked(i as usize) << l;
+                }
+                let mut hits = samples & opaque;
+                if hits != 0 {
+                    let mut t = [[0.0f32; LANES]; 3];
+                    for (a, v) in fr.iter().enumerate() {
+                        _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+                    }
+                    while hits != 0 {
+                        let l = hits.trailing_zeros() as usize;
+                        hits &= hits - 1;
+                        // SAFETY: as above.
+                        let rgba = *lut.entries.get_unchecked(li[l] as usize);
+                        let tl = [t[0][l], t[1][l], t[2][l]];
+                        if keep(
+                            kept,
+                            (&mut self.alpha[l], self.id[l]),
+                            base[l],
+                            tl,
+                            rgba,
+                            stats,
+                        ) {
+                            ended |= 1 << l;
+                        }
+                    }
+                }
+            }
+            _mm256_storeu_si256(self.k.as_mut_ptr().cast(), k_next);
+            let past = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                k_next,
+                ldi(&self.k1),
+            ))) as u8;
+            ended = (ended | past) & self.live;
+            self.live &= !ended;
+            (0..LANES).filter(move |l| ended & (1 << l) != 0)
+        }
+    }
+
+    /// `Caster::leap` for the lanes `leaps` (the others keep `k_next`): past the cube
+    /// of empty cells of radius `dist - 1` around `cells`, at least one sample on.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    unsafe fn leap(
+        &self,
+        k: __m256i,
+        k_next: __m256i,
+        cells: [__m256i; 3],
+        dist: __m256i,
+        leaps: u8,
+    ) -> __m256i {
+        // SAFETY: the caller runs with AVX2 (this function's contract).
+        unsafe {
+            let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
+            let r = _mm256_sub_epi32(dist, _mm256_set1_epi32(1));
+            let mc = MACRO_CELL as i32;
+            let mut q = _mm256_set1_ps(f32::INFINITY);
+            for (a, &cell) in cells.iter().enumerate() {
+                let up = _mm256_loadu_si256(self.up[a].as_ptr().cast());
+                let above = _mm256_add_epi32(_mm256_add_epi32(cell, r), _mm256_set1_epi32(1));
+                let below = _mm256_max_epi32(_mm256_sub_epi32(cell, r), _mm256_setzero_si256());
+                let face = _mm256_cvtepi32_ps(_mm256_mullo_epi32(
+                    _mm256_blendv_epi8(below, above, up),
+                    _mm256_set1_epi32(mc),
+                ));
+                let x = _mm256_mul_ps(_mm256_sub_ps(face, ld(&self.o[a])), ld(&self.inv_dk[a]));
+                // `q.min(x)`: a NaN x leaves q (MINPS returns its second operand).
+                q = _mm256_min_ps(x, q);
+            }
+            // `ceil_i64(q - j - 1/64).max(k + 1)`, the argument clamped to +-2^25 to fit
+            // i32: sample indices stay within +-2^24, so a clamped value ends the ray
+            // (or gives k + 1) just as the unclamped one does.
+            let y = _mm256_sub_ps(_mm256_sub_ps(q, ld(&self.j)), _mm256_set1_ps(1.0 / 64.0));
+            let lim = (1 << 25) as f32;
+            let y = _mm256_max_ps(_mm256_min_ps(y, _mm256_set1_ps(lim)), _mm256_set1_ps(-lim));
+            let kk = _mm256_cvttps_epi32(y);
+            let up = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_cvtepi32_ps(kk), y));
+            let kk = _mm256_sub_epi32(kk, up);
+            let leapt = _mm256_max_epi32(kk, _mm256_add_epi32(k, _mm256_set1_epi32(1)));
+            let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            let mask = _mm256_cmpeq_epi32(
+                _mm256_and_si256(_mm256_set1_epi32(i32::from(leaps)), lane_bits),
+                lane_bits,
+            );
+            _mm256_blendv_epi8(k_next, leapt, mask)
         }
     }
 }
@@ -412,7 +733,7 @@ struct Marcher {
 /// # Safety
 /// The CPU must support AVX2 and FMA (inlined into [`composite_tile`]).
 #[inline(always)]
-unsafe fn step<const PRE: bool>(
+unsafe fn segment_step(
     c: &Caster,
     inv: &Invariants,
     m: &mut Marcher,
@@ -443,7 +764,6 @@ unsafe fn step<const PRE: bool>(
         let ray = &m.ray;
         let k = m.k;
         let lead = match m.prev {
-            _ if !PRE => 0,
             Some((pk, _)) if pk == k - 1 => 0,
             _ => 1,
         };
@@ -482,7 +802,7 @@ unsafe fn step<const PRE: bool>(
         // sample before was read (as the reference loop does; one sample, so read
         // with the reference loop's scalar code).
         if m.dist != 0 {
-            if let Some((_, front)) = m.prev.filter(|_| PRE && lead == 0) {
+            if let Some((_, front)) = m.prev.filter(|_| lead == 0) {
                 let loc = f.locate(ray.at(ray.t(k, c.dt)));
                 let back = lut.position(f.value_at(&loc));
                 stats.samples += 1;
@@ -548,33 +868,6 @@ unsafe fn step<const PRE: bool>(
             }
             t
         };
-        if !PRE {
-            // Point sampling: each sample's own entry (`Lut::index`), the lanes with
-            // opacity found without branches.
-            let mut li = [0i32; LANES];
-            _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
-            let mut mask = 0u32;
-            for (j, &i) in li.iter().enumerate().take(n) {
-                // SAFETY: uv was clamped to [0, LUT_SIZE-1] before the conversion.
-                let i = i as usize;
-                let word = *lut.opaque.get_unchecked(i / 64);
-                mask |= (((word >> (i % 64)) & 1) as u32) << j;
-            }
-            let mut t: Option<[[f32; LANES]; 3]> = None;
-            while mask != 0 {
-                let j = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let t = t.get_or_insert_with(fractions);
-                // SAFETY: as above.
-                let rgba = *lut.entries.get_unchecked(li[j] as usize);
-                let tj = [t[0][j], t[1][j], t[2][j]];
-                if keep(kept, (&mut m.alpha, m.id), base[j], tj, rgba, stats) {
-                    return false;
-                }
-            }
-            m.k = k + n as i64;
-            return m.k <= ray.k1;
-        }
         let mut u = [0.0f32; LANES];
         _mm256_storeu_ps(u.as_mut_ptr(), uv);
         let pre = &lut.pre;
