@@ -370,7 +370,10 @@ unsafe fn composite_lanes(
         let mut next = 0;
         loop {
             // Fill the idle lanes with the next rays that meet a visible cell.
-            for l in 0..LANES {
+            let mut idle = !lanes.live;
+            while idle != 0 && next < n {
+                let l = idle.trailing_zeros() as usize;
+                idle &= idle - 1;
                 while lanes.live & (1 << l) == 0 && next < n {
                     let i = next;
                     next += 1;
