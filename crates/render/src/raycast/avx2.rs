@@ -461,21 +461,7 @@ impl Lanes {
         // covers every unsafe operation below (CPU features, pointer ranges).
         unsafe {
             let Invariants {
-                nx,
-                sxy,
-                cd,
-                dt,
-                hi,
-                zero,
-                one,
-                nxv,
-                sxyv,
-                lut_lo,
-                lut_scale,
-                half,
-                lut_max,
-                values,
-                ..
+                cd, dt, hi, zero, ..
             } = *inv;
             let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
             let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
@@ -516,71 +502,33 @@ impl Lanes {
                 k_next = self.leap(k, k_next, cells, dist, leaps);
             }
             if samples != 0 {
-                stats.samples += u64::from(samples.count_ones());
-                let fr = axes!(|a| {
-                    let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
-                    _mm256_min_ps(_mm256_max_ps(t, zero), one)
-                });
-                let mut base = [0i32; LANES];
-                _mm256_storeu_si256(
-                    base.as_mut_ptr().cast(),
-                    _mm256_add_epi32(
-                        ijk[0],
-                        _mm256_add_epi32(
-                            _mm256_mullo_epi32(ijk[1], nxv),
-                            _mm256_mullo_epi32(ijk[2], sxyv),
-                        ),
-                    ),
-                );
-                // SAFETY: base + sxy + nx + 1 is a voxel (clamped above).
-                let mut ptrs = [values; LANES];
-                for (p, &b) in ptrs.iter_mut().zip(&base) {
-                    *p = values.add(b as usize);
-                }
-                let (c000, c100) = row(ptrs, 0);
-                let (c010, c110) = row(ptrs, nx);
-                let (c001, c101) = row(ptrs, sxy);
-                let (c011, c111) = row(ptrs, sxy + nx);
-                let x00 = lerp(c000, c100, fr[0]);
-                let x10 = lerp(c010, c110, fr[0]);
-                let x01 = lerp(c001, c101, fr[0]);
-                let x11 = lerp(c011, c111, fr[0]);
-                let y0 = lerp(x00, x10, fr[1]);
-                let y1 = lerp(x01, x11, fr[1]);
-                let v = lerp(y0, y1, fr[2]);
-                let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
-                let liv = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max));
-                let lut = c.lut;
-                let mut li = [0i32; LANES];
-                _mm256_storeu_si256(li.as_mut_ptr().cast(), liv);
-                let mut opaque = 0u8;
-                for (l, &i) in li.iter().enumerate() {
-                    // SAFETY: the index was clamped to the table.
-                    opaque |= *lut.opaque.get_unchecked(i as usize) << l;
-                }
-                let mut hits = samples & opaque;
-                if hits != 0 {
-                    let mut t = [[0.0f32; LANES]; 3];
-                    for (a, v) in fr.iter().enumerate() {
-                        _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
-                    }
-                    while hits != 0 {
-                        let l = hits.trailing_zeros() as usize;
-                        hits &= hits - 1;
-                        // SAFETY: as above.
-                        let rgba = *lut.entries.get_unchecked(li[l] as usize);
-                        let tl = [t[0][l], t[1][l], t[2][l]];
-                        if keep(
-                            kept,
-                            (&mut self.alpha[l], self.id[l]),
-                            base[l],
-                            tl,
-                            rgba,
-                            stats,
-                        ) {
-                            ended |= 1 << l;
-                        }
-                    }
+                // Each sampling lane takes samples k and k + 1 (when k + 1 <= k1): a
+                // second sample in an empty cell has no opacity, so taking it changes
+                // nothing, and the pair halves the step's fixed work per sample.
+                let k2 = _mm256_add_epi32(k, _mm256_set1_epi32(1));
+                let last = _mm256_cmpgt_epi32(k2, ldi(&self.k1));
+                let second = samples & !(_mm256_movemask_ps(_mm256_castsi256_ps(last)) as u8);
+                stats.samples += u64::from(samples.count_ones() + second.count_ones());
+                let first = probe(c, inv, p, ijk);
+                ended |= self.keep_hits(c.lut, kept, samples & first.opaque, &first, stats);
+                if second != 0 {
+                    let t2 = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(k2), ld(&self.j)), dt);
+                    let p2 =
+                        axes!(|a| _mm256_add_ps(ld(&self.o[a]), _mm256_mul_ps(ld(&self.d[a]), t2)));
+                    let ijk2 = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(
+                        _mm256_max_ps(p2[a], zero),
+                        hi[a]
+                    )));
+                    let next = probe(c, inv, p2, ijk2);
+                    ended |=
+                        self.keep_hits(c.lut, kept, second & next.opaque & !ended, &next, stats);
+                    let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+                    let twice = _mm256_cmpeq_epi32(
+                        _mm256_and_si256(_mm256_set1_epi32(i32::from(second)), lane_bits),
+                        lane_bits,
+                    );
+                    // All ones is -1: subtracting it steps the second-sample lanes once more.
+                    k_next = _mm256_sub_epi32(k_next, twice);
                 }
             }
             _mm256_storeu_si256(self.k.as_mut_ptr().cast(), k_next);
@@ -592,6 +540,51 @@ impl Lanes {
             self.live &= !ended;
             (0..LANES).filter(move |l| ended & (1 << l) != 0)
         }
+    }
+
+    /// Keeps the samples of `probe` in the lanes `hits`; returns the lanes whose rays
+    /// reached full opacity.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    unsafe fn keep_hits(
+        &mut self,
+        lut: &crate::tf::Lut,
+        kept: &mut Kept,
+        mut hits: u8,
+        probe: &Probe,
+        stats: &mut RenderStats,
+    ) -> u8 {
+        let mut ended = 0u8;
+        if hits == 0 {
+            return ended;
+        }
+        // SAFETY: the caller runs with AVX2 (this function's contract).
+        unsafe {
+            let mut t = [[0.0f32; LANES]; 3];
+            for (a, v) in probe.fr.iter().enumerate() {
+                _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
+            }
+            while hits != 0 {
+                let l = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                // SAFETY: the entry index was clamped to the table.
+                let rgba = *lut.entries.get_unchecked(probe.li[l] as usize);
+                let tl = [t[0][l], t[1][l], t[2][l]];
+                if keep(
+                    kept,
+                    (&mut self.alpha[l], self.id[l]),
+                    probe.base[l],
+                    tl,
+                    rgba,
+                    stats,
+                ) {
+                    ended |= 1 << l;
+                }
+            }
+        }
+        ended
     }
 
     /// `Caster::leap` for the lanes `leaps` (the others keep `k_next`): past the cube
@@ -642,6 +635,90 @@ impl Lanes {
                 lane_bits,
             );
             _mm256_blendv_epi8(k_next, leapt, mask)
+        }
+    }
+}
+
+/// One sample per lane: its table entry, corner voxel, cell fractions, and which
+/// lanes' entries have opacity.
+struct Probe {
+    li: [i32; LANES],
+    base: [i32; LANES],
+    fr: [__m256; 3],
+    opaque: u8,
+}
+
+/// Reads the samples at positions `p` (cells `ijk`, clamped) for every lane: the
+/// reference loop's trilinear value and `Lut::index`.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+#[inline(always)]
+unsafe fn probe(c: &Caster, inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3]) -> Probe {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let Invariants {
+            nx,
+            sxy,
+            zero,
+            one,
+            nxv,
+            sxyv,
+            lut_lo,
+            lut_scale,
+            half,
+            lut_max,
+            values,
+            ..
+        } = *inv;
+        let fr = axes!(|a| {
+            let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
+            _mm256_min_ps(_mm256_max_ps(t, zero), one)
+        });
+        let mut base = [0i32; LANES];
+        _mm256_storeu_si256(
+            base.as_mut_ptr().cast(),
+            _mm256_add_epi32(
+                ijk[0],
+                _mm256_add_epi32(
+                    _mm256_mullo_epi32(ijk[1], nxv),
+                    _mm256_mullo_epi32(ijk[2], sxyv),
+                ),
+            ),
+        );
+        // SAFETY: base + sxy + nx + 1 is a voxel (the cells are clamped).
+        let mut ptrs = [values; LANES];
+        for (p, &b) in ptrs.iter_mut().zip(&base) {
+            *p = values.add(b as usize);
+        }
+        let (c000, c100) = row(ptrs, 0);
+        let (c010, c110) = row(ptrs, nx);
+        let (c001, c101) = row(ptrs, sxy);
+        let (c011, c111) = row(ptrs, sxy + nx);
+        let x00 = lerp(c000, c100, fr[0]);
+        let x10 = lerp(c010, c110, fr[0]);
+        let x01 = lerp(c001, c101, fr[0]);
+        let x11 = lerp(c011, c111, fr[0]);
+        let y0 = lerp(x00, x10, fr[1]);
+        let y1 = lerp(x01, x11, fr[1]);
+        let v = lerp(y0, y1, fr[2]);
+        let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
+        let mut li = [0i32; LANES];
+        _mm256_storeu_si256(
+            li.as_mut_ptr().cast(),
+            _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max)),
+        );
+        let mut opaque = 0u8;
+        for (l, &i) in li.iter().enumerate() {
+            // SAFETY: the index was clamped to the table.
+            opaque |= *c.lut.opaque.get_unchecked(i as usize) << l;
+        }
+        Probe {
+            li,
+            base,
+            fr,
+            opaque,
         }
     }
 }
