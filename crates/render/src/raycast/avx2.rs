@@ -214,6 +214,46 @@ fn refill<T: Copy>(v: &mut Vec<T>, n: usize, x: T) {
     v.resize(n, x);
 }
 
+impl Scratch {
+    /// Starts a tile of `n` rays: no kept samples, zero colours, and `n` zero
+    /// opacities appended to `alpha`. Returns where the tile's opacities start.
+    fn begin(&mut self, n: usize, alpha: &mut Vec<f32>) -> usize {
+        refill(&mut self.views, n, Vec3::ZERO);
+        refill(&mut self.colors, n, [0.0; 3]);
+        self.kept.clear();
+        let start = alpha.len();
+        alpha.resize(start + n, 0.0);
+        start
+    }
+}
+
+/// Ends a tile: lights its kept samples, then writes each pixel's colour over the
+/// background by its opacity (`alpha`, the tile's).
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA ([`supported`]).
+#[target_feature(enable = "avx2,fma")]
+unsafe fn finish(c: &Caster, scratch: &mut Scratch, alpha: &[f32], rgb: &mut Vec<[f32; 3]>) {
+    let Scratch {
+        views,
+        colors,
+        kept,
+        light: buffers,
+    } = scratch;
+    if kept.len() > 0 {
+        // SAFETY: this function's contract.
+        unsafe { light(c, kept, views, colors, buffers) };
+    }
+    let bg = c.frame.background;
+    for (col, &op) in colors.iter().zip(alpha) {
+        rgb.push([
+            col[0] + (1.0 - op) * bg[0],
+            col[1] + (1.0 - op) * bg[1],
+            col[2] + (1.0 - op) * bg[2],
+        ]);
+    }
+}
+
 /// The first `n` elements of `v`, grown with copies of `x` if it is shorter: for
 /// buffers whose every element is written before it is read, so stale values from
 /// an earlier tile need no clearing (zeroing them was 4% of a frame's instructions).
@@ -268,17 +308,8 @@ unsafe fn composite_segments(
         let (xs, ys) = (px.xs, px.ys);
         let tw = xs.1 - xs.0;
         let n = tw * (ys.1 - ys.0);
-        let Scratch {
-            views,
-            colors,
-            kept,
-            light: buffers,
-        } = scratch;
-        refill(views, n, Vec3::ZERO);
-        refill(colors, n, [0.0; 3]);
-        kept.clear();
-        let start = alpha.len();
-        alpha.resize(start + n, 0.0);
+        let start = scratch.begin(n, alpha);
+        let Scratch { views, kept, .. } = &mut *scratch;
         // INTERLEAVE rays march side by side, one step each in turn: a ray's steps form
         // a chain of dependent loads and branches, and the core overlaps the chains of
         // independent rays.
@@ -318,17 +349,7 @@ unsafe fn composite_segments(
                 }
             }
         }
-        if kept.len() > 0 {
-            light(c, kept, views, colors, buffers);
-        }
-        let bg = c.frame.background;
-        for (col, &op) in colors.iter().zip(&alpha[start..]) {
-            rgb.push([
-                col[0] + (1.0 - op) * bg[0],
-                col[1] + (1.0 - op) * bg[1],
-                col[2] + (1.0 - op) * bg[2],
-            ]);
-        }
+        finish(c, scratch, &alpha[start..], rgb);
     }
 }
 
@@ -354,17 +375,8 @@ unsafe fn composite_lanes(
         let (xs, ys) = (px.xs, px.ys);
         let tw = xs.1 - xs.0;
         let n = tw * (ys.1 - ys.0);
-        let Scratch {
-            views,
-            colors,
-            kept,
-            light: buffers,
-        } = scratch;
-        refill(views, n, Vec3::ZERO);
-        refill(colors, n, [0.0; 3]);
-        kept.clear();
-        let start = alpha.len();
-        alpha.resize(start + n, 0.0);
+        let start = scratch.begin(n, alpha);
+        let Scratch { views, kept, .. } = &mut *scratch;
         let inv = Invariants::new(c);
         let mut lanes = Lanes::default();
         let mut next = 0;
@@ -391,17 +403,7 @@ unsafe fn composite_lanes(
                 alpha[start + lanes.id[l] as usize] = lanes.alpha[l];
             }
         }
-        if kept.len() > 0 {
-            light(c, kept, views, colors, buffers);
-        }
-        let bg = c.frame.background;
-        for (col, &op) in colors.iter().zip(&alpha[start..]) {
-            rgb.push([
-                col[0] + (1.0 - op) * bg[0],
-                col[1] + (1.0 - op) * bg[1],
-                col[2] + (1.0 - op) * bg[2],
-            ]);
-        }
+        finish(c, scratch, &alpha[start..], rgb);
     }
 }
 
