@@ -36,7 +36,7 @@ pub enum Sampling {
     #[default]
     Point,
     /// Each segment between samples integrated ([`PreIntegrated`]): thin shells show
-    /// whatever the step, for about a quarter more frame time on the MNI152 scene.
+    /// whatever the step, for 40-50% more frame time on the MNI152 scene.
     PreIntegrated,
 }
 
