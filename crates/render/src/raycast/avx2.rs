@@ -650,13 +650,19 @@ struct Probe {
     opaque: u8,
 }
 
-/// Reads the samples at positions `p` (cells `ijk`, clamped) for every lane: the
-/// reference loop's trilinear value and `Lut::index`.
+/// For eight samples at positions `p` in the cells `ijk` (clamped to `[0, dims-2]`):
+/// their fractions in the cell, their corner voxels' indices, and their table
+/// coordinates (`Lut::position` of the trilinear value), with the reference loop's
+/// arithmetic.
 ///
 /// # Safety
-/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+/// The CPU must support AVX2; `ijk` must be clamped as said.
 #[inline(always)]
-unsafe fn probe(c: &Caster, inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3]) -> Probe {
+unsafe fn values_at(
+    inv: &Invariants,
+    p: [__m256; 3],
+    ijk: [__m256i; 3],
+) -> ([__m256; 3], [i32; LANES], __m256) {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
@@ -689,7 +695,7 @@ unsafe fn probe(c: &Caster, inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3])
                 ),
             ),
         );
-        // SAFETY: base + sxy + nx + 1 is a voxel (the cells are clamped).
+        // SAFETY: base + sxy + nx + 1 < nx ny nz, the cells being clamped.
         let mut ptrs = [values; LANES];
         for (p, &b) in ptrs.iter_mut().zip(&base) {
             *p = values.add(b as usize);
@@ -706,11 +712,23 @@ unsafe fn probe(c: &Caster, inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3])
         let y1 = lerp(x01, x11, fr[1]);
         let v = lerp(y0, y1, fr[2]);
         let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
+        (fr, base, _mm256_min_ps(_mm256_max_ps(x, zero), lut_max))
+    }
+}
+
+/// Reads the samples at positions `p` (cells `ijk`, clamped) for every lane: the
+/// reference loop's trilinear value and `Lut::index`.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+#[inline(always)]
+unsafe fn probe(c: &Caster, inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3]) -> Probe {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let (fr, base, uv) = values_at(inv, p, ijk);
         let mut li = [0i32; LANES];
-        _mm256_storeu_si256(
-            li.as_mut_ptr().cast(),
-            _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, zero), lut_max)),
-        );
+        _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
         let mut opaque = 0u8;
         for (l, &i) in li.iter().enumerate() {
             // SAFETY: the index was clamped to the table.
@@ -826,21 +844,12 @@ unsafe fn segment_step(
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
         let Invariants {
-            nx,
-            sxy,
             cd,
             lanes,
             dt,
             hi,
             zero,
-            one,
-            nxv,
-            sxyv,
-            lut_lo,
-            lut_scale,
-            half,
-            lut_max,
-            values,
+            ..
         } = *inv;
         let (f, lut) = (c.field, c.lut);
         let ray = &m.ray;
@@ -908,41 +917,9 @@ unsafe fn segment_step(
         }
         let n = (ray.k1 - k + 1).min((LANES - lead) as i64) as usize;
         stats.samples += n as u64;
-        let fr = axes!(|a| {
-            let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
-            _mm256_min_ps(_mm256_max_ps(t, zero), one)
-        });
-        let mut base = [0i32; LANES];
-        _mm256_storeu_si256(
-            base.as_mut_ptr().cast(),
-            _mm256_add_epi32(
-                ijk[0],
-                _mm256_add_epi32(
-                    _mm256_mullo_epi32(ijk[1], nxv),
-                    _mm256_mullo_epi32(ijk[2], sxyv),
-                ),
-            ),
-        );
-        // Trilinear values. SAFETY: the indices are clamped to [0, dims-2] above, so
-        // base + sxy + nx + 1 < nx ny nz.
-        let mut ptrs = [values; LANES];
-        for (p, &b) in ptrs.iter_mut().zip(&base) {
-            *p = values.add(b as usize);
-        }
-        let (c000, c100) = row(ptrs, 0);
-        let (c010, c110) = row(ptrs, nx);
-        let (c001, c101) = row(ptrs, sxy);
-        let (c011, c111) = row(ptrs, sxy + nx);
-        let x00 = lerp(c000, c100, fr[0]);
-        let x10 = lerp(c010, c110, fr[0]);
-        let x01 = lerp(c001, c101, fr[0]);
-        let x11 = lerp(c011, c111, fr[0]);
-        let y0 = lerp(x00, x10, fr[1]);
-        let y1 = lerp(x01, x11, fr[1]);
-        let v = lerp(y0, y1, fr[2]);
-        // `Lut::position`, then each sample's segment from the one before, in order.
-        let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
-        let uv = _mm256_min_ps(_mm256_max_ps(x, zero), lut_max);
+        // Trilinear values and `Lut::position`; then each sample's segment from the one
+        // before, in order.
+        let (fr, base, uv) = values_at(inv, p, ijk);
         let fractions = || {
             let mut t = [[0.0f32; LANES]; 3];
             for (a, v) in fr.iter().enumerate() {
