@@ -214,6 +214,31 @@ fn refill<T: Copy>(v: &mut Vec<T>, n: usize, x: T) {
     v.resize(n, x);
 }
 
+/// The ray of the tile's pixel `i` (row-major in the tile) when it meets a visible
+/// cell, its view vector recorded in `views[i]`.
+#[inline(always)]
+fn pixel_ray(c: &Caster, px: &Pixels, i: usize, views: &mut [Vec3]) -> Option<Ray> {
+    let tw = px.xs.1 - px.xs.0;
+    let (x, y) = (px.xs.0 + i % tw, px.ys.0 + i / tw);
+    let (ray, view) = c.ray(x as f32, y as f32, (px.start[i], px.end[i]))?;
+    views[i] = view;
+    Some(ray)
+}
+
+/// Lane `l`'s bit of an eight-bit mask `m`, as a vector mask (all ones or zero).
+///
+/// # Safety
+/// The CPU must support AVX2 (the loops of this module).
+#[inline(always)]
+unsafe fn lane_mask(m: u8) -> __m256i {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
+        let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        let v = _mm256_and_si256(_mm256_set1_epi32(i32::from(m)), lane_bits);
+        _mm256_cmpeq_epi32(v, lane_bits)
+    }
+}
+
 impl Scratch {
     /// Starts a tile of `n` rays: no kept samples, zero colours, and `n` zero
     /// opacities appended to `alpha`. Returns where the tile's opacities start.
@@ -305,9 +330,7 @@ unsafe fn composite_segments(
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let (xs, ys) = (px.xs, px.ys);
-        let tw = xs.1 - xs.0;
-        let n = tw * (ys.1 - ys.0);
+        let n = (px.xs.1 - px.xs.0) * (px.ys.1 - px.ys.0);
         let start = scratch.begin(n, alpha);
         let Scratch { views, kept, .. } = &mut *scratch;
         // INTERLEAVE rays march side by side, one step each in turn: a ray's steps form
@@ -321,9 +344,7 @@ unsafe fn composite_segments(
                 while slot.is_none() && next < n {
                     let i = next;
                     next += 1;
-                    let (x, y) = (xs.0 + i % tw, ys.0 + i / tw);
-                    if let Some((ray, view)) = c.ray(x as f32, y as f32, (px.start[i], px.end[i])) {
-                        views[i] = view;
+                    if let Some(ray) = pixel_ray(c, px, i, views) {
                         *slot = Some(Marcher {
                             k: ray.k0,
                             ray,
@@ -372,9 +393,7 @@ unsafe fn composite_lanes(
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let (xs, ys) = (px.xs, px.ys);
-        let tw = xs.1 - xs.0;
-        let n = tw * (ys.1 - ys.0);
+        let n = (px.xs.1 - px.xs.0) * (px.ys.1 - px.ys.0);
         let start = scratch.begin(n, alpha);
         let Scratch { views, kept, .. } = &mut *scratch;
         let inv = Invariants::new(c);
@@ -389,9 +408,7 @@ unsafe fn composite_lanes(
                 while lanes.live & (1 << l) == 0 && next < n {
                     let i = next;
                     next += 1;
-                    let (x, y) = (xs.0 + i % tw, ys.0 + i / tw);
-                    if let Some((ray, view)) = c.ray(x as f32, y as f32, (px.start[i], px.end[i])) {
-                        views[i] = view;
+                    if let Some(ray) = pixel_ray(c, px, i, views) {
                         lanes.set(l, &ray, i as u32);
                     }
                 }
@@ -462,17 +479,18 @@ impl Lanes {
         // SAFETY: this function's `# Safety` contract, which its callers uphold,
         // covers every unsafe operation below (CPU features, pointer ranges).
         unsafe {
-            let Invariants {
-                cd, dt, hi, zero, ..
-            } = *inv;
+            let Invariants { cd, .. } = *inv;
             let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
             let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
-            let k = ldi(&self.k);
-            // `Ray::t`, `Ray::at`, `Field::locate`, as the reference loop computes them.
-            let t = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(k), ld(&self.j)), dt);
-            let p = axes!(|a| _mm256_add_ps(ld(&self.o[a]), _mm256_mul_ps(ld(&self.d[a]), t)));
-            let ijk =
-                axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
+            // Sample k's position and cell per lane: `Ray::t`, `Ray::at` and
+            // `Field::locate`, as the reference loop computes them.
+            let (o, d, j) = (
+                axes!(|a| ld(&self.o[a])),
+                axes!(|a| ld(&self.d[a])),
+                ld(&self.j),
+            );
+            let (k, k1) = (ldi(&self.k), ldi(&self.k1));
+            let (p, ijk) = positions(inv, (o, d, j), k);
             let cells = axes!(|a| _mm256_srli_epi32::<2>(ijk[a]));
             const _: () = assert!(MACRO_CELL == 4, "the shift above divides by MACRO_CELL");
             let cell = _mm256_add_epi32(
@@ -498,7 +516,8 @@ impl Lanes {
             let leaps = !(_mm256_movemask_ps(_mm256_castsi256_ps(empty)) as u8) & self.live;
             let samples = self.live & !leaps;
             let mut ended = 0u8;
-            let mut k_next = _mm256_add_epi32(k, _mm256_set1_epi32(1));
+            let k_plus = _mm256_add_epi32(k, _mm256_set1_epi32(1));
+            let mut k_next = k_plus;
             if leaps != 0 {
                 stats.skips += u64::from(leaps.count_ones());
                 k_next = self.leap(k, k_next, cells, dist, leaps);
@@ -507,37 +526,23 @@ impl Lanes {
                 // Each sampling lane takes samples k and k + 1 (when k + 1 <= k1): a
                 // second sample in an empty cell has no opacity, so taking it changes
                 // nothing, and the pair halves the step's fixed work per sample.
-                let k2 = _mm256_add_epi32(k, _mm256_set1_epi32(1));
-                let last = _mm256_cmpgt_epi32(k2, ldi(&self.k1));
+                let last = _mm256_cmpgt_epi32(k_plus, k1);
                 let second = samples & !(_mm256_movemask_ps(_mm256_castsi256_ps(last)) as u8);
                 stats.samples += u64::from(samples.count_ones() + second.count_ones());
                 let first = probe(c, inv, p, ijk);
                 ended |= self.keep_hits(c.lut, kept, samples & first.opaque, &first, stats);
                 if second != 0 {
-                    let t2 = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(k2), ld(&self.j)), dt);
-                    let p2 =
-                        axes!(|a| _mm256_add_ps(ld(&self.o[a]), _mm256_mul_ps(ld(&self.d[a]), t2)));
-                    let ijk2 = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(
-                        _mm256_max_ps(p2[a], zero),
-                        hi[a]
-                    )));
+                    let (p2, ijk2) = positions(inv, (o, d, j), k_plus);
                     let next = probe(c, inv, p2, ijk2);
                     ended |=
                         self.keep_hits(c.lut, kept, second & next.opaque & !ended, &next, stats);
-                    let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-                    let twice = _mm256_cmpeq_epi32(
-                        _mm256_and_si256(_mm256_set1_epi32(i32::from(second)), lane_bits),
-                        lane_bits,
-                    );
                     // All ones is -1: subtracting it steps the second-sample lanes once more.
-                    k_next = _mm256_sub_epi32(k_next, twice);
+                    k_next = _mm256_sub_epi32(k_next, lane_mask(second));
                 }
             }
             _mm256_storeu_si256(self.k.as_mut_ptr().cast(), k_next);
-            let past = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(
-                k_next,
-                ldi(&self.k1),
-            ))) as u8;
+            let past =
+                _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(k_next, k1))) as u8;
             ended = (ended | past) & self.live;
             self.live &= !ended;
             (0..LANES).filter(move |l| ended & (1 << l) != 0)
@@ -631,13 +636,29 @@ impl Lanes {
             let up = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_cvtepi32_ps(kk), y));
             let kk = _mm256_sub_epi32(kk, up);
             let leapt = _mm256_max_epi32(kk, _mm256_add_epi32(k, _mm256_set1_epi32(1)));
-            let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-            let mask = _mm256_cmpeq_epi32(
-                _mm256_and_si256(_mm256_set1_epi32(i32::from(leaps)), lane_bits),
-                lane_bits,
-            );
-            _mm256_blendv_epi8(k_next, leapt, mask)
+            _mm256_blendv_epi8(k_next, leapt, lane_mask(leaps))
         }
+    }
+}
+
+/// Sample `k` per lane of rays `(o, d, j)`: its position and cell, as `Ray::t`,
+/// `Ray::at` and `Field::locate` compute them in the reference loop.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+#[inline(always)]
+unsafe fn positions(
+    inv: &Invariants,
+    (o, d, j): ([__m256; 3], [__m256; 3], __m256),
+    k: __m256i,
+) -> ([__m256; 3], [__m256i; 3]) {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
+        let Invariants { dt, hi, zero, .. } = *inv;
+        let t = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(k), j), dt);
+        let p = axes!(|a| _mm256_add_ps(o[a], _mm256_mul_ps(d[a], t)));
+        let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
+        (p, ijk)
     }
 }
 
@@ -1189,12 +1210,7 @@ unsafe fn light(
         }
         let lobe = first(lobe, cos.len(), 0.0);
         shader.specular.eval_slice(cos, lobe);
-        // Lane j's bit of an eight-bit mask, as a vector mask.
-        let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-        let bits = |m: u8| {
-            let v = _mm256_and_si256(_mm256_set1_epi32(i32::from(m)), lane_bits);
-            _mm256_castsi256_ps(_mm256_cmpeq_epi32(v, lane_bits))
-        };
+        let bits = |m: u8| _mm256_castsi256_ps(lane_mask(m));
         let (ambient, diffuse_k, specular_k) = (
             _mm256_set1_ps(m.ambient),
             _mm256_set1_ps(m.diffuse),
