@@ -575,7 +575,7 @@ pub fn write(path: &Path, volume: &Volume, gzip: bool, endian: Endian) -> Result
     })
 }
 
-/// Writes a single-file NIfTI-2 volume (nifti2.h): like [`write`], with 64-bit
+/// Writes a single-file NIfTI-2 volume (nifti2.h): like [`write()`], with 64-bit
 /// dimensions (so sides over 32767 voxels) and double-precision geometry.
 pub fn write_nifti2(
     path: &Path,

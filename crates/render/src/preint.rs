@@ -35,8 +35,9 @@ pub enum Sampling {
     /// fastest; a shell of opacity thinner than the step is hit or missed.
     #[default]
     Point,
-    /// Each segment between samples integrated ([`PreIntegrated`]): thin shells show
-    /// whatever the step, for 40-50% more frame time on the MNI152 scene.
+    /// Each segment between samples integrated (Engel, Kraus and Ertl 2001; the
+    /// crate-private `PreIntegrated` tables): thin shells show whatever the step, for
+    /// 40-50% more frame time on the MNI152 scene.
     PreIntegrated,
 }
 

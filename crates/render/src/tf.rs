@@ -395,8 +395,9 @@ impl Lut {
         }
     }
 
-    /// Table coordinate of value `v` for [`PreIntegrated::at`]: the argument
-    /// [`Lut::index`] truncates (the same operations, so the same entry).
+    /// Table coordinate of value `v` for the pre-integrated tables (the crate-private
+    /// `PreIntegrated::at`): the argument [`Lut::index`] truncates (the same
+    /// operations, so the same entry).
     #[inline(always)]
     pub fn position(&self, v: f32) -> f32 {
         ((v - self.lo) * self.scale + 0.5)

@@ -109,7 +109,7 @@ fn corners(ports: Ports, v: u32) -> Vec<Input> {
 
 /// The input stream: every corner (see the module), then random inputs until `vectors`
 /// valid inputs (or just the corners if there are more of them), with one clock in
-/// [`BUBBLE_ONE_IN`] a bubble. Half of the random `cos` codes are uniform over the whole
+/// `BUBBLE_ONE_IN` (16) a bubble. Half of the random `cos` codes are uniform over the whole
 /// input range, half over `[0, 1]` where the lobes live. `v` places the corners
 /// `n = 2^v` and the K_v zero crossings.
 pub fn stimulus(ports: Ports, v: u32, vectors: usize, seed: u64) -> Stimulus {
