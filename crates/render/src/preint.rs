@@ -37,7 +37,7 @@ pub enum Sampling {
     Point,
     /// Each segment between samples integrated (Engel, Kraus and Ertl 2001; the
     /// crate-private `PreIntegrated` tables): thin shells show whatever the step, for
-    /// 40-50% more frame time on the MNI152 scene.
+    /// about a third more frame time on the MNI152 scene.
     PreIntegrated,
 }
 
@@ -192,10 +192,9 @@ impl PreIntegrated {
     }
 
     /// Whether some bin from `lo` to `hi` (`lo <= hi < LUT_SIZE`) has opacity:
-    /// [`PreIntegrated::segment`]'s first test, apart for a branch-free pass over many
-    /// segments.
+    /// [`PreIntegrated::segment`]'s first test.
     #[inline(always)]
-    pub fn crosses_opacity(&self, lo: u32, hi: u32) -> bool {
+    fn crosses_opacity(&self, lo: u32, hi: u32) -> bool {
         debug_assert!(lo <= hi && (hi as usize) < LUT_SIZE);
         // SAFETY: hi < LUT_SIZE (this function's contract) and `visible` has
         // LUT_SIZE + 1 entries.
@@ -207,7 +206,7 @@ impl PreIntegrated {
     /// [`PreIntegrated::segment`] for a segment that [`PreIntegrated::crosses_opacity`]:
     /// `[r, g, b, alpha]`, colour linear.
     #[inline(always)]
-    pub fn segment_through_opacity(&self, f: f32, b: f32, last: &mut Last) -> Option<[f32; 4]> {
+    fn segment_through_opacity(&self, f: f32, b: f32, last: &mut Last) -> Option<[f32; 4]> {
         let (bf, bb) = (bin(f), bin(b));
         if bf == bb {
             // SAFETY: bins are below LUT_SIZE, the length of `point`.

@@ -1,18 +1,15 @@
 //! The composite loops on AVX2 + FMA, in two passes over a tile of rays.
 //!
-//! March, point sampling ([`composite_lanes`]): eight rays at a time, one per lane,
-//! each lane taking its own ray's next step of the reference loop (`Caster::composite`):
-//! a leap out of an empty macro cell or one sample (position, cell, trilinear value,
-//! transfer-function entry). A vector's loads then belong to eight independent chains,
-//! where marching one ray eight samples at a time made each step wait on the one
-//! before (and evaluated samples past the ray's end); a lane whose ray stops takes the
-//! tile's next ray.
+//! March ([`composite_lanes`]): eight rays at a time, one per lane, each lane taking
+//! its own ray's next step of the reference loop (`Caster::composite`): a leap out of
+//! an empty macro cell or samples (position, cell, trilinear value, transfer-function
+//! entry; pre-integrated, the segments ending at them, [`crate::preint`], each lane
+//! carrying its ray's last sample as the next segment's front). A vector's loads then
+//! belong to eight independent chains, where marching one ray eight samples at a time
+//! made each step wait on the one before (and evaluated samples past the ray's end);
+//! a lane whose ray stops takes the tile's next ray.
 //!
-//! March, pre-integrated sampling ([`composite_segments`]): each ray takes eight
-//! consecutive samples at a time and composites the segments that end at them
-//! ([`crate::preint`]) in order, each needing the sample before.
-//!
-//! Both stop each ray at the same sample as the reference loop. Opacity needs no
+//! The march stops each ray at the same sample as the reference loop. Opacity needs no
 //! lighting, so the march only records the samples it keeps: where they are, their
 //! colour and their weight.
 //!
@@ -40,7 +37,7 @@ use std::arch::x86_64::*;
 use super::{Caster, Pixels, Ray, RenderStats, TERMINATION_OPACITY};
 use crate::field::MACRO_CELL;
 use crate::math::Vec3;
-use crate::preint::{bin, Last, Sampling};
+use crate::preint::{Last, Sampling};
 use glint_lobe::Geometry;
 
 /// `[e(0), e(1), e(2)]` with `$a` bound to the axis: per-axis vector code written
@@ -306,83 +303,23 @@ pub(super) unsafe fn composite_tile(
     // carries the other's code.
     unsafe {
         if c.sampling == Sampling::PreIntegrated {
-            composite_segments(c, px, scratch, rgb, alpha, stats)
+            composite_lanes::<true>(c, px, scratch, rgb, alpha, stats)
         } else {
-            composite_lanes(c, px, scratch, rgb, alpha, stats)
+            composite_lanes::<false>(c, px, scratch, rgb, alpha, stats)
         }
     }
 }
 
-/// [`composite_tile`] for pre-integrated sampling: each ray in chunks of eight samples
-/// along it, whose segments are integrated in order.
+/// Eight rays marched together, one per lane: each lane takes the reference loop's
+/// next step of its own ray (a leap out of an empty macro cell, or samples:
+/// [`Lanes::step`] for point sampling, [`Lanes::segment_step`] pre-integrated when
+/// `PRE`), so a vector's loads belong to eight independent chains. A lane whose ray
+/// ends takes the tile's next ray.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA ([`supported`]).
 #[target_feature(enable = "avx2,fma")]
-unsafe fn composite_segments(
-    c: &Caster,
-    px: &Pixels,
-    scratch: &mut Scratch,
-    rgb: &mut Vec<[f32; 3]>,
-    alpha: &mut Vec<f32>,
-    stats: &mut RenderStats,
-) {
-    // SAFETY: this function's `# Safety` contract, which its callers uphold,
-    // covers every unsafe operation below (CPU features, pointer ranges).
-    unsafe {
-        let n = (px.xs.1 - px.xs.0) * (px.ys.1 - px.ys.0);
-        let start = scratch.begin(n, alpha);
-        let Scratch { views, kept, .. } = &mut *scratch;
-        // INTERLEAVE rays march side by side, one step each in turn: a ray's steps form
-        // a chain of dependent loads and branches, and the core overlaps the chains of
-        // independent rays.
-        let inv = Invariants::new(c);
-        let mut slots: [Option<Marcher>; INTERLEAVE] = [const { None }; INTERLEAVE];
-        let mut next = 0;
-        loop {
-            for slot in slots.iter_mut() {
-                while slot.is_none() && next < n {
-                    let i = next;
-                    next += 1;
-                    if let Some(ray) = pixel_ray(c, px, i, views) {
-                        *slot = Some(Marcher {
-                            k: ray.k0,
-                            ray,
-                            id: i as u32,
-                            alpha: 0.0,
-                            cached_cell: usize::MAX,
-                            dist: 0,
-                            prev: None,
-                            last: Last::default(),
-                        });
-                    }
-                }
-            }
-            if slots.iter().all(Option::is_none) {
-                break;
-            }
-            for slot in slots.iter_mut() {
-                if let Some(m) = slot {
-                    if !segment_step(c, &inv, m, kept, stats) {
-                        alpha[start + m.id as usize] = m.alpha;
-                        *slot = None;
-                    }
-                }
-            }
-        }
-        finish(c, scratch, &alpha[start..], rgb);
-    }
-}
-
-/// Eight rays marched together, one per lane, for point sampling: each lane takes
-/// the reference loop's next step of its own ray (a leap out of an empty macro cell,
-/// or one sample), so a vector's loads belong to eight independent chains. A lane
-/// whose ray ends takes the tile's next ray.
-///
-/// # Safety
-/// The CPU must support AVX2 and FMA ([`supported`]).
-#[target_feature(enable = "avx2,fma")]
-unsafe fn composite_lanes(
+unsafe fn composite_lanes<const PRE: bool>(
     c: &Caster,
     px: &Pixels,
     scratch: &mut Scratch,
@@ -416,7 +353,12 @@ unsafe fn composite_lanes(
             if lanes.live == 0 {
                 break;
             }
-            for l in lanes.step(c, &inv, kept, stats) {
+            let ended = if PRE {
+                lanes.segment_step(c, &inv, kept, stats)
+            } else {
+                lanes.step(c, &inv, kept, stats)
+            };
+            for l in (0..LANES).filter(|l| ended & (1 << l) != 0) {
                 alpha[start + lanes.id[l] as usize] = lanes.alpha[l];
             }
         }
@@ -441,6 +383,11 @@ struct Lanes {
     k1: [i32; LANES],
     alpha: [f32; LANES],
     id: [u32; LANES],
+    /// Pre-integrated sampling: the last sample read and its table coordinate (the
+    /// front of the next segment; `i32::MIN` for none), and the segment cache.
+    prev_k: [i32; LANES],
+    prev_u: [f32; LANES],
+    last: [Last; LANES],
 }
 
 impl Lanes {
@@ -459,6 +406,8 @@ impl Lanes {
         self.k1[l] = ray.k1.clamp(-(1 << 24), 1 << 24) as i32;
         self.alpha[l] = 0.0;
         self.id[l] = id;
+        self.prev_k[l] = i32::MIN;
+        self.last[l] = Last::default();
         self.live |= 1 << l;
     }
 
@@ -475,11 +424,10 @@ impl Lanes {
         inv: &Invariants,
         kept: &mut Kept,
         stats: &mut RenderStats,
-    ) -> impl Iterator<Item = usize> {
+    ) -> u8 {
         // SAFETY: this function's `# Safety` contract, which its callers uphold,
         // covers every unsafe operation below (CPU features, pointer ranges).
         unsafe {
-            let Invariants { cd, .. } = *inv;
             let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
             let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
             // Sample k's position and cell per lane: `Ray::t`, `Ray::at` and
@@ -491,29 +439,8 @@ impl Lanes {
             );
             let (k, k1) = (ldi(&self.k), ldi(&self.k1));
             let (p, ijk) = positions(inv, (o, d, j), k);
-            let cells = axes!(|a| _mm256_srli_epi32::<2>(ijk[a]));
-            const _: () = assert!(MACRO_CELL == 4, "the shift above divides by MACRO_CELL");
-            let cell = _mm256_add_epi32(
-                cells[0],
-                _mm256_mullo_epi32(
-                    _mm256_set1_epi32(cd[0] as i32),
-                    _mm256_add_epi32(
-                        cells[1],
-                        _mm256_mullo_epi32(_mm256_set1_epi32(cd[1] as i32), cells[2]),
-                    ),
-                ),
-            );
-            // Scalar loads, not a gather (see the module's notes).
-            let mut ci = [0i32; LANES];
-            _mm256_storeu_si256(ci.as_mut_ptr().cast(), cell);
-            let mut dist = [0i32; LANES];
-            for (d, &i) in dist.iter_mut().zip(&ci) {
-                // SAFETY: positions are clamped to the cells, so each index is a cell.
-                *d = i32::from(*c.distance.get_unchecked(i as usize));
-            }
-            let dist = _mm256_loadu_si256(dist.as_ptr().cast());
-            let empty = _mm256_cmpeq_epi32(dist, _mm256_setzero_si256());
-            let leaps = !(_mm256_movemask_ps(_mm256_castsi256_ps(empty)) as u8) & self.live;
+            let (cells, dist, visible) = cell_distances(c, inv, ijk);
+            let leaps = !visible & self.live;
             let samples = self.live & !leaps;
             let mut ended = 0u8;
             let k_plus = _mm256_add_epi32(k, _mm256_set1_epi32(1));
@@ -545,8 +472,142 @@ impl Lanes {
                 _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(k_next, k1))) as u8;
             ended = (ended | past) & self.live;
             self.live &= !ended;
-            (0..LANES).filter(move |l| ended & (1 << l) != 0)
+            ended
         }
+    }
+
+    /// [`Lanes::step`] for pre-integrated sampling, the reference loop's step with
+    /// segments (`Caster::composite`): each sample composites the segment from the
+    /// sample before ([`crate::preint`]). Where sample k lies in a visible cell, the
+    /// segment ending at k, its front read first as sample k - 1 when that was not
+    /// read (after a leap, or at the ray's start: `Caster::before`), and when the
+    /// front was known the segment ending at k + 1 too (as [`Lanes::step`] takes a
+    /// second sample). Where sample k lies in an empty cell, the segment ending at k
+    /// when sample k - 1 was read (it may leave a visible cell), then the leap.
+    /// Returns the lanes whose rays ended, now idle.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    unsafe fn segment_step(
+        &mut self,
+        c: &Caster,
+        inv: &Invariants,
+        kept: &mut Kept,
+        stats: &mut RenderStats,
+    ) -> u8 {
+        // SAFETY: this function's `# Safety` contract, which its callers uphold,
+        // covers every unsafe operation below (CPU features, pointer ranges).
+        unsafe {
+            let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
+            let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
+            let (o, d, j) = (
+                axes!(|a| ld(&self.o[a])),
+                axes!(|a| ld(&self.d[a])),
+                ld(&self.j),
+            );
+            let (k, k1) = (ldi(&self.k), ldi(&self.k1));
+            let one = _mm256_set1_epi32(1);
+            let k_before = _mm256_sub_epi32(k, one);
+            let known_v = _mm256_cmpeq_epi32(ldi(&self.prev_k), k_before);
+            let known = _mm256_movemask_ps(_mm256_castsi256_ps(known_v)) as u8 & self.live;
+            // The two reads of a lane: k - 1 and k where the front is unknown, else k
+            // and k + 1. Sample k's cell decides between sampling and leaping.
+            let first_k = _mm256_blendv_epi8(k_before, k, known_v);
+            let second_k = _mm256_add_epi32(first_k, one);
+            let (p0, ijk0) = positions(inv, (o, d, j), first_k);
+            let (p1, ijk1) = positions(inv, (o, d, j), second_k);
+            let ijk_k = axes!(|a| _mm256_blendv_epi8(ijk1[a], ijk0[a], known_v));
+            let (cells, dist, visible) = cell_distances(c, inv, ijk_k);
+            let visible = visible & self.live;
+            let leaps = self.live & !visible;
+            let beyond = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(second_k, k1)));
+            let reads = visible | (leaps & known);
+            let seconds = visible & !(beyond as u8);
+            let mut k_next = _mm256_add_epi32(k, one);
+            if leaps != 0 {
+                stats.skips += u64::from(leaps.count_ones());
+                k_next = self.leap(k, k_next, cells, dist, leaps);
+            }
+            let mut ended = 0u8;
+            if reads != 0 {
+                let first = reads_at(inv, p0, ijk0, first_k);
+                let second = if seconds != 0 {
+                    reads_at(inv, p1, ijk1, second_k)
+                } else {
+                    first
+                };
+                ended =
+                    self.keep_segments(c, kept, stats, [&first, &second], (reads, known, seconds));
+                // All ones is -1: lanes that read k and k + 1 step once more.
+                k_next = _mm256_sub_epi32(k_next, lane_mask(known & seconds));
+            }
+            _mm256_storeu_si256(self.k.as_mut_ptr().cast(), k_next);
+            let past =
+                _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(k_next, k1))) as u8;
+            ended = (ended | past) & self.live;
+            self.live &= !ended;
+            ended
+        }
+    }
+
+    /// [`Lanes::segment_step`]'s segments: lanes `reads` have read their first
+    /// sample, lanes `seconds` their second as well; a lane in `known` composites the
+    /// segment from its last read to the first, every lane in `seconds` the one from
+    /// its first to its second. Returns the lanes whose rays reached full opacity.
+    #[inline(always)]
+    fn keep_segments(
+        &mut self,
+        c: &Caster,
+        kept: &mut Kept,
+        stats: &mut RenderStats,
+        [first, second]: [&Reads; 2],
+        (reads, known, seconds): (u8, u8, u8),
+    ) -> u8 {
+        let pre = &c.lut.pre;
+        let mut ended = 0u8;
+        let mut m = reads;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let bit = 1u8 << l;
+            let at = |r: &Reads| [r.t[0][l], r.t[1][l], r.t[2][l]];
+            stats.samples += 1;
+            if known & bit != 0 {
+                if let Some(rgba) = pre.segment(self.prev_u[l], first.u[l], &mut self.last[l]) {
+                    if keep(
+                        kept,
+                        (&mut self.alpha[l], self.id[l]),
+                        first.base[l],
+                        at(first),
+                        rgba,
+                        stats,
+                    ) {
+                        ended |= bit;
+                        continue;
+                    }
+                }
+            }
+            (self.prev_k[l], self.prev_u[l]) = (first.k[l], first.u[l]);
+            if seconds & bit != 0 {
+                stats.samples += 1;
+                if let Some(rgba) = pre.segment(first.u[l], second.u[l], &mut self.last[l]) {
+                    if keep(
+                        kept,
+                        (&mut self.alpha[l], self.id[l]),
+                        second.base[l],
+                        at(second),
+                        rgba,
+                        stats,
+                    ) {
+                        ended |= bit;
+                        continue;
+                    }
+                }
+                (self.prev_k[l], self.prev_u[l]) = (second.k[l], second.u[l]);
+            }
+        }
+        ended
     }
 
     /// Keeps the samples of `probe` in the lanes `hits`; returns the lanes whose rays
@@ -638,6 +699,91 @@ impl Lanes {
             let leapt = _mm256_max_epi32(kk, _mm256_add_epi32(k, _mm256_set1_epi32(1)));
             _mm256_blendv_epi8(k_next, leapt, lane_mask(leaps))
         }
+    }
+}
+
+/// One sample per lane, as [`Lanes::keep_segments`] uses it.
+#[derive(Clone, Copy)]
+struct Reads {
+    /// Fractions inside the trilinear cell, per axis.
+    t: [[f32; LANES]; 3],
+    /// Corner-000 voxel.
+    base: [i32; LANES],
+    /// Table coordinate (`Lut::position` of the trilinear value).
+    u: [f32; LANES],
+    /// Sample index.
+    k: [i32; LANES],
+}
+
+/// The samples at positions `p` (cells `ijk`, clamped) with sample indices `k`.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]); `ijk` must be
+/// clamped to the field's cells.
+#[inline(always)]
+unsafe fn reads_at(inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3], k: __m256i) -> Reads {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let (fr, base, uv) = values_at(inv, p, ijk);
+        let mut r = Reads {
+            t: [[0.0; LANES]; 3],
+            base,
+            u: [0.0; LANES],
+            k: [0; LANES],
+        };
+        for (a, v) in fr.iter().enumerate() {
+            _mm256_storeu_ps(r.t[a].as_mut_ptr(), *v);
+        }
+        _mm256_storeu_ps(r.u.as_mut_ptr(), uv);
+        _mm256_storeu_si256(r.k.as_mut_ptr().cast(), k);
+        r
+    }
+}
+
+/// The macro cells of the cells `ijk` (one per lane), their distance-map entries, and
+/// the lanes whose cell is visible (entry 0).
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]); `ijk` must be
+/// clamped to the field's cells.
+#[inline(always)]
+unsafe fn cell_distances(
+    c: &Caster,
+    inv: &Invariants,
+    ijk: [__m256i; 3],
+) -> ([__m256i; 3], __m256i, u8) {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let cd = inv.cd;
+        let cells = axes!(|a| _mm256_srli_epi32::<2>(ijk[a]));
+        const _: () = assert!(MACRO_CELL == 4, "the shift above divides by MACRO_CELL");
+        let cell = _mm256_add_epi32(
+            cells[0],
+            _mm256_mullo_epi32(
+                _mm256_set1_epi32(cd[0] as i32),
+                _mm256_add_epi32(
+                    cells[1],
+                    _mm256_mullo_epi32(_mm256_set1_epi32(cd[1] as i32), cells[2]),
+                ),
+            ),
+        );
+        // Scalar loads, not a gather (see the module's notes).
+        let mut ci = [0i32; LANES];
+        _mm256_storeu_si256(ci.as_mut_ptr().cast(), cell);
+        let mut dist = [0i32; LANES];
+        for (d, &i) in dist.iter_mut().zip(&ci) {
+            // SAFETY: positions are clamped to the cells, so each index is a cell.
+            *d = i32::from(*c.distance.get_unchecked(i as usize));
+        }
+        let dist = _mm256_loadu_si256(dist.as_ptr().cast());
+        let visible = _mm256_cmpeq_epi32(dist, _mm256_setzero_si256());
+        (
+            cells,
+            dist,
+            _mm256_movemask_ps(_mm256_castsi256_ps(visible)) as u8,
+        )
     }
 }
 
@@ -764,10 +910,6 @@ unsafe fn probe(c: &Caster, inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3])
     }
 }
 
-/// Rays marched side by side in a tile (on the MNI152 scene 2 gave 6% over 1, and 3
-/// or 4 no more than 2).
-const INTERLEAVE: usize = 2;
-
 /// [`step`]'s values that are the same for every ray of a frame, computed once per
 /// tile: the loop then keeps them in registers or on the stack. Read from the caster
 /// at each step, they were reloaded and recomputed after every push of a kept sample
@@ -778,8 +920,6 @@ struct Invariants {
     nx: usize,
     sxy: usize,
     cd: [usize; 3],
-    /// 0, 1, .. 7.
-    lanes: __m256,
     dt: __m256,
     /// The last cell's corner per axis, `dims - 2`.
     hi: [__m256; 3],
@@ -808,7 +948,6 @@ impl Invariants {
                 nx,
                 sxy,
                 cd: f.cell_dims,
-                lanes: _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0),
                 dt: _mm256_set1_ps(c.dt),
                 hi: axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32)),
                 zero: _mm256_setzero_ps(),
@@ -823,171 +962,6 @@ impl Invariants {
                 values: f.values.as_ptr(),
             }
         }
-    }
-}
-
-/// A ray being marched: the reference loop's state.
-struct Marcher {
-    ray: Ray,
-    /// The ray's index in its tile.
-    id: u32,
-    /// Next sample.
-    k: i64,
-    alpha: f32,
-    /// The macro cell last looked up, and its distance-map entry.
-    cached_cell: usize,
-    dist: u8,
-    /// The last sample read and its table coordinate: the front of the next segment.
-    prev: Option<(i64, f32)>,
-    /// [`PreIntegrated::segment`]'s cache.
-    last: Last,
-}
-
-/// One step of the march of `m`: a leap over empty space, or a chunk of eight samples
-/// whose kept ones (those composited) go to `kept`. Returns whether the ray goes on.
-///
-/// Each sample composites the segment from the sample before ([`crate::preint`]).
-/// When that one was not read (after a leap, or at the ray's start), the chunk starts
-/// a sample early and its first lane reads only the front of the first segment (the
-/// reference loop's `Caster::before`, with the same arithmetic).
-///
-/// # Safety
-/// The CPU must support AVX2 and FMA (inlined into [`composite_tile`]).
-#[inline(always)]
-unsafe fn segment_step(
-    c: &Caster,
-    inv: &Invariants,
-    m: &mut Marcher,
-    kept: &mut Kept,
-    stats: &mut RenderStats,
-) -> bool {
-    // SAFETY: this function's `# Safety` contract, which its callers uphold,
-    // covers every unsafe operation below (CPU features, pointer ranges).
-    unsafe {
-        let Invariants {
-            cd,
-            lanes,
-            dt,
-            hi,
-            zero,
-            ..
-        } = *inv;
-        let (f, lut) = (c.field, c.lut);
-        let ray = &m.ray;
-        let k = m.k;
-        let lead = match m.prev {
-            Some((pk, _)) if pk == k - 1 => 0,
-            _ => 1,
-        };
-        // Positions o + d t with t = (k0 + j) dt, as `Ray::t` and `Ray::at` compute them
-        // for sample k0 = k - lead + lane.
-        let t = _mm256_mul_ps(
-            _mm256_add_ps(
-                _mm256_add_ps(_mm256_set1_ps((k - lead as i64) as f32), lanes),
-                _mm256_set1_ps(ray.j),
-            ),
-            dt,
-        );
-        let p = axes!(|a| _mm256_add_ps(
-            _mm256_set1_ps(ray.o.get(a)),
-            _mm256_mul_ps(_mm256_set1_ps(ray.d.get(a)), t)
-        ));
-        // `Field::locate`: clamp to the cells, truncate, fractions clamped to [0, 1]
-        // (max/min put 0 for NaN, as f32::max/min do).
-        let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
-        // Empty-space skipping is decided by sample k; the others need no test, since a
-        // segment between samples in inactive cells has zero opacity anyway.
-        let c0 = axes!(|a| {
-            let first = if lead == 0 {
-                _mm256_cvtsi256_si32(ijk[a])
-            } else {
-                _mm256_extract_epi32::<1>(ijk[a])
-            };
-            first as usize / MACRO_CELL
-        });
-        let cell = c0[0] + cd[0] * (c0[1] + cd[1] * c0[2]);
-        if cell != m.cached_cell {
-            m.cached_cell = cell;
-            m.dist = c.distance[cell];
-        }
-        // In empty space: a leap, after the segment that ends at sample k when the
-        // sample before was read (as the reference loop does; one sample, so read
-        // with the reference loop's scalar code).
-        if m.dist != 0 {
-            if let Some((_, front)) = m.prev.filter(|_| lead == 0) {
-                let loc = f.locate(ray.at(ray.t(k, c.dt)));
-                let back = lut.position(f.value_at(&loc));
-                stats.samples += 1;
-                m.prev = Some((k, back));
-                if let Some(rgba) = lut.pre.segment(front, back, &mut m.last) {
-                    if keep(
-                        kept,
-                        (&mut m.alpha, m.id),
-                        loc.base as i32,
-                        loc.t,
-                        rgba,
-                        stats,
-                    ) {
-                        return false;
-                    }
-                }
-            }
-            stats.skips += 1;
-            m.k = c.leap(ray, c0, m.dist, k);
-            return m.k <= ray.k1;
-        }
-        let n = (ray.k1 - k + 1).min((LANES - lead) as i64) as usize;
-        stats.samples += n as u64;
-        // Trilinear values and `Lut::position`; then each sample's segment from the one
-        // before, in order.
-        let (fr, base, uv) = values_at(inv, p, ijk);
-        let fractions = || {
-            let mut t = [[0.0f32; LANES]; 3];
-            for (a, v) in fr.iter().enumerate() {
-                _mm256_storeu_ps(t[a].as_mut_ptr(), *v);
-            }
-            t
-        };
-        let mut u = [0.0f32; LANES];
-        _mm256_storeu_ps(u.as_mut_ptr(), uv);
-        let pre = &lut.pre;
-        let front = match m.prev {
-            Some((_, u)) if lead == 0 => u,
-            _ => u[0],
-        };
-        // Which segments cross opacity, without branches: each lane's bins and the lane
-        // before's (lane 0's front from the chunk before); then those alone, in order.
-        let bv = _mm256_cvttps_epi32(uv);
-        let before = _mm256_blend_epi32::<1>(
-            _mm256_permutevar8x32_epi32(bv, _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6)),
-            _mm256_set1_epi32(bin(front) as i32),
-        );
-        let (mut lo, mut hi) = ([0u32; LANES], [0u32; LANES]);
-        _mm256_storeu_si256(lo.as_mut_ptr().cast(), _mm256_min_epi32(before, bv));
-        _mm256_storeu_si256(hi.as_mut_ptr().cast(), _mm256_max_epi32(before, bv));
-        let mut mask = 0u32;
-        for j in 0..LANES {
-            mask |= (pre.crosses_opacity(lo[j], hi[j]) as u32) << j;
-        }
-        // Lanes lead .. lead + n: the samples of this chunk.
-        mask &= ((1u32 << (lead + n)) - 1) & !((1u32 << lead) - 1);
-        let mut t: Option<[[f32; LANES]; 3]> = None;
-        while mask != 0 {
-            let j = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            let f = if j == lead { front } else { u[j - 1] };
-            let Some(rgba) = pre.segment_through_opacity(f, u[j], &mut m.last) else {
-                continue;
-            };
-            let t = t.get_or_insert_with(fractions);
-            let tj = [t[0][j], t[1][j], t[2][j]];
-            if keep(kept, (&mut m.alpha, m.id), base[j], tj, rgba, stats) {
-                return false;
-            }
-        }
-        m.prev = Some((k + n as i64 - 1, u[lead + n - 1]));
-        m.k = k + n as i64;
-        m.k <= ray.k1
     }
 }
 
