@@ -136,8 +136,8 @@ pub struct SceneFlags {
     pub prefilter: Option<Prefilter>,
     /// Composite mode: point (the transfer function at each sample) or pre-integrated
     /// (integrated between samples, Engel et al. 2001: shells of opacity thinner than
-    /// the step show without slicing rings, for 40-50% more frame time on the MNI152
-    /// scene) [default: point].
+    /// the step show without slicing rings, for about a third more frame time on the
+    /// MNI152 scene) [default: point].
     #[arg(long, value_parser = choice::<Sampling>(Sampling::ALL.map(|p| p.name())))]
     pub sampling: Option<Sampling>,
     /// The length of matter, in mm, whose opacity the transfer function gives (VTK's
