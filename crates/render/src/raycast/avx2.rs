@@ -411,6 +411,48 @@ impl Lanes {
         self.live |= 1 << l;
     }
 
+    /// The lanes' rays `(o, d, j)`, next samples and last samples, as vectors.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    unsafe fn rays(&self) -> (([__m256; 3], [__m256; 3], __m256), __m256i, __m256i) {
+        // SAFETY: the caller runs with AVX2 (this function's contract); the loads read
+        // whole arrays of eight.
+        unsafe {
+            let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
+            let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
+            (
+                (
+                    axes!(|a| ld(&self.o[a])),
+                    axes!(|a| ld(&self.d[a])),
+                    ld(&self.j),
+                ),
+                ldi(&self.k),
+                ldi(&self.k1),
+            )
+        }
+    }
+
+    /// Ends a step: the next samples `k_next`; the lanes `ended` (full opacity) and
+    /// those past their last sample `k1` become idle. Returns them.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    unsafe fn advance(&mut self, k_next: __m256i, k1: __m256i, ended: u8) -> u8 {
+        // SAFETY: the caller runs with AVX2 (this function's contract); the store
+        // writes the whole array of eight.
+        unsafe {
+            _mm256_storeu_si256(self.k.as_mut_ptr().cast(), k_next);
+            let past =
+                _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(k_next, k1))) as u8;
+            let ended = (ended | past) & self.live;
+            self.live &= !ended;
+            ended
+        }
+    }
+
     /// One step of every live lane: a leap where the sample lies in an empty macro
     /// cell (`Caster::leap`, lane by lane in vectors), else the sample. Returns the
     /// lanes whose rays ended, now idle.
@@ -428,17 +470,10 @@ impl Lanes {
         // SAFETY: this function's `# Safety` contract, which its callers uphold,
         // covers every unsafe operation below (CPU features, pointer ranges).
         unsafe {
-            let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
-            let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
+            let (ray, k, k1) = self.rays();
             // Sample k's position and cell per lane: `Ray::t`, `Ray::at` and
             // `Field::locate`, as the reference loop computes them.
-            let (o, d, j) = (
-                axes!(|a| ld(&self.o[a])),
-                axes!(|a| ld(&self.d[a])),
-                ld(&self.j),
-            );
-            let (k, k1) = (ldi(&self.k), ldi(&self.k1));
-            let (p, ijk) = positions(inv, (o, d, j), k);
+            let (p, ijk) = positions(inv, ray, k);
             let (cells, dist, visible) = cell_distances(c, inv, ijk);
             let leaps = !visible & self.live;
             let samples = self.live & !leaps;
@@ -459,7 +494,7 @@ impl Lanes {
                 let first = probe(c, inv, p, ijk);
                 ended |= self.keep_hits(c.lut, kept, samples & first.opaque, &first, stats);
                 if second != 0 {
-                    let (p2, ijk2) = positions(inv, (o, d, j), k_plus);
+                    let (p2, ijk2) = positions(inv, ray, k_plus);
                     let next = probe(c, inv, p2, ijk2);
                     ended |=
                         self.keep_hits(c.lut, kept, second & next.opaque & !ended, &next, stats);
@@ -467,12 +502,7 @@ impl Lanes {
                     k_next = _mm256_sub_epi32(k_next, lane_mask(second));
                 }
             }
-            _mm256_storeu_si256(self.k.as_mut_ptr().cast(), k_next);
-            let past =
-                _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(k_next, k1))) as u8;
-            ended = (ended | past) & self.live;
-            self.live &= !ended;
-            ended
+            self.advance(k_next, k1, ended)
         }
     }
 
@@ -499,24 +529,18 @@ impl Lanes {
         // SAFETY: this function's `# Safety` contract, which its callers uphold,
         // covers every unsafe operation below (CPU features, pointer ranges).
         unsafe {
-            let ld = |v: &[f32; LANES]| _mm256_loadu_ps(v.as_ptr());
-            let ldi = |v: &[i32; LANES]| _mm256_loadu_si256(v.as_ptr().cast());
-            let (o, d, j) = (
-                axes!(|a| ld(&self.o[a])),
-                axes!(|a| ld(&self.d[a])),
-                ld(&self.j),
-            );
-            let (k, k1) = (ldi(&self.k), ldi(&self.k1));
+            let (ray, k, k1) = self.rays();
             let one = _mm256_set1_epi32(1);
             let k_before = _mm256_sub_epi32(k, one);
-            let known_v = _mm256_cmpeq_epi32(ldi(&self.prev_k), k_before);
+            let prev_k = _mm256_loadu_si256(self.prev_k.as_ptr().cast());
+            let known_v = _mm256_cmpeq_epi32(prev_k, k_before);
             let known = _mm256_movemask_ps(_mm256_castsi256_ps(known_v)) as u8 & self.live;
             // The two reads of a lane: k - 1 and k where the front is unknown, else k
             // and k + 1. Sample k's cell decides between sampling and leaping.
             let first_k = _mm256_blendv_epi8(k_before, k, known_v);
             let second_k = _mm256_add_epi32(first_k, one);
-            let (p0, ijk0) = positions(inv, (o, d, j), first_k);
-            let (p1, ijk1) = positions(inv, (o, d, j), second_k);
+            let (p0, ijk0) = positions(inv, ray, first_k);
+            let (p1, ijk1) = positions(inv, ray, second_k);
             let ijk_k = axes!(|a| _mm256_blendv_epi8(ijk1[a], ijk0[a], known_v));
             let (cells, dist, visible) = cell_distances(c, inv, ijk_k);
             let visible = visible & self.live;
@@ -542,12 +566,7 @@ impl Lanes {
                 // All ones is -1: lanes that read k and k + 1 step once more.
                 k_next = _mm256_sub_epi32(k_next, lane_mask(known & seconds));
             }
-            _mm256_storeu_si256(self.k.as_mut_ptr().cast(), k_next);
-            let past =
-                _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(k_next, k1))) as u8;
-            ended = (ended | past) & self.live;
-            self.live &= !ended;
-            ended
+            self.advance(k_next, k1, ended)
         }
     }
 
@@ -564,50 +583,52 @@ impl Lanes {
         [first, second]: [&Reads; 2],
         (reads, known, seconds): (u8, u8, u8),
     ) -> u8 {
-        let pre = &c.lut.pre;
         let mut ended = 0u8;
         let mut m = reads;
         while m != 0 {
             let l = m.trailing_zeros() as usize;
             m &= m - 1;
             let bit = 1u8 << l;
-            let at = |r: &Reads| [r.t[0][l], r.t[1][l], r.t[2][l]];
-            stats.samples += 1;
-            if known & bit != 0 {
-                if let Some(rgba) = pre.segment(self.prev_u[l], first.u[l], &mut self.last[l]) {
-                    if keep(
-                        kept,
-                        (&mut self.alpha[l], self.id[l]),
-                        first.base[l],
-                        at(first),
-                        rgba,
-                        stats,
-                    ) {
-                        ended |= bit;
-                        continue;
-                    }
-                }
-            }
-            (self.prev_k[l], self.prev_u[l]) = (first.k[l], first.u[l]);
-            if seconds & bit != 0 {
-                stats.samples += 1;
-                if let Some(rgba) = pre.segment(first.u[l], second.u[l], &mut self.last[l]) {
-                    if keep(
-                        kept,
-                        (&mut self.alpha[l], self.id[l]),
-                        second.base[l],
-                        at(second),
-                        rgba,
-                        stats,
-                    ) {
-                        ended |= bit;
-                        continue;
-                    }
-                }
-                (self.prev_k[l], self.prev_u[l]) = (second.k[l], second.u[l]);
+            let front = (known & bit != 0).then_some(self.prev_u[l]);
+            if self.read(c, l, front, first, kept, stats)
+                || (seconds & bit != 0 && self.read(c, l, Some(first.u[l]), second, kept, stats))
+            {
+                ended |= bit;
             }
         }
         ended
+    }
+
+    /// Lane `l`'s read `r`: the segment to it from `front` when that is known, kept if
+    /// it has opacity; the read becomes the lane's last. Returns whether the ray
+    /// reached full opacity.
+    #[inline(always)]
+    fn read(
+        &mut self,
+        c: &Caster,
+        l: usize,
+        front: Option<f32>,
+        r: &Reads,
+        kept: &mut Kept,
+        stats: &mut RenderStats,
+    ) -> bool {
+        stats.samples += 1;
+        (self.prev_k[l], self.prev_u[l]) = (r.k[l], r.u[l]);
+        let Some(f) = front else {
+            return false;
+        };
+        let Some(rgba) = c.lut.pre.segment(f, r.u[l], &mut self.last[l]) else {
+            return false;
+        };
+        let t = [r.t[0][l], r.t[1][l], r.t[2][l]];
+        keep(
+            kept,
+            (&mut self.alpha[l], self.id[l]),
+            r.base[l],
+            t,
+            rgba,
+            stats,
+        )
     }
 
     /// Keeps the samples of `probe` in the lanes `hits`; returns the lanes whose rays
