@@ -1251,8 +1251,8 @@ impl Caster<'_> {
 
     /// The table coordinate of sample `k - 1` of `ray`: the front of the segment
     /// ending at sample `k`, when `k - 1` was not read (a leap or the ray's start just
-    /// before `k`). The SIMD loop reads it as the first lane of its next chunk, with
-    /// the same arithmetic.
+    /// before `k`). The SIMD loop's lanes read it as their first sample of the step
+    /// (`Lanes::segment_step`), with the same arithmetic.
     fn before(&self, ray: &Ray, k: i64) -> f32 {
         let loc = self.field.locate(ray.at(ray.t(k - 1, self.dt)));
         self.lut.position(self.field.value_at(&loc))

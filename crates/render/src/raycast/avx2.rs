@@ -931,7 +931,7 @@ unsafe fn probe(c: &Caster, inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3])
     }
 }
 
-/// [`step`]'s values that are the same for every ray of a frame, computed once per
+/// The lane steps' values that are the same for every ray of a frame, computed once per
 /// tile: the loop then keeps them in registers or on the stack. Read from the caster
 /// at each step, they were reloaded and recomputed after every push of a kept sample
 /// (a call that may reallocate, after which the compiler cannot assume the field
@@ -957,7 +957,7 @@ struct Invariants {
 
 impl Invariants {
     /// # Safety
-    /// The CPU must support AVX2 (inlined into [`composite`]).
+    /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
     #[inline(always)]
     unsafe fn new(c: &Caster) -> Invariants {
         // SAFETY: the caller runs with AVX2 (this function's contract).
