@@ -290,45 +290,13 @@ pub(crate) fn is_gzip(path: &Path) -> Result<bool, IoError> {
     Ok(got == 2 && magic == [0x1f, 0x8b])
 }
 
-/// Spacing = column norms of the affine's 3x3 part.
-pub(crate) fn spacing_of(affine: &[[f64; 4]; 4]) -> [f64; 3] {
-    std::array::from_fn(|c| {
-        (0..3)
-            .map(|r| affine[r][c] * affine[r][c])
-            .sum::<f64>()
-            .sqrt()
-    })
-}
-
-fn det3(a: &[[f64; 4]; 4]) -> f64 {
-    a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-        - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-        + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
-}
-
-/// Checks that an affine is finite and non-singular (relative to its column norms), and
-/// returns its spacing.
+/// Checks that an affine places voxels in 3-D space ([`crate::affine::check`]) and
+/// returns its spacing; the error names the file.
 pub(crate) fn check_affine(path: &Path, affine: &[[f64; 4]; 4]) -> Result<[f64; 3], IoError> {
-    if affine.iter().flatten().any(|x| !x.is_finite()) {
-        return Err(IoError::Geometry {
-            path: path.into(),
-            what: format!("the voxel-to-world affine has non-finite entries: {affine:?}"),
-        });
-    }
-    let spacing = spacing_of(affine);
-    let scale = spacing[0] * spacing[1] * spacing[2];
-    // A determinant that is a tiny fraction of the product of the column norms means the
-    // columns are (nearly) linearly dependent: voxels collapse to a plane or a line.
-    if scale == 0.0 || det3(affine).abs() < 1e-6 * scale {
-        return Err(IoError::Geometry {
-            path: path.into(),
-            what: format!(
-                "the voxel-to-world affine is singular (spacing {spacing:?}, determinant {:e})",
-                det3(affine)
-            ),
-        });
-    }
-    Ok(spacing)
+    crate::affine::check(affine).map_err(|e| IoError::Geometry {
+        path: path.into(),
+        what: e.to_string(),
+    })
 }
 
 /// Checks user- or header-given voxel sizes.

@@ -37,6 +37,7 @@
 
 #![warn(missing_docs)]
 
+pub mod affine;
 mod clock;
 mod common;
 pub mod dicom;

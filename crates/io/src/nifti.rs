@@ -19,7 +19,7 @@ use crate::clock::Clock;
 
 use crate::common::{
     check_affine, checked_voxels, decode_samples, encode_samples, is_gzip, open, os_or_invalid,
-    read_exact_growing, spacing_of, write_atomic, Endian, ScalarType,
+    read_exact_growing, write_atomic, Endian, ScalarType,
 };
 use crate::{IoError, ReadOptions, Volume, VolumeFile};
 
@@ -544,7 +544,7 @@ pub fn write(path: &Path, volume: &Volume, gzip: bool, endian: Endian) -> Result
     }
     put_i16(&mut h, 70, code_of(ty));
     put_i16(&mut h, 72, (8 * ty.size()) as i16);
-    let spacing = spacing_of(&volume.affine);
+    let spacing = crate::affine::spacing(&volume.affine);
     put_f32(&mut h, 76, 1.0);
     for (i, &s) in spacing.iter().enumerate() {
         put_f32(&mut h, 80 + 4 * i, s);
@@ -604,7 +604,7 @@ pub fn write_nifti2(
     for (i, d) in dim.iter().enumerate() {
         put(&mut h, 16 + 8 * i, &d.to_le_bytes());
     }
-    let spacing = spacing_of(&volume.affine);
+    let spacing = crate::affine::spacing(&volume.affine);
     put(&mut h, 104, &1f64.to_le_bytes());
     for (i, s) in spacing.iter().enumerate() {
         put(&mut h, 112 + 8 * i, &s.to_le_bytes());

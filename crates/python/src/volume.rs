@@ -64,37 +64,10 @@ pub fn read(py: Python<'_>, path: PathBuf, max_voxels: Option<u64>) -> PyResult<
 /// that still counts as agreeing: float32 headers carry ~7 significant digits.
 const SPACING_RTOL: f64 = 1e-5;
 
-/// Smallest `|det|` of the affine's 3x3 part, relative to the product of its column
-/// norms, for the voxel axes to span 3-D space; the threshold `glint_io` applies to
-/// file affines (`check_affine` in crates/io/src/common.rs, not public).
-const SINGULAR_RTOL: f64 = 1e-6;
-
-/// Checks a user affine: finite, last row `[0, 0, 0, 1]`, not singular. Returns the
-/// spacing (column norms).
+/// Checks a user affine as the readers check file affines ([`glint_io::affine::check`]):
+/// finite, last row `[0, 0, 0, 1]`, not singular. Returns the spacing (column norms).
 fn check_affine(a: &[[f64; 4]; 4]) -> PyResult<[f64; 3]> {
-    if a.iter().flatten().any(|x| !x.is_finite()) {
-        return Err(PyValueError::new_err(format!(
-            "affine has non-finite entries: {a:?}"
-        )));
-    }
-    if a[3] != [0.0, 0.0, 0.0, 1.0] {
-        return Err(PyValueError::new_err(format!(
-            "affine's last row must be [0, 0, 0, 1], got {:?}",
-            a[3]
-        )));
-    }
-    let spacing: [f64; 3] =
-        std::array::from_fn(|c| (0..3).map(|r| a[r][c] * a[r][c]).sum::<f64>().sqrt());
-    let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-        - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-        + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-    let scale = spacing.iter().product::<f64>();
-    if scale == 0.0 || det.abs() < SINGULAR_RTOL * scale {
-        return Err(PyValueError::new_err(format!(
-            "affine is singular (spacing {spacing:?}, determinant {det:e})"
-        )));
-    }
-    Ok(spacing)
+    glint_io::affine::check(a).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// A voxel-to-world affine, row-major.
