@@ -43,6 +43,7 @@ mod common;
 pub mod dicom;
 pub mod gifti;
 pub mod mesh;
+mod message;
 pub mod nifti;
 pub mod nrrd;
 pub mod raw;
@@ -51,6 +52,7 @@ mod types;
 
 pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
 pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
+pub use message::one_line;
 pub use robust::{robust_range, ROBUST_PERCENTILES, ROBUST_SAMPLES};
 pub use types::{IoError, Mesh, Samples, Volume};
 

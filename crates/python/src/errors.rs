@@ -9,18 +9,7 @@ use pyo3::exceptions::{
 };
 use pyo3::prelude::*;
 
-/// The error and its sources joined with `": "`: the line `glint` prints after
-/// `glint: error: ` (anyhow's `{:#}` format).
-pub fn one_line(err: &dyn Error) -> String {
-    let mut line = err.to_string();
-    let mut source = err.source();
-    while let Some(s) = source {
-        line.push_str(": ");
-        line.push_str(&s.to_string());
-        source = s.source();
-    }
-    line
-}
+pub use glint_io::one_line;
 
 /// A `ValueError` with the error's one-line message.
 pub fn value_error(err: &dyn Error) -> PyErr {

@@ -16,24 +16,21 @@ use glint_io::{open_volume, ReadOptions, Volume};
 use glint_lobe::{Geometry, Lobe, LobeKind, Specular};
 use serde::{Deserialize, Serialize};
 
-use crate::camera::{Camera, CameraSpec, Projection};
-use crate::colormap::ScalarColors;
-use crate::error::RenderError;
-use crate::field::{Field, Prefilter};
+use glint_core::camera::{Camera, CameraSpec, Projection};
+use glint_core::{
+    Image, Light, Material, MaterialOverrides, RenderError, RenderMode, ScalarColors, Shader,
+    Timings, MAX_LIGHTS,
+};
+use glint_raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
+use glint_volume::{
+    preset, Classification, ClassifySettings, Field, FrameSettings, Kernel, Phantom, Prefilter,
+    Sampling, TransferFunction,
+};
+
 use crate::hwlobe::HwCache;
-use crate::image::Image;
-use crate::isosurface::extract_field;
 use crate::meshes::{
     MeshKey, MeshSet, MeshSpec, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS,
 };
-use crate::phantom::Phantom;
-use crate::preint::Sampling;
-use crate::presets::preset;
-use crate::raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
-use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel, Mode};
-use crate::shading::{Light, Shader, MAX_LIGHTS};
-use crate::tf::{Material, MaterialOverrides, TransferFunction};
-use crate::timings::Timings;
 
 /// The scene schema version this build reads and writes.
 pub const SCENE_VERSION: u32 = 1;
@@ -226,58 +223,6 @@ pub struct OpenedVolume {
     pub notes: Vec<String>,
     /// Time spent inflating gzip data, when the reader measured it.
     pub inflate: Option<std::time::Duration>,
-}
-
-/// How samples along a ray make a pixel (the scene's form of [`Mode`], whose iso value
-/// the scene keeps in [`Scene::iso`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum RenderMode {
-    /// Front-to-back compositing of shaded, classified samples.
-    #[default]
-    Composite,
-    /// The first point where the value reaches the iso value, shaded and opaque.
-    Iso,
-    /// Maximum intensity projection.
-    Mip,
-    /// The scene's meshes and the volume's isosurface at [`Scene::iso`], rasterised
-    /// (the mode of every scene with meshes).
-    Surface,
-}
-
-impl RenderMode {
-    /// Every mode, in the order `--help` lists them.
-    pub const ALL: [RenderMode; 4] = [
-        RenderMode::Composite,
-        RenderMode::Iso,
-        RenderMode::Mip,
-        RenderMode::Surface,
-    ];
-
-    /// The name users type.
-    pub fn name(self) -> &'static str {
-        match self {
-            RenderMode::Composite => "composite",
-            RenderMode::Iso => "iso",
-            RenderMode::Mip => "mip",
-            RenderMode::Surface => "surface",
-        }
-    }
-}
-
-impl std::str::FromStr for RenderMode {
-    type Err = RenderError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let key = s.trim().to_ascii_lowercase();
-        RenderMode::ALL
-            .into_iter()
-            .find(|m| m.name() == key)
-            .ok_or_else(|| {
-                RenderError::Parameter(format!(
-                    "unknown mode '{s}': expected composite, iso, mip or surface"
-                ))
-            })
-    }
 }
 
 /// Which lobe a scene uses: one of glint-lobe's closed-form lobes, evaluated in f32,
@@ -827,18 +772,14 @@ impl Scene {
             shade: Some(material.shade),
         };
         let n = *scene.lobe.n.get_or_insert(power);
-        let mode = match (scene.mode, scene.iso) {
-            (RenderMode::Iso, iso) => Mode::Iso {
-                threshold: *scene.iso.get_or_insert(iso.unwrap_or((lo + hi) / 2.0)),
-            },
+        let iso = match (scene.mode, scene.iso) {
+            (RenderMode::Iso, iso) => *scene.iso.get_or_insert(iso.unwrap_or((lo + hi) / 2.0)),
             (_, Some(_)) => {
                 return Err(RenderError::Parameter(
                     "an iso value is only used in iso mode".into(),
                 ))
             }
-            (RenderMode::Composite, None) => Mode::Composite,
-            (RenderMode::Mip, None) => Mode::Mip,
-            (RenderMode::Surface, None) => unreachable!("surface scenes are refused above"),
+            (_, None) => 0.0,
         };
         check_lights(&scene.lights)?;
         if !scene.gate.is_finite() || !(0.0..=1.0).contains(&scene.gate) {
@@ -849,7 +790,8 @@ impl Scene {
         }
         let gate = (scene.gate * (hi - lo) as f64 / field.min_spacing()) as f32;
         let classify = ClassifySettings {
-            mode,
+            mode: scene.mode,
+            iso,
             step: scene.step,
             skip_empty: scene.skip_empty,
             sampling: scene.sampling,
@@ -1128,7 +1070,10 @@ impl Renderer {
         }
         let extra = match (field, iso) {
             (Some(f), Some(iso)) => {
-                let mesh = self.opened.time("isosurface", || extract_field(f, iso))?;
+                let mesh = self.opened.time("isosurface", || {
+                    glint_mesh::extract_grid(f.values(), f.dims(), &f.affine(), iso)
+                        .map_err(crate::mesh_error)
+                })?;
                 if mesh.triangles.is_empty() {
                     return Err(RenderError::Parameter(format!(
                         "no isosurface at iso value {iso}: no voxel edge crosses it"
@@ -1291,7 +1236,7 @@ fn derived(camera: &Camera) -> Derived {
         view_up: camera.up.to_array(),
         view_angle_deg: match camera.projection {
             Projection::Perspective => 2.0 * (camera.half_height as f64).atan().to_degrees(),
-            Projection::Orthographic => crate::camera::FIELD_OF_VIEW_DEG,
+            Projection::Orthographic => glint_core::camera::FIELD_OF_VIEW_DEG,
         },
         parallel_scale: camera.half_height,
         step_mm: None,

@@ -57,19 +57,6 @@ pub enum ViewError {
     Message(String),
 }
 
-/// The error and its sources joined with `": "` (what `glint` prints, anyhow's `{:#}`),
-/// on one line: e.g. an invalid hardware unit names the field at fault.
-fn one_line(err: &dyn std::error::Error) -> String {
-    let mut line = err.to_string();
-    let mut source = err.source();
-    while let Some(s) = source {
-        line.push_str(": ");
-        line.push_str(&s.to_string());
-        source = s.source();
-    }
-    line.replace('\n', " ")
-}
-
 /// Limits and timing of a viewer.
 #[derive(Clone, Copy, Debug)]
 pub struct ViewerConfig {
@@ -275,7 +262,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                     }
                     Ok(Action::Save) => save = true,
                     Err(e) => {
-                        let message = one_line(&e);
+                        let message = glint_io::one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
                     }
                 }
@@ -292,7 +279,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                         }
                     }
                     Ok(Err(e)) => {
-                        let message = one_line(&e);
+                        let message = glint_io::one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
                     }
                     Err(_) => {
