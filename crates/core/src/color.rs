@@ -14,6 +14,13 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
     REC709_LUMA[0] * rgb[0] + REC709_LUMA[1] * rgb[1] + REC709_LUMA[2] * rgb[2]
 }
 
+/// [`luminance`] in f32: the same weights, rounded to f32 (equal to the f32 literals
+/// of the weights: tested), summed left to right.
+#[inline]
+pub fn luminance_f32(rgb: [f32; 3]) -> f32 {
+    REC709_LUMA[0] as f32 * rgb[0] + REC709_LUMA[1] as f32 * rgb[1] + REC709_LUMA[2] as f32 * rgb[2]
+}
+
 /// sRGB-encoded component to linear light (IEC 61966-2-1).
 pub fn srgb_to_linear(c: f64) -> f64 {
     if c <= 0.04045 {
@@ -36,6 +43,12 @@ pub fn linear_to_srgb(c: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn f32_weights_are_the_f32_literals() {
+        assert_eq!(REC709_LUMA.map(|w| w as f32), [0.2126f32, 0.7152, 0.0722]);
+        assert_eq!(luminance_f32([1.0; 3]), 1.0);
+    }
 
     #[test]
     fn srgb_round_trip() {

@@ -35,7 +35,7 @@ mod mode;
 mod timings;
 
 pub use camera::{Camera, CameraSpec, Projection, View};
-pub use color::{linear_to_srgb, luminance, srgb_to_linear};
+pub use color::{linear_to_srgb, luminance, luminance_f32, srgb_to_linear, REC709_LUMA};
 pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
 pub use error::{BoxedError, RenderError};
 pub use image::{

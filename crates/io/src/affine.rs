@@ -18,7 +18,7 @@ pub const SINGULAR_RTOL: f64 = 1e-6;
 pub enum AffineError {
     /// An entry is NaN or infinite.
     #[error("the voxel-to-world affine has non-finite entries: {0:?}")]
-    NonFinite(Affine),
+    NonFinite(Box<Affine>),
     /// The last row is not `[0, 0, 0, 1]`.
     #[error("the voxel-to-world affine's last row must be [0, 0, 0, 1], got {0:?}")]
     LastRow([f64; 4]),
@@ -44,7 +44,7 @@ pub enum AffineError {
 /// ```
 pub fn check(affine: &Affine) -> Result<[f64; 3], AffineError> {
     if affine.iter().flatten().any(|x| !x.is_finite()) {
-        return Err(AffineError::NonFinite(*affine));
+        return Err(AffineError::NonFinite(Box::new(*affine)));
     }
     if affine[3] != [0.0, 0.0, 0.0, 1.0] {
         return Err(AffineError::LastRow(affine[3]));

@@ -53,14 +53,15 @@
 
 mod hwlobe;
 mod meshes;
+mod renderer;
 mod scene;
 
 pub use glint_core::{camera, math};
 pub use glint_core::{
-    linear_to_srgb, luminance, srgb_to_linear, Camera, CameraSpec, ColorMap, Depth, Image, Light,
-    Material, MaterialOverrides, Projection, RenderError, RenderMode, RenderStats, ScalarColors,
-    Shader, Timings, View, COLORMAP_TABLE, MAX_IMAGE_SIDE, MAX_LIGHTS, RING_BLUR_SIGMA,
-    RING_ERODE_PX, RING_OBJECT_ALPHA,
+    linear_to_srgb, luminance, luminance_f32, srgb_to_linear, Camera, CameraSpec, ColorMap, Depth,
+    Image, Light, Material, MaterialOverrides, Projection, RenderError, RenderMode, RenderStats,
+    ScalarColors, Shader, Timings, View, COLORMAP_TABLE, MAX_IMAGE_SIDE, MAX_LIGHTS,
+    RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
 pub use glint_mesh as mesh;
 pub use glint_mesh::vertex_normals;
@@ -72,9 +73,10 @@ pub use glint_volume::{
     PRESETS, TERMINATION_OPACITY,
 };
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
+pub use renderer::{Rendered, Renderer};
 pub use scene::{
-    Derived, Input, LobeSpec, MeshLayer, OpenedVolume, Plan, Rendered, Renderer, Resolved, Scene,
-    SceneLobe, DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
+    Derived, Input, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,
+    DEFAULT_SHININESS, MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
 };
 
 /// A mesh-extraction error as the renderer's: the same variant and message.

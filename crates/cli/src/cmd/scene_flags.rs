@@ -2,7 +2,7 @@
 //! `#[derive(clap::Args)]` struct flattened into each command, and the one function
 //! that applies it to a [`Scene`], so the commands cannot drift apart.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::builder::TypedValueParser;
@@ -168,7 +168,7 @@ impl SceneFlags {
     /// n and v, lights).
     pub fn scene(&self) -> anyhow::Result<Scene> {
         let mut scene = match &self.scene {
-            Some(path) => load_scene(path)?,
+            Some(path) => Scene::load(path)?,
             None => Scene::default(),
         };
         self.apply(&mut scene)?;
@@ -343,29 +343,6 @@ pub fn set<T>(field: &mut T, value: Option<T>) {
     if let Some(v) = value {
         *field = v;
     }
-}
-
-/// Reads a scene file; a relative input path in it is relative to the file.
-pub fn load_scene(path: &Path) -> anyhow::Result<Scene> {
-    let mut scene = Scene::from_json_file(path)?;
-    let Some(dir) = path.parent() else {
-        return Ok(scene);
-    };
-    let rebase = |p: &mut PathBuf| {
-        if p.is_relative() {
-            *p = dir.join(&*p);
-        }
-    };
-    if let Input::Path(p) = &mut scene.input {
-        rebase(p);
-    }
-    for m in &mut scene.meshes {
-        rebase(&mut m.path);
-        if let Some(o) = &mut m.overlay {
-            rebase(&mut o.path);
-        }
-    }
-    Ok(scene)
 }
 
 /// Parses `WxH`.

@@ -4,7 +4,7 @@ use std::net::IpAddr;
 use std::sync::Arc;
 
 use anyhow::Context;
-use glint_render::{Input, SceneLobe};
+use glint_render::SceneLobe;
 use glint_view::{Viewer, ViewerConfig};
 
 use super::choice::choice;
@@ -43,10 +43,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(kind) = args.lobe {
         args.scene.set_lobe(&mut scene, kind);
     }
-    if let Input::Path(p) = &mut scene.input {
-        // Saved scenes name the volume absolutely, so they render from anywhere.
-        *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
-    }
+    // Saved scenes name their files absolutely, so they render from anywhere.
+    let scene = scene.with_absolute_paths()?;
     let config = ViewerConfig {
         max_clients: args.max_clients as usize,
         ..ViewerConfig::default()
