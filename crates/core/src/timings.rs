@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 /// Named stage durations in the order they ran.
 ///
 /// ```
-/// let mut t = glint_render::Timings::default();
+/// let mut t = glint_core::Timings::default();
 /// let x = t.time("sum", || (1..=10).sum::<u32>());
 /// assert_eq!(x, 55);
 /// assert_eq!(t.stages()[0].0, "sum");

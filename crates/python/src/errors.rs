@@ -22,18 +22,22 @@ pub fn value_error(err: &dyn Error) -> PyErr {
 pub fn io_error(py: Python<'_>, err: glint_io::IoError) -> PyErr {
     let message = one_line(&err);
     match err {
-        glint_io::IoError::Os { source, .. } => {
-            let exc = match source.kind() {
-                ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
-                ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
-                ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
-                ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
-                ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
-                _ => PyOSError::new_err(message),
-            };
-            exc.set_cause(py, Some(PyErr::from(source)));
-            exc
-        }
+        glint_io::IoError::Os { source, .. } => os_error(py, message, source),
         _ => PyValueError::new_err(message),
     }
+}
+
+/// An `OSError` (the subclass for the cause) with `message`, the OS error as its
+/// `__cause__`.
+pub fn os_error(py: Python<'_>, message: String, source: std::io::Error) -> PyErr {
+    let exc = match source.kind() {
+        ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+        ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
+        ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
+        ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
+        _ => PyOSError::new_err(message),
+    };
+    exc.set_cause(py, Some(PyErr::from(source)));
+    exc
 }

@@ -4,7 +4,6 @@
 
 use std::time::Instant;
 
-use glint_lobe::LobeKind;
 use glint_render::{
     luminance_f32, srgb_to_linear, Depth, Image, RenderError, RenderStats, Renderer, Scene,
     MAX_IMAGE_SIDE,
@@ -84,9 +83,9 @@ pub fn render_frame(
     let image = match split {
         Split::Off => main.image,
         Split::Side | Split::Diff => {
-            let mut exact = main.scene.clone();
-            exact.lobe.kind = LobeKind::Exact.into();
-            let reference = renderer.render(&exact, &|_| {})?.image;
+            let reference = renderer
+                .render(&glint_compare::exact_scene(&main.scene), &|_| {})?
+                .image;
             if split == Split::Side {
                 side_by_side(&reference, &main.image)
             } else {
@@ -186,6 +185,7 @@ fn difference(a: &Image, b: &Image) -> Image {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glint_lobe::LobeKind;
     use glint_render::{Input, Phantom};
 
     fn scene() -> Scene {

@@ -6,7 +6,6 @@ use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::builder::TypedValueParser;
-use glint_hw::Config as HwConfig;
 use glint_io::{Format, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
@@ -153,14 +152,7 @@ impl SceneFlags {
     /// Makes `scene`'s lobe `kind`; a `hw` lobe takes its unit's v unless --v was
     /// given (a --v that contradicts the unit is refused when the scene is resolved).
     pub fn set_lobe(&self, scene: &mut Scene, kind: SceneLobe) {
-        scene.lobe.kind = kind;
-        if kind == SceneLobe::Hw && self.v.is_none() {
-            scene.lobe.v = scene
-                .lobe
-                .hw
-                .as_ref()
-                .map_or(HwConfig::default().v, |c| c.v);
-        }
+        scene.lobe.set_kind(kind, self.v);
     }
 
     /// The scene file (or the default scene) with every given flag applied. Checks what

@@ -128,3 +128,50 @@ impl Scene {
         paths
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{MeshSpec, Overlay};
+
+    #[test]
+    fn load_rebases_relative_paths_on_the_file_and_save_makes_them_absolute() {
+        let dir = tempfile::tempdir().unwrap();
+        let sub = dir.path().join("study");
+        std::fs::create_dir(&sub).unwrap();
+        let mut mesh = MeshSpec::new("lh.gii");
+        mesh.overlay = Some(Overlay::new("/abs/lh.sulc.gii"));
+        let scene = Scene {
+            input: Input::Path("brain.nii.gz".into()),
+            meshes: vec![mesh],
+            ..Scene::default()
+        };
+        let file = sub.join("scene.json");
+        std::fs::write(&file, scene.to_json().unwrap()).unwrap();
+        let loaded = Scene::load(&file).unwrap();
+        assert_eq!(loaded.input, Input::Path(sub.join("brain.nii.gz")));
+        assert_eq!(loaded.meshes[0].path, sub.join("lh.gii"));
+        // Absolute paths stay as they are.
+        let overlay = loaded.meshes[0].overlay.as_ref().unwrap();
+        assert_eq!(overlay.path, PathBuf::from("/abs/lh.sulc.gii"));
+        // Saved: every path absolute, and loading it back gives the same scene.
+        let saved = dir.path().join("saved.json");
+        scene.save(&saved).unwrap();
+        let back = Scene::load(&saved).unwrap();
+        let cwd = std::env::current_dir().unwrap();
+        assert_eq!(back.input, Input::Path(cwd.join("brain.nii.gz")));
+        assert_eq!(back.meshes[0].path, cwd.join("lh.gii"));
+        assert_eq!(back, scene.with_absolute_paths().unwrap());
+    }
+
+    #[test]
+    fn a_failed_save_leaves_no_file_and_names_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("no-such-dir").join("scene.json");
+        let err = Scene::default().save(&target).unwrap_err();
+        assert!(glint_io::one_line(&err).contains("scene.json"), "{err}");
+        assert!(!target.exists());
+        let err = Scene::load(&dir.path().join("missing.json")).unwrap_err();
+        assert!(matches!(err, RenderError::SceneFile { .. }), "{err:?}");
+    }
+}

@@ -130,6 +130,21 @@ impl LobeSpec {
             ..LobeSpec::default()
         }
     }
+
+    /// Switches to the lobe `kind`. A `hw` lobe squares as often as its unit does, so
+    /// it takes the unit's v (the default unit's when none is set) unless `v` says
+    /// otherwise (a contradicting `v` is refused when the scene is resolved); other
+    /// lobes keep theirs unless `v` is given.
+    pub fn set_kind(&mut self, kind: SceneLobe, v: Option<u32>) {
+        self.kind = kind;
+        match (kind, v) {
+            (_, Some(v)) => self.v = v,
+            (SceneLobe::Hw, None) => {
+                self.v = self.hw.as_ref().map_or(HwConfig::default().v, |c| c.v);
+            }
+            (SceneLobe::Float(_), None) => {}
+        }
+    }
 }
 
 /// [`LobeSpec`] as scene JSON gives it: `v` may be left out, and then follows the

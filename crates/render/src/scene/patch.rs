@@ -100,7 +100,7 @@ mod tests {
         let scene = Scene::default();
         let err = patched(&scene, json!({"camera": {"zoom": "big"}})).unwrap_err();
         assert!(err.to_string().contains("camera.zoom"), "{err}");
-        let err = patched(&scene, json!({"lobe": {"kind": "phong"}})).unwrap_err();
+        let err = patched(&scene, json!({"lobe": {"kind": "lambert"}})).unwrap_err();
         assert!(err.to_string().contains("lobe.kind"), "{err}");
         assert!(patched(&scene, json!({"nonsense": 1})).is_err());
         assert!(patched(&scene, json!({"version": 99})).is_err());
