@@ -10,6 +10,7 @@ use pyo3::exceptions::{
 use pyo3::prelude::*;
 
 pub use glint_io::one_line;
+use glint_render::RenderError;
 
 /// A `ValueError` with the error's one-line message.
 pub fn value_error(err: &dyn Error) -> PyErr {
@@ -40,4 +41,35 @@ pub fn os_error(py: Python<'_>, message: String, source: std::io::Error) -> PyEr
     };
     exc.set_cause(py, Some(PyErr::from(source)));
     exc
+}
+
+/// A render error as Python sees it: reading and writing failures as `glint.read`
+/// raises them, other OS failures `OSError`, everything else `ValueError`.
+pub fn render_error(py: Python<'_>, err: RenderError) -> PyErr {
+    match err {
+        RenderError::Read(e) | RenderError::Write(e) => io_error(py, e),
+        RenderError::Io(e) => {
+            let exc = PyOSError::new_err(one_line(&e));
+            exc.set_cause(py, Some(PyErr::from(e)));
+            exc
+        }
+        // A scene file the system refused (missing, unreadable): the OSError for it.
+        RenderError::SceneFile { path, source } => match *source {
+            RenderError::Io(e) => {
+                let message = one_line(&RenderError::SceneFile {
+                    path,
+                    source: Box::new(RenderError::Io(std::io::Error::new(
+                        e.kind(),
+                        e.to_string(),
+                    ))),
+                });
+                os_error(py, message, e)
+            }
+            source => value_error(&RenderError::SceneFile {
+                path,
+                source: Box::new(source),
+            }),
+        },
+        other => value_error(&other),
+    }
 }

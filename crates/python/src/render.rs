@@ -5,46 +5,14 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use numpy::{PyArray1, PyArrayMethods as _};
-use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
 use glint_render::{Depth, Input, RenderError, Rendered, Renderer as RRenderer, SceneLobe};
 
-use crate::errors;
+use crate::errors::{self, render_error};
 use crate::scene::{with_fields, Scene};
 use crate::volume::Volume;
-
-/// A render error as Python sees it: reading and writing failures as `glint.read`
-/// raises them, other OS failures `OSError`, everything else `ValueError`.
-pub fn render_error(py: Python<'_>, err: RenderError) -> PyErr {
-    match err {
-        RenderError::Read(e) | RenderError::Write(e) => errors::io_error(py, e),
-        RenderError::Io(e) => {
-            let exc = PyOSError::new_err(errors::one_line(&e));
-            exc.set_cause(py, Some(PyErr::from(e)));
-            exc
-        }
-        // A scene file the system refused (missing, unreadable): the OSError for it.
-        RenderError::SceneFile { path, source } => match *source {
-            RenderError::Io(e) => {
-                let message = errors::one_line(&RenderError::SceneFile {
-                    path,
-                    source: Box::new(RenderError::Io(std::io::Error::new(
-                        e.kind(),
-                        e.to_string(),
-                    ))),
-                });
-                errors::os_error(py, message, e)
-            }
-            source => errors::value_error(&RenderError::SceneFile {
-                path,
-                source: Box::new(source),
-            }),
-        },
-        other => errors::value_error(&other),
-    }
-}
 
 /// What a renderer draws: a volume in memory, or a file to read.
 enum Source {

@@ -93,7 +93,7 @@ impl Scene {
     /// relative to the file.
     #[staticmethod]
     fn load(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Scene> {
-        let inner = RScene::load(&path).map_err(|e| crate::render::render_error(py, e))?;
+        let inner = RScene::load(&path).map_err(|e| errors::render_error(py, e))?;
         Ok(Scene { inner })
     }
 
@@ -102,7 +102,7 @@ impl Scene {
     fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
         self.inner
             .save(&path)
-            .map_err(|e| crate::render::render_error(py, e))
+            .map_err(|e| errors::render_error(py, e))
     }
 
     /// The scene as a dict of plain Python values.

@@ -7,7 +7,7 @@
 use std::arch::x86_64::*;
 
 use super::frame::{Binned, EdgeRow, Edges, ScreenVertex};
-use super::tile::{clip, Rect, LANES, LANE_X};
+use super::rect::{clip, Rect, LANES, LANE_X};
 
 /// Whether this CPU can run [`raster`].
 pub(super) fn supported() -> bool {

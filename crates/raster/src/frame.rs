@@ -21,7 +21,7 @@ pub(super) struct ScreenVertex {
 
 /// A triangle binned to a band: its index and its sample-space bounding box clipped
 /// to the image, `[x0, y0, x1, y1]` inclusive (sample coordinates are below
-/// 4 x [`MAX_IMAGE_SIDE`](crate::raycast::MAX_IMAGE_SIDE) = 2^16).
+/// 4 x [`MAX_IMAGE_SIDE`](glint_core::MAX_IMAGE_SIDE) = 2^16).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Binned {
     pub(super) id: u32,

@@ -34,8 +34,10 @@
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+mod ctx;
 mod cull;
 mod frame;
+mod rect;
 mod shade;
 mod tile;
 
@@ -44,8 +46,9 @@ use std::mem::MaybeUninit;
 use glint_io::{IoError, Mesh};
 use rayon::prelude::*;
 
+use self::ctx::Ctx;
 use self::frame::Frame;
-use self::tile::{Ctx, Out, Scratch};
+use self::tile::{Out, Scratch};
 use glint_core::camera::{Camera, CameraSpec};
 use glint_core::Image;
 use glint_core::RenderError;

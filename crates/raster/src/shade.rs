@@ -5,8 +5,8 @@
 use glint_core::camera::Projection;
 use glint_core::{ShadeBatch, Vec3};
 
+use super::ctx::Ctx;
 use super::frame::Frame;
-use super::tile::Ctx;
 use super::Surfaces;
 
 /// Samples a [`Batch`] lights at once.

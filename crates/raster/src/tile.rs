@@ -4,35 +4,12 @@
 
 use std::mem::MaybeUninit;
 
-use super::frame::{Bands, Binned, Edges, Frame, ScreenVertex};
+use super::ctx::Ctx;
+use super::frame::{Bands, Binned, Edges, ScreenVertex};
+use super::rect::{clip, Rect, LANES, LANE_X};
 use super::shade::Batch;
-use super::{SurfaceSettings, Surfaces};
 use glint_core::camera::Projection;
-use glint_core::ScalarColors;
-use glint_core::Shader;
 use glint_core::Vec3;
-
-/// Samples the rasterizer tests at once along a row (one AVX2 vector of f32).
-pub(super) const LANES: usize = 8;
-
-/// Each lane's offset from the first sample of a group.
-pub(super) const LANE_X: [f32; LANES] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
-
-/// What the tiles of a render read: the meshes, the lighting and the colours.
-pub(super) struct Ctx<'a> {
-    pub(super) s: &'a Surfaces,
-    pub(super) frame: &'a Frame,
-    /// The shader with its lights placed for the frame's camera.
-    pub(super) shader: &'a Shader,
-    pub(super) colors: Option<&'a ScalarColors>,
-    pub(super) settings: &'a SurfaceSettings,
-    /// The background is black: each band is zeroed first (one memset over its
-    /// rows, faster than [`Ctx::write_empty`]'s stores), which leaves the tiles no
-    /// triangle meets written.
-    pub(super) zeroed: bool,
-    /// Rasterise with the AVX2 loop ([`super::avx2`]).
-    pub(super) avx2: bool,
-}
 
 /// Buffers a worker reuses from tile to tile and band to band.
 #[derive(Default)]
@@ -55,23 +32,6 @@ pub(super) struct Out<'a> {
     /// Per pixel: the distance to the nearest surface it shows
     /// ([`Surfaces::render_layer`]), when asked for.
     pub(super) far: Option<&'a mut [MaybeUninit<f32>]>,
-}
-
-/// A tile: origin and size in samples.
-#[derive(Clone, Copy)]
-pub(super) struct Rect {
-    pub(super) x0: usize,
-    pub(super) y0: usize,
-    pub(super) w: usize,
-    pub(super) h: usize,
-}
-
-impl Rect {
-    /// Row length of the tile's sample buffers: a group of lanes starting at the last
-    /// sample of a row stays inside the row.
-    pub(super) fn stride(&self) -> usize {
-        self.w + LANES
-    }
 }
 
 impl Ctx<'_> {
@@ -405,16 +365,6 @@ impl TriCache {
             color: [0.0; 3],
         }
     };
-}
-
-/// The part of triangle `t`'s bounding box inside `rect`, `[x0, y0, x1, y1]`
-/// inclusive, or `None` when they do not meet.
-#[inline(always)]
-pub(super) fn clip(t: &Binned, rect: Rect) -> Option<[usize; 4]> {
-    let [bx0, by0, bx1, by1] = t.bbox.map(usize::from);
-    let (x0, y0) = (bx0.max(rect.x0), by0.max(rect.y0));
-    let (x1, y1) = (bx1.min(rect.x0 + rect.w - 1), by1.min(rect.y0 + rect.h - 1));
-    (x0 <= x1 && y0 <= y1).then_some([x0, y0, x1, y1])
 }
 
 /// Keeps, per sample of `rect`, the nearer of triangle `t` (vertices `[a, b, c]`) and

@@ -129,156 +129,19 @@ impl Field {
     /// samples are replaced by the volume's minimum.
     pub fn with_prefilter(volume: &Volume, prefilter: Prefilter) -> Result<Field, RenderError> {
         let dims = volume.dims;
-        if dims.iter().any(|&d| d < 2) {
-            return Err(RenderError::Volume(format!(
-                "dimensions {}x{}x{}: need at least 2 samples along each axis",
-                dims[0], dims[1], dims[2]
-            )));
-        }
-        let count = dims
-            .iter()
-            .try_fold(1usize, |acc, &d| acc.checked_mul(d))
-            .filter(|&c| c <= MAX_FIELD_VOXELS)
-            .ok_or_else(|| {
-                RenderError::Volume(format!(
-                    "dimensions {}x{}x{} exceed the renderer's limit of {MAX_FIELD_VOXELS} voxels",
-                    dims[0], dims[1], dims[2]
-                ))
-            })?;
-        if volume.samples.len() != count {
-            return Err(RenderError::Volume(format!(
-                "{} samples for dimensions {}x{}x{}",
-                volume.samples.len(),
-                dims[0],
-                dims[1],
-                dims[2]
-            )));
-        }
-        let to_world = linear_part(&volume.affine);
-        let origin = [
-            volume.affine[0][3],
-            volume.affine[1][3],
-            volume.affine[2][3],
-        ];
-        if origin.iter().any(|x| !x.is_finite()) {
-            return Err(RenderError::Volume("affine has a non-finite origin".into()));
-        }
-        let to_index = inverse3(&to_world)
-            .ok_or_else(|| RenderError::Volume("affine is singular or not finite".into()))?;
-        let spacing: Vec<f64> = (0..3)
-            .map(|c| (0..3).map(|r| to_world[r][c].powi(2)).sum::<f64>().sqrt())
-            .collect();
-        let min_spacing = spacing.iter().cloned().fold(f64::INFINITY, f64::min);
-
+        let count = checked_count(volume)?;
+        let (to_world, origin, to_index, min_spacing) = placement(&volume.affine)?;
         let mut timings = Timings::default();
-        let mut values = timings.time("field: values", || physical_values(volume));
-        let mut lo = f32::INFINITY;
-        let mut hi = f32::NEG_INFINITY;
-        for &v in &values {
-            if v.is_finite() {
-                lo = lo.min(v);
-                hi = hi.max(v);
-            }
-        }
-        if !lo.is_finite() {
-            return Err(RenderError::Volume(
-                "no finite sample (all NaN or infinite)".into(),
-            ));
-        }
-        values.par_iter_mut().for_each(|v| {
-            if !v.is_finite() {
-                *v = lo;
-            }
-        });
-        if prefilter == Prefilter::Binomial {
-            timings.time("field: prefilter", || binomial(&mut values, dims));
-        }
+        let (values, (lo, hi)) = finite_values(volume, prefilter, &mut timings)?;
         let robust = timings.time("field: robust range", || {
             glint_io::robust_range(values.len(), |i| values[i] as f64)
                 .map(|(a, b)| (a as f32, b as f32))
                 .unwrap_or((lo, hi))
         });
-        let gradients_start = std::time::Instant::now();
-
-        // Gradient in index space g_idx; world gradient = A^-T g_idx (chain rule on
-        // f(x) = f_idx(A^-1 (x - o))).
-        let grad_to_world = transpose3(&to_index);
-        let g: [[f32; 3]; 3] = grad_to_world.map(|row| row.map(|x| x as f32));
-        let [nx, ny, nz] = dims;
-        // Two passes over the central differences (cheap next to the memory a stored
-        // f32 copy would take at the size limit): the largest component, then the
-        // quantised gradients; a row at a time, interior rows without bounds checks.
-        let largest = (0..nz)
-            .into_par_iter()
-            .map_init(
-                || vec![[0.0f32; 3]; nx],
-                |row, k| {
-                    let mut m = 0.0f32;
-                    for j in 0..ny {
-                        row_gradients(&values, dims, &g, j, k, row);
-                        m = row.iter().flatten().fold(m, |m, x| m.max(x.abs()));
-                    }
-                    m
-                },
-            )
-            .reduce(|| 0.0, f32::max);
-        let gradient_scale = if largest > 0.0 && largest.is_finite() {
-            largest / 32767.0
-        } else {
-            1.0
-        };
-        let inv_scale = 1.0 / gradient_scale;
-        let mut gradients = vec![[0i16; 4]; count];
-        gradients.par_chunks_mut(nx * ny).enumerate().for_each_init(
-            || vec![[0.0f32; 3]; nx],
-            |row, (k, slab)| {
-                for j in 0..ny {
-                    row_gradients(&values, dims, &g, j, k, row);
-                    // Rounded half away from zero (without libm's roundf, a call
-                    // per component on baseline x86-64); |x| * inv_scale <= 32767
-                    // up to rounding, and `as` saturates.
-                    let q = |x: f32| {
-                        let y = x * inv_scale;
-                        (y + 0.5f32.copysign(y)) as i16
-                    };
-                    for (o, w) in slab[nx * j..][..nx].iter_mut().zip(row.iter()) {
-                        *o = [q(w[0]), q(w[1]), q(w[2]), 0];
-                    }
-                }
-            },
-        );
-
-        timings.record("field: gradients", gradients_start.elapsed());
-        let cells_start = std::time::Instant::now();
-        // Macro cells: cell c covers voxels c*B ..= c*B + B (one voxel of overlap, so
-        // every trilinear sample inside the cell's box reads only voxels it covers).
-        let cell_dims = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
-        let [cx, cy, cz] = cell_dims;
-        let mut cells = vec![(0.0f32, 0.0f32); cx * cy * cz];
-        cells
-            .par_chunks_mut(cx * cy)
-            .enumerate()
-            .for_each(|(ck, row)| {
-                for cj in 0..cy {
-                    for ci in 0..cx {
-                        let mut lo_c = f32::INFINITY;
-                        let mut hi_c = f32::NEG_INFINITY;
-                        for k in ck * MACRO_CELL..=((ck + 1) * MACRO_CELL).min(nz - 1) {
-                            for j in cj * MACRO_CELL..=((cj + 1) * MACRO_CELL).min(ny - 1) {
-                                let base = nx * (j + ny * k);
-                                for i in ci * MACRO_CELL..=((ci + 1) * MACRO_CELL).min(nx - 1) {
-                                    let v = values[base + i];
-                                    lo_c = lo_c.min(v);
-                                    hi_c = hi_c.max(v);
-                                }
-                            }
-                        }
-                        row[ci + cx * cj] = (lo_c, hi_c);
-                    }
-                }
-            });
-
-        timings.record("field: macro cells", cells_start.elapsed());
+        let (gradients, gradient_scale) = timings.time("field: gradients", || {
+            quantised_gradients(&values, dims, &to_index, count)
+        });
+        let (cell_dims, cells) = timings.time("field: macro cells", || macro_cells(&values, dims));
         Ok(Field {
             timings,
             prefilter,
@@ -480,6 +343,178 @@ impl Field {
         let s = self.gradient_scale;
         Vec3::new(g[0] * s, g[1] * s, g[2] * s)
     }
+}
+
+/// The voxel count of `volume`, checked: at least 2 samples per axis, at most
+/// [`MAX_FIELD_VOXELS`], and as many samples as the dimensions say.
+fn checked_count(volume: &Volume) -> Result<usize, RenderError> {
+    let dims = volume.dims;
+    if dims.iter().any(|&d| d < 2) {
+        return Err(RenderError::Volume(format!(
+            "dimensions {}x{}x{}: need at least 2 samples along each axis",
+            dims[0], dims[1], dims[2]
+        )));
+    }
+    let count = dims
+        .iter()
+        .try_fold(1usize, |acc, &d| acc.checked_mul(d))
+        .filter(|&c| c <= MAX_FIELD_VOXELS)
+        .ok_or_else(|| {
+            RenderError::Volume(format!(
+                "dimensions {}x{}x{} exceed the renderer's limit of {MAX_FIELD_VOXELS} voxels",
+                dims[0], dims[1], dims[2]
+            ))
+        })?;
+    if volume.samples.len() != count {
+        return Err(RenderError::Volume(format!(
+            "{} samples for dimensions {}x{}x{}",
+            volume.samples.len(),
+            dims[0],
+            dims[1],
+            dims[2]
+        )));
+    }
+    Ok(count)
+}
+
+/// The affine's 3x3 part, origin, inverse 3x3 part and smallest spacing.
+fn placement(affine: &[[f64; 4]; 4]) -> Result<(Mat3, [f64; 3], Mat3, f64), RenderError> {
+    let to_world = linear_part(affine);
+    let origin = [affine[0][3], affine[1][3], affine[2][3]];
+    if origin.iter().any(|x| !x.is_finite()) {
+        return Err(RenderError::Volume("affine has a non-finite origin".into()));
+    }
+    let to_index = inverse3(&to_world)
+        .ok_or_else(|| RenderError::Volume("affine is singular or not finite".into()))?;
+    let spacing: Vec<f64> = (0..3)
+        .map(|c| (0..3).map(|r| to_world[r][c].powi(2)).sum::<f64>().sqrt())
+        .collect();
+    let min_spacing = spacing.iter().cloned().fold(f64::INFINITY, f64::min);
+    Ok((to_world, origin, to_index, min_spacing))
+}
+
+/// The physical values with NaN and infinite samples replaced by the smallest finite
+/// one, then prefiltered; and the finite range before the prefilter.
+fn finite_values(
+    volume: &Volume,
+    prefilter: Prefilter,
+    timings: &mut Timings,
+) -> Result<(Vec<f32>, (f32, f32)), RenderError> {
+    let mut values = timings.time("field: values", || physical_values(volume));
+    let mut lo = f32::INFINITY;
+    let mut hi = f32::NEG_INFINITY;
+    for &v in &values {
+        if v.is_finite() {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    if !lo.is_finite() {
+        return Err(RenderError::Volume(
+            "no finite sample (all NaN or infinite)".into(),
+        ));
+    }
+    values.par_iter_mut().for_each(|v| {
+        if !v.is_finite() {
+            *v = lo;
+        }
+    });
+    if prefilter == Prefilter::Binomial {
+        timings.time("field: prefilter", || binomial(&mut values, volume.dims));
+    }
+    Ok((values, (lo, hi)))
+}
+
+/// World gradients of `values` (central differences, one-sided at the faces) as 16-bit
+/// integers times one scale for the volume (the largest component maps to 32767), and
+/// that scale.
+fn quantised_gradients(
+    values: &[f32],
+    dims: [usize; 3],
+    to_index: &Mat3,
+    count: usize,
+) -> (Vec<[i16; 4]>, f32) {
+    // Gradient in index space g_idx; world gradient = A^-T g_idx (chain rule on
+    // f(x) = f_idx(A^-1 (x - o))).
+    let grad_to_world = transpose3(to_index);
+    let g: [[f32; 3]; 3] = grad_to_world.map(|row| row.map(|x| x as f32));
+    let [nx, ny, nz] = dims;
+    // Two passes over the central differences (cheap next to the memory a stored
+    // f32 copy would take at the size limit): the largest component, then the
+    // quantised gradients; a row at a time, interior rows without bounds checks.
+    let largest = (0..nz)
+        .into_par_iter()
+        .map_init(
+            || vec![[0.0f32; 3]; nx],
+            |row, k| {
+                let mut m = 0.0f32;
+                for j in 0..ny {
+                    row_gradients(values, dims, &g, j, k, row);
+                    m = row.iter().flatten().fold(m, |m, x| m.max(x.abs()));
+                }
+                m
+            },
+        )
+        .reduce(|| 0.0, f32::max);
+    let gradient_scale = if largest > 0.0 && largest.is_finite() {
+        largest / 32767.0
+    } else {
+        1.0
+    };
+    let inv_scale = 1.0 / gradient_scale;
+    let mut gradients = vec![[0i16; 4]; count];
+    gradients.par_chunks_mut(nx * ny).enumerate().for_each_init(
+        || vec![[0.0f32; 3]; nx],
+        |row, (k, slab)| {
+            for j in 0..ny {
+                row_gradients(values, dims, &g, j, k, row);
+                // Rounded half away from zero (without libm's roundf, a call
+                // per component on baseline x86-64); |x| * inv_scale <= 32767
+                // up to rounding, and `as` saturates.
+                let q = |x: f32| {
+                    let y = x * inv_scale;
+                    (y + 0.5f32.copysign(y)) as i16
+                };
+                for (o, w) in slab[nx * j..][..nx].iter_mut().zip(row.iter()) {
+                    *o = [q(w[0]), q(w[1]), q(w[2]), 0];
+                }
+            }
+        },
+    );
+    (gradients, gradient_scale)
+}
+
+/// Macro cells: cell c covers voxels c*B ..= c*B + B (one voxel of overlap, so every
+/// trilinear sample inside the cell's box reads only voxels it covers); per cell the
+/// (min, max) of its values.
+fn macro_cells(values: &[f32], dims: [usize; 3]) -> ([usize; 3], Vec<(f32, f32)>) {
+    let [nx, ny, nz] = dims;
+    let cell_dims = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
+    let [cx, cy, cz] = cell_dims;
+    let mut cells = vec![(0.0f32, 0.0f32); cx * cy * cz];
+    cells
+        .par_chunks_mut(cx * cy)
+        .enumerate()
+        .for_each(|(ck, row)| {
+            for cj in 0..cy {
+                for ci in 0..cx {
+                    let mut lo_c = f32::INFINITY;
+                    let mut hi_c = f32::NEG_INFINITY;
+                    for k in ck * MACRO_CELL..=((ck + 1) * MACRO_CELL).min(nz - 1) {
+                        for j in cj * MACRO_CELL..=((cj + 1) * MACRO_CELL).min(ny - 1) {
+                            let base = nx * (j + ny * k);
+                            for i in ci * MACRO_CELL..=((ci + 1) * MACRO_CELL).min(nx - 1) {
+                                let v = values[base + i];
+                                lo_c = lo_c.min(v);
+                                hi_c = hi_c.max(v);
+                            }
+                        }
+                    }
+                    row[ci + cx * cj] = (lo_c, hi_c);
+                }
+            }
+        });
+    (cell_dims, cells)
 }
 
 /// The volume's physical values as f32 (slope and intercept applied), converted in

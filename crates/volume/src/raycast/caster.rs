@@ -3,18 +3,11 @@
 use glint_core::camera::Camera;
 use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3};
 
-#[cfg(target_arch = "x86_64")]
-use super::avx2;
 use super::settings::FrameSettings;
 use super::{ISO_REFINE_STEPS, TERMINATION_OPACITY, TILE};
 use crate::field::{Field, Loc, MACRO_CELL};
 use crate::lut::Lut;
 use crate::preint::{Last, Sampling};
-#[cfg(target_arch = "x86_64")]
-pub(super) use avx2::Scratch;
-/// The SIMD loops' per-thread buffers (none without them).
-#[cfg(not(target_arch = "x86_64"))]
-pub(super) type Scratch = ();
 
 /// Per-render state shared by all rays.
 pub(super) struct Caster<'a> {
@@ -67,33 +60,6 @@ impl Caster<'_> {
                     c[2] + (1.0 - op) * bg[2],
                 ]);
                 alpha.push(op);
-            }
-        }
-    }
-
-    /// [`Caster::tile`] compiled for AVX2 and FMA, with composite rays marched and
-    /// lit by the SIMD loops of [`avx2`] (no FMA contraction anywhere, so results are
-    /// the scalar loop's).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn tile_avx2(
-        &self,
-        px: &Pixels,
-        scratch: &mut Scratch,
-        rgb: &mut Vec<[f32; 3]>,
-        alpha: &mut Vec<f32>,
-        stats: &mut RenderStats,
-    ) {
-        // SAFETY: this function's `# Safety` contract, which its callers uphold,
-        // covers every unsafe operation below (CPU features, pointer ranges).
-        unsafe {
-            if self.mode == RenderMode::Composite {
-                avx2::composite_tile(self, px, scratch, rgb, alpha, stats)
-            } else {
-                self.tile(px, rgb, alpha, stats)
             }
         }
     }

@@ -7,11 +7,11 @@ use rayon::prelude::*;
 use glint_core::camera::Camera;
 use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
 
-use super::caster::{Caster, IndexRays, Pixels, Scratch};
+use super::caster::{Caster, IndexRays, Pixels};
 use super::cells::{active_bounds, chessboard_distance, visible_blocks, visible_cells};
 use super::settings::{ClassifySettings, FrameSettings, Kernel};
 use super::start::StartBounds;
-use super::{simd_supported, TILE};
+use super::{simd_supported, Scratch, TILE};
 use crate::field::Field;
 use crate::lut::Lut;
 use crate::tf::TransferFunction;

@@ -10,6 +10,12 @@ mod start;
 #[cfg(target_arch = "x86_64")]
 mod avx2;
 
+#[cfg(target_arch = "x86_64")]
+use avx2::Scratch;
+/// The SIMD loops' per-thread buffers (none without them).
+#[cfg(not(target_arch = "x86_64"))]
+type Scratch = ();
+
 pub use classify::Classification;
 pub use settings::{ClassifySettings, FrameSettings, Kernel};
 
