@@ -23,6 +23,7 @@
 //! a directory, all or nothing; [`write_report`] regenerates docs/accuracy.md.
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 mod curves;
 mod error;

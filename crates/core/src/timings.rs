@@ -34,7 +34,7 @@ impl Timings {
         }
     }
 
-    /// Appends `other`'s stages (e.g. [`crate::Field::timings`]).
+    /// Appends `other`'s stages (e.g. a field's, glint-volume's `Field::timings`).
     pub fn extend(&mut self, other: &Timings) {
         for &(s, d) in &other.stages {
             self.record(s, d);

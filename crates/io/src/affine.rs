@@ -139,9 +139,10 @@ mod tests {
     fn inverse_times_matrix_is_identity() {
         let m = [[0.9, 0.1, 0.0], [-0.2, 1.1, 0.3], [0.05, 0.0, 2.5]];
         let inv = inverse3(&m).unwrap();
-        for r in 0..3 {
-            let col: [f64; 3] = std::array::from_fn(|c| inv[c][r]);
-            let e = mul3(&m, col);
+        // m · (column r of the inverse) is the r-th unit vector.
+        let t = transpose3(&inv);
+        for (r, col) in t.iter().enumerate() {
+            let e = mul3(&m, *col);
             for (c, x) in e.iter().enumerate() {
                 assert!((x - f64::from(u8::from(c == r))).abs() < 1e-12, "{e:?}");
             }

@@ -50,6 +50,7 @@
 //! It re-exports what front ends use, so they depend on it alone.
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 mod hwlobe;
 mod meshes;

@@ -26,6 +26,7 @@
 //! update a full-resolution frame follows.
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod protocol;
 mod session;

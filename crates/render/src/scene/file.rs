@@ -35,7 +35,7 @@ impl Scene {
     pub fn from_value(value: serde_json::Value) -> Result<Scene, RenderError> {
         let input_given = value.get("input").is_some();
         let scene: Scene = serde_path_to_error::deserialize(value)
-            .map_err(|e| RenderError::Scene(format!("bad scene: {e}")))?;
+            .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
         scene.meshes_only_unless(input_given).check_version()
     }
 

@@ -71,7 +71,7 @@ pub struct Scene {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<MeshSpec>,
     /// Surface renders: samples per pixel along each axis, 1, 2 or 4 (default
-    /// [`DEFAULT_SSAA`]).
+    /// [`DEFAULT_SSAA`](crate::DEFAULT_SSAA)).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ssaa: Option<u32>,
     /// How samples along a ray make a pixel.
@@ -221,7 +221,7 @@ pub struct OpenedVolume {
 }
 
 /// What a render used, in world units, for tools that rebuild the scene elsewhere
-/// (VTK in scripts/bench_vtk.py). Written by [`Renderer::render`]; ignored on input.
+/// (VTK in scripts/bench_vtk.py). Written by [`Renderer::render`](crate::Renderer::render); ignored on input.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Derived {
     /// Eye position, mm (RAS+).

@@ -6,7 +6,7 @@ use glint_core::{RenderError, RenderMode, MAX_IMAGE_SIDE};
 
 use crate::preint::Sampling;
 
-/// What a [`Classification`] depends on besides the transfer function: the mode, the
+/// What a [`Classification`](crate::Classification) depends on besides the transfer function: the mode, the
 /// sample step and empty-space skipping. Changing any of them means classifying again.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClassifySettings {
@@ -74,7 +74,7 @@ impl ClassifySettings {
     }
 }
 
-/// What one frame of a [`Classification`] depends on besides the [`Shader`]: image
+/// What one frame of a [`Classification`](crate::Classification) depends on besides the [`Shader`](glint_core::Shader): image
 /// size, camera, background and the compositing loop. Changing them never classifies
 /// again.
 #[derive(Clone, Copy, Debug, PartialEq)]
