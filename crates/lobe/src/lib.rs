@@ -27,6 +27,7 @@ mod batch;
 mod coefficient;
 mod geometry;
 mod lobe;
+mod sampling;
 mod table;
 
 pub use batch::measure;
@@ -37,4 +38,8 @@ pub use coefficient::{
 };
 pub use geometry::{blinn_cos, phong_cos, reflect, Geometry};
 pub use lobe::{Lobe, LobeError, LobeKind, Real, MAX_N, MAX_V};
+pub use sampling::{
+    blinn_jacobian, direction, reflect_about, AxisLobe, Frame, LobeSample, LobeSampler, Scatter,
+    SpecularSampler, DEFENSIVE_SHARE, DOMINANCE, TABULATED_PDF_MAX_REL_ERROR,
+};
 pub use table::{CosTable, Specular, TableError, MAX_TABLE_FRAC_BITS};
