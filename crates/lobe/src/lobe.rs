@@ -3,7 +3,10 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::coefficient::{energy_fit_coefficient, minimax_coefficient, slope_fit_coefficient};
+use crate::coefficient::{
+    energy_fit_coefficient, minimax_coefficient, power_sphere_integral,
+    schlick_hemisphere_integral, slope_fit_coefficient,
+};
 
 /// Largest shininess exponent accepted. Phong exponents in practice stay below ~1000
 /// (the paper's range); 10000 leaves room for very sharp mirrors.
@@ -115,6 +118,12 @@ pub enum LobeError {
     /// The lobe name is not one of the known kinds.
     #[error("unknown lobe '{0}': expected one of exact, k, g, schlick, gauss, minimax")]
     UnknownKind(String),
+    /// A [`CosTable`](crate::CosTable) was to be sampled but does not say which
+    /// shininess it was made for ([`CosTable::with_shininess`](crate::CosTable::with_shininess)).
+    #[error(
+        "a cosine table without its shininess n and v cannot be sampled (CosTable::with_shininess)"
+    )]
+    TableWithoutShininess,
 }
 
 /// The evaluation form, with its parameters already converted to `T`.
@@ -198,6 +207,30 @@ impl<T: Real> Lobe<T> {
     /// The coefficient `a` of a power fit, `None` for the other kinds.
     pub fn coefficient(&self) -> Option<f64> {
         self.kind.uses_v().then_some(self.a)
+    }
+
+    /// `∫ eval dω` over the whole sphere of directions, in closed form (f64).
+    ///
+    /// `eval` is a function of `c = cos γ` on `[-1, 1]`, so this is `2π ∫_{-1}^{1}
+    /// eval(c) dc`. `exact`: `2π/(n+1)` (`4π` at `n = 0`, where `max(c, 0)^0 = 1` on
+    /// the whole sphere); the power fits with `x = 1 - c`, `m = 2^v`:
+    /// `2π (1 - (1 - a·min(1/a, 2))^(m+1)) / (a(m+1))`, which is `2π/(a(m+1))` wherever
+    /// `a >= 1/2`, so `2π/(n+1)` for K_v whenever `n >= (2^v - 1)/2` (docs/lobes.md,
+    /// "Sampling"); `schlick`: `2π ((n ln n)/(n-1)^2 - 1/(n-1))` (`π` at `n = 1`);
+    /// `gauss`: `2π (1 - e^(-2n))/n`.
+    pub fn sphere_integral(&self) -> f64 {
+        use std::f64::consts::TAU;
+        let n = self.n;
+        match self.kind {
+            LobeKind::Exact if n == 0.0 => 2.0 * TAU,
+            LobeKind::Exact => TAU / (n + 1.0),
+            LobeKind::EnergyFit | LobeKind::SlopeFit | LobeKind::Minimax => {
+                power_sphere_integral(self.a, 1 << self.v)
+            }
+            LobeKind::Schlick => TAU * schlick_hemisphere_integral(n),
+            LobeKind::Gauss if n == 0.0 => 2.0 * TAU,
+            LobeKind::Gauss => TAU * -(-2.0 * n).exp_m1() / n,
+        }
     }
 
     /// Evaluates the lobe at `c = cos γ`.
