@@ -1,4 +1,4 @@
-//! Readers for biomedical volumes (NIfTI, NRRD, DICOM, raw) and surfaces (STL, OBJ,
+//! Readers for biomedical volumes (NIfTI, NRRD, MGH, DICOM, raw) and surfaces (STL, OBJ,
 //! PLY, GIFTI) into one [`Volume`] and one [`Mesh`] type, with writers for round trips.
 //!
 //! ```
@@ -28,6 +28,7 @@
 //! | --- | --- | --- | --- |
 //! | NIfTI-1, NIfTI-2 `.nii`, `.nii.gz`; `.hdr`/`.img` (also ANALYZE 7.5) | [`nifti`] | yes | `.nii` |
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
+//! | FreeSurfer MGH `.mgh`, `.mgz` | [`mgh`] | uchar, short, ushort, int, float | no |
 //! | DICOM file or directory | [`dicom`] | native, deflate, JPEG, JPEG 2000, RLE | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
@@ -43,6 +44,7 @@ mod common;
 pub mod dicom;
 pub mod gifti;
 pub mod mesh;
+pub mod mgh;
 pub mod nifti;
 pub mod nrrd;
 pub mod raw;
@@ -64,6 +66,8 @@ pub enum Format {
     Nifti,
     /// NRRD (`.nrrd`, `.nhdr` + data file).
     Nrrd,
+    /// FreeSurfer MGH (`.mgh`; `.mgz`, `.mgh.gz` gzip-compressed).
+    Mgh,
     /// DICOM (a file or a directory of slices).
     Dicom,
     /// Headerless samples described by the caller.
@@ -84,6 +88,7 @@ impl Format {
         match self {
             Format::Nifti => "NIfTI",
             Format::Nrrd => "NRRD",
+            Format::Mgh => "MGH",
             Format::Dicom => "DICOM",
             Format::Raw => "raw",
             Format::Stl => "STL",
@@ -113,6 +118,7 @@ impl Format {
         Some(match ext {
             "nii" | "hdr" => Format::Nifti,
             "nrrd" | "nhdr" => Format::Nrrd,
+            "mgh" | "mgz" => Format::Mgh,
             "dcm" | "dicom" | "ima" => Format::Dicom,
             "raw" | "bin" | "img" => Format::Raw,
             "stl" => Format::Stl,
@@ -212,6 +218,7 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
     match Format::guess(path) {
         Some(Format::Nifti) => nifti::read(path, options),
         Some(Format::Nrrd) => nrrd::read(path, options),
+        Some(Format::Mgh) => mgh::read(path, options),
         Some(Format::Dicom) => dicom::read(path, options),
         Some(Format::Raw) => unsupported(
             path,
@@ -225,8 +232,8 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
         None if common::has_dicom_magic(path) => dicom::read(path, options),
         None => unsupported(
             path,
-            "unknown volume extension (expected .nii, .nii.gz, .nrrd, .nhdr, .dcm, a DICOM \
-             directory, or raw parameters)",
+            "unknown volume extension (expected .nii, .nii.gz, .nrrd, .nhdr, .mgh, .mgz, .dcm, \
+             a DICOM directory, or raw parameters)",
         ),
     }
 }

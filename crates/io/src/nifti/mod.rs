@@ -17,14 +17,12 @@
 mod header;
 mod write;
 
-use std::io::{BufReader, Read};
+use std::io::Read;
 use std::path::{Path, PathBuf};
-
-use flate2::read::MultiGzDecoder;
 
 use crate::clock::Clock;
 use crate::common::{
-    check_affine, checked_voxels, decode_samples, is_gzip, open, os_or_invalid, read_exact_growing,
+    check_affine, checked_voxels, decode_samples, open_maybe_gz, os_or_invalid, read_exact_growing,
     ScalarType,
 };
 use crate::{IoError, ReadOptions, Samples, Volume, VolumeFile};
@@ -36,20 +34,6 @@ pub use write::{write, write_nifti2};
 const HEADER_SIZE: usize = 348;
 /// The NIfTI-2 header (nifti2.h); its single-file data starts 4 bytes later.
 const HEADER2_SIZE: usize = 540;
-
-/// Opens a file, gunzipping it when it starts with the gzip signature (the time spent
-/// inflating goes to `clock`); the length is known only for an uncompressed file.
-fn open_maybe_gz(path: &Path, clock: &Clock) -> Result<(Box<dyn Read>, Option<u64>), IoError> {
-    let gz = is_gzip(path)?;
-    let file = open(path)?;
-    let len = file.metadata().map(|m| m.len()).ok();
-    Ok(if gz {
-        let inflater = MultiGzDecoder::new(BufReader::new(file));
-        (Box::new(BufReader::new(clock.timed(inflater))), None)
-    } else {
-        (Box::new(BufReader::new(file)), len)
-    })
-}
 
 /// The image file of a `.hdr` (`.img`, or `.img.gz`, beside it).
 fn image_of(path: &Path) -> Result<PathBuf, IoError> {
