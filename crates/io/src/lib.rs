@@ -54,7 +54,7 @@ mod types;
 pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
 pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
 pub use robust::{robust_range, ROBUST_PERCENTILES, ROBUST_SAMPLES};
-pub use types::{IoError, Mesh, Samples, Volume};
+pub use types::{IoError, Mesh, Rgb, Samples, Volume};
 
 use std::path::Path;
 
@@ -153,8 +153,65 @@ pub struct ReadOptions {
     /// Read the file as raw samples with these parameters, whatever its extension.
     pub raw: Option<RawParams>,
     /// Refuse what lenient readers accept with a note: DICOM files without the 128-byte
-    /// preamble or the file meta group, multi-frame DICOM without frame positions.
+    /// preamble or the file meta group, multi-frame DICOM without frame positions,
+    /// DICOM PixelSpacing of zero.
     pub strict: bool,
+    /// What a colour volume's [`Volume::samples`] hold: its luminance (the default) or
+    /// one of its channels. The colour itself is in [`Volume::colour`] either way.
+    pub grey: Grey,
+    /// The DICOM series to read from a directory that holds several, by its
+    /// SeriesInstanceUID; `None` reads the only image series, or the largest (with a
+    /// note naming the others).
+    pub series: Option<String>,
+}
+
+/// The grey a colour volume's [`Volume::samples`] hold ([`ReadOptions::grey`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Grey {
+    /// The luma `0.299 R + 0.587 G + 0.114 B` (ITU-R BT.601, the Y of DICOM's YBR_FULL,
+    /// PS3.3 C.7.6.3.1.2), rounded to the channels' type.
+    #[default]
+    Luminance,
+    /// The red channel.
+    Red,
+    /// The green channel.
+    Green,
+    /// The blue channel.
+    Blue,
+}
+
+impl Grey {
+    /// Every choice, in the order of [`Grey::name`]s users type.
+    pub const ALL: [Grey; 4] = [Grey::Luminance, Grey::Red, Grey::Green, Grey::Blue];
+
+    /// The name on the command line: `luminance`, `red`, `green`, `blue`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Grey::Luminance => "luminance",
+            Grey::Red => "red",
+            Grey::Green => "green",
+            Grey::Blue => "blue",
+        }
+    }
+}
+
+impl std::str::FromStr for Grey {
+    type Err = String;
+    /// Parses a [`Grey::name`] (also `r`, `g`, `b`, `luma`), case-insensitive.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s.trim().to_ascii_lowercase().as_str() {
+            "luminance" | "luma" | "y" => Grey::Luminance,
+            "red" | "r" => Grey::Red,
+            "green" | "g" => Grey::Green,
+            "blue" | "b" => Grey::Blue,
+            _ => {
+                return Err(format!(
+                    "unknown channel '{s}' (expected luminance, red, green or blue)"
+                ))
+            }
+        })
+    }
 }
 
 impl Default for ReadOptions {
@@ -164,6 +221,8 @@ impl Default for ReadOptions {
             max_voxels: 1 << 31,
             raw: None,
             strict: false,
+            grey: Grey::Luminance,
+            series: None,
         }
     }
 }

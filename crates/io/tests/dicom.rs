@@ -220,8 +220,10 @@ fn gap_and_duplicate_slices_are_errors() {
     );
 }
 
+/// A directory with two series reads the larger with a note naming the other, or the
+/// one `series` names; an unknown UID is an error listing the series there.
 #[test]
-fn mixed_series_are_errors() {
+fn mixed_series_read_the_largest_or_the_one_named() {
     let dir = tempfile::tempdir().unwrap();
     ct_series(dir.path(), &[0.0, 2.0], EXPLICIT_LE);
     let mut o = image(2, 3, "1.2.3.100", 50, true);
@@ -238,9 +240,29 @@ fn mixed_series_are_errors() {
         PrimitiveValue::U16(vec![0; 6].into()),
     );
     write(&dir.path().join("other.dcm"), o, EXPLICIT_LE);
-    let err = glint_io::read_volume(dir.path(), &ReadOptions::default()).unwrap_err();
-    assert!(matches!(err, IoError::MixedSeries { .. }), "{err}");
-    assert!(err.to_string().contains("1.2.3.100"), "{err}");
+    let f = glint_io::open_volume(dir.path(), &ReadOptions::default()).unwrap();
+    assert_eq!(f.volume.dims[2], 2);
+    let note = f.notes.iter().find(|n| n.contains("image series here"));
+    let note = note.unwrap_or_else(|| panic!("{:?}", f.notes));
+    assert!(
+        note.contains("the largest") && note.contains("1.2.3.100"),
+        "{note}"
+    );
+    let other = ReadOptions {
+        series: Some("1.2.3.100".into()),
+        ..ReadOptions::default()
+    };
+    let v = glint_io::read_volume(dir.path(), &other).unwrap();
+    assert_eq!(v.dims, [3, 2, 1]);
+    let none = ReadOptions {
+        series: Some("9.9".into()),
+        ..ReadOptions::default()
+    };
+    let err = glint_io::read_volume(dir.path(), &none).unwrap_err();
+    assert!(
+        err.to_string().contains("no series 9.9") && err.to_string().contains("1.2.3.100"),
+        "{err}"
+    );
 }
 
 fn functional_item(tag: Tag, inner: InMemDicomObject) -> DataElement<InMemDicomObject> {
@@ -624,7 +646,7 @@ fn undecodable_compressed_data_names_the_transfer_syntax() {
         matches!(err, IoError::Invalid { .. }) && err.to_string().contains("JPEG Baseline"),
         "{err}"
     );
-    // JPEG-LS: no CharLS in this build, refused before decoding, by name.
+    // JPEG-LS without a frame header: refused before CharLS sees it, by name.
     let p = dir.path().join("jpegls.dcm");
     write(
         &p,
@@ -633,8 +655,10 @@ fn undecodable_compressed_data_names_the_transfer_syntax() {
     );
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
-        matches!(err, IoError::Unsupported { .. })
-            && err.to_string().contains("JPEG-LS not supported"),
+        matches!(err, IoError::Invalid { .. })
+            && err
+                .to_string()
+                .contains("JPEG-LS pixel data without a frame header"),
         "{err}"
     );
     // A transfer syntax dicom-rs knows but cannot decode (MPEG2).

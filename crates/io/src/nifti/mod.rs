@@ -106,6 +106,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             slope,
             intercept,
             units: None,
+            colour: None,
         },
         format: crate::Format::Nifti,
         notes,

@@ -71,6 +71,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             slope: 1.0,
             intercept: 0.0,
             units: None,
+            colour: None,
         },
         format: Format::Nrrd,
         notes,
