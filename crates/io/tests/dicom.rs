@@ -1,6 +1,8 @@
 //! DICOM: series directories and multi-frame files written with dicom-object in every
 //! uncompressed transfer syntax, and the bad-input cases.
 
+mod common;
+
 use std::path::Path;
 
 use dicom_core::value::{DataSetSequence, PixelFragmentSequence, PrimitiveValue, Value};
@@ -1079,5 +1081,135 @@ fn pixel_spacing_must_agree_across_slices() {
     assert!(
         matches!(err, IoError::MixedSeries { .. }) && err.to_string().contains("PixelSpacing"),
         "{err}"
+    );
+}
+
+/// A radiotherapy export: 16 CT slices beside pydicom's RT structure set, plan and a
+/// one-frame dose grid, and a README. The CT series is read, with notes naming what was
+/// skipped; `dicom::list` names every series and object; the dose grid is read when
+/// asked for, scaled by its DoseGridScaling.
+#[test]
+fn an_export_directory_reads_its_image_series_and_lists_the_rest() {
+    let (Some(rtstruct), Some(rtplan), Some(rtdose)) = (
+        common::sample("pydicom/rtstruct.dcm"),
+        common::sample("pydicom/rtplan.dcm"),
+        common::sample("pydicom/rtdose_1frame.dcm"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let zs: Vec<f64> = (0..16).map(|k| 2.5 * k as f64).collect();
+    ct_series(dir.path(), &zs, EXPLICIT_LE);
+    for p in [&rtstruct, &rtplan, &rtdose] {
+        std::fs::copy(p, dir.path().join(p.file_name().unwrap())).unwrap();
+    }
+    std::fs::write(dir.path().join("README.txt"), "export notes").unwrap();
+
+    let f = glint_io::open_volume(dir.path(), &ReadOptions::default()).unwrap();
+    assert_eq!(f.volume.dims, [3, 2, 16]);
+    let notes = f.notes.join("\n");
+    assert!(
+        notes.contains("skipped 2 object(s): rtplan.dcm (not an image: RT Plan Storage); rtstruct.dcm (not an image: RT Structure Set Storage)"),
+        "{notes}"
+    );
+    assert!(
+        notes.contains("2 image series here: read 1.2.3.99"),
+        "{notes}"
+    );
+    assert!(notes.contains("RTDOSE"), "{notes}");
+    assert!(notes.contains("skipped 1 non-DICOM file(s)"), "{notes}");
+
+    let listing = glint_io::dicom::list(dir.path(), &ReadOptions::default()).unwrap();
+    assert_eq!(listing.series.len(), 2);
+    assert_eq!(
+        (listing.series[0].uid.as_str(), listing.series[0].slices),
+        ("1.2.3.99", 16)
+    );
+    let dose = &listing.series[1];
+    assert_eq!(dose.modality.as_deref(), Some("RTDOSE"));
+    let names: Vec<String> = listing
+        .skipped
+        .iter()
+        .map(|s| {
+            format!(
+                "{} {}",
+                s.path.file_name().unwrap().to_string_lossy(),
+                s.reason
+            )
+        })
+        .collect();
+    assert_eq!(names.len(), 3, "{names:?}");
+    assert!(
+        names[0].starts_with("README.txt not a DICOM file"),
+        "{names:?}"
+    );
+    assert!(names[1].starts_with("rtplan.dcm no PixelData"), "{names:?}");
+    assert_eq!(
+        listing.skipped[2].class.as_deref(),
+        Some("RT Structure Set Storage")
+    );
+
+    // The dose grid, by its series UID: stored values times DoseGridScaling, in its
+    // DoseUnits (RELATIVE in pydicom's file).
+    let obj = dicom_object::open_file(&rtdose).unwrap();
+    let scaling = obj
+        .element(tags::DOSE_GRID_SCALING)
+        .unwrap()
+        .to_float64()
+        .unwrap();
+    let units = obj.element(tags::DOSE_UNITS).unwrap().to_str().unwrap();
+    let o = ReadOptions {
+        series: Some(dose.uid.clone()),
+        ..ReadOptions::default()
+    };
+    let v = glint_io::read_volume(dir.path(), &o).unwrap();
+    assert_eq!(v.dims, [10, 10, 1]);
+    assert_eq!(v.slope, scaling);
+    assert_eq!(v.units.as_deref(), Some(units.trim()));
+}
+
+/// A slice of the chosen series that cannot be read is an error, not a skip.
+#[test]
+fn a_broken_slice_of_the_read_series_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    ct_series(dir.path(), &[0.0, 2.0, 4.0], EXPLICIT_LE);
+    let p = dir.path().join("slice02.dcm");
+    let bytes = std::fs::read(&p).unwrap();
+    std::fs::write(&p, &bytes[..bytes.len() - 4]).unwrap();
+    let e = glint_io::read_volume(dir.path(), &ReadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("slice02.dcm"), "{e}");
+}
+
+/// Colour photometric interpretations glint does not convert are refused by name.
+#[test]
+fn unsupported_colour_models_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut o = image(2, 2, "1.2.3.7", 1, false);
+    put(
+        &mut o,
+        tags::SAMPLES_PER_PIXEL,
+        VR::US,
+        dicom_value!(U16, [3]),
+    );
+    put(
+        &mut o,
+        tags::PHOTOMETRIC_INTERPRETATION,
+        VR::CS,
+        dicom_value!(Str, "YBR_PARTIAL_420"),
+    );
+    put(&mut o, tags::BITS_ALLOCATED, VR::US, dicom_value!(U16, [8]));
+    put(&mut o, tags::BITS_STORED, VR::US, dicom_value!(U16, [8]));
+    put(
+        &mut o,
+        tags::PIXEL_DATA,
+        VR::OB,
+        PrimitiveValue::U8(vec![0; 12].into()),
+    );
+    let p = dir.path().join("partial.dcm");
+    write(&p, o, EXPLICIT_LE);
+    let e = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, IoError::Unsupported { .. }) && e.to_string().contains("YBR_PARTIAL_420"),
+        "{e}"
     );
 }
