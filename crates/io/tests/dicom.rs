@@ -698,8 +698,9 @@ fn jpeg2000_codestream_larger_than_the_image_is_refused() {
     );
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
-        err.to_string()
-            .contains("declares 60000 x 60000 x 1 samples, more than Rows x Columns = 4"),
+        err.to_string().contains(
+            "declares 60000 x 60000 x 1 samples, more than Rows x Columns x SamplesPerPixel = 4"
+        ),
         "{err}"
     );
 }
@@ -1211,5 +1212,29 @@ fn unsupported_colour_models_are_refused_by_name() {
     assert!(
         matches!(e, IoError::Unsupported { .. }) && e.to_string().contains("YBR_PARTIAL_420"),
         "{e}"
+    );
+}
+
+/// A JPEG-LS frame header declaring more samples than Rows x Columns is refused before
+/// CharLS allocates for it.
+#[test]
+fn jpeg_ls_frame_larger_than_the_image_is_refused() {
+    // SOI, SOF55: Lf 11, P 8, Y 60000, X 60000, Nf 1, component 1 (1x1, Tq 0), EOI.
+    let mut cs = vec![0xFF, 0xD8, 0xFF, 0xF7, 0x00, 0x0B, 0x08];
+    cs.extend(60000u16.to_be_bytes());
+    cs.extend(60000u16.to_be_bytes());
+    cs.extend([0x01, 0x01, 0x11, 0x00, 0xFF, 0xD9]);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("jls.dcm");
+    write(
+        &p,
+        compressed_slice(2, 2, 0.0, cs),
+        "1.2.840.10008.1.2.4.80",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("JPEG-LS codestream declares 60000 x 60000 x 1 samples"),
+        "{err}"
     );
 }

@@ -52,6 +52,10 @@ pub struct Args {
     /// preamble or the file meta group, multi-frame DICOM without frame positions.
     #[arg(long)]
     strict: bool,
+    /// The DICOM series to read from a directory that holds several (its
+    /// SeriesInstanceUID, as listed); default: the only or the largest.
+    #[arg(long)]
+    series: Option<String>,
 }
 
 /// Runs `glint info`.
@@ -65,6 +69,7 @@ fn report(args: &Args) -> anyhow::Result<String> {
     let mut options = ReadOptions {
         max_voxels: args.max_voxels,
         strict: args.strict,
+        series: args.series.clone(),
         ..ReadOptions::default()
     };
     if !args.raw_dims.is_empty() {
@@ -145,10 +150,50 @@ fn report(args: &Args) -> anyhow::Result<String> {
         {
             eprintln!("glint: {}: {n}", args.file.display());
         }
+        // A DICOM directory: every series and every object not read, too.
+        let listing = match args.file.is_dir() {
+            true => Some(glint_io::dicom::list(&args.file, &options)?),
+            false => None,
+        };
         if args.json {
-            out = serde_json::to_string_pretty(&volume_json(args, &file))? + "\n";
+            let mut v = volume_json(args, &file);
+            if let Some(l) = &listing {
+                v["series"] = l.series.iter().map(|s| json!({
+                    "uid": s.uid, "modality": s.modality, "description": s.description,
+                    "files": s.files, "slices": s.slices, "dims": [s.columns, s.rows, s.slices],
+                    "photometric": s.photometric,
+                })).collect();
+                v["skipped"] = l
+                    .skipped
+                    .iter()
+                    .map(|k| {
+                        json!({
+                            "file": k.path.display().to_string(), "reason": k.reason,
+                            "class": k.class, "modality": k.modality, "series": k.series,
+                        })
+                    })
+                    .collect();
+            }
+            out = serde_json::to_string_pretty(&v)? + "\n";
         } else {
             print_volume(&mut out, args, &file)?;
+            for s in listing.iter().flat_map(|l| &l.series) {
+                let m = s.modality.as_deref().unwrap_or("?");
+                let d = s
+                    .description
+                    .as_deref()
+                    .map(|d| format!(" '{d}'"))
+                    .unwrap_or_default();
+                let (c, r, n) = (s.columns, s.rows, s.slices);
+                writeln!(
+                    out,
+                    "series:   {} {m}{d}: {c} x {r} x {n} ({} files)",
+                    s.uid, s.files
+                )?;
+            }
+            for k in listing.iter().flat_map(|l| &l.skipped) {
+                writeln!(out, "skipped:  {}: {}", k.path.display(), k.reason)?;
+            }
         }
     }
     Ok(out)
@@ -169,6 +214,7 @@ fn volume_json(args: &Args, f: &VolumeFile) -> Value {
         "intercept": v.intercept,
         "range": [finite_or_null(lo), finite_or_null(hi)],
         "units": v.units,
+        "colour": v.is_colour(),
         "affine_voxel_to_ras_mm": v.affine,
         "notes": f.notes,
     })
@@ -203,6 +249,12 @@ fn print_volume(out: &mut String, args: &Args, f: &VolumeFile) -> std::fmt::Resu
         num(v.spacing[2])
     )?;
     writeln!(out, "type:     {}", v.samples.type_name())?;
+    if v.is_colour() {
+        writeln!(
+            out,
+            "colour:   RGB (the range below is of the grey samples)"
+        )?;
+    }
     if v.slope != 1.0 || v.intercept != 0.0 {
         writeln!(
             out,
