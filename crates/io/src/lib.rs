@@ -18,6 +18,9 @@
 //! assert_eq!(back.affine, vol.affine);
 //! ```
 //!
+//! A colour volume (DICOM RGB and YBR images) carries its RGB planes in
+//! [`Volume::colour`] beside a grey [`Volume::samples`] ([`ReadOptions::grey`]).
+//!
 //! World coordinates are millimetres in RAS+ (x towards the patient's Right, y Anterior,
 //! z Superior), NIfTI's convention; readers of LPS formats (DICOM, NRRD in LPS space)
 //! convert. Every reader checks the announced size against [`ReadOptions::max_voxels`]
@@ -29,7 +32,7 @@
 //! | NIfTI-1, NIfTI-2 `.nii`, `.nii.gz`; `.hdr`/`.img` (also ANALYZE 7.5) | [`nifti`] | yes | `.nii` |
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
 //! | FreeSurfer MGH `.mgh`, `.mgz` | [`mgh`] | uchar, short, ushort, int, float | no |
-//! | DICOM file or directory | [`dicom`] | native, deflate, JPEG, JPEG 2000, RLE | no |
+//! | DICOM file or directory | [`dicom`] | native, deflate, JPEG (8, 12-bit, lossless), JPEG-LS, JPEG 2000, RLE; grey, 1-bit and colour | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
 //! | OBJ | [`mesh`] | yes | yes |

@@ -23,7 +23,7 @@
 //! `M = Mdc^T · diag(delta)`, translation `Pxyz_c - M · (dims / 2)` (a half-voxel
 //! centre for odd sizes: the division is in floating point). When goodRASFlag is not
 //! positive the direction cosines are not valid: FreeSurfer and nibabel then take 1 mm
-//! coronal voxels centred on the origin (`Mdc` = [[-1,0,0],[0,0,1],[0,-1,0]]), and so
+//! coronal voxels centred on the origin (`Mdc = [[-1,0,0],[0,0,1],[0,-1,0]]`), and so
 //! does glint, with a note.
 //!
 //! After the samples may come scan parameters (TR, flip angle, TE, TI, field of view:
