@@ -158,41 +158,13 @@ fn report(args: &Args) -> anyhow::Result<String> {
         if args.json {
             let mut v = volume_json(args, &file);
             if let Some(l) = &listing {
-                v["series"] = l.series.iter().map(|s| json!({
-                    "uid": s.uid, "modality": s.modality, "description": s.description,
-                    "files": s.files, "slices": s.slices, "dims": [s.columns, s.rows, s.slices],
-                    "photometric": s.photometric,
-                })).collect();
-                v["skipped"] = l
-                    .skipped
-                    .iter()
-                    .map(|k| {
-                        json!({
-                            "file": k.path.display().to_string(), "reason": k.reason,
-                            "class": k.class, "modality": k.modality, "series": k.series,
-                        })
-                    })
-                    .collect();
+                listing_json(&mut v, l);
             }
             out = serde_json::to_string_pretty(&v)? + "\n";
         } else {
             print_volume(&mut out, args, &file)?;
-            for s in listing.iter().flat_map(|l| &l.series) {
-                let m = s.modality.as_deref().unwrap_or("?");
-                let d = s
-                    .description
-                    .as_deref()
-                    .map(|d| format!(" '{d}'"))
-                    .unwrap_or_default();
-                let (c, r, n) = (s.columns, s.rows, s.slices);
-                writeln!(
-                    out,
-                    "series:   {} {m}{d}: {c} x {r} x {n} ({} files)",
-                    s.uid, s.files
-                )?;
-            }
-            for k in listing.iter().flat_map(|l| &l.skipped) {
-                writeln!(out, "skipped:  {}: {}", k.path.display(), k.reason)?;
+            if let Some(l) = &listing {
+                print_listing(&mut out, l)?;
             }
         }
     }
@@ -218,6 +190,53 @@ fn volume_json(args: &Args, f: &VolumeFile) -> Value {
         "affine_voxel_to_ras_mm": v.affine,
         "notes": f.notes,
     })
+}
+
+/// The series and skipped objects of a DICOM directory, into `glint info --json`.
+fn listing_json(v: &mut Value, l: &glint_io::dicom::Listing) {
+    v["series"] = l
+        .series
+        .iter()
+        .map(|s| {
+            json!({
+                "uid": s.uid, "modality": s.modality, "description": s.description,
+                "files": s.files, "slices": s.slices, "dims": [s.columns, s.rows, s.slices],
+                "photometric": s.photometric,
+            })
+        })
+        .collect();
+    v["skipped"] = l
+        .skipped
+        .iter()
+        .map(|k| {
+            json!({
+                "file": k.path.display().to_string(), "reason": k.reason,
+                "class": k.class, "modality": k.modality, "series": k.series,
+            })
+        })
+        .collect();
+}
+
+/// One line per series and per skipped object of a DICOM directory.
+fn print_listing(out: &mut String, l: &glint_io::dicom::Listing) -> std::fmt::Result {
+    for s in &l.series {
+        let m = s.modality.as_deref().unwrap_or("?");
+        let d = s
+            .description
+            .as_deref()
+            .map(|d| format!(" '{d}'"))
+            .unwrap_or_default();
+        let (c, r, n) = (s.columns, s.rows, s.slices);
+        writeln!(
+            out,
+            "series:   {} {m}{d}: {c} x {r} x {n} ({} files)",
+            s.uid, s.files
+        )?;
+    }
+    for k in &l.skipped {
+        writeln!(out, "skipped:  {}: {}", k.path.display(), k.reason)?;
+    }
+    Ok(())
 }
 
 fn finite_or_null(x: f64) -> Value {
@@ -419,7 +438,7 @@ fn num(x: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{num, report, Args};
+    use super::{listing_json, num, print_listing, report, Args};
     use clap::Parser;
     use glint_io::{Endian, Mesh, Samples, Volume};
     use serde_json::Value;
@@ -633,5 +652,42 @@ mod tests {
             err.contains("broken.nii") && err.contains("truncated"),
             "{err}"
         );
+    }
+
+    /// A DICOM directory's listing: one line per series and per skipped object, and
+    /// the same in JSON.
+    #[test]
+    fn dicom_listing_lines_and_json() {
+        use glint_io::dicom::{Listing, Series, Skipped};
+        let l = Listing {
+            series: vec![Series {
+                uid: "1.2.3".into(),
+                modality: Some("CT".into()),
+                description: Some("chest".into()),
+                files: 64,
+                slices: 64,
+                columns: 512,
+                rows: 512,
+                photometric: "MONOCHROME2".into(),
+            }],
+            skipped: vec![Skipped {
+                path: "x/rs.dcm".into(),
+                reason: "no PixelData: not an image (RT Structure Set Storage)".into(),
+                class: Some("RT Structure Set Storage".into()),
+                modality: Some("RTSTRUCT".into()),
+                series: Some("1.2.4".into()),
+            }],
+        };
+        let mut out = String::new();
+        print_listing(&mut out, &l).unwrap();
+        assert_eq!(
+            out,
+            "series:   1.2.3 CT 'chest': 512 x 512 x 64 (64 files)\n\
+             skipped:  x/rs.dcm: no PixelData: not an image (RT Structure Set Storage)\n"
+        );
+        let mut v = serde_json::json!({});
+        listing_json(&mut v, &l);
+        assert_eq!(v["series"][0]["dims"], serde_json::json!([512, 512, 64]));
+        assert_eq!(v["skipped"][0]["class"], "RT Structure Set Storage");
     }
 }
