@@ -60,6 +60,16 @@ fn zero_pixel_spacing_is_one_mm_with_a_note_and_refused_when_strict() {
 }
 
 #[test]
+fn a_series_option_that_does_not_match_a_single_file_is_an_error() {
+    let o = ReadOptions {
+        series: Some("9.9.9".into()),
+        ..ReadOptions::default()
+    };
+    let e = dicom::read(&dir().join("pixel_spacing_zero.dcm"), &o).unwrap_err();
+    assert!(e.to_string().contains("not 9.9.9"), "{e}");
+}
+
+#[test]
 fn one_bit_pixels_unpack_across_frames() {
     let f = dicom::read(&dir().join("one_bit_frames.dcm"), &ReadOptions::default()).unwrap();
     let Samples::U8(v) = &f.volume.samples else {

@@ -130,6 +130,20 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         series::select(path, options, &mut notes)?
     } else {
         let h = open_header(path, options.max_voxels, options.strict).map_err(|r| r.error)?;
+        if let Some(uid) = options
+            .series
+            .as_ref()
+            .filter(|u| h.series.as_ref() != Some(u))
+        {
+            return Err(invalid(
+                path,
+                format!(
+                    "the file is series {}, not {}",
+                    one_line(h.series.as_deref().unwrap_or("(none)")),
+                    one_line(uid)
+                ),
+            ));
+        }
         notes.extend(h.notes.iter().cloned());
         vec![h]
     };
