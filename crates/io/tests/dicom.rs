@@ -1238,3 +1238,20 @@ fn jpeg_ls_frame_larger_than_the_image_is_refused() {
         "{err}"
     );
 }
+
+/// Found by fuzzing (2026-11-25, `fuzz/artifacts/dicom/oom-db40bb26...`): an item tag
+/// with a defined length inside an item. dicom-rs reads it as an element and skips its
+/// 13 bytes; the walk took it for a nested item, so the two parted ways and dicom-rs
+/// then allocated 4 GB for an element length the walk never saw. The walk now follows
+/// dicom-parser's state machine and refuses the length before dicom-rs parses the file.
+#[test]
+fn fuzz_crash_an_item_tag_inside_an_item_is_walked_as_dicom_rs_reads_it() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/dicom-oom-db40bb26.dcm");
+    let e = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, IoError::Truncated { .. })
+            && e.to_string()
+                .contains("element (0051,FF00) declares 4292870399 bytes, only 33852 are left"),
+        "{e}"
+    );
+}
