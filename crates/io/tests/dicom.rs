@@ -1255,3 +1255,19 @@ fn fuzz_crash_an_item_tag_inside_an_item_is_walked_as_dicom_rs_reads_it() {
         "{e}"
     );
 }
+
+/// Found by fuzzing (2026-11-25, `oom-90e8df68...`): a bare data set with a 38-byte UL
+/// value. dicom-rs reads 9 whole values (36 bytes) and the next header 2 bytes early,
+/// where it found a length of 0xFFFF0000 and allocated 4 GB; the walk skipped all 38
+/// bytes and never saw it. The walk now consumes what dicom-rs consumes.
+#[test]
+fn fuzz_crash_a_binary_value_of_odd_length_is_walked_as_dicom_rs_reads_it() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/dicom-oom-90e8df68.dcm");
+    let e = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, IoError::Truncated { .. })
+            && e.to_string()
+                .contains("element (0000,0000) declares 4294901760 bytes, only 46 are left"),
+        "{e}"
+    );
+}

@@ -430,12 +430,18 @@ struct Open {
 /// defined length included, is an element whose value is skipped. Where dicom-parser
 /// would stop with an error (an unexpected tag for an item header, a defined length
 /// that ends before the bytes read), the walk stops too: dicom-rs reads nothing further.
-/// (A fuzzed file with an item tag inside an item was read one way here and the other
-/// way by dicom-rs, which then allocated 4 GB for a length the walk never saw.)
+/// (Two fuzzed files were read one way here and another by dicom-rs, which then
+/// allocated 4 GB for a length the walk never saw: an item tag inside an item, and a
+/// 38-byte UL value of which dicom-rs reads 36 bytes.)
 fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<bool, IoError> {
     let mut open: Vec<Open> = Vec::new();
     let mut in_sequence = false;
+    // `pos` is where dicom-parser's reader is in the bytes; `logical` is the position it
+    // counts, which runs ahead where a binary value's length is not a multiple of its
+    // sample size (see `consumed`). Ends of defined-length containers are counted in the
+    // latter, as dicom-parser does.
     let mut pos = 0usize;
+    let mut logical = 0usize;
     let mut has_pixels = false;
     let push = |open: &mut Vec<Open>, o: Open, tag: Tag| {
         open.push(o);
@@ -454,10 +460,10 @@ fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<bool, IoError> {
             end: Some(end),
         }) = open.last().copied()
         {
-            if pos < end {
+            if logical < end {
                 break;
             }
-            if pos > end {
+            if logical > end {
                 // dicom-parser: "inconsistent sequence end"; it reads no further.
                 return Ok(has_pixels);
             }
@@ -469,12 +475,13 @@ fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<bool, IoError> {
             return Ok(has_pixels);
         };
         pos += header;
+        logical += header;
         let left = data.len() - pos;
         let defined = len != UNDEFINED;
         if defined && len as usize > left {
             return Err(too_long(path, tag, len.into(), left));
         }
-        let end = defined.then_some(pos + len as usize);
+        let end = defined.then_some(logical + len as usize);
         if in_sequence {
             match (tag.0, tag.1) {
                 (0xFFFE, 0xE000) => {
@@ -501,14 +508,32 @@ fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<bool, IoError> {
                 }
             }
             _ if tag == tags::PIXEL_DATA && !defined => {
-                pos = walk_fragments(path, data, pos, enc)?;
+                let after = walk_fragments(path, data, pos, enc)?;
+                logical += after - pos;
+                pos = after;
             }
             _ if vr == VR::SQ || !defined => {
                 in_sequence = true;
                 push(&mut open, Open { item: false, end }, tag)?;
             }
-            _ => pos += len as usize,
+            _ => {
+                pos += consumed(vr, len as usize);
+                logical += len as usize;
+            }
         }
+    }
+}
+
+/// The bytes dicom-parser 0.10 reads for a value of `len` bytes: binary numbers are read
+/// as `len / size` whole values (stateful/decode.rs `read_value_ul` and the like), so a
+/// length that is not a multiple of the size leaves the rest unread, and the next
+/// header is read from there.
+fn consumed(vr: VR, len: usize) -> usize {
+    match vr {
+        VR::US | VR::OW | VR::SS => len & !1,
+        VR::AT | VR::UL | VR::OL | VR::SL | VR::FL | VR::OF => len & !3,
+        VR::FD | VR::OD | VR::SV | VR::UV | VR::OV => len & !7,
+        _ => len,
     }
 }
 
