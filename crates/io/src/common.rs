@@ -2,10 +2,13 @@
 //! affine geometry, and atomic writes.
 
 use std::fmt;
-use std::io::{Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
+use flate2::read::MultiGzDecoder;
+
+use crate::clock::Clock;
 use crate::{IoError, Samples};
 
 /// The stored type of a volume's samples.
@@ -272,6 +275,23 @@ pub(crate) fn open(path: &Path) -> Result<std::fs::File, IoError> {
     std::fs::File::open(path).map_err(|e| IoError::Os {
         path: path.into(),
         source: e,
+    })
+}
+
+/// Opens a file, gunzipping it when it starts with the gzip signature (the time spent
+/// inflating goes to `clock`); the length is known only for an uncompressed file.
+pub(crate) fn open_maybe_gz(
+    path: &Path,
+    clock: &Clock,
+) -> Result<(Box<dyn Read>, Option<u64>), IoError> {
+    let gz = is_gzip(path)?;
+    let file = open(path)?;
+    let len = file.metadata().map(|m| m.len()).ok();
+    Ok(if gz {
+        let inflater = MultiGzDecoder::new(BufReader::new(file));
+        (Box::new(BufReader::new(clock.timed(inflater))), None)
+    } else {
+        (Box::new(BufReader::new(file)), len)
     })
 }
 
