@@ -64,43 +64,42 @@ pub use types::{IoError, Mesh, Rgb, Samples, Volume};
 use std::path::Path;
 
 /// The file formats glint reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::Display)]
 #[non_exhaustive]
 pub enum Format {
     /// NIfTI-1 or NIfTI-2 (`.nii`, `.nii.gz`), or a `.hdr`/`.img` pair (NIfTI or ANALYZE 7.5).
+    #[strum(to_string = "NIfTI")]
     Nifti,
     /// NRRD (`.nrrd`, `.nhdr` + data file).
+    #[strum(to_string = "NRRD")]
     Nrrd,
     /// FreeSurfer MGH (`.mgh`; `.mgz`, `.mgh.gz` gzip-compressed).
+    #[strum(to_string = "MGH")]
     Mgh,
     /// DICOM (a file or a directory of slices).
+    #[strum(to_string = "DICOM")]
     Dicom,
     /// Headerless samples described by the caller.
+    #[strum(to_string = "raw")]
     Raw,
     /// STL, binary or ASCII.
+    #[strum(to_string = "STL")]
     Stl,
     /// Wavefront OBJ.
+    #[strum(to_string = "OBJ")]
     Obj,
     /// Stanford PLY, ASCII or binary.
+    #[strum(to_string = "PLY")]
     Ply,
     /// GIFTI surface (`.gii`, `.gii.gz`).
+    #[strum(to_string = "GIFTI")]
     Gifti,
 }
 
 impl Format {
     /// The format's usual name.
     pub fn name(self) -> &'static str {
-        match self {
-            Format::Nifti => "NIfTI",
-            Format::Nrrd => "NRRD",
-            Format::Mgh => "MGH",
-            Format::Dicom => "DICOM",
-            Format::Raw => "raw",
-            Format::Stl => "STL",
-            Format::Obj => "OBJ",
-            Format::Ply => "PLY",
-            Format::Gifti => "GIFTI",
-        }
+        self.into()
     }
 
     /// Whether the format holds surfaces (else volumes).

@@ -17,7 +17,7 @@ pub(super) const LANES: usize = 8;
 /// samples: `normal` holds world gradients) or [`Shader::shade_normals`] (surface
 /// samples: unit normals); `color` then holds the lit colours. The buffers are kept
 /// between batches, so lighting allocates nothing once they have grown; the columns
-/// hold whole chunks of [`LANES`] samples (entries past the length are computed and
+/// hold whole chunks of eight samples (entries past the length are computed and
 /// ignored).
 #[derive(Clone, Debug, Default)]
 pub struct ShadeBatch {

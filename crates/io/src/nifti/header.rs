@@ -21,7 +21,10 @@ pub(super) fn code_of(ty: ScalarType) -> i16 {
 }
 
 pub(super) fn type_of(code: i16) -> Option<ScalarType> {
-    ScalarType::ALL.into_iter().find(|&t| code_of(t) == code)
+    ScalarType::ALL
+        .iter()
+        .copied()
+        .find(|&t| code_of(t) == code)
 }
 
 /// Names of the NIfTI datatypes this reader refuses, for the error message.
