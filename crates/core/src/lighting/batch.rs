@@ -3,7 +3,7 @@
 //! each step at once and the lobe is evaluated by one call of its SIMD kernel
 //! ([`glint_lobe::Specular::eval_slice`]) for every sample and light; every step is
 //! the scalar form's operation in the same order (no FMA contraction), so a batch gives
-//! [`Shader::shade`] and [`Shader::shade_normal`] bit for bit (tested below). Elsewhere
+//! [`Shader::shade`](super::Shader::shade) and [`Shader::shade_normal`](super::Shader::shade_normal) bit for bit (tested below). Elsewhere
 //! the batch is lit one sample at a time by the scalar form itself.
 
 use crate::math::Vec3;
@@ -12,8 +12,8 @@ use crate::math::Vec3;
 pub(super) const LANES: usize = 8;
 
 /// Samples to light together, as columns. Fill the first [`ShadeBatch::len`] entries
-/// of `normal`, `view` and `color`, then call [`Shader::shade_gradients`] (volume
-/// samples: `normal` holds world gradients) or [`Shader::shade_normals`] (surface
+/// of `normal`, `view` and `color`, then call [`Shader::shade_gradients`](super::Shader::shade_gradients) (volume
+/// samples: `normal` holds world gradients) or [`Shader::shade_normals`](super::Shader::shade_normals) (surface
 /// samples: unit normals); `color` then holds the lit colours. The buffers are kept
 /// between batches, so lighting allocates nothing once they have grown; the columns
 /// hold whole chunks of eight samples (entries past the length are computed and
