@@ -41,8 +41,8 @@ pub struct Outcome {
 ///
 /// Never fails: an error (a missing or bad file, a failed render, a full disk, even a
 /// panic) gives a failed row with its one line, and the folder then holds no output
-/// but the row. Idempotent: running it again, or twice at once on two machines,
-/// writes the same files.
+/// but the row. Idempotent: running it again (after its process was killed, say)
+/// writes the same files, after removing the temporary files a killed run left.
 pub fn run_job(item: &Item, spec: &Spec, out: &Path, force: bool) -> Outcome {
     let views: Vec<String> = spec.views.iter().map(|v| v.name().to_string()).collect();
     let dir = out.join(&item.id);
