@@ -60,7 +60,7 @@ struct Options {
     #[arg(short, long, value_name = "DIR")]
     output: PathBuf,
     /// The views of each mosaic, left to right [default: left,anterior,superior].
-    #[arg(long, value_delimiter = ',', value_parser = choice::<View>(View::ALL.map(|v| v.name())))]
+    #[arg(long, value_delimiter = ',', value_parser = choice::<View>(View::NAMES.iter().copied()))]
     views: Vec<View>,
     /// Also write three orthogonal slices per input, for quality control.
     #[arg(long)]
