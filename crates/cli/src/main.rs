@@ -39,6 +39,9 @@ enum Command {
     Bench(cmd::bench::Command),
     /// Describe a volume or surface file.
     Info(cmd::info::Args),
+    /// A whole study: a mosaic of views (and QC slices) per input, a results table and
+    /// an HTML report, resumable.
+    Batch(cmd::batch::Args),
     /// Interactive viewer in the browser: a local web server rendering frames.
     View(cmd::view::Args),
     /// The specular unit: ROM contents, width sweeps, stage-by-stage evaluation.
@@ -61,6 +64,11 @@ fn main() -> ExitCode {
         Command::Info(args) => cmd::info::run(args),
         Command::Hw(args) => cmd::hw::run(args),
         Command::View(args) => cmd::view::run(args),
+        // Its exit status counts the inputs that failed.
+        Command::Batch(args) => match cmd::batch::run(args) {
+            Ok(failed) => return ExitCode::from(failed),
+            Err(e) => Err(e),
+        },
     };
     report(result)
 }

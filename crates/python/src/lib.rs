@@ -1,6 +1,7 @@
 //! The `glint` Python package's native module, `glint._glint`: conversions between
 //! numpy arrays and the glint crates, and GIL handling. No imaging logic lives here;
-//! every function forwards to `glint-io`, `glint-lobe` or `glint-hw`.
+//! every function forwards to `glint-io`, `glint-lobe`, `glint-hw`, `glint-render`,
+//! `glint-compare` or `glint-batch`.
 //!
 //! Rules every function follows:
 //! - inputs are copied into Rust-owned buffers while the GIL is held, then the GIL is
@@ -14,6 +15,7 @@
 #![warn(missing_docs)]
 
 mod arrays;
+mod batch;
 mod errors;
 mod hw;
 mod json;
@@ -37,6 +39,11 @@ fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(volume::read, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe_kinds, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_inputs, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_job, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_failed_row, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_spec_key, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_finish, m)?)?;
     let hw = PyModule::new(m.py(), "hw")?;
     hw.add_class::<hw::Unit>()?;
     m.add_submodule(&hw)?;

@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod analyze;
+pub mod batch;
 pub mod bench;
 pub mod choice;
 pub mod compare;

@@ -4,7 +4,8 @@
 ``Volume.from_array`` wraps data already in memory; ``glint.render(volume, scene)``
 renders a :class:`Scene` (a :class:`Renderer` keeps the classification across views);
 ``glint.compare`` measures what a cheap lobe changes in the image; ``glint.lobe`` evaluates any
-specular lobe on a numpy array; ``glint.hw.Unit`` is the device model. Every function
+specular lobe on a numpy array; ``glint.hw.Unit`` is the device model; ``glint.batch`` renders
+a whole study on Dask (``pip install glint[dask]``), as ``glint batch`` does on one machine. Every function
 releases the GIL while it works and raises ``ValueError``/``OSError``/``TypeError``
 with the one-line messages of the ``glint`` command.
 """
@@ -12,11 +13,24 @@ with the one-line messages of the ``glint`` command.
 from glint._glint import Image, Renderer, Scene, Volume, compare, lobe, lobe_kinds, read, render
 from glint import hw
 
+
+
+def __getattr__(name):
+    # glint.batch is imported on first use (python -m glint.batch runs it fresh, and
+    # it is callable: glint.batch(...) is glint.batch.run(...)).
+    if name == "batch":
+        import importlib
+
+        return importlib.import_module("glint.batch")
+    raise AttributeError(f"module 'glint' has no attribute {name!r}")
+
+
 __all__ = [
     "Image",
     "Renderer",
     "Scene",
     "Volume",
+    "batch",
     "compare",
     "hw",
     "lobe",

@@ -7,6 +7,7 @@ from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, o
 import numpy as np
 import numpy.typing as npt
 
+from glint import batch as batch
 from glint import hw as hw
 
 _Path = Union[str, "os.PathLike[str]"]

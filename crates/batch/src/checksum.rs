@@ -1,0 +1,110 @@
+//! The checksum of an input: what a rerun compares to know that an input's bytes did
+//! not change.
+
+use std::io::Read;
+use std::path::Path;
+
+use sha2::{Digest, Sha256};
+
+use crate::{os_error, BatchError};
+
+/// `sha256:` and the hex SHA-256 of the input's bytes: of a file, what `sha256sum`
+/// prints for it; of a `.hdr` header, of the header followed by its `.img` data file
+/// when there is one; of a directory (a DICOM series), of its regular files in name
+/// order, each as its name, a NUL byte, its length as 8 little-endian bytes and its
+/// bytes (so renaming or moving bytes between files changes it). An `.nhdr`'s detached
+/// data file is not included.
+pub fn checksum(path: &Path) -> Result<String, BatchError> {
+    let mut hash = Sha256::new();
+    let meta = std::fs::metadata(path).map_err(|e| os_error(path, e))?;
+    if meta.is_dir() {
+        let mut files = Vec::new();
+        for entry in std::fs::read_dir(path).map_err(|e| os_error(path, e))? {
+            let entry = entry.map_err(|e| os_error(path, e))?;
+            if entry.file_type().map_err(|e| os_error(path, e))?.is_file() {
+                files.push(entry.path());
+            }
+        }
+        files.sort();
+        for file in files {
+            let name = file.file_name().unwrap_or_default().to_string_lossy();
+            let len = std::fs::metadata(&file)
+                .map_err(|e| os_error(&file, e))?
+                .len();
+            hash.update(name.as_bytes());
+            hash.update([0]);
+            hash.update(len.to_le_bytes());
+            feed(&mut hash, &file)?;
+        }
+    } else {
+        feed(&mut hash, path)?;
+        let is_hdr = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("hdr"));
+        if is_hdr {
+            for ext in ["img", "IMG"] {
+                let img = path.with_extension(ext);
+                if img.is_file() {
+                    feed(&mut hash, &img)?;
+                    break;
+                }
+            }
+        }
+    }
+    Ok(format!("sha256:{:x}", hash.finalize()))
+}
+
+/// Feeds a file's bytes to the hash, in 1 MiB reads.
+fn feed(hash: &mut Sha256, path: &Path) -> Result<(), BatchError> {
+    let mut file = std::fs::File::open(path).map_err(|e| os_error(path, e))?;
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        let n = file.read(&mut buf).map_err(|e| os_error(path, e))?;
+        if n == 0 {
+            return Ok(());
+        }
+        hash.update(&buf[..n]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_hashes_as_sha256sum_does() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("abc.nii");
+        std::fs::write(&path, b"abc").unwrap();
+        // FIPS 180-2, appendix B.1: SHA-256("abc").
+        assert_eq!(
+            checksum(&path).unwrap(),
+            "sha256:ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+
+    #[test]
+    fn pairs_and_series_change_with_any_of_their_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let hdr = dir.path().join("p.hdr");
+        std::fs::write(&hdr, b"header").unwrap();
+        let alone = checksum(&hdr).unwrap();
+        std::fs::write(dir.path().join("p.img"), b"data").unwrap();
+        let paired = checksum(&hdr).unwrap();
+        assert_ne!(alone, paired);
+        std::fs::write(dir.path().join("p.img"), b"datb").unwrap();
+        assert_ne!(checksum(&hdr).unwrap(), paired);
+
+        let series = dir.path().join("series");
+        std::fs::create_dir(&series).unwrap();
+        std::fs::write(series.join("1.dcm"), b"ab").unwrap();
+        std::fs::write(series.join("2.dcm"), b"c").unwrap();
+        let first = checksum(&series).unwrap();
+        // The same bytes split differently between the files.
+        std::fs::write(series.join("1.dcm"), b"a").unwrap();
+        std::fs::write(series.join("2.dcm"), b"bc").unwrap();
+        assert_ne!(checksum(&series).unwrap(), first);
+        let err = checksum(&dir.path().join("missing.nii")).unwrap_err();
+        assert!(glint_io::one_line(&err).contains("missing.nii"), "{err}");
+    }
+}
