@@ -8,6 +8,7 @@
 
 use glint_lobe::Geometry;
 
+use super::transport::{hybrid_terms, medium_factor, phase_hg};
 use super::{flat, Material, Shader};
 use crate::math::Vec3;
 
@@ -37,6 +38,12 @@ pub struct ShadeBatch {
     n_dot_l: Vec<f32>,
     cos: Vec<f32>,
     lobe: Vec<f32>,
+    /// Shadowed lighting ([`Shader::shade_gradients_shadowed`]): per light and sample
+    /// (light-major) the transmittance, per sample the ambient occlusion and the
+    /// phase sum.
+    transmittance: Vec<f32>,
+    occlusion: Vec<f32>,
+    phase: Vec<f32>,
 }
 
 /// The first `n` elements of `v`, grown with zeros if it is shorter (every element
@@ -72,6 +79,18 @@ impl ShadeBatch {
         }
         self.len = n;
     }
+
+    /// The columns [`Shader::shade_gradients_shadowed`] reads besides the others, for
+    /// `lights` lights (the shader's placed lights): the transmittance of light `i` to
+    /// sample `k` at `[i * len + k]`, and each sample's ambient occlusion. Call after
+    /// [`ShadeBatch::set_len`]; the caller fills both.
+    pub fn shadow_columns(&mut self, lights: usize) -> (&mut [f32], &mut [f32]) {
+        let n = self.len;
+        (
+            first(&mut self.transmittance, n * lights),
+            first(&mut self.occlusion, n),
+        )
+    }
 }
 
 impl Shader {
@@ -95,6 +114,54 @@ impl Shader {
             return unsafe { self.shade_normals_avx2(batch) };
         }
         self.shade_normals_body(batch)
+    }
+
+    /// Lights the volume samples of `batch` (world gradients in `normal`) with each
+    /// light scaled by its transmittance and the ambient term by the occlusion
+    /// ([`ShadeBatch::shadow_columns`]): [`Shader::shade_shadowed`] for each, bit for
+    /// bit.
+    pub fn shade_gradients_shadowed(&self, batch: &mut ShadeBatch) {
+        #[cfg(target_arch = "x86_64")]
+        if avx2() {
+            // SAFETY: the CPU supports AVX2 (checked at run time just above).
+            return unsafe { self.shade_shadowed_avx2(batch) };
+        }
+        self.shade_shadowed_body(batch)
+    }
+
+    /// [`Shader::shade_gradients_shadowed`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn shade_shadowed_avx2(&self, batch: &mut ShadeBatch) {
+        self.shade_shadowed_body(batch)
+    }
+
+    #[inline(always)]
+    fn shade_shadowed_body(&self, b: &mut ShadeBatch) {
+        if !self.material().shade || b.len == 0 {
+            return;
+        }
+        self.gradient_normals(b);
+        self.light_columns_shadowed(b);
+        let n = b.len;
+        let m = self.material();
+        let (diffuse, specular, phase) = (&b.diffuse[..n], &b.specular[..n], &b.phase[..n]);
+        let (magnitude, usable) = (&b.magnitude[..n], &b.usable[..n]);
+        let occlusion = &b.occlusion[..n];
+        for col in &mut b.color {
+            for k in 0..n {
+                let c = col[k];
+                let flat = c * medium_factor(m, occlusion[k], phase[k]);
+                let w = self.gate_weight(magnitude[k]);
+                let sums = [diffuse[k], specular[k], phase[k]];
+                let (lit, spec) = hybrid_terms(m, sums, occlusion[k], w);
+                let shaded = c * lit + spec;
+                col[k] = if usable[k] { shaded } else { flat };
+            }
+        }
     }
 
     /// [`Shader::shade_gradients`] compiled for AVX2.
@@ -237,6 +304,78 @@ impl Shader {
                 };
                 specular[k] = if lit {
                     specular[k] + intensity * lobe[k]
+                } else {
+                    specular[k]
+                };
+            }
+        }
+    }
+}
+
+impl Shader {
+    /// [`Shader`]'s `light_columns` with each light's intensity scaled by its
+    /// transmittance, and the phase sum of every sample (the scalar form's
+    /// `phase_sum` and `sums_shadowed`, in the same order).
+    #[inline(always)]
+    fn light_columns_shadowed(&self, b: &mut ShadeBatch) {
+        let n = b.len;
+        let lights = self.world_lights();
+        let count = lights.len();
+        let [nx, ny, nz] = &mut b.normal;
+        let (nx, ny, nz) = (&mut nx[..n], &mut ny[..n], &mut nz[..n]);
+        let [vx, vy, vz] = &b.view;
+        let (vx, vy, vz) = (&vx[..n], &vy[..n], &vz[..n]);
+        let n_dot_v = first(&mut b.n_dot_v, n);
+        for k in 0..n {
+            let d = nx[k] * vx[k] + ny[k] * vy[k] + nz[k] * vz[k];
+            let flip = d < 0.0;
+            nx[k] = if flip { -nx[k] } else { nx[k] };
+            ny[k] = if flip { -ny[k] } else { ny[k] };
+            nz[k] = if flip { -nz[k] } else { nz[k] };
+            n_dot_v[k] = if flip { -d } else { d };
+        }
+        let transmittance = &b.transmittance[..n * count];
+        let n_dot_l = first(&mut b.n_dot_l, n * count);
+        let cos = first(&mut b.cos, n * count);
+        let phase = first(&mut b.phase, n);
+        phase.fill(0.0);
+        let g = self.anisotropy();
+        for (i, &(l, intensity)) in lights.iter().enumerate() {
+            let (ndl, cos) = (&mut n_dot_l[i * n..][..n], &mut cos[i * n..][..n]);
+            let t = &transmittance[i * n..][..n];
+            for k in 0..n {
+                let l_dot_v = l.x * vx[k] + l.y * vy[k] + l.z * vz[k];
+                phase[k] += (intensity * t[k]) * phase_hg(g, l_dot_v);
+                let d = nx[k] * l.x + ny[k] * l.y + nz[k] * l.z;
+                ndl[k] = d;
+                cos[k] = match self.geometry() {
+                    Geometry::Phong => 2.0 * d * n_dot_v[k] - l_dot_v,
+                    Geometry::Blinn => {
+                        let h = (l + Vec3::new(vx[k], vy[k], vz[k])).normalize_or_zero();
+                        nx[k] * h.x + ny[k] * h.y + nz[k] * h.z
+                    }
+                };
+            }
+        }
+        let lobe = first(&mut b.lobe, n * count);
+        self.specular().eval_slice(cos, lobe);
+        let diffuse = first(&mut b.diffuse, n);
+        let specular = first(&mut b.specular, n);
+        diffuse.fill(0.0);
+        specular.fill(0.0);
+        for (i, &(_, intensity)) in lights.iter().enumerate() {
+            let (ndl, lobe) = (&n_dot_l[i * n..][..n], &lobe[i * n..][..n]);
+            let t = &transmittance[i * n..][..n];
+            for k in 0..n {
+                let lit = ndl[k] > 0.0;
+                let it = intensity * t[k];
+                diffuse[k] = if lit {
+                    diffuse[k] + it * ndl[k]
+                } else {
+                    diffuse[k]
+                };
+                specular[k] = if lit {
+                    specular[k] + it * lobe[k]
                 } else {
                     specular[k]
                 };
@@ -392,6 +531,48 @@ mod tests {
                 // SAFETY: AVX2 is supported (checked above).
                 unsafe { shader.shade_normals_avx2(&mut b) };
                 check(&b, want, n, "avx2");
+            }
+        }
+    }
+
+    #[test]
+    fn shadowed_batches_are_the_scalar_form_bit_for_bit_on_every_path() {
+        let n = 300;
+        for gate in [0.0, 0.3] {
+            for (s, shader) in shaders(gate).into_iter().enumerate() {
+                let g = [0.0, 0.6, -0.4][s % 3];
+                let shader = shader.with_anisotropy(g).unwrap();
+                let lights = shader.world_lights().len();
+                let mut input = ShadeBatch::default();
+                fill(&mut input, n, 2.0);
+                let (t, occ) = input.shadow_columns(lights);
+                for (i, x) in t.iter_mut().enumerate() {
+                    *x = 0.5 + 0.5 * spread(i, 0.33);
+                }
+                for (k, x) in occ.iter_mut().enumerate() {
+                    *x = 0.5 + 0.5 * spread(k, 0.77);
+                }
+                let (t, occ) = (input.transmittance.clone(), input.occlusion.clone());
+                let want = |k: usize| {
+                    let g = Vec3::new(input.normal[0][k], input.normal[1][k], input.normal[2][k]);
+                    let v = Vec3::new(input.view[0][k], input.view[1][k], input.view[2][k]);
+                    let c = [input.color[0][k], input.color[1][k], input.color[2][k]];
+                    let tk: Vec<f32> = (0..lights).map(|i| t[i * n + k]).collect();
+                    shader.shade_shadowed(c, g, &shader.for_ray(v), &tk, occ[k])
+                };
+                let mut b = input.clone();
+                shader.shade_shadowed_body(&mut b);
+                check(&b, want, n, "portable");
+                #[cfg(target_arch = "x86_64")]
+                if avx2() {
+                    let mut b = input.clone();
+                    // SAFETY: AVX2 is supported (checked above).
+                    unsafe { shader.shade_shadowed_avx2(&mut b) };
+                    check(&b, want, n, "avx2");
+                }
+                let mut b = input.clone();
+                shader.shade_gradients_shadowed(&mut b);
+                check(&b, want, n, "dispatched");
             }
         }
     }
