@@ -54,5 +54,6 @@ pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{Classification, ClassifySettings, FrameSettings, Kernel, TERMINATION_OPACITY};
 pub use tf::{TransferFunction, TransferFunctionFile};
 pub use transport::{
-    LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
+    check_spp, LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES,
+    MAX_SPP,
 };
