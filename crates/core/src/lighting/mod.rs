@@ -23,8 +23,11 @@ use crate::camera::Camera;
 use crate::error::RenderError;
 use crate::math::Vec3;
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
 mod batch;
 mod material;
+mod shadowed;
 mod transport;
 
 pub use batch::ShadeBatch;
