@@ -83,7 +83,11 @@ impl Shader {
         self.light_columns_shadowed(b);
         let n = b.len;
         let m = self.material();
-        let (diffuse, specular, phase) = (&b.shadow.diffuse[..n], &b.shadow.specular[..n], &b.shadow.phase[..n]);
+        let (diffuse, specular, phase) = (
+            &b.shadow.diffuse[..n],
+            &b.shadow.specular[..n],
+            &b.shadow.phase[..n],
+        );
         let (magnitude, usable) = (&b.shadow.magnitude[..n], &b.shadow.usable[..n]);
         let occlusion = &b.shadow.occlusion[..n];
         for col in &mut b.color {
@@ -293,7 +297,10 @@ mod tests {
                 for (k, x) in occ.iter_mut().enumerate() {
                     *x = 0.5 + 0.5 * spread(k, 0.77);
                 }
-                let (t, occ) = (input.shadow.transmittance.clone(), input.shadow.occlusion.clone());
+                let (t, occ) = (
+                    input.shadow.transmittance.clone(),
+                    input.shadow.occlusion.clone(),
+                );
                 let want = |k: usize| {
                     let g = Vec3::new(input.normal[0][k], input.normal[1][k], input.normal[2][k]);
                     let v = Vec3::new(input.view[0][k], input.view[1][k], input.view[2][k]);
@@ -317,5 +324,4 @@ mod tests {
             }
         }
     }
-
 }
