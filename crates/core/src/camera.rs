@@ -27,22 +27,22 @@ use crate::math::Vec3;
 pub enum View {
     /// In front of the face, looking towards posterior; superior up.
     #[default]
-    #[strum(serialize = "a")]
+    #[strum(to_string = "anterior", serialize = "a")]
     Anterior,
     /// Behind the head, looking towards anterior; superior up.
-    #[strum(serialize = "p")]
+    #[strum(to_string = "posterior", serialize = "p")]
     Posterior,
     /// At the patient's left, looking towards the right; superior up.
-    #[strum(serialize = "l")]
+    #[strum(to_string = "left", serialize = "l")]
     Left,
     /// At the patient's right, looking towards the left; superior up.
-    #[strum(serialize = "r")]
+    #[strum(to_string = "right", serialize = "r")]
     Right,
     /// Above, looking down towards inferior; anterior up.
-    #[strum(serialize = "s")]
+    #[strum(to_string = "superior", serialize = "s")]
     Superior,
     /// Below, looking up towards superior; anterior up.
-    #[strum(serialize = "i")]
+    #[strum(to_string = "inferior", serialize = "i")]
     Inferior,
 }
 
@@ -98,10 +98,14 @@ impl glint_lobe::names::Named for View {
 pub enum Projection {
     /// Pinhole camera with a 30° vertical field of view (VTK's default).
     #[default]
-    #[strum(serialize = "persp")]
+    #[strum(to_string = "perspective", serialize = "persp")]
     Perspective,
     /// Parallel rays.
-    #[strum(serialize = "ortho", serialize = "parallel")]
+    #[strum(
+        to_string = "orthographic",
+        serialize = "ortho",
+        serialize = "parallel"
+    )]
     Orthographic,
 }
 
@@ -279,6 +283,40 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_print_and_parse_as_users_type_them() {
+        let names: Vec<&str> = View::ALL.iter().map(|v| v.name()).collect();
+        assert_eq!(
+            names,
+            [
+                "anterior",
+                "posterior",
+                "left",
+                "right",
+                "superior",
+                "inferior"
+            ]
+        );
+        assert_eq!(View::NAMES, names.as_slice());
+        for (short, v) in ["a", "p", "l", "r", "s", "i"].iter().zip(View::ALL) {
+            assert_eq!(short.parse::<View>().unwrap(), *v);
+            assert_eq!(v.name().to_uppercase().parse::<View>().unwrap(), *v);
+        }
+        assert_eq!(Projection::Perspective.to_string(), "perspective");
+        assert_eq!(Projection::Orthographic.name(), "orthographic");
+        for (s, p) in [
+            ("perspective", Projection::Perspective),
+            ("persp", Projection::Perspective),
+            ("orthographic", Projection::Orthographic),
+            ("ortho", Projection::Orthographic),
+            ("Parallel", Projection::Orthographic),
+        ] {
+            assert_eq!(s.parse::<Projection>().unwrap(), p);
+        }
+        let err = "fisheye".parse::<Projection>().unwrap_err().to_string();
+        assert!(err.contains("perspective, orthographic"), "{err}");
+    }
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5

@@ -32,28 +32,28 @@ use crate::{IoError, Samples};
 )]
 pub enum ScalarType {
     /// Unsigned 8-bit.
-    #[strum(serialize = "u8", serialize = "uint8", serialize = "uchar")]
+    #[strum(to_string = "u8", serialize = "uint8", serialize = "uchar")]
     U8,
     /// Signed 8-bit.
-    #[strum(serialize = "i8", serialize = "int8", serialize = "char")]
+    #[strum(to_string = "i8", serialize = "int8", serialize = "char")]
     I8,
     /// Unsigned 16-bit.
-    #[strum(serialize = "u16", serialize = "uint16", serialize = "ushort")]
+    #[strum(to_string = "u16", serialize = "uint16", serialize = "ushort")]
     U16,
     /// Signed 16-bit.
-    #[strum(serialize = "i16", serialize = "int16", serialize = "short")]
+    #[strum(to_string = "i16", serialize = "int16", serialize = "short")]
     I16,
     /// Unsigned 32-bit.
-    #[strum(serialize = "u32", serialize = "uint32", serialize = "uint")]
+    #[strum(to_string = "u32", serialize = "uint32", serialize = "uint")]
     U32,
     /// Signed 32-bit.
-    #[strum(serialize = "i32", serialize = "int32", serialize = "int")]
+    #[strum(to_string = "i32", serialize = "int32", serialize = "int")]
     I32,
     /// 32-bit IEEE float.
-    #[strum(serialize = "f32", serialize = "float32", serialize = "float")]
+    #[strum(to_string = "f32", serialize = "float32", serialize = "float")]
     F32,
     /// 64-bit IEEE float.
-    #[strum(serialize = "f64", serialize = "float64", serialize = "double")]
+    #[strum(to_string = "f64", serialize = "float64", serialize = "double")]
     F64,
 }
 
@@ -385,6 +385,30 @@ pub(crate) fn has_dicom_magic(path: &Path) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::ScalarType;
+
+    #[test]
+    fn scalar_type_names_print_short_and_parse_long() {
+        let short: Vec<String> = ScalarType::ALL.iter().map(|t| t.to_string()).collect();
+        assert_eq!(
+            short,
+            ["u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"]
+        );
+        for (long, t) in [
+            ("uint8", ScalarType::U8),
+            ("char", ScalarType::I8),
+            ("USHORT", ScalarType::U16),
+            ("short", ScalarType::I16),
+            ("uint", ScalarType::U32),
+            ("int32", ScalarType::I32),
+            ("float", ScalarType::F32),
+            ("double", ScalarType::F64),
+        ] {
+            assert_eq!(long.parse::<ScalarType>().unwrap(), t);
+        }
+        assert!("u12".parse::<ScalarType>().is_err());
+    }
+
     /// An atomically written output gets the permissions of any file the user creates
     /// (0666 less the umask), not the temporary file's private 0600.
     #[cfg(unix)]

@@ -41,7 +41,7 @@ pub enum Phantom {
     #[default]
     Head,
     /// The 3D modified Shepp-Logan head ([`shepp_logan`]), with the `phantom` preset.
-    #[strum(serialize = "shepp_logan")]
+    #[strum(to_string = "shepp-logan", serialize = "shepp_logan")]
     SheppLogan,
 }
 
@@ -302,6 +302,16 @@ pub fn head_with_ramp(n: usize, ramp: f64) -> Result<Volume, RenderError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_print_and_parse_as_users_type_them() {
+        assert_eq!(Phantom::NAMES, ["head", "shepp-logan"]);
+        for s in ["shepp-logan", "shepp_logan", "Shepp-Logan"] {
+            assert_eq!(s.parse::<Phantom>().unwrap(), Phantom::SheppLogan);
+        }
+        assert_eq!(Phantom::SheppLogan.to_string(), "shepp-logan");
+        assert!("sphere".parse::<Phantom>().is_err());
+    }
 
     #[test]
     fn a_fixed_ramp_is_the_same_object_on_any_grid() {

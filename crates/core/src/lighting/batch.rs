@@ -3,18 +3,17 @@
 //! each step at once and the lobe is evaluated by one call of its SIMD kernel
 //! ([`glint_lobe::Specular::eval_slice`]) for every sample and light; every step is
 //! the scalar form's operation in the same order (no FMA contraction), so a batch gives
-//! [`Shader::shade`] and [`Shader::shade_normal`] bit for bit (tested below). Elsewhere
+//! [`Shader::shade`](super::Shader::shade) and [`Shader::shade_normal`](super::Shader::shade_normal) bit for bit (tested below). Elsewhere
 //! the batch is lit one sample at a time by the scalar form itself.
 
-use super::Shader;
 use crate::math::Vec3;
 
 /// Lanes of a chunk: the AVX2 kernel takes this many samples at a time.
 pub(super) const LANES: usize = 8;
 
 /// Samples to light together, as columns. Fill the first [`ShadeBatch::len`] entries
-/// of `normal`, `view` and `color`, then call [`Shader::shade_gradients`] (volume
-/// samples: `normal` holds world gradients) or [`Shader::shade_normals`] (surface
+/// of `normal`, `view` and `color`, then call [`Shader::shade_gradients`](super::Shader::shade_gradients) (volume
+/// samples: `normal` holds world gradients) or [`Shader::shade_normals`](super::Shader::shade_normals) (surface
 /// samples: unit normals); `color` then holds the lit colours. The buffers are kept
 /// between batches, so lighting allocates nothing once they have grown; the columns
 /// hold whole chunks of eight samples (entries past the length are computed and
@@ -91,54 +90,15 @@ impl ShadeBatch {
     }
 
     /// Sample `k`'s normal (or gradient), view and colour.
-    fn sample(&self, k: usize) -> (Vec3, Vec3, [f32; 3]) {
+    pub(super) fn sample(&self, k: usize) -> (Vec3, Vec3, [f32; 3]) {
         let v3 = |c: &[Vec<f32>; 3]| Vec3::new(c[0][k], c[1][k], c[2][k]);
         let color = [self.color[0][k], self.color[1][k], self.color[2][k]];
         (v3(&self.normal), v3(&self.view), color)
     }
 
-    fn set_color(&mut self, k: usize, rgb: [f32; 3]) {
+    pub(super) fn set_color(&mut self, k: usize, rgb: [f32; 3]) {
         for (col, x) in self.color.iter_mut().zip(rgb) {
             col[k] = x;
-        }
-    }
-}
-
-impl Shader {
-    /// Lights the volume samples of `batch`, whose `normal` columns hold world
-    /// gradients: [`Shader::shade`] for each, bit for bit.
-    pub fn shade_gradients(&self, batch: &mut ShadeBatch) {
-        self.shade_batch(batch, true)
-    }
-
-    /// Lights the surface samples of `batch`, whose `normal` columns hold unit
-    /// normals: [`Shader::shade_normal`] for each, bit for bit.
-    pub fn shade_normals(&self, batch: &mut ShadeBatch) {
-        self.shade_batch(batch, false)
-    }
-
-    fn shade_batch(&self, batch: &mut ShadeBatch, gradients: bool) {
-        if !self.material().shade || batch.is_empty() {
-            return;
-        }
-        #[cfg(target_arch = "x86_64")]
-        if super::avx2::supported() {
-            // SAFETY: the CPU supports AVX2 (checked at run time just above).
-            return unsafe { super::avx2::shade(self, batch, gradients) };
-        }
-        self.shade_scalar(batch, gradients)
-    }
-
-    /// The batch lit one sample at a time by the scalar form.
-    pub(super) fn shade_scalar(&self, batch: &mut ShadeBatch, gradients: bool) {
-        for k in 0..batch.len {
-            let (n, v, c) = batch.sample(k);
-            let rgb = if gradients {
-                self.shade(c, n, &self.for_ray(v))
-            } else {
-                self.shade_normal(c, n, v)
-            };
-            batch.set_color(k, rgb);
         }
     }
 }
@@ -151,6 +111,7 @@ mod tests {
     use crate::camera::{Camera, CameraSpec};
     use crate::lighting::Light;
     use crate::lighting::Material;
+    use crate::lighting::Shader;
     use glint_lobe::Geometry;
 
     /// A deterministic spread of values in [-1, 1) (a Weyl sequence).

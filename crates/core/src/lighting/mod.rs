@@ -26,6 +26,7 @@ use crate::math::Vec3;
 #[cfg(target_arch = "x86_64")]
 mod avx2;
 mod batch;
+mod dispatch;
 mod material;
 mod shadowed;
 mod transport;
