@@ -42,7 +42,8 @@ pub use image::{
     Depth, Image, RenderStats, MAX_IMAGE_SIDE, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
 pub use lighting::{
-    Light, Material, MaterialOverrides, RayLighting, ShadeBatch, Shader, MAX_LIGHTS,
+    phase_hg, Light, Material, MaterialOverrides, RayLighting, ShadeBatch, Shader, SurfacePart,
+    MAX_ANISOTROPY, MAX_LIGHTS,
 };
 pub use math::Vec3;
 pub use mode::RenderMode;

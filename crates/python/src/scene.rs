@@ -13,13 +13,14 @@ use crate::json;
 
 /// Fields the scene JSON omits while they are unset (`Option` fields serialised with
 /// `skip_serializing_if`); reading them gives None.
-const OPTIONAL_FIELDS: [&str; 6] = [
+const OPTIONAL_FIELDS: [&str; 7] = [
     "iso",
     "preset",
     "transfer_function",
     "derived",
     "ssaa",
     "opacity_unit",
+    "lighting",
 ];
 
 /// A render, described completely (volume, classification, lobe, lights, camera, size).

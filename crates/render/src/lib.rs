@@ -73,11 +73,15 @@ pub use glint_volume::{
     Preset, Sampling, TransferFunction, TransferFunctionFile, MACRO_CELL, MAX_FIELD_VOXELS,
     PRESETS, TERMINATION_OPACITY,
 };
+pub use glint_volume::{
+    LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
+};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use renderer::{Rendered, Renderer};
 pub use scene::{
-    Derived, Input, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,
-    DEFAULT_SHININESS, MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
+    Derived, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,
+    Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS, DEFAULT_SPP,
+    MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
 };
 
 /// A mesh-extraction error as the renderer's: the same variant and message.

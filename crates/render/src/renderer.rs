@@ -5,13 +5,33 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glint_core::camera::{Camera, Projection};
-use glint_core::{Image, RenderError, RenderMode, ScalarColors, Timings};
+use glint_core::{Image, RenderError, RenderMode, ScalarColors, Shader, Timings};
 use glint_io::{ReadOptions, Volume};
-use glint_volume::{Classification, ClassifySettings, Field, Kernel, Prefilter, TransferFunction};
+use glint_volume::{
+    Classification, ClassifySettings, Field, FrameSettings, Kernel, PathImage, Prefilter,
+    ShadowField, ShadowSettings, TransferFunction,
+};
 
 use crate::hwlobe::HwCache;
 use crate::meshes::{MeshKey, MeshSet};
-use crate::scene::{Derived, Input, Plan, Resolved, Scene};
+use crate::scene::{Derived, Input, MeshLayer, Plan, Resolved, Scene, Transport};
+
+/// The `shadows` model's last light volumes, for the classification and settings they
+/// were built with (reused while the lights point the same way).
+#[derive(Clone)]
+struct ShadowCache {
+    class: Arc<Classification>,
+    settings: ShadowSettings,
+    field: Arc<ShadowField>,
+}
+
+/// A path-traced image being accumulated, for the scene it renders (the resolved
+/// scene's JSON without its sample count).
+#[derive(Clone)]
+struct PathAccumulation {
+    key: String,
+    image: PathImage,
+}
 
 /// A rendered image and the resolved scene that made it.
 #[derive(Clone, Debug)]
@@ -48,6 +68,11 @@ pub struct Renderer {
     /// The volume the field was built from, kept to rebuild the field when a scene
     /// asks for another [`Prefilter`]; `None` for a renderer made from a field.
     volume: Option<Arc<Volume>>,
+    /// The last light volumes (`shadows` scenes).
+    shadows: Option<ShadowCache>,
+    /// The path-traced image of the last `path` scene: rendering the same scene with
+    /// more samples adds to it; any other change starts again.
+    paths: Option<PathAccumulation>,
 }
 
 impl Renderer {
@@ -83,6 +108,8 @@ impl Renderer {
                 opened: Timings::default(),
                 notes: Vec::new(),
                 volume: None,
+                shadows: None,
+                paths: None,
             });
         }
         let start = Instant::now();
@@ -156,6 +183,8 @@ impl Renderer {
         self.field = Some(Arc::new(field));
         self.classification = None;
         self.meshes = None;
+        self.shadows = None;
+        self.paths = None;
         Ok(())
     }
 
@@ -171,6 +200,8 @@ impl Renderer {
             kernel: Kernel::Auto,
             notes: Vec::new(),
             volume: None,
+            shadows: None,
+            paths: None,
         }
     }
 
@@ -308,6 +339,7 @@ impl Renderer {
                 classify,
                 frame,
                 meshes,
+                transport,
             } => {
                 let start = Instant::now();
                 let (class, built) = self.classification(&tf, &classify)?;
@@ -315,12 +347,15 @@ impl Renderer {
                     timings.record("classify", start.elapsed());
                 }
                 let camera = class.camera(&frame)?;
-                let shader = &resolved.shader;
-                let image = timings.time("frame", || match &meshes {
-                    None => class.render(shader, &frame, progress),
-                    Some(layer) => layer.render(&camera, shader, |far| {
-                        class.render_in_front(shader, &frame, progress, far)
-                    }),
+                let volume = VolumeFrame {
+                    class: &class,
+                    shader: &resolved.shader,
+                    frame: &frame,
+                    camera: &camera,
+                    meshes: meshes.as_ref(),
+                };
+                let image = timings.time("frame", || {
+                    self.render_volume(&volume, transport, &scene, progress)
                 })?;
                 let field = self.field.as_deref().expect("a volume plan has a field");
                 let step_mm = scene.step * field.min_spacing();
@@ -350,6 +385,109 @@ impl Renderer {
             timings,
             colors,
         })
+    }
+}
+
+/// What a volume frame is rendered from.
+struct VolumeFrame<'a> {
+    class: &'a Arc<Classification>,
+    shader: &'a Shader,
+    frame: &'a FrameSettings,
+    camera: &'a Camera,
+    meshes: Option<&'a MeshLayer>,
+}
+
+impl Renderer {
+    /// The volume frame of `v` under `transport`, drawn over its meshes when it has
+    /// any (rays stop at them).
+    fn render_volume(
+        &mut self,
+        v: &VolumeFrame,
+        transport: Transport,
+        scene: &Scene,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Image, RenderError> {
+        let (class, shader, frame) = (v.class, v.shader, v.frame);
+        let mut volume = |far: Option<&[f32]>| -> Result<Image, RenderError> {
+            match transport {
+                Transport::Local => match far {
+                    None => class.render(shader, frame, progress),
+                    Some(far) => class.render_in_front(shader, frame, progress, far),
+                },
+                Transport::Shadows(settings) => {
+                    let lights = self.shadow_field(class, shader, frame, v.camera, settings)?;
+                    class.render_shadowed(shader, frame, progress, far, &lights)
+                }
+                Transport::Path { spp, settings } => {
+                    let mut key = scene.clone();
+                    key.lighting.spp = None;
+                    key.derived = None;
+                    let key = key.to_json()?;
+                    let size = [frame.width, frame.height];
+                    let acc = match self.paths.take() {
+                        Some(a) if a.key == key && a.image.samples() <= spp => a,
+                        _ => PathAccumulation {
+                            key,
+                            image: PathImage::new(size[0], size[1]),
+                        },
+                    };
+                    let acc = self.paths.insert(acc);
+                    class.trace_paths(
+                        shader,
+                        frame,
+                        &settings,
+                        &mut acc.image,
+                        spp,
+                        far,
+                        progress,
+                    )?;
+                    Ok(acc.image.image(frame.background))
+                }
+            }
+        };
+        match v.meshes {
+            None => volume(None),
+            Some(layer) => layer.render(v.camera, shader, |far| volume(Some(far))),
+        }
+    }
+
+    /// The light volumes of `shader`'s lights for `camera`: the last ones when they
+    /// were built for the same classification, settings and light directions.
+    fn shadow_field(
+        &mut self,
+        class: &Arc<Classification>,
+        shader: &Shader,
+        frame: &FrameSettings,
+        camera: &Camera,
+        settings: ShadowSettings,
+    ) -> Result<Arc<ShadowField>, RenderError> {
+        if let Some(c) = &self.shadows {
+            if Arc::ptr_eq(&c.class, class)
+                && c.settings == settings
+                && c.field.is_for(shader, camera)
+            {
+                return Ok(c.field.clone());
+            }
+        }
+        let field = Arc::new(class.shadow_field(shader, frame, &settings)?);
+        self.shadows = Some(ShadowCache {
+            class: class.clone(),
+            settings,
+            field: field.clone(),
+        });
+        Ok(field)
+    }
+
+    /// Forgets the path-traced image it holds: the next `path` render starts from no
+    /// samples (benchmarks repeating one frame).
+    pub fn forget_paths(&mut self) {
+        self.paths = None;
+    }
+
+    /// Samples per pixel of the path-traced image the renderer holds (0 when it holds
+    /// none): a `path` scene rendered again with more samples continues from it.
+    pub fn path_samples(&self) -> u32 {
+        self.paths.as_ref().map_or(0, |p| p.image.samples())
     }
 }
 

@@ -7,6 +7,10 @@
 //                                            then the page at FOREIGN_URL (another
 //                                            origin) opens the viewer's socket with
 //                                            the URL's token: it must be refused
+//   node drive.mjs progressive URL           a `path` scene: with the mouse still the
+//                                            frames' sample count grows; a drag
+//                                            restarts it at one sample, then it grows
+//                                            again
 //   node drive.mjs bench URL SECONDS         drag for SECONDS; frames/s received
 //                                            during the drag, input-to-frame latency
 //
@@ -14,8 +18,8 @@
 import { chromium } from "playwright-core";
 
 const [mode, url, arg, foreignUrl] = process.argv.slice(2);
-if (!["test", "bench"].includes(mode) || !url) {
-  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs bench URL SECONDS");
+if (!["test", "bench", "progressive"].includes(mode) || !url) {
+  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs progressive URL | drive.mjs bench URL SECONDS");
   process.exit(2);
 }
 const browser = await chromium.launch({
@@ -39,7 +43,28 @@ try {
   const box = await page.locator("#frame").boundingBox();
   const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
   const pixels = () => page.evaluate(() => document.getElementById("frame").toDataURL());
-  if (mode === "test") {
+  if (mode === "progressive") {
+    const g = () => page.evaluate(() => ({ samples: window.glint.samples, log: window.glint.sampleLog.slice(), errors: window.glint.errors }));
+    const first = (await g()).samples;
+    // Mouse still: refined frames arrive with more samples.
+    await page.waitForFunction((n) => window.glint.samples > n && window.glint.samples >= 4, first, { timeout: 120000 });
+    const grown = (await g()).samples;
+    const mark = (await g()).log.length;
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    for (let i = 1; i <= 10; i++) await page.mouse.move(cx + 8 * i, cy + 2 * i);
+    await page.mouse.up();
+    // The drag's frames restart at one sample; then the count grows again.
+    await page.waitForFunction((m) => window.glint.sampleLog.slice(m).includes(1), mark, { timeout: 120000 });
+    await page.waitForFunction((m) => window.glint.sampleLog.slice(m).some((x, i, a) => i > 0 && a[i - 1] === 1 && x > 1), mark, { timeout: 120000 });
+    const end = await g();
+    const after = end.log.slice(mark);
+    const restarted = after.includes(1);
+    const regrown = Math.max(...after.slice(after.lastIndexOf(1)));
+    const text = await page.evaluate(() => document.getElementById("samples").textContent);
+    console.log(JSON.stringify({ first, grown, restarted, regrown, text, after, errors: end.errors }));
+    if (!(grown > first) || !restarted || !(regrown > 1) || end.errors.length) process.exitCode = 1;
+  } else if (mode === "test") {
     const before = await pixels();
     const full = await page.evaluate(() => window.glint.full);
     await page.mouse.move(cx, cy);

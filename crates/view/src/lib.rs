@@ -25,7 +25,11 @@
 //! dragging), `split` and `save`. Only the latest state is rendered: updates that
 //! arrive while a frame renders are merged, never queued. While the user drags,
 //! frames are half size and JPEG at quality 70; 150 ms after the last interactive
-//! update a full-resolution frame follows.
+//! update a full-resolution frame follows. A `path` scene is progressive: its
+//! interactive frames take one sample per pixel, and while the scene holds still full
+//! frames follow one another, each adding samples to the last ([`next_samples`]), up
+//! to the scene's `spp`; the frame header carries the sample count. Any change
+//! starts again from one sample.
 //!
 //! Access ([`access`]): only the viewer's own page may use it.
 //! Requests must name this machine in `Host` (DNS rebinding), a WebSocket handshake
@@ -50,10 +54,12 @@ use axum::http::header;
 use axum::response::{Html, IntoResponse};
 use axum::routing::get;
 use axum::{middleware, Router};
-use glint_render::{RenderError, Renderer, Scene, SceneLobe, View, PRESETS};
+use glint_render::{
+    LightingModel, RenderError, Renderer, Scene, SceneLobe, View, DEFAULT_SPP, PRESETS,
+};
 
 pub use access::{is_loopback, Access, Token};
-pub use session::{apply_patch, render_frame, Frame, MAX_VIEW_SIDE};
+pub use session::{apply_patch, next_samples, render_frame, Frame, MAX_VIEW_SIDE};
 
 use protocol::{ClientMessage, Purpose, ServerMessage, Split};
 
@@ -285,6 +291,8 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     let mut save = false;
     let mut inflight: Option<tokio::task::JoinHandle<Result<(Frame, Purpose), RenderError>>> = None;
     let mut settle: Option<tokio::time::Instant> = None;
+    // Samples per pixel the last full frame of the current state held (`path`).
+    let mut reached = 0;
     loop {
         if inflight.is_none() {
             let purpose = if save {
@@ -297,7 +305,12 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 None
             };
             if let Some(purpose) = purpose {
-                let (r, s) = (renderer.clone(), state.clone());
+                let (r, mut s) = (renderer.clone(), state.clone());
+                if purpose == Purpose::Full {
+                    if let Some(goal) = state.progressive() {
+                        s.scene.lighting.spp = Some(next_samples(reached, goal));
+                    }
+                }
                 inflight = Some(tokio::task::spawn_blocking(move || {
                     let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
                     render_frame(&mut r, &s.scene, s.split, purpose, s.seq).map(|f| (f, purpose))
@@ -323,6 +336,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 };
                 match outcome {
                     Ok(Action::Render { interactive }) => {
+                        reached = 0;
                         if interactive {
                             wanted = Wanted::Frame(Purpose::Interactive);
                             settle = Some(tokio::time::Instant::now() + viewer.config.settle);
@@ -342,6 +356,15 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 inflight = None;
                 match done {
                     Ok(Ok((frame, purpose))) => {
+                        // A `path` state still holding still refines: the next full
+                        // frame adds samples, until the scene's count.
+                        if purpose == Purpose::Full && frame.seq == state.seq {
+                            reached = frame.samples;
+                            let more = state.progressive().is_some_and(|goal| reached < goal);
+                            if more && wanted == Wanted::Nothing && settle.is_none() {
+                                wanted = Wanted::Frame(Purpose::Full);
+                            }
+                        }
                         if socket.send(Message::Binary(frame.message.into())).await.is_err() { return }
                         if purpose != Purpose::Interactive {
                             let scene = serde_json::to_value(&frame.scene).expect("scenes serialise");
@@ -382,6 +405,14 @@ enum Action {
 }
 
 impl ClientState {
+    /// The sample count a progressive state refines to: a `path` scene shown alone
+    /// (split views render both images to the full count at once).
+    fn progressive(&self) -> Option<u32> {
+        let lighting = &self.scene.lighting;
+        (lighting.model == LightingModel::Path && self.split == Split::Off)
+            .then(|| lighting.spp.unwrap_or(DEFAULT_SPP))
+    }
+
     fn handle(
         &mut self,
         text: &str,

@@ -100,8 +100,9 @@ pub enum Purpose {
 }
 
 /// The header before every frame's image bytes: magic `GLNT`, then little-endian
-/// `seq: u32, width: u32, height: u32, render_ms: f32`, format and purpose bytes, two
-/// zero bytes.
+/// `seq: u32, width: u32, height: u32, render_ms: f32`, format and purpose bytes, and
+/// `samples: u16` (the path-traced samples per pixel the frame holds, 0 for the
+/// `local` and `shadows` models).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameHeader {
     /// The last update the frame reflects.
@@ -116,6 +117,9 @@ pub struct FrameHeader {
     pub format: Format,
     /// Why it was sent.
     pub purpose: Purpose,
+    /// Path-traced samples per pixel in the image (0: not path traced); saturates at
+    /// `u16::MAX`.
+    pub samples: u16,
 }
 
 impl FrameHeader {
@@ -127,7 +131,8 @@ impl FrameHeader {
         out.extend_from_slice(&self.width.to_le_bytes());
         out.extend_from_slice(&self.height.to_le_bytes());
         out.extend_from_slice(&self.render_ms.to_le_bytes());
-        out.extend_from_slice(&[self.format as u8, self.purpose as u8, 0, 0]);
+        out.extend_from_slice(&[self.format as u8, self.purpose as u8]);
+        out.extend_from_slice(&self.samples.to_le_bytes());
         out.extend_from_slice(image);
         out
     }
@@ -156,6 +161,7 @@ impl FrameHeader {
             render_ms: f32::from_bits(u(16)),
             format,
             purpose,
+            samples: u16::from_le_bytes([bytes[22], bytes[23]]),
         };
         Some((header, &bytes[HEADER_BYTES..]))
     }
@@ -174,6 +180,7 @@ mod tests {
             render_ms: 12.5,
             format: Format::Png,
             purpose: Purpose::Save,
+            samples: 300,
         };
         let bytes = h.encode(b"img");
         assert_eq!(bytes.len(), HEADER_BYTES + 3);

@@ -5,8 +5,8 @@
 use std::time::Instant;
 
 use glint_render::{
-    luminance_f32, srgb_to_linear, Depth, Image, RenderError, RenderStats, Renderer, Scene,
-    MAX_IMAGE_SIDE,
+    luminance_f32, srgb_to_linear, Depth, Image, LightingModel, RenderError, RenderStats, Renderer,
+    Scene, MAX_IMAGE_SIDE,
 };
 use serde_json::{Map, Value};
 
@@ -63,10 +63,21 @@ pub struct Frame {
     pub scene: Scene,
     /// The last update the frame reflects.
     pub seq: u32,
+    /// Path-traced samples per pixel in the image (0 for the other lighting models).
+    pub samples: u32,
 }
 
-/// Renders `scene` for `purpose` (interactive frames at half size) with `split`,
-/// encoded with its header.
+/// The sample count a progressive `path` frame renders to, having `done` of `goal`:
+/// 1, 2, 4, 8, then 8 more at a time, so each refinement of a 512x512 frame takes a
+/// bounded time and input is answered between two of them.
+pub fn next_samples(done: u32, goal: u32) -> u32 {
+    done.saturating_add(done.clamp(1, 8)).min(goal).max(1)
+}
+
+/// Renders `scene` for `purpose` (interactive frames at half size; a `path` scene's
+/// interactive frames at one sample per pixel, its full frames to the scene's sample
+/// count, continuing the samples `renderer` holds for it) with `split`, encoded with
+/// its header.
 pub fn render_frame(
     renderer: &mut Renderer,
     scene: &Scene,
@@ -77,6 +88,9 @@ pub fn render_frame(
     let mut s = scene.clone();
     if purpose == Purpose::Interactive {
         s.size = s.size.map(|x| (x / 2).max(1));
+        if s.lighting.model == LightingModel::Path {
+            s.lighting.spp = Some(1);
+        }
     }
     let start = Instant::now();
     let main = renderer.render(&s, &|_| {})?;
@@ -94,6 +108,11 @@ pub fn render_frame(
         }
     };
     let render_ms = start.elapsed().as_secs_f32() * 1e3;
+    let samples = if main.scene.lighting.model == LightingModel::Path {
+        renderer.path_samples()
+    } else {
+        0
+    };
     let (format, bytes) = match purpose {
         Purpose::Save => (
             Format::Png,
@@ -111,11 +130,13 @@ pub fn render_frame(
         render_ms,
         format,
         purpose,
+        samples: u16::try_from(samples).unwrap_or(u16::MAX),
     };
     Ok(Frame {
         message: header.encode(&bytes),
         scene: main.scene,
         seq,
+        samples,
     })
 }
 
@@ -267,6 +288,36 @@ mod tests {
         assert_eq!(FrameHeader::decode(&f.message).unwrap().0.width, 12);
         let f = render_frame(&mut r, &scene(), Split::Off, Purpose::Save, 1).unwrap();
         assert_eq!(&FrameHeader::decode(&f.message).unwrap().1[1..4], b"PNG");
+    }
+
+    #[test]
+    fn path_frames_continue_their_samples_and_interaction_restarts_them() {
+        let mut s = scene();
+        s.lighting = glint_render::Lighting {
+            model: LightingModel::Path,
+            spp: Some(2),
+            ..Default::default()
+        };
+        let mut r = Renderer::open(&s.input).unwrap();
+        let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 1).unwrap();
+        assert_eq!(
+            (
+                f.samples,
+                FrameHeader::decode(&f.message).unwrap().0.samples
+            ),
+            (2, 2)
+        );
+        s.lighting.spp = Some(5);
+        let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 1).unwrap();
+        assert_eq!(f.samples, 5, "the same scene with more samples continues");
+        let f = render_frame(&mut r, &s, Split::Off, Purpose::Interactive, 2).unwrap();
+        assert_eq!(f.samples, 1, "interactive path frames take one sample");
+        let f = render_frame(&mut r, &scene(), Split::Off, Purpose::Full, 3).unwrap();
+        assert_eq!(f.samples, 0, "local frames are not path traced");
+        let steps: Vec<u32> =
+            std::iter::successors(Some(0), |&d| (d < 40).then(|| next_samples(d, 40))).collect();
+        assert_eq!(steps, [0, 1, 2, 4, 8, 16, 24, 32, 40]);
+        assert_eq!(next_samples(0, 0), 1);
     }
 
     #[test]

@@ -13,7 +13,7 @@ use std::path::Path;
 use std::process::Command;
 use std::sync::Arc;
 
-use glint_render::{Input, Phantom, Scene};
+use glint_render::{Input, Lighting, LightingModel, Phantom, Scene};
 use glint_view::{Access, Token, Viewer, ViewerConfig};
 
 fn ci() -> bool {
@@ -118,4 +118,58 @@ fn the_page_shows_frames_and_dragging_turns_the_volume() {
 fn tempfile_path(name: &str) -> std::path::PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
     dir.join(name)
+}
+
+#[test]
+fn a_path_scene_refines_while_the_mouse_is_still_and_a_drag_restarts_it() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("browser");
+    if !tools_present(&dir) {
+        return;
+    }
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    let scene = Scene {
+        input: Input::Phantom {
+            name: Phantom::SheppLogan,
+            size: 48,
+        },
+        size: [128, 128],
+        lighting: Lighting {
+            model: LightingModel::Path,
+            spp: Some(64),
+            ..Lighting::default()
+        },
+        ..Scene::default()
+    };
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
+        .unwrap();
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    let url = access.url();
+    runtime.spawn(glint_view::serve(listener, viewer, access));
+    let out = Command::new("node")
+        .current_dir(&dir)
+        .args(["drive.mjs", "progressive", &url])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "drive.mjs failed: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    let n = |k: &str| report[k].as_u64().unwrap();
+    assert!(n("grown") > n("first"), "{report}");
+    assert_eq!(report["restarted"], true, "{report}");
+    assert!(n("regrown") > 1, "{report}");
+    assert!(n("grown") <= 64 && n("regrown") <= 64, "{report}");
+    assert!(
+        report["text"]
+            .as_str()
+            .unwrap()
+            .contains("samples per pixel"),
+        "{report}"
+    );
+    eprintln!("progressive browser test: {report}");
 }

@@ -236,6 +236,14 @@ impl Field {
         )
     }
 
+    /// The macro-cell grid: its dimensions and, per cell (i fastest), the (min, max)
+    /// of the values a trilinear sample inside the cell's box can take. Cell `c` spans
+    /// voxels `c·MACRO_CELL ..= (c+1)·MACRO_CELL` along each axis (clipped to the
+    /// volume). Light transport bounds its extinction per cell by these ranges.
+    pub fn macro_cells(&self) -> ([usize; 3], &[(f32, f32)]) {
+        (self.cell_dims, &self.cells)
+    }
+
     /// A world direction expressed in voxel index units.
     pub fn direction_to_index(&self, d: [f64; 3]) -> [f64; 3] {
         mul3(&self.to_index, d)

@@ -44,6 +44,7 @@ mod preint;
 pub mod presets;
 mod raycast;
 mod tf;
+pub mod transport;
 
 pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
 pub use lut::{Lut, LUT_SIZE};
@@ -52,3 +53,7 @@ pub use preint::Sampling;
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{Classification, ClassifySettings, FrameSettings, Kernel, TERMINATION_OPACITY};
 pub use tf::{TransferFunction, TransferFunctionFile};
+pub use transport::{
+    check_spp, LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES,
+    MAX_SPP,
+};

@@ -79,7 +79,8 @@ struct Options {
     /// stderr.
     #[arg(long)]
     timings: bool,
-    /// Benchmarking: render this many times and print ms per frame to stdout.
+    /// Benchmarking: render this many times and print ms per frame to stdout (path
+    /// lighting traces every frame's samples anew).
     #[arg(long, default_value_t = 1, hide = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     repeat: u32,
     /// Benchmarking: composite with the portable scalar loop instead of the SIMD one.
@@ -106,6 +107,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut rendered = renderer.render_resolved(resolved.clone(), &progress)?;
     let mut frames = Vec::with_capacity(args.repeat as usize);
     for _ in 1..args.repeat {
+        // A path-traced frame repeated is traced again, not taken from the last one.
+        renderer.forget_paths();
         let start = Instant::now();
         rendered = renderer.render_resolved(resolved.clone(), &progress)?;
         frames.push(start.elapsed());

@@ -9,8 +9,8 @@ use clap::builder::TypedValueParser;
 use glint_io::{Format, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    ColorMap, Input, Light, MeshSpec, Overlay, Phantom, Prefilter, Projection, RenderMode,
-    Sampling, Scene, SceneLobe, TransferFunction, View,
+    ColorMap, Input, Light, LightingModel, MeshSpec, Overlay, Phantom, Prefilter, Projection,
+    RenderMode, Sampling, Scene, SceneLobe, TransferFunction, View,
 };
 
 use super::choice::choice;
@@ -143,6 +143,34 @@ pub struct SceneFlags {
     /// scalar opacity unit distance) [default: one voxel of the smallest spacing].
     #[arg(long, value_name = "MM")]
     pub opacity_unit: Option<f64>,
+    /// Light transport: local (every light reaches every sample), shadows (each
+    /// light's transmittance through the volume scales it; a scattering medium where
+    /// the gradient is weak; --occlusion adds local ambient occlusion) or path
+    /// (progressive Monte Carlo path tracing with the lights, a uniform environment
+    /// and the lobe importance-sampled: --spp, --bounces, --seed, --environment)
+    /// [default: local].
+    #[arg(long, value_parser = choice::<LightingModel>(LightingModel::ALL.map(|m| m.name())))]
+    pub lighting: Option<LightingModel>,
+    /// Path lighting: samples per pixel [default: 64].
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Path lighting: most scattering events of a path [default: 4].
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// Path lighting: seed of the random numbers (the same seed and --spp give the
+    /// same image bit for bit) [default: 0].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Path lighting: radiance of the uniform white environment [default: 0.5].
+    #[arg(long, allow_negative_numbers = true)]
+    pub environment: Option<f32>,
+    /// Shadows and path lighting: anisotropy g of the medium's Henyey-Greenstein phase
+    /// function, -0.95..=0.95 (> 0 scatters forwards) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub anisotropy: Option<f32>,
+    /// Shadows lighting: local ambient occlusion on the ambient term.
+    #[arg(long)]
+    pub occlusion: bool,
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     pub no_skip: bool,
@@ -317,6 +345,7 @@ impl SceneFlags {
         set(&mut lobe.v, self.v);
         set(&mut lobe.geometry, self.geometry);
         set(&mut scene.gate, self.gate);
+        self.apply_transport(scene);
         if self.no_headlight {
             scene
                 .lights
@@ -327,6 +356,26 @@ impl SceneFlags {
         }
         scene.lights.extend(self.lights.iter().copied());
         Ok(())
+    }
+}
+
+impl SceneFlags {
+    /// `--lighting` (keeping only the settings the model uses) and its settings.
+    fn apply_transport(&self, scene: &mut Scene) {
+        let l = &mut scene.lighting;
+        if let Some(model) = self.lighting {
+            if model != l.model {
+                *l = l.for_model(model);
+            }
+        }
+        set(&mut l.spp, self.spp.map(Some));
+        set(&mut l.bounces, self.bounces.map(Some));
+        set(&mut l.seed, self.seed.map(Some));
+        set(&mut l.environment, self.environment.map(Some));
+        set(&mut l.anisotropy, self.anisotropy.map(Some));
+        if self.occlusion {
+            l.occlusion = Some(true);
+        }
     }
 }
 
@@ -458,6 +507,44 @@ mod tests {
         ] {
             assert!(scene(argv).is_err(), "{argv:?} was accepted");
         }
+    }
+
+    #[test]
+    fn lighting_flags_set_the_model_and_its_settings() {
+        let s = scene(&[
+            "--lighting",
+            "path",
+            "--spp",
+            "16",
+            "--bounces",
+            "3",
+            "--seed",
+            "7",
+            "--environment",
+            "0.3",
+            "--anisotropy",
+            "-0.2",
+        ])
+        .unwrap();
+        let l = &s.lighting;
+        assert_eq!(l.model, LightingModel::Path);
+        assert_eq!((l.spp, l.bounces, l.seed), (Some(16), Some(3), Some(7)));
+        assert_eq!((l.environment, l.anisotropy), (Some(0.3), Some(-0.2)));
+        // Switching a path scene to shadows keeps what shadows uses.
+        let mut next = s.clone();
+        let flags = SceneFlags {
+            lighting: Some(LightingModel::Shadows),
+            occlusion: true,
+            ..SceneFlags::default()
+        };
+        flags.apply(&mut next).unwrap();
+        let l = &next.lighting;
+        assert_eq!(
+            (l.model, l.spp, l.seed),
+            (LightingModel::Shadows, None, None)
+        );
+        assert_eq!((l.anisotropy, l.occlusion), (Some(-0.2), Some(true)));
+        assert!(scene(&["--lighting", "global"]).is_err());
     }
 
     #[test]

@@ -29,6 +29,8 @@ pub struct ShadeBatch {
     pub color: [Vec<f32>; 3],
     /// The AVX2 kernel's intermediate values.
     pub(super) scratch: Scratch,
+    /// The shadowed form's columns ([`Shader::shade_gradients_shadowed`]).
+    pub(super) shadow: super::shadowed::ShadowScratch,
 }
 
 /// Intermediate values of the AVX2 kernel, kept between batches.

@@ -28,9 +28,12 @@ mod avx2;
 mod batch;
 mod dispatch;
 mod material;
+mod shadowed;
+mod transport;
 
 pub use batch::ShadeBatch;
 pub use material::{Material, MaterialOverrides};
+pub use transport::{phase_hg, SurfacePart, MAX_ANISOTROPY};
 
 /// A directional light given relative to the camera: `azimuth` degrees towards the
 /// image's right and `elevation` degrees towards its top, from the viewing direction.
@@ -108,6 +111,9 @@ pub struct Shader {
     /// Gradient magnitude (value per mm) below which a sample is unshaded; full
     /// shading from twice this value (a linear ramp between).
     gate: f32,
+    /// Henyey-Greenstein anisotropy of the medium's phase function (light transport
+    /// only: [`Shader::shade_shadowed`]).
+    anisotropy: f32,
 }
 
 /// Per-ray constants of the lighting: the view vector and, per light, `L·V`
@@ -173,6 +179,7 @@ impl Shader {
             relative: lights,
             lights: Vec::new(),
             gate,
+            anisotropy: 0.0,
         })
     }
 

@@ -17,12 +17,14 @@ use serde::{Deserialize, Serialize};
 use crate::meshes::MeshSpec;
 
 mod file;
+mod lighting;
 mod lobe;
 mod patch;
 mod resolve;
 #[cfg(test)]
 mod tests;
 
+pub use lighting::{Lighting, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SPP};
 pub use lobe::{LobeSpec, SceneLobe};
 pub use patch::MERGED_FIELDS;
 pub use resolve::{MeshLayer, Plan, Resolved};
@@ -93,6 +95,10 @@ pub struct Scene {
     pub lobe: LobeSpec,
     /// Directional lights relative to the camera (the headlight is `(0, 0)`).
     pub lights: Vec<Light>,
+    /// The light-transport model (`local`, `shadows`, `path`) and its settings
+    /// ([`Lighting`]); left out of the JSON while it is the default, `local`.
+    #[serde(skip_serializing_if = "Lighting::is_default")]
+    pub lighting: Lighting,
     /// Camera placement.
     pub camera: CameraSpec,
     /// Image width and height in pixels.
@@ -139,6 +145,7 @@ impl Default for Scene {
             material: MaterialOverrides::default(),
             lobe: LobeSpec::default(),
             lights: vec![Light::HEADLIGHT],
+            lighting: Lighting::default(),
             camera: CameraSpec::default(),
             size: [512, 512],
             step: 0.5,

@@ -7,12 +7,12 @@ use glint_core::RenderError;
 use super::Scene;
 
 /// Scene fields that are objects [`Scene::patch`] merges field by field.
-pub const MERGED_FIELDS: [&str; 3] = ["camera", "lobe", "material"];
+pub const MERGED_FIELDS: [&str; 4] = ["camera", "lobe", "material", "lighting"];
 
 impl Scene {
     /// The scene with the fields of `patch` (scene JSON's field names and values)
-    /// applied: the objects of [`MERGED_FIELDS`] (`camera`, `lobe`, `material`) merged
-    /// field by field, every other field replaced; `null` gives a field its default
+    /// applied: the objects of [`MERGED_FIELDS`] (`camera`, `lobe`, `material`,
+    /// `lighting`) merged field by field, every other field replaced; `null` gives a field its default
     /// (inside a merged object, for its optional fields). The result is checked as a
     /// scene file is ([`Scene::from_value`]): unknown fields and bad values are errors
     /// that name the field.

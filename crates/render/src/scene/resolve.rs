@@ -11,7 +11,7 @@ use glint_core::{
 use glint_raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
 use glint_volume::{preset, ClassifySettings, Field, FrameSettings, Kernel, TransferFunction};
 
-use super::{Input, Scene, DEFAULT_SHININESS};
+use super::{Input, Scene, Transport, DEFAULT_SHININESS};
 use crate::hwlobe::HwCache;
 use crate::meshes::{MeshSet, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 use crate::Renderer;
@@ -43,6 +43,8 @@ pub enum Plan {
         /// Meshes drawn in the volume with the same camera, when the scene has any:
         /// rays stop at the nearest surface and the volume composites over it.
         meshes: Option<MeshLayer>,
+        /// How light reaches the samples.
+        transport: Transport,
     },
     /// Rasterising the meshes (and the volume's isosurface).
     Surface {
@@ -157,6 +159,7 @@ impl Scene {
             ));
         }
         check_lights(&scene.lights)?;
+        scene.lighting.resolve(RenderMode::Surface)?;
         let material = scene.material.apply(SURFACE_MATERIAL);
         material.validate()?;
         scene.material = MaterialOverrides {
@@ -303,6 +306,7 @@ impl Scene {
         };
         frame.validate()?;
         scene.camera.validate()?;
+        let (transport, anisotropy) = scene.lighting.resolve(scene.mode)?;
         let specular = scene.lobe.specular(n, hw)?;
         let shader = Shader::with_specular(
             specular,
@@ -310,7 +314,8 @@ impl Scene {
             material,
             scene.lights.clone(),
             gate,
-        )?;
+        )?
+        .with_anisotropy(anisotropy)?;
         Ok(Resolved {
             scene,
             shader,
@@ -319,6 +324,7 @@ impl Scene {
                 classify,
                 frame,
                 meshes: None,
+                transport,
             },
         })
     }

@@ -4,7 +4,7 @@
 const $ = (id) => document.getElementById(id);
 const canvas = $("frame");
 const ctx = canvas.getContext("2d");
-const glint = (window.glint = { frames: 0, full: 0, latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
+const glint = (window.glint = { frames: 0, full: 0, samples: 0, sampleLog: [], latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
 let seq = 0;
 let scene = null;
 const frameTimes = [];
@@ -63,7 +63,8 @@ ws.onmessage = async (ev) => {
   const magic = String.fromCharCode(...new Uint8Array(ev.data, 0, 4));
   if (magic !== "GLNT") return;
   const h = { seq: view.getUint32(4, true), width: view.getUint32(8, true), height: view.getUint32(12, true),
-    ms: view.getFloat32(16, true), format: view.getUint8(20), purpose: view.getUint8(21) };
+    ms: view.getFloat32(16, true), format: view.getUint8(20), purpose: view.getUint8(21),
+    samples: view.getUint16(22, true) };
   const blob = new Blob([new Uint8Array(ev.data, 24)], { type: h.format === 0 ? "image/jpeg" : "image/png" });
   if (h.purpose === 2) { download("glint.png", blob); return; }
   const bitmap = await createImageBitmap(blob);
@@ -72,6 +73,10 @@ ws.onmessage = async (ev) => {
   const now = performance.now();
   glint.frames += 1;
   if (h.purpose === 1) glint.full += 1;
+  // Path-traced frames: the samples per pixel they hold (refined while the scene holds still).
+  glint.samples = h.samples;
+  glint.sampleLog.push(h.samples);
+  $("samples").textContent = h.samples > 0 ? `${h.samples} samples per pixel` : "";
   // Input-to-frame latency: every event this frame reflects (its seq and the older
   // ones, merged into it on the server) waited from its pointer event until now.
   for (const [s, t] of glint.sent) {
@@ -94,6 +99,9 @@ function showScene(s) {
   $("geometry").value = s.lobe.geometry;
   $("projection").value = s.camera.projection;
   if (s.iso !== undefined) $("iso").value = s.iso;
+  const l = s.lighting || { model: "local" };
+  $("lighting").value = l.model;
+  if (l.spp !== undefined) $("spp").value = l.spp;
 }
 
 function download(name, blob) {
@@ -139,4 +147,13 @@ $("split").onchange = (e) => send({ type: "split", split: e.target.value });
 const light = () => update({ lights: [{ azimuth: Number($("light-az").value), elevation: Number($("light-el").value), intensity: 1 }] }, true);
 $("light-az").oninput = light;
 $("light-el").oninput = light;
+// The lighting model: only the settings the model uses are sent (the others are
+// refused by the scene), the sample count with `path`.
+$("lighting").onchange = (e) => {
+  const model = e.target.value;
+  const patch = { model, spp: null, bounces: null, seed: null, environment: null, anisotropy: null, occlusion: null };
+  if (model === "path") patch.spp = Number($("spp").value);
+  update({ lighting: patch });
+};
+$("spp").onchange = (e) => { if ($("lighting").value === "path") update({ lighting: { spp: Number(e.target.value) } }); };
 $("save").onclick = () => { glint.saving = true; send({ type: "save" }); };

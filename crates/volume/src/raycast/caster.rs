@@ -1,13 +1,14 @@
 //! The rays of a frame and the reference loops that march them, one sample at a time.
 
 use glint_core::camera::Camera;
-use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3};
+use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3, MAX_LIGHTS};
 
 use super::settings::FrameSettings;
 use super::{ISO_REFINE_STEPS, TERMINATION_OPACITY, TILE};
 use crate::field::{Field, Loc, MACRO_CELL};
 use crate::lut::Lut;
 use crate::preint::{Last, Sampling};
+use crate::transport::ShadowField;
 
 /// Per-render state shared by all rays.
 pub(super) struct Caster<'a> {
@@ -35,6 +36,8 @@ pub(super) struct Caster<'a> {
     pub(super) jitter: bool,
     /// [`ClassifySettings::sampling`].
     pub(super) sampling: Sampling,
+    /// The `shadows` model's light volumes (`None`: local lighting).
+    pub(super) shadows: Option<&'a ShadowField>,
 }
 
 impl Caster<'_> {
@@ -263,15 +266,41 @@ impl Caster<'_> {
     ) -> bool {
         stats.shaded += 1;
         let grad = self.field.gradient_at(loc);
-        let rgb = self
-            .shader
-            .shade([rgba[0], rgba[1], rgba[2]], grad, lighting);
+        let base = [rgba[0], rgba[1], rgba[2]];
+        let rgb = match self.shadows {
+            None => self.shader.shade(base, grad, lighting),
+            Some(s) => {
+                let p = Vec3::new(
+                    loc.ijk[0] as f32 + loc.t[0],
+                    loc.ijk[1] as f32 + loc.t[1],
+                    loc.ijk[2] as f32 + loc.t[2],
+                );
+                self.shade_shadowed(s, p, base, grad, lighting)
+            }
+        };
         let w = (1.0 - *alpha) * rgba[3];
         color[0] += w * rgb[0];
         color[1] += w * rgb[1];
         color[2] += w * rgb[2];
         *alpha += w;
         *alpha >= TERMINATION_OPACITY
+    }
+
+    /// [`Shader::shade_shadowed`] of a sample at index-space point `p`, its lights'
+    /// transmittance and ambient occlusion read from `shadows`.
+    #[inline(always)]
+    pub(super) fn shade_shadowed(
+        &self,
+        shadows: &ShadowField,
+        p: Vec3,
+        base: [f32; 3],
+        grad: Vec3,
+        lighting: &RayLighting,
+    ) -> [f32; 3] {
+        let mut t = [1.0f32; MAX_LIGHTS];
+        let occlusion = shadows.at(p, &mut t);
+        self.shader
+            .shade_shadowed(base, grad, lighting, &t[..shadows.lights()], occlusion)
     }
 
     /// The table coordinate of sample `k - 1` of `ray`: the front of the segment
@@ -323,7 +352,11 @@ impl Caster<'_> {
                 let e = self.lut.get(threshold);
                 let g = self.field.gradient(p);
                 let lighting = self.shader.for_ray(view);
-                let rgb = self.shader.shade([e[0], e[1], e[2]], g, &lighting);
+                let base = [e[0], e[1], e[2]];
+                let rgb = match self.shadows {
+                    None => self.shader.shade(base, g, &lighting),
+                    Some(s) => self.shade_shadowed(s, p, base, g, &lighting),
+                };
                 return (rgb, 1.0);
             }
             k += 1;
@@ -541,10 +574,10 @@ mod jitter_tests {
         )
         .unwrap();
         let on = class
-            .render_jittered(&shader, &settings, &|_| {}, true, None)
+            .render_jittered(&shader, &settings, &|_| {}, true, None, None)
             .unwrap();
         let off = class
-            .render_jittered(&shader, &settings, &|_| {}, false, None)
+            .render_jittered(&shader, &settings, &|_| {}, false, None, None)
             .unwrap();
         assert_ne!(on.rgb, off.rgb, "jitter changed nothing");
         // Away from edges: pixels whose 5x5 neighbourhood is all nearly opaque.

@@ -1,6 +1,6 @@
 //! A field classified by a transfer function, and the frames rendered from it.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use rayon::prelude::*;
 
@@ -15,6 +15,7 @@ use super::{simd_supported, Scratch, TILE};
 use crate::field::Field;
 use crate::lut::Lut;
 use crate::tf::TransferFunction;
+use crate::transport::{DensityGrid, Medium, ShadowField};
 
 /// The transfer function tabulated for `settings` (MIP shows the function's own
 /// opacity, not a per-step one).
@@ -54,6 +55,14 @@ pub struct Classification {
     /// that can show a sample, for the rays' start bounds (empty when skipping is off
     /// or in MIP, whose leaps depend on the ray's maximum so far).
     pub(super) blocks: Vec<[Vec3; 8]>,
+    /// The transfer function, for light transport's medium.
+    tf: TransferFunction,
+    /// Built on first use by light transport: the medium (extinction and colour per
+    /// value, majorants per macro cell), the extinction on the light volumes' grid,
+    /// and its local ambient occlusion.
+    medium: OnceLock<Medium>,
+    density: OnceLock<DensityGrid>,
+    occlusion: OnceLock<Arc<Vec<f32>>>,
 }
 
 impl Classification {
@@ -94,7 +103,35 @@ impl Classification {
             distance,
             visible_box,
             clip_box,
+            tf: tf.clone(),
+            medium: OnceLock::new(),
+            density: OnceLock::new(),
+            occlusion: OnceLock::new(),
         })
+    }
+
+    /// The classified field as a participating medium (built on first use).
+    pub(crate) fn medium(&self) -> &Medium {
+        self.medium.get_or_init(|| {
+            let unit = self
+                .settings
+                .opacity_unit
+                .unwrap_or_else(|| self.field.min_spacing());
+            Medium::new(&self.field, &self.tf, unit)
+        })
+    }
+
+    /// The extinction on the light volumes' grid (built on first use).
+    pub(crate) fn density(&self) -> &DensityGrid {
+        self.density
+            .get_or_init(|| DensityGrid::new(&self.field, self.medium()))
+    }
+
+    /// The local ambient occlusion on the light volumes' grid (built on first use).
+    pub(crate) fn occlusion(&self) -> Arc<Vec<f32>> {
+        self.occlusion
+            .get_or_init(|| Arc::new(crate::transport::occlusion_grid(self.density())))
+            .clone()
     }
 
     /// The field it classifies.
@@ -170,7 +207,7 @@ impl Classification {
         settings: &FrameSettings,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Image, RenderError> {
-        self.render_jittered(shader, settings, progress, true, None)
+        self.render_jittered(shader, settings, progress, true, None, None)
     }
 
     /// [`Classification::render`] with each ray stopped at a per-pixel distance:
@@ -192,12 +229,13 @@ impl Classification {
                 far.len()
             )));
         }
-        self.render_jittered(shader, settings, progress, true, Some(far))
+        self.render_jittered(shader, settings, progress, true, Some(far), None)
     }
 
     /// [`Classification::render`] with the per-pixel [`jitter`] on or off (off only
-    /// in tests that compare the two), and rays stopped at `far` when given
-    /// ([`Classification::render_in_front`]; `width * height` long).
+    /// in tests that compare the two), rays stopped at `far` when given
+    /// ([`Classification::render_in_front`]; `width * height` long), and each light
+    /// scaled by its transmittance from `shadows` when given (the `shadows` model).
     pub(crate) fn render_jittered(
         &self,
         shader: &Shader,
@@ -205,9 +243,13 @@ impl Classification {
         progress: &(dyn Fn(u64) + Sync),
         jitter: bool,
         far: Option<&[f32]>,
+        shadows: Option<&ShadowField>,
     ) -> Result<Image, RenderError> {
         let camera = self.camera(settings)?;
         let shader = &shader.placed(&camera);
+        if let Some(s) = shadows {
+            s.check_lights(shader)?;
+        }
         let field = &*self.field;
         let (w, h) = (settings.width as usize, settings.height as usize);
         let rays = IndexRays::new(&camera, field, settings.width, settings.height);
@@ -231,6 +273,7 @@ impl Classification {
             simd: settings.kernel == Kernel::Auto && simd_supported(),
             jitter,
             sampling: self.settings.sampling,
+            shadows,
         };
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)

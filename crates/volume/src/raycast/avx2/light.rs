@@ -2,7 +2,10 @@
 
 use std::arch::x86_64::*;
 
+use glint_core::MAX_LIGHTS;
+
 use super::*;
+use crate::transport::ShadowField;
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
 /// `Field::gradient_at` computes them, in component order.
@@ -109,7 +112,13 @@ pub(super) unsafe fn light(
         // and `kept` holds `padded` samples.
         unsafe { gather(c, kept, views, batch, r0) };
     }
-    c.shader.shade_gradients(batch);
+    match c.shadows {
+        None => c.shader.shade_gradients(batch),
+        Some(shadows) => {
+            shadow_columns(c, shadows, kept, batch);
+            c.shader.shade_gradients_shadowed(batch);
+        }
+    }
     // In sample order, as the reference loop adds them.
     let [r, g, b] = &batch.color;
     for (s, ((r, g), b)) in kept.0[..n].iter().zip(r.iter().zip(g).zip(b)) {
@@ -162,6 +171,27 @@ unsafe fn gather(c: &Caster, kept: &Kept, views: &[Vec3], batch: &mut ShadeBatch
             _mm256_storeu_ps(batch.normal[a].as_mut_ptr().add(r0), g[a]);
             _mm256_storeu_ps(batch.view[a].as_mut_ptr().add(r0), view[a]);
             _mm256_storeu_ps(batch.color[a].as_mut_ptr().add(r0), base[a]);
+        }
+    }
+}
+
+/// Fills `batch`'s transmittance and occlusion columns for the `kept` samples from
+/// the light volumes, at each sample's index-space position: its cell's corner (from
+/// the corner voxel's linear index) plus its fractions, as the reference loop's
+/// `Caster::add` computes it from the located sample.
+fn shadow_columns(c: &Caster, shadows: &ShadowField, kept: &Kept, batch: &mut ShadeBatch) {
+    let n = batch.len();
+    let lights = shadows.lights();
+    let [nx, ny, _] = c.field.dims;
+    let (t, occlusion) = batch.shadow_columns(lights);
+    let mut tl = [1.0f32; MAX_LIGHTS];
+    for (k, s) in kept.0.iter().enumerate().take(n) {
+        let b = s.base as usize;
+        let (i, j, kk) = (b % nx, (b / nx) % ny, b / (nx * ny));
+        let p = Vec3::new(i as f32 + s.t[0], j as f32 + s.t[1], kk as f32 + s.t[2]);
+        occlusion[k] = shadows.at(p, &mut tl);
+        for (l, &x) in tl[..lights].iter().enumerate() {
+            t[l * n + k] = x;
         }
     }
 }

@@ -1,0 +1,365 @@
+//! What light transport (shadows, path tracing) asks of the lighting model: how much
+//! of each light reaches a sample (a transmittance factor per light, and an occlusion
+//! factor on the ambient term), and the model's response to light from one direction
+//! seen from another, for a surface-like sample and for a scattering medium.
+//!
+//! A volume sample is a hybrid (Kroes, Post and Botha, "Exposure Render: an
+//! interactive photo-realistic volume rendering framework", PLoS ONE 7(7), 2012): a
+//! surface, lit by the model's diffuse and specular terms, where the gradient is
+//! strong; a medium that scatters by the Henyey-Greenstein phase function where it is
+//! weak. The weight of the surface is the gate's ramp ([`Shader::shade`]'s blend
+//! between the shaded and the flat colour: 0 below the gate, 1 from twice it), where
+//! Exposure Render draws the surface with probability `1 - exp(-s·|∇I|)`: the same
+//! idea, gated as glint's local model already is.
+//!
+//! Units: a light of intensity `I` from direction `L` sends a surface sample
+//! `I·(c·diffuse·N·L + specular·lobe)` and a medium sample `I·c·diffuse·4π·p(L, V)`,
+//! so with one light of intensity 1 that nothing shadows, an isotropic medium
+//! (`g = 0`) gives the local model's flat colour `c·diffuse`, and
+//! [`Shader::shade_shadowed`] gives [`Shader::shade`] (tested). As a BSDF in a path
+//! tracer this is `f·cos θ_i = response / π` for the surface (Lambert's `c·diffuse/π`
+//! and the lobe over π) and `f = response / 4π` for the medium (`c·diffuse` times the
+//! normalised phase function): energy-conserving for `c·diffuse <= 1`, so a white
+//! furnace stays at the environment's radiance.
+
+use crate::error::RenderError;
+use crate::math::Vec3;
+
+use super::{facing, Material, RayLighting, Shader};
+
+/// `4π` times the Henyey-Greenstein phase function ("Diffuse radiation in the
+/// galaxy", Astrophysical Journal 93, 1941) for light arriving from unit direction
+/// `wi` (towards the light) and leaving towards `wo`, written with `l_dot_v = wi·wo`:
+/// the scattering angle's cosine is `-wi·wo`, so
+/// `(1 - g²) / (1 + g² + 2g·wi·wo)^(3/2)`. Its mean over the sphere is 1; `g > 0`
+/// scatters forwards (bright when looking towards the light through the medium).
+#[inline(always)]
+pub fn phase_hg(g: f32, l_dot_v: f32) -> f32 {
+    let g2 = g * g;
+    let denom = 1.0 + g2 + 2.0 * g * l_dot_v;
+    (1.0 - g2) / (denom * denom.sqrt())
+}
+
+/// Largest `|g|` of the phase function a shader takes (at `|g| = 1` it is a delta).
+pub const MAX_ANISOTROPY: f32 = 0.95;
+
+/// Where a volume sample is a surface: its unit normal (down the gradient) and the
+/// surface's weight in the hybrid, in `(0, 1]` ([`Shader::surface_at`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePart {
+    /// Unit normal, down the gradient (either side may face the viewer).
+    pub normal: Vec3,
+    /// The surface's weight; the medium's is `1 - weight`.
+    pub weight: f32,
+}
+
+impl Shader {
+    /// This shader with the medium's phase function anisotropy `g` (Henyey-Greenstein;
+    /// 0, isotropic, by default).
+    pub fn with_anisotropy(mut self, g: f32) -> Result<Shader, RenderError> {
+        if !g.is_finite() || g.abs() > MAX_ANISOTROPY {
+            return Err(RenderError::Parameter(format!(
+                "anisotropy {g}: expected -{MAX_ANISOTROPY}..={MAX_ANISOTROPY}"
+            )));
+        }
+        self.anisotropy = g;
+        Ok(self)
+    }
+
+    /// The phase function's anisotropy `g`.
+    pub fn anisotropy(&self) -> f32 {
+        self.anisotropy
+    }
+
+    /// Lit linear colour of a volume sample as [`Shader::shade`] lights it, with the
+    /// light of light `i` scaled by `transmittance[i]` (what reaches the sample through
+    /// the volume; one per placed light) and the ambient term by `occlusion`, and the
+    /// flat part of the hybrid a scattering medium (see the module docs): with one
+    /// light of intensity 1, every factor 1 and `g = 0` it is [`Shader::shade`] up to
+    /// rounding. [`Shader::shade_gradients_shadowed`] is its batch form, bit for bit.
+    #[inline(always)]
+    pub fn shade_shadowed(
+        &self,
+        base: [f32; 3],
+        grad: Vec3,
+        ray: &RayLighting,
+        transmittance: &[f32],
+        occlusion: f32,
+    ) -> [f32; 3] {
+        let m = &self.material;
+        if !m.shade {
+            return base;
+        }
+        let gm2 = grad.dot(grad);
+        let g0 = self.gate;
+        let phase = self.phase_sum(ray, transmittance);
+        if !(gm2 > g0 * g0 && gm2 < f32::INFINITY) {
+            return base.map(|c| c * medium_factor(m, occlusion, phase));
+        }
+        let gm = gm2.sqrt();
+        let (diffuse, specular) = self.sums_shadowed(grad * (-1.0 / gm), ray, transmittance);
+        let w = self.gate_weight(gm);
+        hybrid(m, base, [diffuse, specular, phase], occlusion, w)
+    }
+
+    /// `Σ_i I_i·T_i·4π·p(L_i, V)` over the ray's lights, in light order.
+    #[inline(always)]
+    fn phase_sum(&self, ray: &RayLighting, transmittance: &[f32]) -> f32 {
+        let g = self.anisotropy;
+        let mut phase = 0.0f32;
+        for (&(_, intensity, l_dot_v, _), &t) in ray.lights[..ray.count].iter().zip(transmittance) {
+            phase += (intensity * t) * phase_hg(g, l_dot_v);
+        }
+        phase
+    }
+
+    /// [`Shader`]'s diffuse and specular sums with each light's intensity scaled by
+    /// its transmittance.
+    #[inline(always)]
+    fn sums_shadowed(&self, n: Vec3, ray: &RayLighting, transmittance: &[f32]) -> (f32, f32) {
+        let (n, n_dot_v) = facing(n, ray.view);
+        let mut diffuse = 0.0f32;
+        let mut specular = 0.0f32;
+        for (&(l, intensity, l_dot_v, h), &t) in ray.lights[..ray.count].iter().zip(transmittance) {
+            let n_dot_l = n.dot(l);
+            if n_dot_l > 0.0 {
+                let it = intensity * t;
+                diffuse += it * n_dot_l;
+                let c = self.cos(n_dot_l, n_dot_v, l_dot_v, n, h);
+                specular += it * self.specular.eval(c);
+            }
+        }
+        (diffuse, specular)
+    }
+
+    /// The surface part of a volume sample with world gradient `grad`: its unit normal
+    /// and weight, `None` where the gradient is below the gate (or not finite) or the
+    /// material is unshaded (then the sample is all medium).
+    #[inline]
+    pub fn surface_at(&self, grad: Vec3) -> Option<SurfacePart> {
+        if !self.material.shade {
+            return None;
+        }
+        let gm2 = grad.dot(grad);
+        let g0 = self.gate;
+        if !(gm2 > g0 * g0 && gm2 < f32::INFINITY) {
+            return None;
+        }
+        let gm = gm2.sqrt();
+        Some(SurfacePart {
+            normal: grad * (-1.0 / gm),
+            weight: self.gate_weight(gm),
+        })
+    }
+
+    /// What a surface of colour `base` and unit `normal` (either side; it is turned to
+    /// face `wo`) sends towards unit `wo` per unit of light from unit `wi`:
+    /// `c·diffuse·N·L + specular·lobe(cos γ)` where `N·L > 0`, else 0 (the light
+    /// reaches the side the viewer sees only). Divided by π it is the BRDF times
+    /// `N·wi`.
+    #[inline]
+    pub fn surface_response(&self, base: [f32; 3], normal: Vec3, wo: Vec3, wi: Vec3) -> [f32; 3] {
+        let m = &self.material;
+        let (n, n_dot_v) = facing(normal, wo);
+        let n_dot_l = n.dot(wi);
+        if n_dot_l <= 0.0 {
+            return [0.0; 3];
+        }
+        let h = (wi + wo).normalize_or_zero();
+        let c = self.cos(n_dot_l, n_dot_v, wi.dot(wo), n, h);
+        let spec = m.specular * self.specular.eval(c);
+        base.map(|b| b * m.diffuse * n_dot_l + spec)
+    }
+
+    /// What a scattering medium of colour `base` sends towards unit `wo` per unit of
+    /// light from unit `wi`: `c·diffuse·4π·p(wi, wo)` ([`phase_hg`]). Divided by 4π it
+    /// is the albedo `c·diffuse` times the normalised phase function.
+    #[inline]
+    pub fn medium_response(&self, base: [f32; 3], wo: Vec3, wi: Vec3) -> [f32; 3] {
+        let p = phase_hg(self.anisotropy, wi.dot(wo));
+        base.map(|b| b * self.material.diffuse * p)
+    }
+
+    /// The medium's single-scattering albedo for a sample of colour `base`:
+    /// `c·diffuse` ([`Shader::medium_response`] integrates to it over the sphere, over
+    /// 4π).
+    #[inline]
+    pub fn medium_albedo(&self, base: [f32; 3]) -> [f32; 3] {
+        base.map(|b| b * self.material.diffuse)
+    }
+}
+
+/// The flat part of a sample that is all medium: `ambient·occlusion +
+/// diffuse·phase`.
+#[inline(always)]
+pub(super) fn medium_factor(m: &Material, occlusion: f32, phase: f32) -> f32 {
+    m.ambient * occlusion + m.diffuse * phase
+}
+
+/// The factors of a volume sample's colour `c·lit + spec` from its shadowed sums
+/// `[diffuse, specular, phase]`, the ambient occlusion and the surface weight `w`:
+/// `lit = ambient·occ + diffuse·(w·D + (1-w)·P)`, `spec = w·specular·S`.
+#[inline(always)]
+pub(super) fn hybrid_terms(
+    m: &Material,
+    [diffuse, specular, phase]: [f32; 3],
+    occlusion: f32,
+    w: f32,
+) -> (f32, f32) {
+    let lit = m.ambient * occlusion + m.diffuse * (w * diffuse + (1.0 - w) * phase);
+    let spec = w * (m.specular * specular);
+    (lit, spec)
+}
+
+/// A volume sample's colour from [`hybrid_terms`].
+#[inline(always)]
+fn hybrid(m: &Material, base: [f32; 3], sums: [f32; 3], occlusion: f32, w: f32) -> [f32; 3] {
+    let (lit, spec) = hybrid_terms(m, sums, occlusion, w);
+    base.map(|c| c * lit + spec)
+}
+
+#[cfg(test)]
+mod tests {
+    use glint_lobe::{Geometry, LobeKind};
+
+    use super::*;
+    use crate::camera::{Camera, CameraSpec};
+    use crate::lighting::Light;
+
+    fn shader(g: f32, gate: f32, lights: Vec<Light>) -> Shader {
+        let cam = Camera::frame(&CameraSpec::default(), Vec3::ZERO, 1.0, 8, 8).unwrap();
+        Shader::new(
+            LobeKind::EnergyFit,
+            30.0,
+            4,
+            Geometry::Phong,
+            Material::default(),
+            lights,
+            gate,
+        )
+        .unwrap()
+        .with_anisotropy(g)
+        .unwrap()
+        .placed(&cam)
+    }
+
+    #[test]
+    fn phase_function_has_mean_one_and_peaks_forwards() {
+        // Mean of 4π p over the sphere: (1/2)∫_{-1}^{1} f(μ) dμ by the midpoint rule.
+        for g in [-0.8f32, -0.3, 0.0, 0.5, 0.9] {
+            let n = 200_000;
+            let mean: f64 = (0..n)
+                .map(|i| {
+                    let mu = -1.0 + (i as f64 + 0.5) * 2.0 / n as f64;
+                    f64::from(phase_hg(g, mu as f32))
+                })
+                .sum::<f64>()
+                / n as f64;
+            assert!((mean - 1.0).abs() < 1e-3, "g = {g}: mean {mean}");
+        }
+        // Forward scattering: light from wi seen from wo = -wi (through the medium).
+        assert!(phase_hg(0.6, -1.0) > phase_hg(0.6, 1.0) * 50.0);
+        assert_eq!(phase_hg(0.0, 0.3), 1.0);
+    }
+
+    #[test]
+    fn unshadowed_isotropic_light_is_the_local_model() {
+        let s = shader(0.0, 0.3, vec![Light::HEADLIGHT]);
+        let view = Vec3::new(0.2, -0.1, 1.0).normalize_or_zero();
+        let ray = s.for_ray(view);
+        for grad in [
+            Vec3::new(0.0, 0.0, -2.0),
+            Vec3::new(0.5, 0.2, -0.4),
+            Vec3::new(0.1, 0.0, 0.0), // below the gate: flat
+            Vec3::new(0.4, 0.0, 0.1), // inside the ramp
+            Vec3::ZERO,
+        ] {
+            let base = [0.8, 0.5, 0.3];
+            let local = s.shade(base, grad, &ray);
+            let lit = s.shade_shadowed(base, grad, &ray, &[1.0], 1.0);
+            for c in 0..3 {
+                assert!(
+                    (local[c] - lit[c]).abs() < 1e-6,
+                    "{grad:?}: {local:?} {lit:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn transmittance_scales_each_light_and_occlusion_the_ambient() {
+        let lights = vec![
+            Light::HEADLIGHT,
+            Light {
+                azimuth: 30.0,
+                elevation: 10.0,
+                intensity: 0.5,
+            },
+        ];
+        let s = shader(0.3, 0.0, lights);
+        let ray = s.for_ray(s.world_lights()[0].0);
+        let base = [1.0, 0.5, 0.25];
+        let grad = s.world_lights()[0].0 * -3.0;
+        let m = Material::default();
+        // Everything dark but the ambient term, scaled by the occlusion.
+        let dark = s.shade_shadowed(base, grad, &ray, &[0.0, 0.0], 0.5);
+        for c in 0..3 {
+            assert!((dark[c] - base[c] * m.ambient * 0.5).abs() < 1e-7);
+        }
+        // Linear in each light's transmittance.
+        let a = s.shade_shadowed(base, grad, &ray, &[1.0, 0.0], 0.0);
+        let b = s.shade_shadowed(base, grad, &ray, &[0.0, 1.0], 0.0);
+        let ab = s.shade_shadowed(base, grad, &ray, &[1.0, 1.0], 0.0);
+        let half = s.shade_shadowed(base, grad, &ray, &[0.5, 0.5], 0.0);
+        for c in 0..3 {
+            assert!((a[c] + b[c] - ab[c]).abs() < 1e-6);
+            assert!((half[c] - 0.5 * ab[c]).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn responses_are_the_shading_of_one_light() {
+        // One light along the view: the surface response plus ambient is the local
+        // shading of a full-weight surface, and a medium's is c·diffuse at g = 0.
+        let s = shader(0.0, 0.0, vec![Light::HEADLIGHT]);
+        let l = s.world_lights()[0].0;
+        let ray = s.for_ray(l);
+        let n = Vec3::new(0.3, 0.1, 0.0) + l;
+        let n = n.normalize_or_zero();
+        let base = [0.9, 0.6, 0.2];
+        let m = Material::default();
+        let r = s.surface_response(base, n, l, l);
+        let local = s.shade(base, n * -5.0, &ray);
+        for c in 0..3 {
+            assert!((r[c] + base[c] * m.ambient - local[c]).abs() < 1e-6);
+        }
+        // The back side of the normal gives the same (two-sided), light behind gives 0.
+        assert_eq!(s.surface_response(base, -n, l, l), r);
+        assert_eq!(s.surface_response(base, n, l, -l), [0.0; 3]);
+        let med = s.medium_response(base, l, Vec3::new(0.0, 1.0, 0.0));
+        for c in 0..3 {
+            assert!((med[c] - base[c] * m.diffuse).abs() < 1e-7);
+        }
+        assert!(s.surface_at(Vec3::ZERO).is_none());
+        let part = s.surface_at(n * -2.0).unwrap();
+        assert_eq!(part.weight, 1.0);
+        assert!((part.normal - n).length() < 1e-6);
+    }
+
+    #[test]
+    fn bad_anisotropy_is_refused() {
+        let s = Shader::new(
+            LobeKind::Exact,
+            10.0,
+            4,
+            Geometry::Phong,
+            Material::default(),
+            vec![],
+            0.0,
+        )
+        .unwrap();
+        assert!(s.clone().with_anisotropy(0.99).is_err());
+        assert!(s.clone().with_anisotropy(f32::NAN).is_err());
+        assert_eq!(s.with_anisotropy(-0.5).unwrap().anisotropy(), -0.5);
+    }
+}

@@ -1,0 +1,402 @@
+//! The lighting of a scene: which light-transport model (`local`, `shadows`, `path`)
+//! and its settings, and the defaults [`Scene::resolve`](super::Scene) writes back.
+
+use serde::{Deserialize, Serialize};
+
+use glint_core::{RenderError, RenderMode, MAX_ANISOTROPY};
+use glint_volume::{check_spp, LightingModel, PathSettings, ShadowSettings};
+
+/// Samples per pixel of a `path` scene that does not say (a few seconds at 512x512
+/// on two cores; docs/lighting.md).
+pub const DEFAULT_SPP: u32 = 64;
+
+/// Scattering events of a `path` scene that does not say: enough for light to cross
+/// a skull's bone and come back (docs/lighting.md shows 1 to 16).
+pub const DEFAULT_BOUNCES: u32 = 4;
+
+/// Radiance of the uniform environment of a `path` scene that does not say: half the
+/// intensity of the default headlight, so the key light still shapes the image.
+pub const DEFAULT_ENVIRONMENT: f32 = 0.5;
+
+/// How a scene is lit: the model and its settings. Settings left unset are chosen by
+/// [`Scene::resolve`](super::Scene::resolve_for) for the model (and written back);
+/// settings another model uses are refused, so a scene says nothing it does not do.
+///
+/// ```
+/// use glint_render::{Input, Lighting, LightingModel, Phantom, Renderer, Scene};
+///
+/// let scene = Scene {
+///     input: Input::Phantom { name: Phantom::SheppLogan, size: 24 },
+///     size: [16, 16],
+///     lighting: Lighting { model: LightingModel::Path, spp: Some(2), ..Lighting::default() },
+///     ..Scene::default()
+/// };
+/// let mut renderer = Renderer::open(&scene.input).unwrap();
+/// let rendered = renderer.render(&scene, &|_| {}).unwrap();
+/// // The resolved scene names the defaults it used.
+/// assert_eq!(rendered.scene.lighting.bounces, Some(glint_render::DEFAULT_BOUNCES));
+/// assert_eq!(rendered.scene.lighting.seed, Some(0));
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Lighting {
+    /// The light-transport model.
+    pub model: LightingModel,
+    /// `path`: samples per pixel [default: [`DEFAULT_SPP`]].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spp: Option<u32>,
+    /// `path`: most scattering events of a path [default: [`DEFAULT_BOUNCES`]].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounces: Option<u32>,
+    /// `path`: the seed of the pixels' random numbers [default: 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// `path`: radiance of the uniform white environment [default:
+    /// [`DEFAULT_ENVIRONMENT`]].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment: Option<f32>,
+    /// `shadows` and `path`: the Henyey-Greenstein anisotropy of the medium's phase
+    /// function, -0.95..=0.95 [default: 0, isotropic].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub anisotropy: Option<f32>,
+    /// `shadows`: local ambient occlusion on the ambient term [default: false].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub occlusion: Option<bool>,
+}
+
+/// The light transport of a resolved volume scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Transport {
+    /// Every light reaches every sample.
+    Local,
+    /// Light volumes per light, optional ambient occlusion.
+    Shadows(ShadowSettings),
+    /// Path tracing to `spp` samples per pixel.
+    Path {
+        /// Samples per pixel.
+        spp: u32,
+        /// Bounces, seed, environment.
+        settings: PathSettings,
+    },
+}
+
+impl Lighting {
+    /// Whether it is the default (`local`, nothing set): scenes then leave it out of
+    /// their JSON, so a local scene's file is what it was before lighting models.
+    pub fn is_default(&self) -> bool {
+        *self == Lighting::default()
+    }
+
+    /// The fields that are set, with their names.
+    fn set_fields(&self) -> [(&'static str, bool); 6] {
+        [
+            ("spp", self.spp.is_some()),
+            ("bounces", self.bounces.is_some()),
+            ("seed", self.seed.is_some()),
+            ("environment", self.environment.is_some()),
+            ("anisotropy", self.anisotropy.is_some()),
+            ("occlusion", self.occlusion.is_some()),
+        ]
+    }
+
+    /// The fields `model` uses.
+    fn used_by(model: LightingModel) -> &'static [&'static str] {
+        match model {
+            LightingModel::Local => &[],
+            LightingModel::Shadows => &["anisotropy", "occlusion"],
+            LightingModel::Path => &["spp", "bounces", "seed", "environment", "anisotropy"],
+        }
+    }
+
+    /// This lighting with the fields its model does not use cleared (what a front end
+    /// does when the user picks another model).
+    pub fn for_model(&self, model: LightingModel) -> Lighting {
+        let used = Lighting::used_by(model);
+        let keep = |name: &str| used.contains(&name);
+        Lighting {
+            model,
+            spp: self.spp.filter(|_| keep("spp")),
+            bounces: self.bounces.filter(|_| keep("bounces")),
+            seed: self.seed.filter(|_| keep("seed")),
+            environment: self.environment.filter(|_| keep("environment")),
+            anisotropy: self.anisotropy.filter(|_| keep("anisotropy")),
+            occlusion: self.occlusion.filter(|_| keep("occlusion")),
+        }
+    }
+
+    /// Chooses the model's defaults (written into `self`) and checks every value and
+    /// the render `mode`: `shadows` lights composite and iso renders, `path` composite
+    /// ones; a surface render takes `local` only. Returns the transport and the phase
+    /// function's anisotropy.
+    pub(crate) fn resolve(&mut self, mode: RenderMode) -> Result<(Transport, f32), RenderError> {
+        let model = self.model;
+        let used = Lighting::used_by(model);
+        if let Some((name, _)) = self
+            .set_fields()
+            .into_iter()
+            .find(|(name, set)| *set && !used.contains(name))
+        {
+            return Err(RenderError::Parameter(format!(
+                "lighting.{name} is not used by {} lighting",
+                model.name()
+            )));
+        }
+        let allowed = match model {
+            LightingModel::Local => true,
+            LightingModel::Shadows => matches!(mode, RenderMode::Composite | RenderMode::Iso),
+            LightingModel::Path => mode == RenderMode::Composite,
+        };
+        if !allowed {
+            return Err(RenderError::Parameter(format!(
+                "{} lighting does not light {} mode",
+                model.name(),
+                mode.name()
+            )));
+        }
+        let anisotropy = match model {
+            LightingModel::Local => 0.0,
+            _ => *self.anisotropy.get_or_insert(0.0),
+        };
+        if !anisotropy.is_finite() || anisotropy.abs() > MAX_ANISOTROPY {
+            return Err(RenderError::Parameter(format!(
+                "lighting.anisotropy {anisotropy}: expected -{MAX_ANISOTROPY}..={MAX_ANISOTROPY}"
+            )));
+        }
+        let transport = match model {
+            LightingModel::Local => Transport::Local,
+            LightingModel::Shadows => Transport::Shadows(ShadowSettings {
+                occlusion: *self.occlusion.get_or_insert(false),
+            }),
+            LightingModel::Path => {
+                let spp = *self.spp.get_or_insert(DEFAULT_SPP);
+                check_spp(spp)?;
+                let settings = PathSettings {
+                    bounces: *self.bounces.get_or_insert(DEFAULT_BOUNCES),
+                    seed: *self.seed.get_or_insert(0),
+                    environment: *self.environment.get_or_insert(DEFAULT_ENVIRONMENT),
+                };
+                settings.validate()?;
+                Transport::Path { spp, settings }
+            }
+        };
+        Ok((transport, anisotropy))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glint_volume::Phantom;
+    use serde_json::json;
+
+    use super::*;
+    use crate::{Input, Renderer, Scene};
+
+    fn small(lighting: Lighting) -> Scene {
+        Scene {
+            input: Input::Phantom {
+                name: Phantom::SheppLogan,
+                size: 24,
+            },
+            size: [20, 16],
+            lighting,
+            ..Scene::default()
+        }
+    }
+
+    fn path(spp: u32) -> Lighting {
+        Lighting {
+            model: LightingModel::Path,
+            spp: Some(spp),
+            ..Lighting::default()
+        }
+    }
+
+    #[test]
+    fn local_scenes_leave_lighting_out_of_their_json() {
+        let scene = small(Lighting::default());
+        let text = scene.to_json().unwrap();
+        assert!(!text.contains("lighting"), "{text}");
+        let mut r = Renderer::open(&scene.input).unwrap();
+        let done = r.render(&scene, &|_| {}).unwrap();
+        assert!(done.scene.lighting.is_default());
+        assert!(!done.scene.to_json().unwrap().contains("lighting"));
+    }
+
+    #[test]
+    fn resolving_writes_each_models_defaults_back() {
+        let mut r = Renderer::open(&small(Lighting::default()).input).unwrap();
+        let shadows = Lighting {
+            model: LightingModel::Shadows,
+            ..Lighting::default()
+        };
+        let s = r.resolve(&small(shadows)).unwrap().scene.lighting;
+        assert_eq!(
+            (s.anisotropy, s.occlusion, s.spp),
+            (Some(0.0), Some(false), None)
+        );
+        let p = r
+            .resolve(&small(Lighting {
+                model: LightingModel::Path,
+                ..Lighting::default()
+            }))
+            .unwrap()
+            .scene
+            .lighting;
+        assert_eq!(p.spp, Some(DEFAULT_SPP));
+        assert_eq!(p.bounces, Some(DEFAULT_BOUNCES));
+        assert_eq!(p.seed, Some(0));
+        assert_eq!(p.environment, Some(DEFAULT_ENVIRONMENT));
+        assert_eq!(p.occlusion, None);
+    }
+
+    #[test]
+    fn settings_of_another_model_and_unlit_modes_are_refused() {
+        let mut r = Renderer::open(&small(Lighting::default()).input).unwrap();
+        let bad = [
+            (
+                small(Lighting {
+                    spp: Some(4),
+                    ..Lighting::default()
+                }),
+                "lighting.spp",
+            ),
+            (
+                small(Lighting {
+                    occlusion: Some(true),
+                    ..path(2)
+                }),
+                "lighting.occlusion",
+            ),
+            (
+                small(Lighting {
+                    anisotropy: Some(1.5),
+                    ..path(2)
+                }),
+                "anisotropy",
+            ),
+            (small(path(0)), "spp 0"),
+            (
+                Scene {
+                    mode: glint_core::RenderMode::Iso,
+                    ..small(path(2))
+                },
+                "iso mode",
+            ),
+            (
+                Scene {
+                    mode: glint_core::RenderMode::Mip,
+                    ..small(Lighting {
+                        model: LightingModel::Shadows,
+                        ..Lighting::default()
+                    })
+                },
+                "mip mode",
+            ),
+            (
+                small(Lighting {
+                    bounces: Some(0),
+                    ..path(2)
+                }),
+                "bounces 0",
+            ),
+        ];
+        for (scene, needle) in bad {
+            let err = r.resolve(&scene).unwrap_err().to_string();
+            assert!(err.contains(needle), "{needle}: {err}");
+        }
+        // Picking a model keeps only its own settings.
+        let l = Lighting {
+            occlusion: Some(true),
+            anisotropy: Some(0.2),
+            ..path(8)
+        }
+        .for_model(LightingModel::Shadows);
+        assert_eq!(
+            (l.spp, l.occlusion, l.anisotropy),
+            (None, Some(true), Some(0.2))
+        );
+    }
+
+    #[test]
+    fn samples_accumulate_while_only_the_count_changes() {
+        let scene = small(path(4));
+        let fresh = Renderer::open(&scene.input)
+            .unwrap()
+            .render(&scene, &|_| {})
+            .unwrap();
+        assert_eq!(fresh.scene.lighting.spp, Some(4));
+        let mut r = Renderer::open(&scene.input).unwrap();
+        for spp in [1, 2, 4] {
+            let step = r.render(&small(path(spp)), &|_| {}).unwrap();
+            assert_eq!(r.path_samples(), spp);
+            assert_eq!(step.scene.lighting.spp, Some(spp));
+            if spp == 4 {
+                // Three batches give the one-batch image bit for bit.
+                assert_eq!(step.image, fresh.image);
+            }
+        }
+        // Anything else changed starts again (and gives another image).
+        let mut moved = small(path(4));
+        moved.camera.azimuth = 40.0;
+        let other = r.render(&moved, &|_| {}).unwrap();
+        assert_eq!(r.path_samples(), 4);
+        assert_ne!(other.image, fresh.image);
+        r.render(&small(path(1)), &|_| {}).unwrap();
+        assert_eq!(r.path_samples(), 1, "a new scene starts from no samples");
+        // Fewer samples than held: start again.
+        r.render(&small(path(3)), &|_| {}).unwrap();
+        r.render(&small(path(2)), &|_| {}).unwrap();
+        assert_eq!(r.path_samples(), 2);
+        // The dumped scene renders the same image again.
+        let again = Scene::from_json(&fresh.scene.to_json().unwrap()).unwrap();
+        let re = Renderer::open(&again.input)
+            .unwrap()
+            .render(&again, &|_| {})
+            .unwrap();
+        assert_eq!(re.image, fresh.image);
+    }
+
+    #[test]
+    fn shadows_darken_and_reuse_their_light_volumes() {
+        let lit = Lighting {
+            model: LightingModel::Shadows,
+            ..Lighting::default()
+        };
+        let mut scene = small(lit);
+        scene.lights = vec![glint_core::Light {
+            azimuth: 50.0,
+            elevation: 30.0,
+            intensity: 1.0,
+        }];
+        let mut r = Renderer::open(&scene.input).unwrap();
+        let a = r.render(&scene, &|_| {}).unwrap();
+        let again = r.render(&scene, &|_| {}).unwrap();
+        assert_eq!(a.image, again.image);
+        let local = r
+            .render(
+                &Scene {
+                    lighting: Lighting::default(),
+                    ..scene.clone()
+                },
+                &|_| {},
+            )
+            .unwrap();
+        let sum = |i: &glint_core::Image| i.rgb.iter().map(|c| f64::from(c[1])).sum::<f64>();
+        assert!(
+            sum(&a.image) < sum(&local.image),
+            "shadows removed no light"
+        );
+        // A patch merges lighting field by field.
+        let p = scene
+            .patch(
+                json!({"lighting": {"occlusion": true}})
+                    .as_object()
+                    .unwrap(),
+            )
+            .unwrap();
+        assert_eq!(p.lighting.model, LightingModel::Shadows);
+        assert_eq!(p.lighting.occlusion, Some(true));
+        let ao = r.render(&p, &|_| {}).unwrap();
+        assert_ne!(ao.image, a.image);
+    }
+}

@@ -1,0 +1,579 @@
+//! Light transport against closed forms: a slab's transmittance `exp(-τ)`, delta and
+//! ratio tracking in agreement on a heterogeneous medium, a white furnace, an opaque
+//! sphere's shadow where geometry puts it, determinism per seed on any thread count,
+//! and the SIMD loop against the scalar one under shadows. Small volumes, few samples.
+
+use std::sync::Arc;
+
+use glint_core::{Light, Material, RenderMode, Shader, Vec3};
+use glint_io::{Samples, Volume};
+use glint_lobe::{Geometry, LobeKind};
+
+use super::rng::Rng;
+use super::tracking::{IndexRay, Tracker};
+use super::*;
+use crate::field::Field;
+use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel};
+use crate::tf::TransferFunction;
+use crate::Sampling;
+
+/// A volume of `dims` and `spacing` whose value at voxel `(i, j, k)` is `f`.
+fn volume(dims: [usize; 3], spacing: [f64; 3], f: impl Fn(f32, f32, f32) -> f32) -> Volume {
+    let mut v = Vec::with_capacity(dims.iter().product());
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                v.push(f(i as f32, j as f32, k as f32));
+            }
+        }
+    }
+    Volume::new(dims, spacing, Samples::F32(v)).unwrap()
+}
+
+fn classify(vol: &Volume, tf: &TransferFunction) -> Classification {
+    let field = Arc::new(Field::new(vol).unwrap());
+    Classification::new(field, tf, &ClassifySettings::default()).unwrap()
+}
+
+/// White colour at every value; opacity per unit (one voxel of the smallest spacing)
+/// from the `(value, alpha)` points.
+fn white(opacity: &[(f64, f64)]) -> TransferFunction {
+    TransferFunction::new(opacity.to_vec(), vec![(0.0, [1.0; 3])]).unwrap()
+}
+
+/// Mean of `n` estimates.
+fn mean(n: u64, mut f: impl FnMut(u64) -> f64) -> f64 {
+    (0..n).map(&mut f).sum::<f64>() / n as f64
+}
+
+#[test]
+fn a_slab_transmits_exp_minus_its_optical_depth() {
+    // A box of uniform matter, anisotropic voxels: opacity 0.02 per 0.5 mm (the
+    // smallest spacing), so σ = -ln(0.98) / 0.5 per mm; an oblique ray across it.
+    let spacing = [1.0, 0.5, 2.0];
+    let vol = volume([30, 20, 10], spacing, |_, _, _| 1.0);
+    let class = classify(&vol, &white(&[(0.0, 0.02)]));
+    let sigma = -(0.98f64).ln() / 0.5;
+    let field = &**class.field();
+    let track = Tracker {
+        field,
+        medium: class.medium(),
+    };
+    // World box: x in [0, 29] mm, y in [0, 9.5], z in [0, 18] (voxel centres).
+    let dir = Vec3::new(1.0, 0.2, 0.3).normalize_or_zero();
+    let origin = Vec3::new(-5.0, 2.0, 3.0);
+    let (dx, dy, dz) = (dir.x as f64, dir.y as f64, dir.z as f64);
+    let (ox, oy, oz) = (origin.x as f64, origin.y as f64, origin.z as f64);
+    // Entry at x = 0; exit at the nearest of x = 29, y = 9.5, z = 18.
+    let t_in = -ox / dx;
+    let t_out = ((29.0 - ox) / dx)
+        .min((9.5 - oy) / dy)
+        .min((18.0 - oz) / dz);
+    let tau = sigma * (t_out - t_in);
+    assert!((0.8..1.6).contains(&tau), "τ = {tau}");
+    let want = (-tau).exp();
+    let ray = IndexRay::from_world(field, origin, dir);
+    let n = 200_000;
+    let delta = mean(n, |s| {
+        let mut rng = Rng::new(11, 0, s);
+        f64::from(u8::from(
+            track
+                .free_path(&ray, 0.0, f32::INFINITY, &mut rng)
+                .is_none(),
+        ))
+    });
+    let ratio = mean(n, |s| {
+        let mut rng = Rng::new(12, 0, s);
+        f64::from(track.transmittance(&ray, 0.0, f32::INFINITY, &mut rng))
+    });
+    eprintln!("slab: exp(-{tau:.4}) = {want:.5}; delta {delta:.5}, ratio {ratio:.5}");
+    for (what, got) in [("delta", delta), ("ratio", ratio)] {
+        assert!(
+            (got - want).abs() < 0.01 * want,
+            "{what} tracking: {got} against exp(-{tau}) = {want}"
+        );
+    }
+}
+
+#[test]
+fn delta_and_ratio_tracking_agree_on_a_heterogeneous_medium() {
+    // A ball whose density falls off with the radius, and a ray through it off
+    // centre: many macro cells, majorants above the extinction.
+    let vol = volume([32, 32, 32], [1.0; 3], |i, j, k| {
+        let r = ((i - 15.5).powi(2) + (j - 15.5).powi(2) + (k - 15.5).powi(2)).sqrt();
+        (14.0 - r).max(0.0)
+    });
+    let class = classify(&vol, &white(&[(0.0, 0.0), (14.0, 0.08)]));
+    let field = &**class.field();
+    let track = Tracker {
+        field,
+        medium: class.medium(),
+    };
+    let ray = IndexRay::from_world(
+        field,
+        Vec3::new(-3.0, 12.0, 14.0),
+        Vec3::new(1.0, 0.1, 0.05).normalize_or_zero(),
+    );
+    // A deterministic reference: the optical depth by the midpoint rule, 0.01 mm.
+    let (t0, t1) = ray.clip(field.dims(), 0.0, f32::INFINITY).unwrap();
+    let steps = ((t1 - t0) / 0.01) as usize;
+    let h = (t1 - t0) / steps as f32;
+    let tau: f64 = (0..steps)
+        .map(|i| {
+            f64::from(
+                track
+                    .medium
+                    .sigma_at(field, ray.at(t0 + (i as f32 + 0.5) * h))
+                    * h,
+            )
+        })
+        .sum();
+    let want = (-tau).exp();
+    assert!((0.1..0.7).contains(&want), "T = {want}");
+    let n = 200_000;
+    let delta = mean(n, |s| {
+        let mut rng = Rng::new(21, 0, s);
+        f64::from(u8::from(
+            track
+                .free_path(&ray, 0.0, f32::INFINITY, &mut rng)
+                .is_none(),
+        ))
+    });
+    let ratio = mean(n, |s| {
+        let mut rng = Rng::new(22, 0, s);
+        f64::from(track.transmittance(&ray, 0.0, f32::INFINITY, &mut rng))
+    });
+    eprintln!("ball: quadrature {want:.5}; delta {delta:.5}, ratio {ratio:.5}");
+    assert!(
+        (delta - ratio).abs() < 0.015 * want,
+        "delta {delta}, ratio {ratio}"
+    );
+    assert!(
+        (ratio - want).abs() < 0.01 * want,
+        "ratio {ratio}, quadrature {want}"
+    );
+}
+
+/// A shader of white diffuse albedo 1 (no ambient, no specular) and the given lights.
+fn albedo_one(lights: Vec<Light>, gate: f32) -> Shader {
+    let m = Material {
+        ambient: 0.0,
+        diffuse: 1.0,
+        specular: 0.0,
+        shade: true,
+    };
+    Shader::new(
+        LobeKind::EnergyFit,
+        20.0,
+        4,
+        Geometry::Phong,
+        m,
+        lights,
+        gate,
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_white_furnace_shows_the_environment() {
+    // Uniform matter of albedo 1 that only scatters, lit by a uniform environment
+    // seen also as the background: every pixel's radiance is the environment's.
+    let vol = volume([16, 16, 16], [1.0; 3], |_, _, _| 1.0);
+    let class = classify(&vol, &white(&[(0.0, 0.15)]));
+    let env = 0.7f32;
+    let frame = FrameSettings {
+        width: 12,
+        height: 12,
+        background: [env; 3],
+        ..Default::default()
+    };
+    for g in [0.0f32, 0.6] {
+        let shader = albedo_one(vec![Light::HEADLIGHT], 0.0)
+            .with_anisotropy(g)
+            .unwrap();
+        // The headlight at intensity 0: environment light alone.
+        let shader = Shader::with_specular(
+            shader.specular().clone(),
+            Geometry::Phong,
+            *shader.material(),
+            vec![Light {
+                intensity: 0.0,
+                ..Light::HEADLIGHT
+            }],
+            0.0,
+        )
+        .unwrap()
+        .with_anisotropy(g)
+        .unwrap();
+        let settings = PathSettings {
+            bounces: MAX_BOUNCES,
+            seed: 9,
+            environment: env,
+        };
+        let mut img = PathImage::new(12, 12);
+        class
+            .trace_paths(&shader, &frame, &settings, &mut img, 256, None, &|_| {})
+            .unwrap();
+        let image = img.image(frame.background);
+        // The radiance of the paths that met the matter, the background (the
+        // environment, exactly) taken out: Σ(rgb - (1 - α) env) / Σα.
+        let e = f64::from(env);
+        let (mut scattered, mut covered) = (0.0f64, 0.0f64);
+        for (c, &a) in image.rgb.iter().zip(&image.alpha) {
+            scattered += f64::from(c[1]) - (1.0 - f64::from(a)) * e;
+            covered += f64::from(a);
+        }
+        assert!(
+            covered > 60.0,
+            "{covered} pixels' worth of paths met the matter"
+        );
+        let mean = scattered / covered;
+        eprintln!("furnace, g = {g}: mean {mean:.5}, environment {env}");
+        assert!(
+            (mean - f64::from(env)).abs() < 0.01 * f64::from(env),
+            "g = {g}: mean radiance {mean}, environment {env}"
+        );
+        // Paths scatter more than once on average (the furnace tests multiple
+        // scattering, not only single).
+        assert!(
+            image.stats.shaded > image.stats.samples,
+            "{:?}",
+            image.stats
+        );
+    }
+}
+
+/// A floor slab (value 1, z in 4..=8) under an opaque ball (value 2, radius 6 at
+/// (24, 24, 24)), 48^3 voxels of 1 mm; opacity 0.5 per voxel for the floor, full for
+/// the ball.
+fn ball_over_floor() -> Classification {
+    let vol = volume([48, 48, 48], [1.0; 3], |i, j, k| {
+        let r = ((i - 24.0).powi(2) + (j - 24.0).powi(2) + (k - 24.0).powi(2)).sqrt();
+        if r <= 6.0 {
+            2.0
+        } else if (4.0..=8.0).contains(&k) {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let tf = white(&[(0.0, 0.0), (0.5, 0.0), (1.0, 0.5), (1.5, 0.5), (2.0, 1.0)]);
+    classify(&vol, &tf)
+}
+
+#[test]
+fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
+    let class = ball_over_floor();
+    // A light straight above: the camera looks down (superior) with a headlight.
+    let frame = FrameSettings {
+        width: 16,
+        height: 16,
+        camera: glint_core::CameraSpec {
+            view: glint_core::View::Superior,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let shader = albedo_one(vec![Light::HEADLIGHT], 0.0);
+    let shadows = class
+        .shadow_field(&shader, &frame, &ShadowSettings::default())
+        .unwrap();
+    let cam = class.camera(&frame).unwrap();
+    let placed = shader.placed(&cam);
+    let up = placed.world_lights()[0].0;
+    assert!(
+        up.z > 0.99,
+        "the headlight of a superior view shines from +z: {up:?}"
+    );
+    let field = &**class.field();
+    let track = Tracker {
+        field,
+        medium: class.medium(),
+    };
+    let l_index = super::frames::direction_to_index(field, up);
+    // Points on the floor's top face (z = 8): under the ball (r < 4) dark, clear of
+    // its shadow (r > 9) lit, both in the light volume and by ratio tracking.
+    let mut checked = 0;
+    for (x, y) in [
+        (24.0, 24.0),
+        (26.0, 22.0),
+        (21.0, 25.0),
+        (24.0, 36.0),
+        (10.0, 10.0),
+        (38.0, 20.0),
+    ] {
+        let r = ((x - 24.0f32).powi(2) + (y - 24.0f32).powi(2)).sqrt();
+        let p = [x, y, 8.0];
+        let volume_t = shadows.transmittance(0, p).unwrap();
+        let ray = IndexRay {
+            o: Vec3::new(x, y, 8.0),
+            d: l_index,
+        };
+        let traced = mean(2000, |s| {
+            let mut rng = Rng::new(5, 1, s);
+            f64::from(track.transmittance(&ray, 0.5, f32::INFINITY, &mut rng))
+        });
+        if r < 4.0 {
+            assert!(
+                volume_t < 0.05,
+                "({x}, {y}) under the ball: light volume {volume_t}"
+            );
+            assert!(traced < 0.01, "({x}, {y}) under the ball: traced {traced}");
+            checked += 1;
+        } else if r > 9.0 {
+            assert!(
+                volume_t > 0.9,
+                "({x}, {y}) in the open: light volume {volume_t}"
+            );
+            assert!(traced > 0.98, "({x}, {y}) in the open: traced {traced}");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 6);
+    // In the image: a headlight hides the ball's shadow behind the ball, so light it
+    // from 40 degrees towards the image's right: the shadow falls on the floor to the
+    // left of the ball, where the image under `shadows` is dark and the local one lit.
+    let side = albedo_one(
+        vec![Light {
+            azimuth: 40.0,
+            elevation: 0.0,
+            intensity: 1.0,
+        }],
+        0.0,
+    );
+    let frame = FrameSettings {
+        width: 48,
+        height: 48,
+        ..frame
+    };
+    let sf = class
+        .shadow_field(&side, &frame, &ShadowSettings::default())
+        .unwrap();
+    let lit = class
+        .render_shadowed(&side, &frame, &|_| {}, None, &sf)
+        .unwrap();
+    let local = class.render(&side, &frame, &|_| {}).unwrap();
+    let lum = |img: &glint_core::Image, x: usize, y: usize| img.rgb[y * 48 + x][1];
+    // Where the shadow falls in the image: the floor point under the light's ray
+    // through the ball's centre, projected by the camera.
+    let cam = class.camera(&frame).unwrap();
+    let l = side.placed(&cam).world_lights()[0].0;
+    // The ball's centre (world = index here) moved down the light to the floor top.
+    let c = Vec3::new(24.0, 24.0, 24.0);
+    assert!(l.z > 0.5, "{l:?}");
+    let floor = c - l * ((c.z - 8.0) / l.z);
+    assert!(
+        (floor - Vec3::new(24.0, 24.0, 8.0)).length() > 10.0,
+        "{floor:?}"
+    );
+    let [u0, du, v0, dv] = cam.image_plane(48, 48);
+    let rel = floor - cam.eye;
+    let (u, v) = match cam.projection {
+        glint_core::Projection::Perspective => {
+            let f = rel.dot(cam.forward);
+            (rel.dot(cam.right) / f, rel.dot(cam.up) / f)
+        }
+        glint_core::Projection::Orthographic => (rel.dot(cam.right), rel.dot(cam.up)),
+    };
+    let (px, py) = (
+        ((u - u0) / du).round() as usize,
+        ((v - v0) / dv).round() as usize,
+    );
+    assert!(px < 48 && py < 48, "shadow at ({px}, {py})");
+    assert!(
+        lum(&lit, px, py) < 0.5 * lum(&local, px, py),
+        "shadow pixel ({px}, {py}): shadows {} local {}",
+        lum(&lit, px, py),
+        lum(&local, px, py)
+    );
+}
+
+fn small_scene() -> (Classification, Shader, FrameSettings) {
+    let class = ball_over_floor();
+    let shader = Shader::new(
+        LobeKind::EnergyFit,
+        30.0,
+        4,
+        Geometry::Blinn,
+        Material::default(),
+        vec![
+            Light::HEADLIGHT,
+            Light {
+                azimuth: 35.0,
+                elevation: 20.0,
+                intensity: 0.8,
+            },
+        ],
+        0.05,
+    )
+    .unwrap()
+    .with_anisotropy(0.3)
+    .unwrap();
+    let frame = FrameSettings {
+        width: 20,
+        height: 16,
+        camera: glint_core::CameraSpec {
+            azimuth: 20.0,
+            elevation: 30.0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    (class, shader, frame)
+}
+
+fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+#[test]
+fn path_images_depend_on_the_seed_and_sample_count_alone() {
+    let (class, shader, frame) = small_scene();
+    let settings = PathSettings {
+        bounces: 4,
+        seed: 3,
+        environment: 0.5,
+    };
+    let trace = |threads: usize, batches: &[u32]| {
+        on_threads(threads, || {
+            let mut img = PathImage::new(20, 16);
+            for &spp in batches {
+                class
+                    .trace_paths(&shader, &frame, &settings, &mut img, spp, None, &|_| {})
+                    .unwrap();
+            }
+            img.image(frame.background)
+        })
+    };
+    let one = trace(1, &[4]);
+    let two = trace(2, &[4]);
+    let batched = trace(2, &[1, 3, 4]);
+    let bits = |img: &glint_core::Image| {
+        img.rgb
+            .iter()
+            .flatten()
+            .chain(&img.alpha)
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&one), bits(&two), "1 thread against 2");
+    assert_eq!(bits(&one), bits(&batched), "one batch against three");
+    assert!(one.alpha.iter().any(|&a| a > 0.0));
+    // Another seed gives another image.
+    let other = on_threads(2, || {
+        let mut img = PathImage::new(20, 16);
+        let s = PathSettings {
+            seed: 4,
+            ..settings
+        };
+        class
+            .trace_paths(&shader, &frame, &s, &mut img, 4, None, &|_| {})
+            .unwrap();
+        img.image(frame.background)
+    });
+    assert_ne!(bits(&one), bits(&other));
+    // Fewer samples than held is refused.
+    let mut img = PathImage::new(20, 16);
+    class
+        .trace_paths(&shader, &frame, &settings, &mut img, 2, None, &|_| {})
+        .unwrap();
+    assert!(class
+        .trace_paths(&shader, &frame, &settings, &mut img, 1, None, &|_| {})
+        .is_err());
+}
+
+#[test]
+fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
+    let (class, shader, frame) = small_scene();
+    for occlusion in [false, true] {
+        let sf = class
+            .shadow_field(&shader, &frame, &ShadowSettings { occlusion })
+            .unwrap();
+        assert_eq!(sf.has_occlusion(), occlusion);
+        let render = |threads: usize, kernel: Kernel| {
+            on_threads(threads, || {
+                let f = FrameSettings { kernel, ..frame };
+                class
+                    .render_shadowed(&shader, &f, &|_| {}, None, &sf)
+                    .unwrap()
+            })
+        };
+        let a = render(1, Kernel::Auto);
+        let b = render(2, Kernel::Auto);
+        let c = render(2, Kernel::Scalar);
+        assert_eq!(a.rgb, b.rgb);
+        assert_eq!(a.rgb, c.rgb, "SIMD against scalar");
+        assert_eq!(a.alpha, c.alpha);
+        let local = class.render(&shader, &frame, &|_| {}).unwrap();
+        assert_ne!(a.rgb, local.rgb, "shadows changed nothing");
+    }
+    // Pre-integrated sampling too.
+    let field = class.field().clone();
+    let tf = white(&[(0.0, 0.0), (0.5, 0.0), (1.0, 0.5), (1.5, 0.5), (2.0, 1.0)]);
+    let pre = Classification::new(
+        field,
+        &tf,
+        &ClassifySettings {
+            sampling: Sampling::PreIntegrated,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let sf = pre
+        .shadow_field(&shader, &frame, &ShadowSettings::default())
+        .unwrap();
+    let a = pre
+        .render_shadowed(&shader, &frame, &|_| {}, None, &sf)
+        .unwrap();
+    let scalar = FrameSettings {
+        kernel: Kernel::Scalar,
+        ..frame
+    };
+    let b = pre
+        .render_shadowed(&shader, &scalar, &|_| {}, None, &sf)
+        .unwrap();
+    assert_eq!(a.rgb, b.rgb, "pre-integrated: SIMD against scalar");
+}
+
+#[test]
+fn light_volumes_refuse_other_lights_and_mip() {
+    let (class, shader, frame) = small_scene();
+    let sf = class
+        .shadow_field(&shader, &frame, &ShadowSettings::default())
+        .unwrap();
+    let moved = FrameSettings {
+        camera: glint_core::CameraSpec {
+            azimuth: 50.0,
+            ..frame.camera
+        },
+        ..frame
+    };
+    assert!(class
+        .render_shadowed(&shader, &moved, &|_| {}, None, &sf)
+        .is_err());
+    let mip = Classification::new(
+        class.field().clone(),
+        &white(&[(0.0, 0.0), (2.0, 1.0)]),
+        &ClassifySettings {
+            mode: RenderMode::Mip,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(mip
+        .render_shadowed(&shader, &frame, &|_| {}, None, &sf)
+        .is_err());
+    let mut img = PathImage::new(20, 16);
+    let settings = PathSettings {
+        bounces: 2,
+        seed: 0,
+        environment: 1.0,
+    };
+    assert!(mip
+        .trace_paths(&shader, &frame, &settings, &mut img, 1, None, &|_| {})
+        .is_err());
+}
