@@ -540,29 +540,10 @@ fn simd_loop_gives_the_scalar_loops_image() {
     }
 }
 
-/// The MNI152 T1 template from scripts/fetch-samples, or `None` outside CI when it is
-/// missing (in CI, with CI set, a missing sample fails the test).
+/// The MNI152 T1 template from scripts/fetch-samples, or `None` when it is missing
+/// outside strict mode (glint_testkit; in strict mode a missing sample fails the test).
 fn mni152() -> Option<Volume> {
-    let dir = std::env::var_os("GLINT_DATA")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(std::env::var_os("HOME").unwrap_or_default())
-                .join(".cache/glint")
-        });
-    let path = dir.join("samples/mni152_t1_09a.nii.gz");
-    if !path.is_file() {
-        let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
-        assert!(
-            !ci,
-            "{} is missing in CI: run scripts/fetch-samples",
-            path.display()
-        );
-        eprintln!(
-            "skipping: {} is missing (run scripts/fetch-samples)",
-            path.display()
-        );
-        return None;
-    }
+    let path = glint_testkit::sample("mni152_t1_09a.nii.gz")?;
     Some(glint_io::read_volume(&path, &glint_io::ReadOptions::default()).unwrap())
 }
 
