@@ -12,7 +12,6 @@
 //! `glint compare --lobe hw` measures against exact only; the comparison with the
 //! float lobe of the same ROM is why this is an example.
 
-
 use glint_analysis::image::{DeltaEStats, Srgb8Image};
 use glint_hw::{Coefficients, Config};
 use glint_lobe::LobeKind;
