@@ -254,7 +254,16 @@ fn compare_works_on_a_mesh() {
         "{}",
         c[1]
     );
-    assert!(out.is_file());
+    // The figure: per lobe a row of three 64x48 panels (exact, the lobe, the ΔE map)
+    // under a title, so at least 3 x 64 wide and 2 x 48 high, and not blank.
+    let (w, h, channels, px) = decode(&out);
+    assert!(w >= 3 * 64 && h >= 2 * 48, "{w}x{h}");
+    let first = &px[..channels];
+    let differ = px.chunks(channels).filter(|p| *p != first).count();
+    assert!(
+        differ * 10 > (w * h) as usize,
+        "a nearly blank figure: {differ} pixels"
+    );
 }
 
 /// A volume with a mesh in the default (composite) mode: the mesh, in front of the

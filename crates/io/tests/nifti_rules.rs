@@ -25,9 +25,9 @@ fn affine(h: &NiftiHeader) -> [[f64; 4]; 4] {
 /// The srow matrix of `h` as an affine, times `scale` (the units' factor).
 fn srow_affine(h: &NiftiHeader, scale: f64) -> [[f64; 4]; 4] {
     let mut a = [[0.0, 0.0, 0.0, 1.0]; 4];
-    for r in 0..3 {
-        for c in 0..4 {
-            a[r][c] = f64::from(h.srow[r][c]) * scale;
+    for (row, src) in a.iter_mut().zip(&h.srow) {
+        for (x, &s) in row.iter_mut().zip(src) {
+            *x = f64::from(s) * scale;
         }
     }
     a

@@ -59,9 +59,11 @@ def _missing(what: str):
 def require_module(name: str):
     """Imports a module a test needs (a reference reader); missing: fail when strict."""
     try:
-        return __import__(name)
+        module = __import__(name)
     except ImportError:
         _missing(f"Python module {name} (crates/python/tests/requirements.txt)")
+    ran(f"python reference reader {name}")
+    return module
 
 
 @pytest.fixture(scope="session")
