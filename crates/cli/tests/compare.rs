@@ -68,7 +68,8 @@ fn the_lobe_differs_from_exact_less_as_v_grows() {
         let doc = json_compare(dir.path(), &["--lobe", "k", "--n", "200", "--v", v]);
         let c = &doc["comparisons"][0];
         assert_eq!(c["v"], v.parse::<u64>().unwrap());
-        assert!(c["render_ms"].as_f64().unwrap() > 0.0);
+        // The render's time is reported (its value is wall time: not asserted on).
+        assert!(c["render_ms"].as_f64().is_some_and(f64::is_finite), "{c}");
         // The highlight exists on the phantom and is part of the image.
         let hl = doc["highlight"]["pixels"].as_u64().unwrap();
         assert!(hl > 0 && hl < 48 * 40, "highlight pixels {hl}");

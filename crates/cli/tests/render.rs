@@ -86,7 +86,23 @@ fn render_prints_the_geometry_the_reader_assumed() {
             && stderr.contains("SpacingBetweenSlices"),
         "{stderr}"
     );
-    assert!(out.is_file());
+    // The image: the 32x32 asked for, with the bright block in the middle of the frame
+    // and the corners, outside the volume, dark.
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut px = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut px).unwrap();
+    assert_eq!((info.width, info.height), (32, 32));
+    let channels = info.color_type.samples();
+    let at = |x: usize, y: usize| &px[(y * 32 + x) * channels..][..3];
+    assert!(
+        at(16, 16).iter().any(|&c| c > 40),
+        "centre {:?}",
+        at(16, 16)
+    );
+    for (x, y) in [(0, 0), (31, 0), (0, 31), (31, 31)] {
+        assert_eq!(at(x, y), [0, 0, 0], "corner ({x}, {y})");
+    }
 
     let strict_out = dir.path().join("strict.png");
     let run = render(&["--strict"], &input, &strict_out);

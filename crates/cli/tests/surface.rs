@@ -32,22 +32,10 @@ fn render_dumped(args: &[&str], out: &Path, scene: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(scene).unwrap()).unwrap()
 }
 
-/// A sample file, or `None` (with a note) when it is missing outside CI; in CI a
-/// missing sample fails the test.
+/// A sample file, or `None` (with a note) when it is missing outside strict mode; in
+/// strict mode (glint_testkit) a missing sample fails the test.
 fn sample(name: &str) -> Option<PathBuf> {
-    let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
-    let root = std::env::var_os("GLINT_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(&std::env::var_os("HOME").unwrap_or_default()).join(".cache/glint")
-        });
-    let p = root.join("samples").join(name);
-    if p.is_file() {
-        return Some(p);
-    }
-    assert!(!ci, "sample {} missing in CI", p.display());
-    eprintln!("skipping: {} missing (scripts/fetch-samples)", p.display());
-    None
+    glint_testkit::sample(name)
 }
 
 /// An 8-bit RGB(A) PNG decoded: width, height, channels, samples.
@@ -266,7 +254,16 @@ fn compare_works_on_a_mesh() {
         "{}",
         c[1]
     );
-    assert!(out.is_file());
+    // The figure: per lobe a row of three 64x48 panels (exact, the lobe, the ΔE map)
+    // under a title, so at least 3 x 64 wide and 2 x 48 high, and not blank.
+    let (w, h, channels, px) = decode(&out);
+    assert!(w >= 3 * 64 && h >= 2 * 48, "{w}x{h}");
+    let first = &px[..channels];
+    let differ = px.chunks(channels).filter(|p| *p != first).count();
+    assert!(
+        differ * 10 > (w * h) as usize,
+        "a nearly blank figure: {differ} pixels"
+    );
 }
 
 /// A volume with a mesh in the default (composite) mode: the mesh, in front of the

@@ -1,8 +1,8 @@
 //! The Verilog units against their Rust models (Icarus Verilog), Verilator lint, and
 //! the models against independent formulas.
 //!
-//! Tests that need iverilog or verilator FAIL when the tool is missing and the
-//! environment variable CI is set; otherwise they print a note and pass.
+//! Tests that need iverilog or verilator FAIL when the tool is missing in strict mode
+//! (`GLINT_STRICT` or `CI` set: glint_testkit); otherwise they print a note and return.
 
 use glint_hw::hdl::{
     cosim, lint, stimulus, HdlUnit, KvUnit, Ports, PowerUnit, SchlickUnit, ToolError,
@@ -29,14 +29,12 @@ fn ports() -> Ports {
     }
 }
 
-/// `Ok(None)` if the tool is missing outside CI (skip), the result otherwise.
+/// `None` if the tool is missing outside strict mode (skip, said and recorded), the
+/// result otherwise; in strict mode (glint_testkit) a missing tool fails, naming it.
 fn tool<T>(r: Result<T, ToolError>) -> Option<T> {
     match r {
         Err(e @ ToolError::Missing { .. }) => {
-            if std::env::var_os("CI").is_some() {
-                panic!("{e} (required in CI)");
-            }
-            eprintln!("SKIPPED: {e}");
+            glint_testkit::missing(&e.to_string());
             None
         }
         Err(e) => panic!("{e}"),
@@ -49,6 +47,7 @@ fn check_cosim(unit: &dyn HdlUnit) {
     let n = vectors();
     if let Some(r) = tool(cosim(unit, n, 14, 4, dir.path())) {
         eprintln!("{r:?}");
+        glint_testkit::ran("iverilog co-simulation");
         assert_eq!(r.mismatches, 0, "{:#?}", r.first_mismatches);
         assert!(r.vectors as usize >= n);
         assert_eq!(r.passed, r.vectors);
@@ -104,6 +103,7 @@ fn verilator_lint_is_clean() {
             return;
         }
     }
+    glint_testkit::ran("verilator lint");
 }
 
 #[test]

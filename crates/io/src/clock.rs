@@ -9,10 +9,22 @@ use std::time::{Duration, Instant};
 
 /// Accumulated time of the readers made by [`Clock::timed`] (shared, so the clock
 /// outlives a reader moved into a `Box<dyn Read>`).
-#[derive(Clone, Default)]
+#[derive(Clone)]
 pub(crate) struct Clock {
     nanos: Arc<AtomicU64>,
     used: Arc<std::sync::atomic::AtomicBool>,
+    /// The time source: `Instant::now`, or a fake one in tests.
+    now: fn() -> Instant,
+}
+
+impl Default for Clock {
+    fn default() -> Self {
+        Clock {
+            nanos: Arc::default(),
+            used: Arc::default(),
+            now: Instant::now,
+        }
+    }
 }
 
 impl Clock {
@@ -41,9 +53,10 @@ pub(crate) struct Timed<R> {
 
 impl<R: Read> Read for Timed<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let start = Instant::now();
+        let start = (self.clock.now)();
         let r = self.inner.read(buf);
-        let ns = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        let spent = (self.clock.now)().saturating_duration_since(start);
+        let ns = u64::try_from(spent.as_nanos()).unwrap_or(u64::MAX);
         self.clock.nanos.fetch_add(ns, Ordering::Relaxed);
         r
     }
@@ -52,12 +65,28 @@ impl<R: Read> Read for Timed<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::cell::Cell;
 
-    /// A reader that takes a known time per call.
-    struct Slow;
-    impl Read for Slow {
+    thread_local! {
+        /// Calls of the fake time source on this thread.
+        static TICKS: Cell<u32> = const { Cell::new(0) };
+    }
+
+    /// A fake time source: 1 ms later at every call (so a read, which asks twice,
+    /// takes exactly 1 ms); no wall time is involved.
+    fn fake_now() -> Instant {
+        static BASE: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+        let t = TICKS.with(|t| {
+            t.set(t.get() + 1);
+            t.get()
+        });
+        *BASE.get_or_init(Instant::now) + Duration::from_millis(u64::from(t))
+    }
+
+    /// A reader of one byte a call.
+    struct OneByte;
+    impl Read for OneByte {
         fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-            std::thread::sleep(Duration::from_millis(5));
             buf[0] = 1;
             Ok(1)
         }
@@ -65,14 +94,19 @@ mod tests {
 
     #[test]
     fn time_inside_reads_is_counted_and_unused_clocks_say_none() {
-        let clock = Clock::default();
+        let clock = Clock {
+            now: fake_now,
+            ..Clock::default()
+        };
         assert_eq!(clock.spent(), None);
-        let mut r: Box<dyn Read> = Box::new(clock.timed(Slow));
+        let mut r: Box<dyn Read> = Box::new(clock.timed(OneByte));
         let mut b = [0u8; 4];
         for _ in 0..3 {
             r.read_exact(&mut b[..1]).unwrap();
         }
         drop(r);
-        assert!(clock.spent().unwrap() >= Duration::from_millis(15));
+        // Three reads of 1 fake millisecond each; the time between reads is not counted
+        // (the source is not asked there).
+        assert_eq!(clock.spent(), Some(Duration::from_millis(3)));
     }
 }

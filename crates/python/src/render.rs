@@ -262,6 +262,19 @@ impl Image {
         Ok(d)
     }
 
+    /// The names of the stages that ran for this image, in order ("read", "field: ...",
+    /// "classify", "frame"): "classify" is absent when the renderer reused its
+    /// classification. What ran, without the times (tests check this, not wall time).
+    #[getter]
+    fn stages(&self) -> Vec<&'static str> {
+        self.rendered
+            .timings
+            .stages()
+            .iter()
+            .map(|(s, _)| *s)
+            .collect()
+    }
+
     /// The image as an 8-bit sRGB PNG file's bytes.
     fn png<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
         let img = &self.rendered.image;

@@ -29,7 +29,13 @@ def test_thumbnails(mni_path, tmp_path):
     for name in pngs:
         with PILImage.open(out / name) as im:
             assert im.size == (48, 48) and im.mode == "RGB"
-            assert np.asarray(im).max() > 0  # something was drawn
+            lit = np.asarray(im).max(axis=2) > 10
+        # The object is in the middle of the thumbnail, the corners are background, and
+        # it covers a plausible share: the ball a disc (radius 10 of a 32-voxel box, so
+        # about pi (10/32)^2 = 0.31 of the frame when the box fills it), the brain more.
+        assert lit[20:28, 20:28].all(), name
+        assert not (lit[0, 0] or lit[0, -1] or lit[-1, 0] or lit[-1, -1]), name
+        assert 0.15 < lit.mean() < 0.9, (name, lit.mean())
     errors = [l for l in proc.stderr.splitlines() if "broken.nii" in l]
     assert len(errors) == 1, proc.stderr
     assert "2 of 3 rendered" in proc.stderr

@@ -38,20 +38,28 @@ def test_render_equals_cli_byte_for_byte(glint_bin, mni_path, brain_scene, tmp_p
     assert got.dtype == np.uint8 and got.shape == (120, 160, 3)
     assert want.shape == got.shape
     assert np.array_equal(got, want)
-    assert got.max() > 0  # the brain is there
+    # The brain seen from the left: in the middle, on a black background, wider than
+    # high (a head's profile in a 160x120 frame).
+    lit = got.max(axis=2) > 10
+    assert lit[50:70, 70:90].all() and not lit[0].any() and not lit[:, 0].any()
+    rows, cols = np.nonzero(lit)
+    assert cols.max() - cols.min() > rows.max() - rows.min()
 
 
 def test_renderer_keeps_classification_and_matches_cli(glint_bin, mni_path, brain_scene, tmp_path):
     renderer = glint.Renderer(glint.read(mni_path))
     first = renderer.render(brain_scene)
-    assert first.timings["classify"] > 0
+    # Which stages ran, not how long they took (no wall-time assertion, issue 34).
+    assert "classify" in first.stages and "frame" in first.stages
+    assert set(first.timings) == {"read", "field", "classify", "frame"}
     views = []
     for view in ("anterior", "superior"):
         image = renderer.render(brain_scene, camera={"view": view}, lobe={"kind": "k"})
-        assert image.timings["classify"] == 0.0  # same transfer function: reused
+        assert "classify" not in image.stages  # same transfer function: reused
+        assert image.timings["classify"] == 0.0 and "frame" in image.stages
         views.append((brain_scene.replace(camera={"view": view}, lobe={"kind": "k"}), image))
     # A new transfer function classifies again.
-    assert renderer.render(brain_scene, preset="mr-default").timings["classify"] > 0
+    assert "classify" in renderer.render(brain_scene, preset="mr-default").stages
     for i, (scene, image) in enumerate(views):
         assert np.array_equal(image.array, cli_render(glint_bin, scene, tmp_path, f"v{i}"))
         # The resolved scene renders the same image on the command line.

@@ -424,14 +424,21 @@ impl Surfaces {
 #[cfg(test)]
 mod tests;
 
-/// Whether this CPU runs the AVX2 loops.
+/// Whether renders run the AVX2 loops: the CPU has AVX2 and `GLINT_SIMD` (read by
+/// [`glint_lobe::KernelPath::cap`]) does not cap the kernels below it.
 fn simd() -> bool {
+    simd_within(glint_lobe::KernelPath::cap())
+}
+
+/// Whether the AVX2 loops run under the cap `cap` on this CPU.
+fn simd_within(cap: glint_lobe::KernelPath) -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        avx2::supported()
+        cap >= glint_lobe::KernelPath::Avx2 && avx2::supported()
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
+        let _ = cap;
         false
     }
 }

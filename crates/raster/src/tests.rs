@@ -2,7 +2,8 @@
 //! triangle tested at every sample, the nearest kept, each sample lit alone by
 //! [`Shader::shade_normal`].
 
-use glint_lobe::{Geometry, LobeKind};
+use glint_lobe::{Geometry, KernelPath, LobeKind};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::frame::{Edges, Frame};
 use super::*;
@@ -146,13 +147,82 @@ fn reference(
     }
 }
 
-/// The loops to test: scalar, and AVX2 where the CPU has it.
+/// Tiles rasterised by the AVX2 loop and by the scalar one, in this test process
+/// (counted in `Ctx::raster`): evidence that a path ran, not a flag saying it should.
+pub(super) static AVX2_TILES: AtomicU64 = AtomicU64::new(0);
+/// See [`AVX2_TILES`].
+pub(super) static SCALAR_TILES: AtomicU64 = AtomicU64::new(0);
+
+/// The loops to test: scalar, and AVX2 where the CPU has it (recorded for the run's
+/// summary of optional paths, glint_testkit).
 fn paths() -> Vec<bool> {
     #[cfg(target_arch = "x86_64")]
     if avx2::supported() {
+        glint_testkit::ran("raster avx2");
         return vec![false, true];
     }
+    glint_testkit::skipped("raster avx2", "this CPU lacks it");
     vec![false]
+}
+
+/// AVX2 support by /proc/cpuinfo agrees with the detection, so a detection bug cannot
+/// make `paths()` leave out a loop the CPU has.
+#[cfg(all(target_arch = "x86_64", target_os = "linux"))]
+#[test]
+fn avx2_detection_agrees_with_proc_cpuinfo() {
+    let Ok(text) = std::fs::read_to_string("/proc/cpuinfo") else {
+        glint_testkit::missing("/proc/cpuinfo");
+        return;
+    };
+    let flags = text.lines().find(|l| l.starts_with("flags")).unwrap();
+    let has = flags.split_whitespace().any(|f| f == "avx2");
+    assert_eq!(avx2::supported(), has, "{flags}");
+}
+
+/// Each loop the CPU has really runs when asked: the tile counters move. And the
+/// `GLINT_SIMD` cap (glint_lobe::KernelPath::cap) turns the AVX2 loops off on any
+/// machine.
+#[test]
+fn each_loop_runs_when_asked_and_the_cap_forces_scalar() {
+    let ball = sphere([0.0; 3], 10.0, 16, 32);
+    let s = Surfaces::new([&ball]).unwrap();
+    let settings = SurfaceSettings {
+        width: 40,
+        height: 40,
+        ssaa: 1,
+        ..Default::default()
+    };
+    let shader = Shader::new(
+        LobeKind::EnergyFit,
+        40.0,
+        4,
+        Geometry::Phong,
+        Material::default(),
+        vec![Light::HEADLIGHT],
+        0.0,
+    )
+    .unwrap();
+    let camera = s.camera(&settings).unwrap();
+    for avx2 in paths() {
+        let counter = if avx2 { &AVX2_TILES } else { &SCALAR_TILES };
+        let before = counter.load(Ordering::Relaxed);
+        s.render_with(&camera, &shader, &settings, None, avx2, false)
+            .unwrap();
+        assert!(
+            counter.load(Ordering::Relaxed) > before,
+            "avx2 {avx2} did not run"
+        );
+    }
+    assert!(
+        !simd_within(KernelPath::Scalar),
+        "the scalar cap leaves AVX2 on"
+    );
+    #[cfg(target_arch = "x86_64")]
+    {
+        assert_eq!(simd_within(KernelPath::Avx2), avx2::supported());
+        assert_eq!(simd_within(KernelPath::Avx512), avx2::supported());
+    }
+    assert_eq!(simd(), simd_within(KernelPath::cap()));
 }
 
 #[test]

@@ -117,12 +117,16 @@ impl Ctx<'_> {
             // SAFETY: `avx2` is set only when the CPU supports AVX2
             // (`super::avx2::supported`).
             unsafe { super::avx2::raster(verts, triangles, tris, rect, depth, ids) };
+            #[cfg(test)]
+            super::tests::AVX2_TILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             return;
         }
         for t in tris {
             let tri = triangles[t.id as usize].map(|i| verts[i as usize]);
             raster_scalar(tri, t, rect, depth, ids);
         }
+        #[cfg(test)]
+        super::tests::SCALAR_TILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Writes the pixels of a tile no triangle meets: what [`Ctx::write`] makes of

@@ -12,8 +12,6 @@
 //! `glint compare --lobe hw` measures against exact only; the comparison with the
 //! float lobe of the same ROM is why this is an example.
 
-use std::path::PathBuf;
-
 use glint_analysis::image::{DeltaEStats, Srgb8Image};
 use glint_hw::{Coefficients, Config};
 use glint_lobe::LobeKind;
@@ -24,8 +22,7 @@ const OUT_BITS: [u32; 3] = [8, 10, 12];
 
 fn scenes() -> Vec<(&'static str, Scene)> {
     let mut out = vec![("phantom (default scene)", Scene::default())];
-    let home = std::env::var_os("HOME").unwrap_or_default();
-    let path = PathBuf::from(home).join(".cache/glint/samples/mni152_t1_09a.nii.gz");
+    let path = glint_testkit::samples_dir().join("mni152_t1_09a.nii.gz");
     if path.is_file() {
         let mni = Scene {
             input: Input::Path(path),

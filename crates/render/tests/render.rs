@@ -304,43 +304,78 @@ fn sphere_highlight_matches_the_analytic_answer_for_each_geometry() {
         );
         assert!(best > 0.95 && best <= 1.0, "{geometry}: peak {best}");
 
-        // Away from the peak, each pixel shows lobe(cos γ) for the sphere's analytic
-        // normal there (the view vector per sample is exact for orthographic rays).
-        let lobe = Lobe::<f64>::new(LobeKind::Exact, 60.0, 4).unwrap();
-        let mut checked = 0;
-        for (dx, dy) in [(6i32, 0i32), (0, 6), (-8, 3), (10, -10), (-4, -12)] {
-            let (x, y) = (
-                (px.round() as i32 + dx) as u32,
-                (py.round() as i32 + dy) as u32,
-            );
-            // Back-project the pixel centre onto the sphere.
-            let scale = cam.half_height * 2.0 / size as f32;
-            let u = (x as f32 + 0.5 - size as f32 / 2.0) * scale;
-            let v = (size as f32 / 2.0 - y as f32 - 0.5) * scale;
-            let c = cam.eye + cam.right * u + cam.up * v;
-            let oc = [c.x - center, c.y - center, c.z - center];
-            let f = cam.forward;
-            let b = oc[0] * f.x + oc[1] * f.y + oc[2] * f.z;
-            let cc = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - r * r;
-            let disc = b * b - cc;
-            assert!(disc > 0.0);
-            let t = -b - disc.sqrt();
-            let normal = [
-                (oc[0] + t * f.x) as f64,
-                (oc[1] + t * f.y) as f64,
-                (oc[2] + t * f.z) as f64,
-            ];
-            let l = [light.x as f64, light.y as f64, light.z as f64];
-            let vv = [view.x as f64, view.y as f64, view.z as f64];
-            let expect = lobe.eval(geometry.cos(normal, l, vv));
-            let got = img.pixel(x, y)[0] as f64;
-            assert!(
-                (got - expect).abs() < 0.06,
-                "{geometry} at ({x},{y}): {got} vs analytic {expect}"
-            );
-            checked += 1;
+        // On the lobe's shoulder (analytic value 0.25 .. 0.75), each pixel shows
+        // lobe(cos γ) for the sphere's analytic normal there (the view vector per sample
+        // is exact for orthographic rays), within a bound derived from the lobe: an
+        // error δ in the normal moves γ by at most δ (Blinn: the angle to H) or 2δ
+        // (Phong: the reflected light turns twice as far), and cos^n changes by
+        // |d f/dγ| = f n tan γ per radian. δ = NORMAL_ERROR is what the volume's
+        // gradient normals (central differences of a 72^3 sampled sphere) may be off.
+        // A renderer returning 0, or another exponent, off the peak fails: the bound is
+        // under half the value everywhere it is checked.
+        const NORMAL_ERROR: f64 = 0.1_f64.to_radians();
+        let n_exp = 60.0;
+        let turns = if geometry == Geometry::Phong {
+            2.0
+        } else {
+            1.0
+        };
+        let lobe = Lobe::<f64>::new(LobeKind::Exact, n_exp, 4).unwrap();
+        let (mut checked, mut worst) = (0, 0.0f64);
+        for dy in -30i32..=30 {
+            for dx in -30i32..=30 {
+                let (x, y) = (px.round() as i32 + dx, py.round() as i32 + dy);
+                if x < 0 || y < 0 || x >= size as i32 || y >= size as i32 {
+                    continue;
+                }
+                let (x, y) = (x as u32, y as u32);
+                // Back-project the pixel centre onto the sphere.
+                let scale = cam.half_height * 2.0 / size as f32;
+                let u = (x as f32 + 0.5 - size as f32 / 2.0) * scale;
+                let v = (size as f32 / 2.0 - y as f32 - 0.5) * scale;
+                let c = cam.eye + cam.right * u + cam.up * v;
+                let oc = [c.x - center, c.y - center, c.z - center];
+                let f = cam.forward;
+                let b = oc[0] * f.x + oc[1] * f.y + oc[2] * f.z;
+                let cc = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - r * r;
+                let disc = b * b - cc;
+                if disc <= 0.0 {
+                    continue;
+                }
+                let t = -b - disc.sqrt();
+                let normal = [
+                    (oc[0] + t * f.x) as f64,
+                    (oc[1] + t * f.y) as f64,
+                    (oc[2] + t * f.z) as f64,
+                ];
+                let l = [light.x as f64, light.y as f64, light.z as f64];
+                let vv = [view.x as f64, view.y as f64, view.z as f64];
+                let cos = geometry.cos(normal, l, vv);
+                let expect = lobe.eval(cos);
+                if !(0.25..=0.75).contains(&expect) {
+                    continue;
+                }
+                let slope = expect * n_exp * (1.0 - cos * cos).sqrt() / cos * turns;
+                let bound = slope * NORMAL_ERROR;
+                assert!(
+                    bound < 0.5 * expect,
+                    "the bound would not bite: {bound} at {expect}"
+                );
+                let got = img.pixel(x, y)[0] as f64;
+                assert!(
+                    (got - expect).abs() <= bound,
+                    "{geometry} at ({x},{y}): {got} vs analytic {expect}, bound {bound}"
+                );
+                worst = worst.max((got - expect).abs() / slope);
+                checked += 1;
+            }
         }
-        assert_eq!(checked, 5);
+        // The shoulder is a ring several pixels wide around the peak.
+        assert!(checked >= 40, "{geometry}: only {checked} shoulder pixels");
+        eprintln!(
+            "{geometry}: {checked} shoulder pixels, worst error as a normal error {:.3} degrees",
+            worst.to_degrees()
+        );
     }
 }
 
@@ -540,29 +575,10 @@ fn simd_loop_gives_the_scalar_loops_image() {
     }
 }
 
-/// The MNI152 T1 template from scripts/fetch-samples, or `None` outside CI when it is
-/// missing (in CI, with CI set, a missing sample fails the test).
+/// The MNI152 T1 template from scripts/fetch-samples, or `None` when it is missing
+/// outside strict mode (glint_testkit; in strict mode a missing sample fails the test).
 fn mni152() -> Option<Volume> {
-    let dir = std::env::var_os("GLINT_DATA")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(std::env::var_os("HOME").unwrap_or_default())
-                .join(".cache/glint")
-        });
-    let path = dir.join("samples/mni152_t1_09a.nii.gz");
-    if !path.is_file() {
-        let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
-        assert!(
-            !ci,
-            "{} is missing in CI: run scripts/fetch-samples",
-            path.display()
-        );
-        eprintln!(
-            "skipping: {} is missing (run scripts/fetch-samples)",
-            path.display()
-        );
-        return None;
-    }
+    let path = glint_testkit::sample("mni152_t1_09a.nii.gz")?;
     Some(glint_io::read_volume(&path, &glint_io::ReadOptions::default()).unwrap())
 }
 

@@ -7,7 +7,7 @@
 //! [`Access::refused`], so a browser that blocked the attempt itself would not pass
 //! for the server). Needs `node`,
 //! `chromium` (scripts/install-deps) and `npm ci` in crates/view/browser (scripts/test);
-//! with CI set, a missing piece fails the test.
+//! in strict mode (`GLINT_STRICT` or `CI` set) a missing piece fails the test.
 
 use std::path::Path;
 use std::process::Command;
@@ -16,11 +16,8 @@ use std::sync::Arc;
 use glint_render::{Input, Lighting, LightingModel, Phantom, Scene};
 use glint_view::{Access, Token, Viewer, ViewerConfig};
 
-fn ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")
-}
-
-/// Whether the browser, node and playwright-core are here; in CI they must be.
+/// Whether the browser, node and playwright-core are here; in strict mode
+/// (glint_testkit) they must be.
 fn tools_present(dir: &Path) -> bool {
     let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
     let missing: Vec<&str> = [
@@ -43,8 +40,7 @@ fn tools_present(dir: &Path) -> bool {
     if missing.is_empty() {
         return true;
     }
-    assert!(!ci(), "missing in CI: {}", missing.join(", "));
-    eprintln!("skipping the browser test: missing {}", missing.join(", "));
+    glint_testkit::missing(&missing.join(", "));
     false
 }
 
@@ -112,6 +108,7 @@ fn the_page_shows_frames_and_dragging_turns_the_volume() {
     let png = std::fs::read(&shot).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     eprintln!("browser test: {report}; screenshot {}", shot.display());
+    glint_testkit::ran("chromium + node (view browser test)");
 }
 
 /// A path in the target directory's tmp folder (kept for inspection).

@@ -619,15 +619,9 @@ mod tests {
     /// scripts/gifti-reference.py: -1.4937248 .. 1.8069096).
     #[test]
     fn gifti_overlays_listed() {
-        let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
-        let home = std::env::var_os("HOME").unwrap_or_default();
-        let p =
-            std::path::Path::new(&home).join(".cache/glint/samples/fsaverage5_sulc_left.gii.gz");
-        if !p.is_file() {
-            assert!(!ci, "sample {} missing in CI", p.display());
-            eprintln!("skipping: {} missing (scripts/fetch-samples)", p.display());
+        let Some(p) = glint_testkit::sample("fsaverage5_sulc_left.gii.gz") else {
             return;
-        }
+        };
         let text = run(&[p.to_str().unwrap()]).unwrap();
         assert!(
             text.contains("format:    GIFTI per-vertex data (no surface)"),

@@ -5,35 +5,15 @@ pub mod table;
 
 use std::path::PathBuf;
 
-/// The directory scripts/fetch-samples fills.
+/// The directory scripts/fetch-samples fills (`$GLINT_DATA/samples`).
 pub fn samples_dir() -> PathBuf {
-    let base = std::env::var_os("GLINT_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache/glint")
-        });
-    base.join("samples")
+    glint_testkit::samples_dir()
 }
 
-/// A sample file; `None` (after saying why) when it is missing outside CI. In CI (env CI
-/// set and not "false"/"0") a missing sample fails the test.
+/// A sample file; `None` (after saying why) when it is missing, a failure naming it
+/// in strict mode (`GLINT_STRICT` or `CI` set: glint_testkit).
 pub fn sample(name: &str) -> Option<PathBuf> {
-    let path = samples_dir().join(name);
-    if path.is_file() {
-        return Some(path);
-    }
-    let ci = std::env::var("CI").map(|v| !v.is_empty() && v != "false" && v != "0");
-    if ci.unwrap_or(false) {
-        panic!(
-            "sample {} is missing in CI: run scripts/fetch-samples first",
-            path.display()
-        );
-    }
-    eprintln!(
-        "skipping: sample {} is missing (run scripts/fetch-samples)",
-        path.display()
-    );
-    None
+    glint_testkit::sample(name)
 }
 
 /// A NIfTI-1 header written field by field from nifti1.h offsets, independent of the

@@ -140,6 +140,9 @@ class Image:
     def scene(self) -> Scene:
         """The resolved scene (every default chosen)."""
     @property
+    def stages(self) -> List[str]:
+        """The stages that ran for this image ("classify" absent when reused)."""
+    @property
     def timings(self) -> Dict[str, float]:
         """Seconds: read, field, classify (0 when reused), frame."""
     def png(self) -> bytes: ...

@@ -7,16 +7,14 @@ use std::path::PathBuf;
 use glint_render::{CameraSpec, Input, Phantom, Scene, View};
 
 /// The MNI152 T1 template (path in `GLINT_MNI152`, default
-/// `~/.cache/glint/samples/mni152_t1_09a.nii.gz`) with the mr-t2-brain preset, seen
+/// `$GLINT_DATA/samples/mni152_t1_09a.nii.gz`, `GLINT_DATA` by default
+/// `~/.cache/glint`) with the mr-t2-brain preset, seen
 /// from the left, 512x512, step 0.5 voxel; without the template (with a note naming
 /// `who` on stderr) the Shepp-Logan phantom at 192^3 with its preset.
 pub fn mni152_scene(who: &str) -> Scene {
     let path = std::env::var_os("GLINT_MNI152")
         .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            let home = std::env::var_os("HOME").unwrap_or_default();
-            PathBuf::from(home).join(".cache/glint/samples/mni152_t1_09a.nii.gz")
-        });
+        .unwrap_or_else(|| glint_testkit::samples_dir().join("mni152_t1_09a.nii.gz"));
     let (input, preset) = if path.is_file() {
         (Input::Path(path), "mr-t2-brain")
     } else {
