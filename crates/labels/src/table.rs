@@ -95,7 +95,10 @@ impl LabelTable {
         let near: Vec<&str> = self
             .entries
             .values()
-            .filter(|e| e.name.to_ascii_lowercase().contains(&lower))
+            .filter(|e| {
+                let name = e.name.to_ascii_lowercase();
+                name.contains(&lower) || strsim::levenshtein(&name, &lower) <= 2
+            })
             .map(|e| e.name.as_str())
             .take(5)
             .collect();

@@ -60,6 +60,9 @@ fn unknown_names_are_refused_with_near_names() {
         other => panic!("{other:?}"),
     }
     assert!(t.lookup("nothing-like-it").is_err());
+    // A typo: names within two edits.
+    let hint = t.lookup("livr").unwrap_err().to_string();
+    assert!(hint.contains("did you mean liver"), "{hint}");
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
