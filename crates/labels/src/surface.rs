@@ -142,9 +142,9 @@ fn label_surface(
         }
     }
     let mut affine = grid.affine;
-    for r in 0..3 {
-        affine[r][3] += (0..3)
-            .map(|a| grid.affine[r][a] * (extent.lo[a] as f64 - pad[a] as f64))
+    for row in affine.iter_mut().take(3) {
+        row[3] += (0..3)
+            .map(|a| row[a] * (extent.lo[a] as f64 - pad[a] as f64))
             .sum::<f64>();
     }
     Ok(glint_mesh::extract_grid(&values, size, &affine, 0.0)?)
