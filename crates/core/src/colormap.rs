@@ -238,7 +238,7 @@ fn format_value(v: f32) -> String {
 /// Writes `text` in white, right-aligned at `right`, vertically centred on `y`, `px`
 /// pixels high, blended over the image by glyph coverage. The glyphs are DejaVu Sans
 /// (the `dejavu` crate, as glint-analysis's plots), rasterised by `ab_glyph`.
-fn draw_text(image: &mut Image, text: &str, right: f32, y: f32, px: f32) {
+pub(crate) fn draw_text(image: &mut Image, text: &str, right: f32, y: f32, px: f32) {
     use ab_glyph::{point, Font, FontRef, ScaleFont};
     let Ok(font) = FontRef::try_from_slice(dejavu::sans::regular()) else {
         return;

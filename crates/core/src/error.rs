@@ -66,6 +66,15 @@ pub enum RenderError {
     /// scalars that do not match the vertices, no triangles).
     #[error("mesh cannot be rendered")]
     Mesh(#[source] glint_io::IoError),
+    /// A label map or its colour table cannot be used (glint-labels' error is the
+    /// source).
+    #[error("label map {}", path.display())]
+    Labels {
+        /// The label volume.
+        path: PathBuf,
+        /// What was wrong.
+        source: BoxedError,
+    },
     /// Reading the input volume failed.
     #[error(transparent)]
     Read(#[from] glint_io::IoError),

@@ -29,6 +29,7 @@ pub mod color;
 mod colormap;
 mod error;
 mod image;
+mod legend;
 pub mod lighting;
 pub mod math;
 mod mode;
@@ -41,6 +42,7 @@ pub use error::{unknown_name, BoxedError, RenderError};
 pub use image::{
     Depth, Image, RenderStats, MAX_IMAGE_SIDE, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
+pub use legend::Legend;
 pub use lighting::{
     phase_hg, Light, Material, MaterialOverrides, RayLighting, ShadeBatch, Shader, SurfacePart,
     MAX_ANISOTROPY, MAX_LIGHTS,

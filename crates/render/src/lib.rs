@@ -45,6 +45,7 @@
 //! | [`glint_volume`] | the field, transfer functions and pre-integration, presets, the built-in phantoms, the ray caster and its SIMD march |
 //! | [`glint_raster`] | the mesh rasterizer |
 //! | [`glint_mesh`] | isosurface extraction, vertex normals, smoothing (no image or font dependencies) |
+//! | [`glint_labels`] | label maps: colour tables, label statistics, per-label surfaces |
 //! | glint-render | the [`Scene`] value and its files, the [`Renderer`], the hardware lobe |
 //!
 //! It re-exports what front ends use, so they depend on it alone.
@@ -53,10 +54,12 @@
 #![forbid(unsafe_code)]
 
 mod hwlobe;
+mod labels;
 mod meshes;
 mod renderer;
 mod scene;
 
+pub use glint_core::Legend;
 pub use glint_core::{camera, math};
 pub use glint_core::{
     linear_to_srgb, luminance, luminance_f32, srgb_to_linear, Camera, CameraSpec, ColorMap, Depth,
@@ -64,6 +67,7 @@ pub use glint_core::{
     ScalarColors, Shader, Timings, View, COLORMAP_TABLE, MAX_IMAGE_SIDE, MAX_LIGHTS,
     RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
+pub use glint_labels as label_maps;
 pub use glint_mesh as mesh;
 pub use glint_mesh::vertex_normals;
 pub use glint_raster::{SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
@@ -76,6 +80,7 @@ pub use glint_volume::{
 pub use glint_volume::{
     LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
 };
+pub use labels::{LabelSpec, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use renderer::{Rendered, Renderer};
 pub use scene::{

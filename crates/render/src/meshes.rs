@@ -8,8 +8,10 @@ use std::sync::Arc;
 use glint_io::{read_mesh, read_surface_data, Format, IoError, Mesh, VertexValues};
 use serde::{Deserialize, Serialize};
 
-use glint_core::{srgb_to_linear, ColorMap, Material, RenderError, ScalarColors};
-use glint_raster::Surfaces;
+use glint_core::{srgb_to_linear, ColorMap, Legend, Material, RenderError, ScalarColors};
+use glint_raster::{Surfaces, SURFACE_COLOR};
+
+use crate::labels::{LabelMeshes, LabelSpec};
 
 /// Supersampling factor of surface renders when the scene gives none: 2x2 samples a
 /// pixel removes most stair-stepping at a quarter of 4x4's cost.
@@ -109,10 +111,11 @@ pub(crate) enum OverlayKind {
 pub(crate) struct MeshKey {
     files: Vec<(PathBuf, Option<(PathBuf, usize)>)>,
     iso: Option<u32>,
+    labels: Option<LabelSpec>,
 }
 
 impl MeshKey {
-    pub(crate) fn new(specs: &[MeshSpec], iso: Option<f32>) -> MeshKey {
+    pub(crate) fn new(specs: &[MeshSpec], iso: Option<f32>, labels: Option<&LabelSpec>) -> MeshKey {
         MeshKey {
             files: specs
                 .iter()
@@ -125,6 +128,7 @@ impl MeshKey {
                 })
                 .collect(),
             iso: iso.map(f32::to_bits),
+            labels: labels.cloned(),
         }
     }
 }
@@ -134,13 +138,24 @@ impl MeshKey {
 pub(crate) struct MeshSet {
     pub(crate) surfaces: Arc<Surfaces>,
     /// Per scene mesh (the isosurface, when there is one, comes after them and has no
-    /// overlay).
+    /// overlay; then the label surfaces).
     pub(crate) overlays: Vec<OverlayKind>,
+    /// The colours of the meshes after the scene's (the isosurface's, then the label
+    /// surfaces'), when there are label surfaces; empty otherwise (the isosurface takes
+    /// the default colour).
+    pub(crate) extra_colors: Vec<[f32; 3]>,
+    /// The legend of the label surfaces.
+    pub(crate) legend: Option<Legend>,
 }
 
 impl MeshSet {
-    /// Reads `specs` with their overlays, and appends `extra` (the volume's isosurface).
-    pub(crate) fn load(specs: &[MeshSpec], extra: Option<Mesh>) -> Result<MeshSet, RenderError> {
+    /// Reads `specs` with their overlays, and appends `extra` (the volume's isosurface)
+    /// and the label surfaces.
+    pub(crate) fn load(
+        specs: &[MeshSpec],
+        extra: Option<Mesh>,
+        label_meshes: Option<LabelMeshes>,
+    ) -> Result<MeshSet, RenderError> {
         let mut meshes = Vec::with_capacity(specs.len() + 1);
         let mut labels = Vec::new();
         let mut overlays = Vec::new();
@@ -165,7 +180,19 @@ impl MeshSet {
             overlays.push(kind);
             meshes.push(mesh);
         }
-        meshes.extend(extra);
+        let mut extra_colors = Vec::new();
+        let mut legend = None;
+        if let Some(l) = label_meshes {
+            if extra.is_some() {
+                extra_colors.push(SURFACE_COLOR);
+            }
+            extra_colors.extend(l.colors);
+            meshes.extend(extra);
+            meshes.extend(l.meshes);
+            legend = l.legend;
+        } else {
+            meshes.extend(extra);
+        }
         let mut surfaces = Surfaces::new(&meshes)?;
         for (k, colors) in labels {
             surfaces.set_vertex_colors(k, &colors)?;
@@ -173,6 +200,8 @@ impl MeshSet {
         Ok(MeshSet {
             surfaces: Arc::new(surfaces),
             overlays,
+            extra_colors,
+            legend,
         })
     }
 

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glint_core::camera::{Camera, Projection};
-use glint_core::{Image, RenderError, RenderMode, ScalarColors, Shader, Timings};
+use glint_core::{Image, Legend, RenderError, RenderMode, ScalarColors, Shader, Timings};
 use glint_io::{ReadOptions, Volume};
 use glint_volume::{
     Classification, ClassifySettings, Field, FrameSettings, Kernel, PathImage, Prefilter,
@@ -13,6 +13,7 @@ use glint_volume::{
 };
 
 use crate::hwlobe::HwCache;
+use crate::labels::LabelMeshes;
 use crate::meshes::{MeshKey, MeshSet};
 use crate::scene::{Derived, Input, MeshLayer, Plan, Resolved, Scene, Transport};
 
@@ -47,6 +48,9 @@ pub struct Rendered {
     /// The colours of the scalar overlays, for a colour bar
     /// ([`ScalarColors::draw_bar`]); `None` without scalar overlays.
     pub colors: Option<ScalarColors>,
+    /// The names and colours of the labels shown, for a legend ([`Legend::draw`]);
+    /// `None` without a label map (or with its legend turned off).
+    pub legend: Option<Legend>,
 }
 
 /// Renders scenes of one volume and one set of meshes, keeping the field, the meshes
@@ -138,7 +142,7 @@ impl Renderer {
     /// isosurface in surface mode).
     pub fn open_scene(scene: &Scene) -> Result<Renderer, RenderError> {
         let mut renderer = Renderer::open(&scene.input)?;
-        if !scene.meshes.is_empty() || scene.is_surface() {
+        if scene.has_meshes() || scene.is_surface() {
             renderer.mesh_set(scene)?;
         }
         Ok(renderer)
@@ -219,7 +223,11 @@ impl Renderer {
         } else {
             None
         };
-        let key = MeshKey::new(&scene.meshes, iso);
+        let labels = scene.labels.clone().map(|mut l| {
+            l.resolve();
+            l
+        });
+        let key = MeshKey::new(&scene.meshes, iso, labels.as_ref());
         if let Some((k, set)) = &self.meshes {
             if *k == key {
                 return Ok(set.clone());
@@ -240,9 +248,19 @@ impl Renderer {
             }
             _ => None,
         };
-        let set = self
-            .opened
-            .time("meshes", || MeshSet::load(&scene.meshes, extra))?;
+        let label_meshes = match &labels {
+            Some(spec) => {
+                let built = self.opened.time("labels", || LabelMeshes::build(spec))?;
+                if let Some(f) = field {
+                    built.check_overlap(spec, glint_labels::world_box(f.dims(), &f.affine()))?;
+                }
+                Some(built)
+            }
+            None => None,
+        };
+        let set = self.opened.time("meshes", || {
+            MeshSet::load(&scene.meshes, extra, label_meshes)
+        })?;
         let set = Arc::new(set);
         self.meshes = Some((key, set.clone()));
         Ok(set)
@@ -257,7 +275,7 @@ impl Renderer {
             let set = self.mesh_set(scene)?;
             return scene.resolve_surface(self.field.as_deref(), &set, &self.hw);
         }
-        let mut resolved = if !scene.meshes.is_empty() {
+        let mut resolved = if scene.has_meshes() {
             let set = self.mesh_set(scene)?;
             let field = self.field.as_ref().expect("checked above");
             scene.resolve_hybrid(field, &set, &self.hw)?
@@ -333,7 +351,7 @@ impl Renderer {
     ) -> Result<Rendered, RenderError> {
         let mut timings = self.opened.clone();
         let mut scene = resolved.scene;
-        let (image, derived, colors) = match resolved.plan {
+        let (image, derived, colors, legend) = match resolved.plan {
             Plan::Volume {
                 tf,
                 classify,
@@ -347,6 +365,7 @@ impl Renderer {
                     timings.record("classify", start.elapsed());
                 }
                 let camera = class.camera(&frame)?;
+                let legend = meshes.as_ref().and_then(|m| m.legend.clone());
                 let volume = VolumeFrame {
                     class: &class,
                     shader: &resolved.shader,
@@ -363,19 +382,20 @@ impl Renderer {
                 d.step_mm = Some(step_mm);
                 d.min_spacing_mm = Some(field.min_spacing());
                 d.transfer_function = Some(tf);
-                (image, d, None)
+                (image, d, None, legend)
             }
             Plan::Surface {
                 surfaces,
                 settings,
                 colors,
+                legend,
             } => {
                 let camera = surfaces.camera(&settings)?;
                 let image = timings.time("frame", || {
                     surfaces.render(&camera, &resolved.shader, &settings, colors.as_ref())
                 })?;
                 progress(u64::from(settings.width) * u64::from(settings.height));
-                (image, derived(&camera), colors)
+                (image, derived(&camera), colors, legend)
             }
         };
         scene.derived = Some(derived);
@@ -384,6 +404,7 @@ impl Renderer {
             scene,
             timings,
             colors,
+            legend,
         })
     }
 }

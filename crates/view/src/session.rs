@@ -17,9 +17,10 @@ use crate::ViewError;
 /// size at most; `glint render` takes up to [`MAX_IMAGE_SIDE`]).
 pub const MAX_VIEW_SIDE: u32 = 2048;
 
-/// Scene fields a client may not change: the server renders only the volume it was
-/// started with.
-const FIXED_FIELDS: [&str; 4] = ["input", "meshes", "version", "derived"];
+/// Scene fields a client may not change: the server renders only the volume (and
+/// meshes and label map) it was started with; a client naming another file would have
+/// the server read it.
+const FIXED_FIELDS: [&str; 5] = ["input", "meshes", "labels", "version", "derived"];
 
 /// JPEG quality of frames sent while the user drags (small and quick).
 const INTERACTIVE_QUALITY: u8 = 70;
@@ -229,6 +230,7 @@ mod tests {
         assert_eq!(s.camera.view, scene().camera.view);
         for (bad, needle) in [
             (r#"{"input": {"path": "/etc/passwd"}}"#, "input"),
+            (r#"{"labels": {"path": "/etc/passwd"}}"#, "labels"),
             (r#"{"camera": {"zoom": -3}}"#, "zoom"),
             (r#"{"camera": {"tilt": 3}}"#, "tilt"),
             (r#"{"step": "fast"}"#, "step"),

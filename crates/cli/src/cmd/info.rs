@@ -17,6 +17,8 @@ use serde_json::{json, Value};
     glint info mni152_t1_09a.nii.gz\n  \
     glint info fsaverage5_pial_left.gii.gz --json\n  \
     glint info ct_series/            (a directory of DICOM slices)\n  \
+    glint info aseg.mgz --labels     (labels, names, voxels, ml)\n  \
+    glint info mask.nii.gz --labels --label-table totalsegmentator\n  \
     glint info head.raw --raw-dims 256,256,128 --raw-type u16 --raw-spacing 0.9,0.9,1.5")]
 pub struct Args {
     /// The file (.nii, .nii.gz, .nrrd, .nhdr, .dcm, DICOM directory, .stl, .obj, .ply,
@@ -56,6 +58,14 @@ pub struct Args {
     /// SeriesInstanceUID, as listed); default: the only or the largest.
     #[arg(long)]
     series: Option<String>,
+    /// List the labels of a label map: value, name, voxel count, volume in ml.
+    #[arg(long)]
+    labels: bool,
+    /// The colour table naming the labels: freesurfer, totalsegmentator, or a file
+    /// (FreeSurfer LUT text, Slicer .ctbl/.txt, .json, .csv) [default: freesurfer for
+    /// files named *aseg*, *aparc*, *wmparc*, else none].
+    #[arg(long, value_name = "TABLE", requires = "labels")]
+    label_table: Option<String>,
 }
 
 /// Runs `glint info`.
@@ -96,6 +106,12 @@ fn report(args: &Args) -> anyhow::Result<String> {
     if options.raw.is_none() && Format::guess(&args.file) == Some(Format::Raw) {
         bail!(
             "{}: a raw file needs --raw-dims (and --raw-type, --raw-spacing)",
+            args.file.display()
+        );
+    }
+    if is_mesh && args.labels {
+        bail!(
+            "{}: --labels lists a label volume's labels; this is a mesh",
             args.file.display()
         );
     }
@@ -160,11 +176,27 @@ fn report(args: &Args) -> anyhow::Result<String> {
             if let Some(l) = &listing {
                 listing_json(&mut v, l);
             }
+            if args.labels {
+                super::info_labels::add_json(
+                    &mut v,
+                    &args.file,
+                    &file.volume,
+                    args.label_table.as_deref(),
+                )?;
+            }
             out = serde_json::to_string_pretty(&v)? + "\n";
         } else {
             print_volume(&mut out, args, &file)?;
             if let Some(l) = &listing {
                 print_listing(&mut out, l)?;
+            }
+            if args.labels {
+                super::info_labels::print(
+                    &mut out,
+                    &args.file,
+                    &file.volume,
+                    args.label_table.as_deref(),
+                )?;
             }
         }
     }

@@ -8,6 +8,8 @@ pub mod compare;
 pub mod eval;
 pub mod hw;
 pub mod info;
+pub mod info_labels;
+pub mod label_flags;
 pub mod mesh;
 pub mod render;
 pub mod scene_flags;

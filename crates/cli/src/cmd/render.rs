@@ -122,6 +122,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(colors) = &rendered.colors {
         colors.draw_bar(&mut rendered.image);
     }
+    if let Some(legend) = &rendered.legend {
+        legend.draw(&mut rendered.image);
+    }
     let depth = if args.depth == "16" {
         Depth::Sixteen
     } else {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::builder::TypedValueParser;
-use glint_io::{Format, ReadOptions};
+use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
     ColorMap, Input, Light, LightingModel, MeshSpec, Overlay, Phantom, Prefilter, Projection,
@@ -14,6 +14,7 @@ use glint_render::{
 };
 
 use super::choice::choice;
+use super::label_flags::LabelFlags;
 
 /// Scene options. Every one is optional: unset, it keeps the scene file's value or the
 /// scene default (which `Scene::resolve_for` chooses and `--dump-scene` shows).
@@ -128,6 +129,10 @@ pub struct SceneFlags {
     /// group, multi-frame DICOM without frame positions).
     #[arg(long)]
     pub strict: bool,
+    /// A colour volume (DICOM RGB or YBR) as one grey: its luminance (ITU-R BT.601
+    /// luma) or one channel [default: luminance].
+    #[arg(long, value_parser = choice::<Grey>(Grey::ALL.map(Grey::name)))]
+    pub channel: Option<Grey>,
     /// Filter applied to the volume before trilinear reconstruction: binomial (a
     /// [1 2 1]/4 low-pass per axis; no "wood grain" rings on surfaces) or none (the
     /// samples as stored) [default: binomial].
@@ -174,6 +179,8 @@ pub struct SceneFlags {
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     pub no_skip: bool,
+    #[command(flatten)]
+    pub labels: LabelFlags,
 }
 
 impl SceneFlags {
@@ -199,6 +206,7 @@ impl SceneFlags {
     pub fn read_options(&self) -> ReadOptions {
         ReadOptions {
             strict: self.strict,
+            grey: self.channel.unwrap_or_default(),
             ..ReadOptions::default()
         }
     }
@@ -206,6 +214,11 @@ impl SceneFlags {
     /// Applies every given flag to `scene`.
     pub fn apply(&self, scene: &mut Scene) -> anyhow::Result<()> {
         self.apply_input(scene)?;
+        let alone = self.input.is_empty()
+            && self.scene.is_none()
+            && self.phantom.is_none()
+            && self.phantom_size.is_none();
+        self.labels.apply(scene, alone)?;
         self.apply_classification(scene)?;
         self.apply_lighting(scene)?;
         let camera = &mut scene.camera;

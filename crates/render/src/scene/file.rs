@@ -15,7 +15,7 @@ impl Scene {
             .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
         de.end()
             .map_err(|e| RenderError::Scene(format!("bad scene JSON: {e}")))?;
-        let input_given = !scene.meshes.is_empty()
+        let input_given = scene.has_meshes()
             && serde_json::from_str::<serde_json::Value>(text)
                 .is_ok_and(|v| v.get("input").is_some());
         scene.meshes_only_unless(input_given).check_version()
@@ -24,7 +24,7 @@ impl Scene {
     /// A scene read with meshes and without an `input` key has no volume (the
     /// default phantom is for scenes of nothing else).
     fn meshes_only_unless(mut self, input_given: bool) -> Scene {
-        if !self.meshes.is_empty() && !input_given {
+        if self.has_meshes() && !input_given {
             self.input = Input::None;
         }
         self
@@ -118,6 +118,9 @@ impl Scene {
         let mut paths = Vec::new();
         if let Input::Path(p) = &mut self.input {
             paths.push(p);
+        }
+        if let Some(l) = &mut self.labels {
+            paths.push(&mut l.path);
         }
         for m in &mut self.meshes {
             paths.push(&mut m.path);

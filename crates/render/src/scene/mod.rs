@@ -14,6 +14,7 @@ use glint_io::{open_volume, ReadOptions, Volume};
 use glint_volume::{Field, Phantom, Prefilter, Sampling, TransferFunction};
 use serde::{Deserialize, Serialize};
 
+use crate::labels::LabelSpec;
 use crate::meshes::MeshSpec;
 
 mod file;
@@ -72,6 +73,10 @@ pub struct Scene {
     /// has no volume.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<MeshSpec>,
+    /// A label map drawn as one surface per label, like [`meshes`](Self::meshes)
+    /// (with a volume, in its ray-cast frame; without one, rasterised).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub labels: Option<LabelSpec>,
     /// Surface renders: samples per pixel along each axis, 1, 2 or 4 (default
     /// [`DEFAULT_SSAA`](crate::DEFAULT_SSAA)).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -137,6 +142,7 @@ impl Default for Scene {
             version: SCENE_VERSION,
             input: Input::default(),
             meshes: Vec::new(),
+            labels: None,
             ssaa: None,
             mode: RenderMode::Composite,
             iso: None,
@@ -257,7 +263,12 @@ impl Scene {
     /// isosurface asked for) rather than ray cast (a volume, with or without meshes
     /// drawn into its frame).
     pub fn is_surface(&self) -> bool {
-        self.mode == RenderMode::Surface || (!self.meshes.is_empty() && self.input == Input::None)
+        self.mode == RenderMode::Surface || (self.has_meshes() && self.input == Input::None)
+    }
+
+    /// Whether the scene has surfaces besides the volume's: meshes or a label map.
+    pub fn has_meshes(&self) -> bool {
+        !self.meshes.is_empty() || self.labels.is_some()
     }
 
     /// The iso value of the volume's isosurface in a surface scene (the scene's, else

@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use glint_core::camera::Camera;
 use glint_core::{
-    Image, Light, Material, MaterialOverrides, RenderError, RenderMode, ScalarColors, Shader,
-    MAX_LIGHTS,
+    Image, Legend, Light, Material, MaterialOverrides, RenderError, RenderMode, ScalarColors,
+    Shader, MAX_LIGHTS,
 };
 use glint_raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
 use glint_volume::{preset, ClassifySettings, Field, FrameSettings, Kernel, TransferFunction};
@@ -54,6 +54,8 @@ pub enum Plan {
         settings: SurfaceSettings,
         /// The colours of the scalar overlays, when any.
         colors: Option<ScalarColors>,
+        /// The labels shown, when the scene has a label map with a legend.
+        legend: Option<Legend>,
     },
 }
 
@@ -66,6 +68,8 @@ pub struct MeshLayer {
     pub settings: SurfaceSettings,
     /// The colours of the scalar overlays, when any.
     pub colors: Option<ScalarColors>,
+    /// The labels shown, when the scene has a label map with a legend.
+    pub legend: Option<Legend>,
 }
 
 impl MeshLayer {
@@ -186,6 +190,7 @@ impl Scene {
                 surfaces: layer.surfaces,
                 settings: layer.settings,
                 colors: layer.colors,
+                legend: layer.legend,
             },
         })
     }
@@ -194,11 +199,15 @@ impl Scene {
     /// supersampling, mesh colours, colour maps and ranges back into the scene.
     fn resolve_mesh_layer(&mut self, set: &MeshSet) -> Result<MeshLayer, RenderError> {
         let ssaa = *self.ssaa.get_or_insert(DEFAULT_SSAA);
-        let mesh_colors = self
+        let mut mesh_colors: Vec<[f32; 3]> = self
             .meshes
             .iter_mut()
             .map(|m| *m.color.get_or_insert(SURFACE_COLOR))
             .collect();
+        mesh_colors.extend(&set.extra_colors);
+        if let Some(l) = &mut self.labels {
+            l.resolve();
+        }
         let colors = set.resolve_overlays(&mut self.meshes)?;
         let settings = SurfaceSettings {
             width: self.size[0],
@@ -214,6 +223,7 @@ impl Scene {
             surfaces: set.surfaces.clone(),
             settings,
             colors,
+            legend: set.legend.clone(),
         })
     }
 
@@ -228,9 +238,11 @@ impl Scene {
     ) -> Result<Resolved, RenderError> {
         let mut volume = self.clone();
         let meshes = std::mem::take(&mut volume.meshes);
+        let labels = volume.labels.take();
         volume.ssaa = None;
         let mut resolved = volume.resolve_cached(field, hw)?;
         resolved.scene.meshes = meshes;
+        resolved.scene.labels = labels;
         resolved.scene.ssaa = self.ssaa;
         let layer = resolved.scene.resolve_mesh_layer(set)?;
         if let Plan::Volume { meshes, .. } = &mut resolved.plan {
@@ -251,7 +263,7 @@ impl Scene {
         field: &Field,
         hw: &HwCache,
     ) -> Result<Resolved, RenderError> {
-        if self.is_surface() || !self.meshes.is_empty() {
+        if self.is_surface() || self.has_meshes() {
             return Err(RenderError::Parameter(
                 "a scene with meshes is resolved by a Renderer, which reads them".into(),
             ));

@@ -20,7 +20,7 @@ use crate::transport::{DensityGrid, Medium, ShadowField};
 /// The transfer function tabulated for `settings` (MIP shows the function's own
 /// opacity, not a per-step one).
 fn lut_for(field: &Field, tf: &TransferFunction, settings: &ClassifySettings) -> Lut {
-    let (lo, hi) = field.range();
+    let (lo, hi) = table_range(field, tf);
     // The opacity correction's exponent: the step in units of the opacity's length.
     let lut_step = match (settings.mode, settings.opacity_unit) {
         (RenderMode::Mip, _) => 1.0,
@@ -28,6 +28,70 @@ fn lut_for(field: &Field, tf: &TransferFunction, settings: &ClassifySettings) ->
         (_, Some(unit)) => settings.step * field.min_spacing() / unit,
     };
     Lut::new(tf, lo, hi, lut_step)
+}
+
+/// How many times wider than the robust range the value range may be before the
+/// table covers the transfer function's domain instead (issue 33: a float volume
+/// with a few voxels at 1e29 put every other value into the table's first entry, and
+/// rendered black). Ordinary scans stay far below it (CT: full range over robust
+/// range about 1.5), so their tables, and images, are unchanged.
+const OUTLIER_SPAN: f64 = 1000.0;
+
+/// The values the table covers: the volume's range, or, when a few outliers stretch
+/// it past [`OUTLIER_SPAN`] times the robust range, the part of it the transfer
+/// function's domain covers (lookups beyond the table take its end entries, the
+/// function's values beyond its domain).
+fn table_range(field: &Field, tf: &TransferFunction) -> (f32, f32) {
+    let (lo, hi) = field.range();
+    let (rlo, rhi) = field.robust_range();
+    let span = f64::from(hi) - f64::from(lo);
+    let robust = (f64::from(rhi) - f64::from(rlo)).max(f64::MIN_POSITIVE);
+    if span <= OUTLIER_SPAN * robust {
+        return (lo, hi);
+    }
+    let (tlo, thi) = tf.domain();
+    let a = (tlo as f32).clamp(lo, hi);
+    let b = (thi as f32).clamp(lo, hi);
+    if b > a {
+        (a, b)
+    } else {
+        (lo, hi)
+    }
+}
+
+/// Whether the affine's axes are far from orthogonal (the cosine of some pair's angle
+/// above 0.1, about 84 degrees): scanners' grids, oblique or not, are orthogonal
+/// (a CT gantry tilt above about 6 degrees counts too, and is framed the same way).
+fn sheared(affine: &[[f64; 4]; 4]) -> bool {
+    let col = |c: usize| [affine[0][c], affine[1][c], affine[2][c]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    [(0, 1), (0, 2), (1, 2)].iter().any(|&(i, j)| {
+        let (a, b) = (col(i), col(j));
+        dot(a, b).abs() > 0.1 * (dot(a, a) * dot(b, b)).sqrt()
+    })
+}
+
+/// The world box of the voxels whose value the table gives opacity (`None`: none).
+fn opaque_world_box(field: &Field, lut: &Lut) -> Option<([f64; 3], [f64; 3])> {
+    let [nx, ny, _] = field.dims;
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (i, &v) in field.values().iter().enumerate() {
+        if lut.opaque[lut.index(v)] == 0 {
+            continue;
+        }
+        let p = [
+            (i % nx) as f64,
+            (i / nx % ny) as f64,
+            (i / (nx * ny)) as f64,
+        ];
+        let w = field.index_to_world(p);
+        for a in 0..3 {
+            lo[a] = lo[a].min(w[a]);
+            hi[a] = hi[a].max(w[a]);
+        }
+    }
+    (lo[0] <= hi[0]).then_some((lo, hi))
 }
 
 /// A field classified by a transfer function for one mode and sample step: the
@@ -51,6 +115,9 @@ pub struct Classification {
     visible_box: Option<([f64; 3], [f64; 3])>,
     /// Index-space box rays are clipped to.
     clip_box: ([f64; 3], [f64; 3]),
+    /// For a sheared grid in composite mode: the world box of the voxels the transfer
+    /// function gives opacity, which cameras frame ([`sheared`]).
+    opaque_world: Option<([f64; 3], [f64; 3])>,
     /// World corners of the blocks of `START_BLOCK`^3 macro cells that hold a cell
     /// that can show a sample, for the rays' start bounds (empty when skipping is off
     /// or in MIP, whose leaps depend on the ray's maximum so far).
@@ -90,6 +157,10 @@ impl Classification {
         } else {
             (vec![0; visible.len()], full_box)
         };
+        let opaque_world = match settings.mode {
+            RenderMode::Composite if sheared(&field.affine()) => opaque_world_box(&field, &lut),
+            _ => None,
+        };
         let blocks = if settings.skip_empty && settings.mode != RenderMode::Mip {
             visible_blocks(&field, &visible)
         } else {
@@ -107,6 +178,7 @@ impl Classification {
             medium: OnceLock::new(),
             density: OnceLock::new(),
             occlusion: OnceLock::new(),
+            opaque_world,
         })
     }
 
@@ -154,9 +226,17 @@ impl Classification {
             .visible_box
             .unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
         let mut corners = Vec::with_capacity(8);
-        for n in 0..8 {
-            let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });
-            corners.push(field.index_to_world(p));
+        if let Some((wlo, whi)) = self.opaque_world {
+            // A strongly sheared grid's index box spans far more world than the object
+            // in it (issue 33): frame the object's own world box.
+            for n in 0..8 {
+                corners.push([0, 1, 2].map(|a| if n & (1 << a) != 0 { whi[a] } else { wlo[a] }));
+            }
+        } else {
+            for n in 0..8 {
+                let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });
+                corners.push(field.index_to_world(p));
+            }
         }
         let mut wlo = [f64::INFINITY; 3];
         let mut whi = [f64::NEG_INFINITY; 3];

@@ -1,0 +1,191 @@
+//! Label maps as a scene layer: surfaces in their table colours, a legend of what is
+//! shown, placement by the label grid's own affine, and one clear error for each bad
+//! input.
+
+use std::path::{Path, PathBuf};
+
+use glint_io::{nifti, Endian, Samples, Volume};
+use glint_render::{
+    CameraSpec, Input, LabelSpec, MaterialOverrides, Projection, RenderError, Renderer, Scene, View,
+};
+
+/// Two 6-voxel cubes side by side along x, labels `a` then `b`, in a 16^3 grid of
+/// 1 mm voxels shifted by `offset` mm.
+fn two_blocks(dir: &Path, name: &str, a: u8, b: u8, offset: f64) -> PathBuf {
+    let n = 16;
+    let values: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, i / n % n, i / (n * n));
+            let inside = (5..11).contains(&y) && (5..11).contains(&z);
+            match x {
+                2..=7 if inside => a,
+                8..=13 if inside => b,
+                _ => 0,
+            }
+        })
+        .collect();
+    let mut vol = Volume::new([n; 3], [1.0; 3], Samples::U8(values)).unwrap();
+    for r in 0..3 {
+        vol.affine[r][3] = offset;
+    }
+    let path = dir.join(name);
+    nifti::write(&path, &vol, false, Endian::Little).unwrap();
+    path
+}
+
+/// A scene of the label map alone, seen from the front, unshaded so a pixel is its
+/// label's colour.
+fn scene(labels: LabelSpec) -> Scene {
+    Scene {
+        input: Input::None,
+        labels: Some(labels),
+        size: [96, 96],
+        ssaa: Some(1),
+        camera: CameraSpec {
+            view: View::Anterior,
+            projection: Projection::Orthographic,
+            ..CameraSpec::default()
+        },
+        material: MaterialOverrides {
+            ambient: Some(1.0),
+            diffuse: Some(0.0),
+            specular: Some(0.0),
+            shade: Some(false),
+        },
+        ..Scene::default()
+    }
+}
+
+fn render(scene: &Scene) -> Result<glint_render::Rendered, RenderError> {
+    Renderer::open_scene(scene)?.render(scene, &|_| {})
+}
+
+/// sRGB 0-255 to linear, as the renderer converts table colours.
+fn linear(c: [u8; 3]) -> [f32; 3] {
+    c.map(|x| glint_render::srgb_to_linear(f64::from(x) / 255.0) as f32)
+}
+
+#[test]
+fn labels_render_in_their_table_colours_with_a_legend() {
+    let dir = tempfile::tempdir().unwrap();
+    // FreeSurfer's 17 Left-Hippocampus (220, 216, 20) and 18 Left-Amygdala
+    // (103, 255, 255), as FreeSurferColorLUT.txt lists them.
+    let path = two_blocks(dir.path(), "aseg.nii", 17, 18, 0.0);
+    let rendered = render(&scene(LabelSpec::new(&path))).unwrap();
+    // The file is named like FreeSurfer's: its table was chosen and written back.
+    let spec = rendered.scene.labels.as_ref().unwrap();
+    assert_eq!(spec.table.as_deref(), Some("freesurfer"));
+    assert_eq!(spec.smoothing, Some(glint_render::DEFAULT_LABEL_SMOOTHING));
+    let legend = rendered.legend.as_ref().unwrap();
+    let names: Vec<&str> = legend.entries.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["Left-Hippocampus", "Left-Amygdala"]);
+    // Seen from the front (looking towards posterior), the patient's right (+x in
+    // RAS) is on the image's left: label 18 at x 8..13 is left of label 17.
+    let img = &rendered.image;
+    let at = |x: u32, y: u32| img.rgb[(y * img.width + x) as usize];
+    let (right, left) = (at(30, 48), at(66, 48));
+    let (hippo, amygdala) = (linear([220, 216, 20]), linear([103, 255, 255]));
+    for k in 0..3 {
+        assert!((left[k] - hippo[k]).abs() < 0.02, "{left:?} vs {hippo:?}");
+        assert!(
+            (right[k] - amygdala[k]).abs() < 0.02,
+            "{right:?} vs {amygdala:?}"
+        );
+    }
+    // The corners are background.
+    assert_eq!(at(1, 1), [0.0; 3]);
+}
+
+#[test]
+fn show_and_hide_select_by_name_or_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = two_blocks(dir.path(), "seg.nii", 5, 52, 0.0);
+    let mut spec = LabelSpec::new(&path);
+    spec.table = Some("totalsegmentator".into());
+    spec.hide = vec!["Liver".into()];
+    let r = render(&scene(spec.clone())).unwrap();
+    let names: Vec<String> = r.legend.unwrap().entries.into_iter().map(|e| e.0).collect();
+    assert_eq!(names, ["aorta"]);
+    // Only the aorta block is drawn: no pixel has the liver's colour, many the aorta's.
+    let table = glint_render::label_maps::LabelTable::totalsegmentator();
+    let count = |c: [u8; 3]| {
+        let want = linear(c);
+        r.image
+            .rgb
+            .iter()
+            .filter(|p| (0..3).all(|k| (p[k] - want[k]).abs() < 0.02))
+            .count()
+    };
+    assert_eq!(count(table.color_of(5)), 0);
+    assert!(count(table.color_of(52)) > 500);
+    spec.hide.clear();
+    spec.show = vec!["5".into()];
+    let r = render(&scene(spec.clone())).unwrap();
+    assert_eq!(r.legend.unwrap().entries[0].0, "liver");
+    // A name not in the table, and a label not in the map, are refused.
+    spec.show = vec!["livr".into()];
+    let err = glint_io::one_line(&render(&scene(spec.clone())).unwrap_err());
+    assert!(
+        err.contains("unknown label \"livr\"") && err.contains("liver"),
+        "{err}"
+    );
+    spec.show = vec!["spleen".into()];
+    let err = glint_io::one_line(&render(&scene(spec)).unwrap_err());
+    assert!(
+        err.contains("spleen") && err.contains("not in the map"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_label_grid_away_from_the_volume_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let far = two_blocks(dir.path(), "far.nii", 1, 2, 5000.0);
+    let volume = Volume::new([8; 3], [1.0; 3], Samples::U8(vec![100; 512])).unwrap();
+    let vpath = dir.path().join("vol.nii");
+    nifti::write(&vpath, &volume, false, Endian::Little).unwrap();
+    let mut s = scene(LabelSpec::new(&far));
+    s.input = Input::Path(vpath.clone());
+    let err = glint_io::one_line(&render(&s).unwrap_err());
+    assert!(err.contains("does not overlap the volume"), "{err}");
+    // Overlapping: renders, with the volume.
+    s.labels = Some(LabelSpec::new(two_blocks(
+        dir.path(),
+        "near.nii",
+        1,
+        2,
+        -4.0,
+    )));
+    assert!(render(&s).is_ok());
+}
+
+#[test]
+fn a_non_label_volume_is_refused_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = Volume::new([4; 3], [1.0; 3], Samples::F32(vec![0.25; 64])).unwrap();
+    let path = dir.path().join("prob.nii");
+    nifti::write(&path, &v, false, Endian::Little).unwrap();
+    let err = glint_io::one_line(&render(&scene(LabelSpec::new(&path))).unwrap_err());
+    assert!(
+        err.contains("prob.nii") && err.contains("whole numbers"),
+        "{err}"
+    );
+}
+
+#[test]
+fn scenes_without_labels_serialise_as_before_and_labels_round_trip() {
+    let json = Scene::default().to_json().unwrap();
+    assert!(!json.contains("labels"));
+    let mut spec = LabelSpec::new("seg.nii.gz");
+    spec.show = vec!["liver".into()];
+    spec.legend = false;
+    let s = Scene {
+        input: Input::None,
+        labels: Some(spec),
+        ..Scene::default()
+    };
+    assert_eq!(Scene::from_json(&s.to_json().unwrap()).unwrap(), s);
+    // A scene file with labels and no input key has no volume.
+    let text = r#"{"version": 1, "labels": {"path": "seg.nii.gz"}}"#;
+    assert_eq!(Scene::from_json(text).unwrap().input, Input::None);
+}
