@@ -110,6 +110,57 @@ impl FromStr for Coefficients {
     }
 }
 
+/// How the unit forms `a(n)`. Every source gives the same words as ROM1 (checked when
+/// the unit is built, see [`crate::CoefCircuit`]); only the hardware differs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CoefSource {
+    /// ROM1: one word per `n` (the paper's Fig. 4).
+    Rom,
+    /// `a(n) = (n+1)·K` rounded, `K ≈ 1/(2^v+1)`: a shift-and-add constant multiplier,
+    /// no ROM (energy-fit coefficients only).
+    Const,
+    /// `a(n) = T_hi[n_hi] + T_lo[n_lo]` rounded: two small tables and an adder
+    /// (energy-fit coefficients only).
+    Table,
+}
+
+impl CoefSource {
+    /// The name used in configuration files and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            CoefSource::Rom => "rom",
+            CoefSource::Const => "const",
+            CoefSource::Table => "table",
+        }
+    }
+}
+
+/// How a BMUL stage squares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Squarer {
+    /// A generic multiplier with both operands the same register (Fig. 4 as drawn).
+    Generic,
+    /// A squarer: the partial-product array folded by symmetry (`x_i x_j = x_j x_i`),
+    /// about half the partial products. Same result as `Generic`.
+    Symmetric,
+    /// The symmetric array with the partial-product columns below
+    /// `2f_in - f_out - square_guard` dropped and a constant (their mean) added.
+    Truncated,
+}
+
+impl Squarer {
+    /// The name used in configuration files and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Squarer::Generic => "generic",
+            Squarer::Symmetric => "symmetric",
+            Squarer::Truncated => "truncated",
+        }
+    }
+}
+
 /// Every parameter of the unit. Formats (see `docs/hardware.md`):
 ///
 /// - RG1 `cos`: signed two's complement, `cos_bits` wide, `cos_bits - 2` fraction bits
@@ -153,6 +204,14 @@ pub struct Config {
     pub out_bits: u32,
     /// How the RGB multipliers round to the output code.
     pub out_round: Rounding,
+    /// How `a(n)` is formed (ROM1, constant multiplier, or two small tables).
+    pub coef_source: CoefSource,
+    /// How each BMUL stage squares.
+    pub squarer: Squarer,
+    /// For [`Squarer::Truncated`]: partial-product columns kept below each stage's
+    /// output LSB (1..=16; the truncation error is below `2^-guard` output LSB of the
+    /// stage plus the compensation's error, see [`crate::TruncatedSquare`]).
+    pub square_guard: u32,
 }
 
 impl Default for Config {
@@ -174,6 +233,9 @@ impl Default for Config {
             square_round: Rounding::Nearest,
             out_bits: 8,
             out_round: Rounding::Nearest,
+            coef_source: CoefSource::Rom,
+            squarer: Squarer::Generic,
+            square_guard: 2,
         }
     }
 }
@@ -293,6 +355,19 @@ impl Config {
             )?;
         }
         check_register("RGB output = out_bits", self.out_bits.into())?;
+        if self.coef_source != CoefSource::Rom && self.coefficients != Coefficients::EnergyFit {
+            return Err(HwError::Parse(format!(
+                "coef_source = {} computes the energy fit (n+1)/(2^v+1); minimax coefficients need coef_source = rom",
+                self.coef_source.name()
+            )));
+        }
+        if self.squarer == Squarer::Truncated && !(1..=16).contains(&self.square_guard) {
+            return Err(HwError::TooNarrow {
+                field: "square_guard",
+                bits: self.square_guard,
+                reason: "a truncated squarer keeps 1..=16 columns below its output LSB",
+            });
+        }
         Ok(())
     }
 }

@@ -1,5 +1,7 @@
 //! `glint hw`: the fixed-point model of the specular unit (ROM contents, width sweeps,
-//! stage-by-stage evaluation, exhaustive error check).
+//! stage-by-stage evaluation, exhaustive error check, Verilog, cost, Pareto fronts).
+
+mod pareto;
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
@@ -8,8 +10,8 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use glint_hw::hdl::{self, HdlUnit, KvUnit, PowerUnit, SchlickUnit};
 use glint_hw::{
-    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, HwError,
-    Input, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
+    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, Design,
+    HwError, Input, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
 };
 
 /// Subcommands of `glint hw`.
@@ -56,6 +58,14 @@ pub enum Command {
         after_help = "Examples:\n  glint hw synth\n  glint hw synth --config unit.json --keep synth"
     )]
     Synth(SynthArgs),
+    /// Explore cost against error for K_v, exact cos^n and Schlick units on three
+    /// targets; write pareto.csv and the plots with each family's front.
+    #[command(
+        after_help = "Examples:\n  nice -n 15 glint hw pareto -o docs/pareto --cache /tmp/pareto-cache --jobs 2\n  \
+                      glint hw pareto --quick -o /tmp/quick\n  \
+                      glint hw pareto -o /tmp/f --cosim-fronts docs/pareto/pareto.csv --front-vectors 100000"
+    )]
+    Pareto(pareto::ParetoArgs),
 }
 
 /// Which Verilog unit.
@@ -230,6 +240,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Verilog(args) => verilog(args),
         Command::Cosim(args) => cosim(args),
         Command::Synth(args) => synth(args),
+        Command::Pareto(args) => pareto::run(args),
     }
 }
 
@@ -242,6 +253,16 @@ pub(crate) fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
     match path {
         None => Ok(Config::default()),
         Some(p) => {
+            let text = read_bounded(p)?;
+            Config::from_json(&text).with_context(|| format!("in {}", p.display()))
+        }
+    }
+}
+
+/// A configuration file's text, read up to [`MAX_CONFIG_BYTES`].
+fn read_bounded(p: &Path) -> anyhow::Result<String> {
+    {
+        {
             let reading = || format!("reading configuration {}", p.display());
             let mut text = String::new();
             std::fs::File::open(p)
@@ -255,7 +276,19 @@ pub(crate) fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
                     p.display()
                 );
             }
-            Config::from_json(&text).with_context(|| format!("in {}", p.display()))
+            Ok(text)
+        }
+    }
+}
+
+/// The design in `path` (a K_v configuration, or any family with `"family"`), or the
+/// default K_v unit; bounded read as [`load_config`].
+fn load_design(path: Option<&Path>) -> anyhow::Result<Design> {
+    match path {
+        None => Ok(Design::Kv(Config::default())),
+        Some(p) => {
+            let text = read_bounded(p)?;
+            Design::from_json(&text).with_context(|| format!("in {}", p.display()))
         }
     }
 }
@@ -443,8 +476,45 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Prints the figures `glint hw pareto` gives for `design` (same function, same format).
+fn print_design_errors(design: &Design) -> anyhow::Result<()> {
+    let e = design.errors()?;
+    let ranges: Vec<String> = glint_hw::N_RANGES
+        .iter()
+        .zip(e.power)
+        .map(|(&(a, b), x)| format!("n {a}-{b} {x:.4}"))
+        .collect();
+    println!(
+        "pareto figures ({}): lobe {:.4} | cos^n {} | all n {:.4}",
+        design.family(),
+        e.lobe,
+        ranges.join(" | "),
+        e.power_all
+    );
+    Ok(())
+}
+
 fn check(args: CheckArgs) -> anyhow::Result<()> {
-    let mut config = load_config(args.config.as_deref())?;
+    let design = load_design(args.config.as_deref())?;
+    let mut config = match design {
+        Design::Kv(c) => c,
+        other => {
+            let other = match (other, args.out_bits) {
+                (Design::Pow { params, .. }, Some(o)) => Design::Pow {
+                    out_bits: o,
+                    params,
+                },
+                (Design::Schlick { params, .. }, Some(o)) => Design::Schlick {
+                    out_bits: o,
+                    params,
+                },
+                (d, _) => d,
+            };
+            in_file(args.config.as_deref(), || other.hdl().map(|_| ()))?;
+            println!("# glint hw check: {}", other.to_json());
+            return print_design_errors(&other);
+        }
+    };
     if let Some(b) = args.out_bits {
         config.out_bits = b;
     }
@@ -501,6 +571,7 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
         .map(|e| e.power - e.ideal_power)
         .fold(f64::MIN, f64::max);
     println!("max over n of (unit - ideal) error vs cos^n: {excess:.4} LSB");
+    print_design_errors(&Design::Kv(cfg.clone()))?;
     for bound in [0.5, 1.0] {
         let ok: Vec<bool> = m
             .per_n
