@@ -161,13 +161,22 @@ impl PowerUnit {
         }
         params.validate()?;
         // Interpolated tables hold the grid points; plain ones the segment middles.
-        let table = |count: u32, frac: u32, interp: bool, f: &dyn Fn(f64) -> f64| -> PowTable {
+        // The plain log table's first word holds g(0) = 1 itself, not the middle of
+        // its segment: L = e - 1 + g must not go below 0 at cos = 1 (e = 0, m = 0).
+        let table = |count: u32,
+                     frac: u32,
+                     interp: bool,
+                     edge_first: bool,
+                     f: &dyn Fn(f64) -> f64|
+         -> PowTable {
             let at = |x: f64| (f(x / f64::from(count)) * 2f64.powi(frac as i32)).round() as u64;
             (0..count)
                 .map(|i| {
                     if interp {
                         let (a, b) = (at(f64::from(i)), at(f64::from(i + 1)));
                         (a, a - b)
+                    } else if i == 0 && edge_first {
+                        (at(0.0), 0)
                     } else {
                         (at(f64::from(i) + 0.5), 0)
                     }
@@ -175,10 +184,12 @@ impl PowerUnit {
                 .collect()
         };
         let p = params;
-        let log = table(1 << p.log_index, p.log_frac, p.log_interp, &|m| {
+        let log = table(1 << p.log_index, p.log_frac, p.log_interp, true, &|m| {
             1.0 - (1.0 + m).log2()
         });
-        let exp = table(1 << p.exp_index, p.exp_frac, p.exp_interp, &|u| (-u).exp2());
+        let exp = table(1 << p.exp_index, p.exp_frac, p.exp_interp, false, &|u| {
+            (-u).exp2()
+        });
         Ok(PowerUnit {
             ports,
             params,
