@@ -9,6 +9,9 @@
 //! equals ROM1's, so the three sources are the same function and share the widths
 //! `glint hw sweep` finds.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
 use crate::fixed::requantize;
 use crate::{CoefSource, HwError, Rom, Rounding};
 
@@ -163,15 +166,51 @@ pub const MAX_TRUNCATED_COLUMNS: u32 = 20;
 /// columns, plus the constant `comp` (the mean of what was dropped, over every `x`),
 /// then rounded like every stage. The dropped bits depend only on `x mod 2^drop`
 /// (a product `x_i x_j` lands in column `i+j+1 < drop` only if `i, j < drop`), so the
-/// model subtracts `low[x mod 2^drop]`. Error before the rounding: `|low - comp| <
-/// 2^drop`, i.e. below `2^-guard` of the stage's output LSB.
+/// model subtracts `low[x mod 2^drop]`. Error before the rounding: `|low - comp|`,
+/// below `(drop/2 + 1)·2^drop` (column `c` holds at most `c/2 + 1` products), i.e.
+/// about `(drop/2 + 1)·2^-guard` of the stage's output LSB; the exploration checks
+/// every truncated unit exhaustively.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TruncatedSquare {
     /// Columns dropped.
     pub drop: u32,
     /// Compensation constant added at column 0.
     pub comp: u64,
-    low: Vec<u64>,
+    low: Arc<Vec<u64>>,
+}
+
+/// The dropped part for every `x mod 2^drop`, and its mean rounded (the compensation):
+/// they depend on `drop` only, so each is built once per process.
+fn low_table(drop: u32) -> (Arc<Vec<u64>>, u64) {
+    type Tables = HashMap<u32, (Arc<Vec<u64>>, u64)>;
+    static CACHE: OnceLock<Mutex<Tables>> = OnceLock::new();
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(t) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&drop) {
+        return t.clone();
+    }
+    // low(x) = low(x without its top bit b) + what bit b adds: x_b 2^(2b) and
+    // x_j x_b 2^(j+b+1) for j < b, each where its column is below `drop`.
+    let mut low = vec![0u64; 1 << drop];
+    for x in 1..low.len() {
+        let b = 63 - (x as u64).leading_zeros();
+        let rest = x ^ (1 << b);
+        let mut add = if 2 * b < drop { 1u64 << (2 * b) } else { 0 };
+        for j in 0..b {
+            if rest >> j & 1 == 1 && j + b + 1 < drop {
+                add += 1 << (j + b + 1);
+            }
+        }
+        low[x] = low[rest] + add;
+    }
+    let sum: u128 = low.iter().map(|&l| u128::from(l)).sum();
+    let count = low.len() as u128;
+    let comp = ((2 * sum + count) / (2 * count)) as u64;
+    let t = (Arc::new(low), comp);
+    cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(drop, t.clone());
+    t
 }
 
 impl TruncatedSquare {
@@ -185,10 +224,7 @@ impl TruncatedSquare {
         if drop == 0 {
             return None;
         }
-        let low: Vec<u64> = (0..1u64 << drop).map(|x| low_columns(x, drop)).collect();
-        let sum: u128 = low.iter().map(|&l| u128::from(l)).sum();
-        let count = low.len() as u128;
-        let comp = ((2 * sum + count) / (2 * count)) as u64;
+        let (low, comp) = low_table(drop);
         Some(TruncatedSquare { drop, comp, low })
     }
 
@@ -198,25 +234,6 @@ impl TruncatedSquare {
         let low = self.low[(x & ((1 << self.drop) - 1)) as usize];
         u128::from(x) * u128::from(x) - u128::from(low) + u128::from(self.comp)
     }
-}
-
-/// The partial products of `x^2`'s symmetric array in columns below `drop`.
-fn low_columns(x: u64, drop: u32) -> u64 {
-    let mut s = 0u64;
-    for i in 0..drop {
-        if x >> i & 1 == 0 {
-            continue;
-        }
-        if 2 * i < drop {
-            s += 1 << (2 * i);
-        }
-        for j in i + 1..drop {
-            if x >> j & 1 == 1 && i + j + 1 < drop {
-                s += 1 << (i + j + 1);
-            }
-        }
-    }
-    s
 }
 
 #[cfg(test)]
@@ -282,7 +299,9 @@ mod tests {
                 exact - u128::from(low) + u128::from(t.comp),
                 "{x}"
             );
-            assert!((t.square(x) as i128 - exact as i128).unsigned_abs() < 1 << 8);
+            // Column c < 8 holds at most c/2 + 1 partial products.
+            let bound = (8u128 / 2 + 1) << 8;
+            assert!((t.square(x) as i128 - exact as i128).unsigned_abs() < bound);
         }
     }
 }

@@ -209,8 +209,8 @@ pub struct Config {
     /// How each BMUL stage squares.
     pub squarer: Squarer,
     /// For [`Squarer::Truncated`]: partial-product columns kept below each stage's
-    /// output LSB (1..=16; the truncation error is below `2^-guard` output LSB of the
-    /// stage plus the compensation's error, see [`crate::TruncatedSquare`]).
+    /// output LSB (1..=16; the truncation error is about `(drop/2 + 1)·2^-guard` of
+    /// the stage's output LSB, see [`crate::TruncatedSquare`]).
     pub square_guard: u32,
 }
 

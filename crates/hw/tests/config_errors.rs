@@ -340,7 +340,7 @@ fn configuration_files_must_be_json_objects() {
 
 mod any_config {
     use super::*;
-    use glint_hw::{Coefficients, Rounding};
+    use glint_hw::{CoefSource, Coefficients, Rounding, Squarer};
     use proptest::prelude::*;
 
     /// Mostly plausible widths, so that many cases get past validation, plus the
@@ -366,6 +366,9 @@ mod any_config {
             extra in prop_oneof![8 => Just(0usize), 1 => Just(1usize)],
             square in proptest::collection::vec(width(), 0..=12),
             nearest in any::<bool>(),
+            source in prop_oneof![6 => Just(CoefSource::Rom), 1 => Just(CoefSource::Const), 1 => Just(CoefSource::Table)],
+            squarer in prop_oneof![6 => Just(Squarer::Generic), 1 => Just(Squarer::Symmetric), 1 => Just(Squarer::Truncated)],
+            square_guard in prop_oneof![8 => 1u32..=16, 1 => any::<u32>()],
         ) -> Config {
             // Mostly the right number of square_frac entries, so later checks run.
             let want = (v.min(12) as usize + extra).min(square.len());
@@ -374,7 +377,7 @@ mod any_config {
                 v, n_bits, cos_bits, coefficients: Coefficients::EnergyFit, coef_bits,
                 coef_round: round, mul_frac, mul_round: round,
                 square_frac: square[..want].to_vec(), square_round: round,
-                out_bits, out_round: round,
+                out_bits, out_round: round, coef_source: source, squarer, square_guard,
             }
         }
     }

@@ -1,12 +1,15 @@
 //! The three cost flows of `glint hw pareto`, each from the same Verilog:
 //!
-//! - **gates**: yosys `synth -flatten` (which maps memories, so a ROM becomes logic and
-//!   is counted), sync-reset flip-flops legalised to plain D flip-flops plus logic,
-//!   `abc -g` onto a fixed set of simple gates (AND, NAND, OR, NOR, XOR, XNOR, ANDNOT,
-//!   ORNOT, MUX), then `stat -tech cmos`. yosys counts 4 transistors for a NAND2 (and
-//!   NOR2), 2 for an inverter, 6 for AND/OR/ANDNOT/ORNOT, 12 for XOR/XNOR/MUX and 16 for
-//!   a D flip-flop (the figures of yosys' `kernel/cost.h`, checked against its totals),
-//!   so NAND2 equivalents are transistors / 4;
+//! - **gates**: yosys `synth -flatten` up to the fine-grained steps, with memories
+//!   kept as memories (a 1024-word ROM mapped to logic keeps ABC busy for ten minutes
+//!   and more at 30-bit words), sync-reset flip-flops legalised to plain D flip-flops
+//!   plus logic, `abc -g` onto a fixed set of simple gates (AND, NAND, OR, NOR, XOR,
+//!   XNOR, ANDNOT, ORNOT, MUX), then `stat -tech cmos`. yosys counts 4 transistors
+//!   for a NAND2 (and NOR2), 2 for an inverter, 6 for AND/OR/ANDNOT/ORNOT, 12 for
+//!   XOR/XNOR/MUX and 16 for a D flip-flop (the figures of yosys' `kernel/cost.h`,
+//!   checked against its totals), so NAND2 equivalents are transistors / 4. ROM bits
+//!   are counted, not dropped: one transistor per bit, as in a mask-programmed NOR
+//!   ROM (its address decoder and sense amplifiers are not counted);
 //! - **iCE40 HX8K**: `synth_ice40` and `nextpnr-ice40` (LUTs, carries, FFs, BRAMs, Fmax);
 //! - **ECP5** (hard 18×18 multipliers): `synth_ecp5` cell counts, no place and route
 //!   (nextpnr-ecp5 is not packaged in Debian 12, whose tools this project installs).
@@ -28,9 +31,10 @@ pub const NAND2_TRANSISTORS: f64 = 4.0;
 /// The measured cost of one design on every target.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Costs {
-    /// Gate-level: cells after `abc -g` (flip-flops included).
+    /// Gate-level: cells after `abc -g` (flip-flops included; a ROM is one cell).
     pub gate_cells: u64,
-    /// Gate-level: `stat -tech cmos` transistors, ROMs as logic.
+    /// Gate-level: `stat -tech cmos` transistors of the logic and flip-flops, plus one
+    /// per ROM bit.
     pub transistors: u64,
     /// iCE40: 4-input LUTs.
     pub ice40_luts: u64,
@@ -91,15 +95,16 @@ pub fn cost_flows<U: HdlUnit + ?Sized>(unit: &U, dir: &Path) -> Result<Costs, To
     };
 
     let gates = format!(
-        "read_verilog {v}; synth -flatten -top {m}; dfflegalize -cell $_DFF_P_ 01; \
-         abc -g {GATE_SET}; opt_clean; tee -o {m}_gates.txt stat -tech cmos"
+        "read_verilog {v}; synth -flatten -top {m} -run :fine; opt -fast -full; techmap; \
+         opt -fast; dfflegalize -cell $_DFF_P_ 01; abc -g {GATE_SET}; opt_clean; \
+         tee -o {m}_gates.txt stat -tech cmos"
     );
     run("yosys", "yosys", dir, &["-q", "-p", &gates])?;
     let text = read(dir, &format!("{m}_gates.txt"))?;
-    if text.contains("$mem") || text.contains("$_SDFF") || text.contains("$_DFFE") {
+    if text.contains("$_SDFF") || text.contains("$_DFFE") {
         return Err(ToolError::Parse {
             tool: "yosys",
-            what: "a netlist of simple gates only (a memory or a complex flip-flop was left)",
+            what: "a netlist of simple gates and D flip-flops (a complex flip-flop was left)",
             tail: tail(&text),
         });
     }
@@ -108,11 +113,12 @@ pub fn cost_flows<U: HdlUnit + ?Sized>(unit: &U, dir: &Path) -> Result<Costs, To
         number_after(&text, "Number of cells:"),
         &text,
     )?;
+    // Logic and flip-flops from yosys, plus one transistor per ROM bit.
     let transistors = parse(
         "the transistor estimate",
         number_after(&text, "Estimated number of transistors:"),
         &text,
-    )?;
+    )? + unit.rom_bits();
 
     let json = format!("{m}_ice40.json");
     let ice =

@@ -31,7 +31,7 @@ use crate::{Design, DesignErrors, HwError};
 
 /// Changes whenever a flow or the error definition changes, so old cache entries are
 /// not reused.
-pub const FLOW_VERSION: &str = "pareto-1 yosys-gates/ice40-hx8k/ecp5";
+pub const FLOW_VERSION: &str = "pareto-2 yosys-gates-rom-bits/ice40-hx8k/ecp5";
 
 /// Seed of every co-simulation's random vectors.
 pub const COSIM_SEED: u64 = 30;
@@ -290,7 +290,7 @@ pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<R
 /// most as costly and at most as wrong, and strictly better in one.
 pub fn mark_fronts(rows: &mut [Row]) {
     let n = rows.len();
-    for t in 0..TARGETS.len() {
+    for (t, axis) in TARGETS.iter().enumerate() {
         for by_lobe in [false, true] {
             let point = |r: &Row| {
                 let e = if by_lobe {
@@ -298,7 +298,7 @@ pub fn mark_fronts(rows: &mut [Row]) {
                 } else {
                     r.measured.errors.power_16_up()
                 };
-                (TARGETS[t].cost(&r.measured.costs), e)
+                (axis.cost(&r.measured.costs), e)
             };
             let flags: Vec<bool> = (0..n)
                 .map(|i| {

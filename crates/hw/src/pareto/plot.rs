@@ -34,7 +34,7 @@ impl Axis {
 pub const TARGETS: [Axis; 3] = [
     Axis {
         key: "gates",
-        label: "NAND2 equivalents (yosys abc -g, stat -tech cmos / 4, ROMs as logic)",
+        label: "NAND2 equivalents (yosys abc -g, stat -tech cmos / 4, ROM bit = 1 transistor)",
         cost: |c| c.nand2(),
     },
     Axis {
@@ -188,8 +188,8 @@ pub fn plot(dir: &Path, rows: &[Row]) -> Result<Vec<String>, ParetoError> {
             .iter()
             .filter(|r| r.candidate.design.out_bits() == o)
             .collect();
-        for t in 0..TARGETS.len() {
-            let stem = format!("pareto-{}-o{o}", TARGETS[t].key);
+        for (t, axis) in TARGETS.iter().enumerate() {
+            let stem = format!("pareto-{}-o{o}", axis.key);
             let err = |file: &str, e: Box<dyn Error>| ParetoError::Plot {
                 file: file.to_string(),
                 message: e.to_string(),
