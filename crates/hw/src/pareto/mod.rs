@@ -144,6 +144,9 @@ pub struct Options {
     pub cache: PathBuf,
     /// Co-simulation vectors per design.
     pub vectors: usize,
+    /// Report only the designs already in the cache (measure nothing new): the
+    /// results of an interrupted run.
+    pub cached_only: bool,
 }
 
 /// The cache key of a design: FNV-1a of its JSON, the flow version and the vectors.
@@ -222,7 +225,22 @@ fn cached_candidates(
 /// marks the fronts. `progress` gets one line per finished step.
 pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<Row>, ParetoError> {
     std::fs::create_dir_all(&opts.cache).map_err(|e| ParetoError::file(&opts.cache, e))?;
-    let cands = cached_candidates(opts, progress)?;
+    let mut cands = cached_candidates(opts, progress)?;
+    // The comparison units first (fewer, and each family needs its points), then K_v.
+    cands.sort_by_key(|c| u8::from(matches!(c.design, Design::Kv(_))));
+    if opts.cached_only {
+        let before = cands.len();
+        cands.retain(|c| {
+            opts.cache
+                .join(key(&c.design, opts.vectors))
+                .join("measured.json")
+                .exists()
+        });
+        progress(&format!(
+            "--cached-only: {} of {before} designs measured so far; the others are left out",
+            cands.len()
+        ));
+    }
     let total = cands.len();
     let done = AtomicUsize::new(0);
     let pool = rayon::ThreadPoolBuilder::new()

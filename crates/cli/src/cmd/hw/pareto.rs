@@ -29,6 +29,10 @@ pub struct ParetoArgs {
     /// (0: skip) and write front-cosim.csv.
     #[arg(long, default_value_t = 0)]
     pub front_vectors: usize,
+    /// Write the CSV and plots from the designs already measured in the cache only (an
+    /// interrupted run's results); measures nothing new.
+    #[arg(long)]
+    pub cached_only: bool,
     /// Only co-simulate the front designs of this pareto.csv (with --front-vectors,
     /// default 10^5), no exploration.
     #[arg(long)]
@@ -71,6 +75,7 @@ pub fn run(args: ParetoArgs) -> anyhow::Result<()> {
             .clone()
             .unwrap_or_else(|| args.output.join("cache")),
         vectors: args.vectors,
+        cached_only: args.cached_only,
     };
     let rows = pareto::explore(&opts, &progress)?;
     let csv = args.output.join("pareto.csv");
