@@ -167,7 +167,7 @@ where
         .legend(|(x, y)| Circle::new((x + 8, y), 6, BLACK.stroke_width(2)));
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.85))
         .border_style(RGBColor(150, 150, 150))
         .label_font((FONT, 14))
