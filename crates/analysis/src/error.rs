@@ -57,7 +57,7 @@ pub enum AnalysisError {
         message: String,
     },
     /// An image's pixel buffer does not match its size, or the size is zero or absurd.
-    #[error("invalid image: {width}x{height} with {pixels} pixels (expected width*height, both 1..={max})", max = crate::image::MAX_SIDE)]
+    #[error("invalid image: {width}x{height} with {pixels} pixels (expected width*height, both 1..={max})", max = crate::MAX_IMAGE_SIDE)]
     ImageSize {
         /// The stated width.
         width: u32,

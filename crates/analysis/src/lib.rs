@@ -23,6 +23,7 @@
 //! a directory, all or nothing; [`write_report`] regenerates docs/accuracy.md.
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 mod curves;
 mod error;
@@ -36,6 +37,10 @@ mod summary;
 mod tolerance;
 
 use std::path::{Path, PathBuf};
+
+/// The largest accepted image width or height (a sanity bound: 16384² pixels is 800 MB
+/// of RGB).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
 
 pub use curves::{curve_angles, curves_header, fmt_num, write_curves_csv, Curves, COMPARED};
 pub use error::AnalysisError;

@@ -123,13 +123,7 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
     let staging = Staging::new(docs)?;
     let v = PAPER_V;
     let rows = sweep(v)?;
-    let at = |n: u32| &rows[(n - 1) as usize];
     let table = summary_rows(&PAPER_FIG3_NS, &[v])?;
-    let k100 = Lobe::<f64>::new(LobeKind::EnergyFit, PAPER_N, v)?;
-    let g100 = Lobe::<f64>::new(LobeKind::SlopeFit, PAPER_N, v)?;
-    let (kp, kn) = signed_peaks(&k100);
-    let (gp, gn) = signed_peaks(&g100);
-
     let figdir = staging.path().join("figures");
     std::fs::create_dir_all(&figdir).map_err(|source| AnalysisError::Io {
         what: "creating",
@@ -137,10 +131,20 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
         source,
     })?;
     write_figures(&figdir, &[Curves::sample(PAPER_N, v)?])?;
-
     let mut d = String::new();
-    let w = &mut d;
-    // Writing into a String cannot fail; the results of write! are ignored below.
+    intro(&mut d, command, v);
+    claim1(&mut d, &rows, &table, v)?;
+    claim2(&mut d, &rows);
+    claim3(&mut d, &rows, v)?;
+    summary_and_method(&mut d, &table, v);
+    staging.write("accuracy.md", d.as_bytes())?;
+    staging.commit()
+}
+
+// Writing into a String cannot fail; the results of write! are ignored below.
+
+/// The page's title, how to regenerate it, and the model.
+fn intro(w: &mut String, command: &str, v: u32) {
     let _ = writeln!(w, "# Accuracy of the specular lobes against cos^n γ\n");
     let _ = writeln!(
         w,
@@ -160,8 +164,20 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
          c/(n − nc + c); `gauss` is exp(n(c − 1)). Errors are `lobe − cos^n γ` over \
          γ ∈ [0°, 90°]. For the paper's setting v = {v} (power 16).\n"
     );
+}
 
-    // ---------------------------------------------------------------- claim 1
+/// Claim 1: the maximum error of K_4 against G_4's, at n = 100 and over every n.
+fn claim1(
+    w: &mut String,
+    rows: &[SweepRow],
+    table: &[LobeMetrics],
+    v: u32,
+) -> Result<(), AnalysisError> {
+    let at = |n: u32| &rows[(n - 1) as usize];
+    let k100 = Lobe::<f64>::new(LobeKind::EnergyFit, PAPER_N, v)?;
+    let g100 = Lobe::<f64>::new(LobeKind::SlopeFit, PAPER_N, v)?;
+    let (kp, kn) = signed_peaks(&k100);
+    let (gp, gn) = signed_peaks(&g100);
     let k1 = at(100);
     let _ = writeln!(w, "## Verdicts\n");
     let _ = writeln!(
@@ -203,11 +219,11 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
         "**Over every integer n in 1..={SWEEP_MAX}:** K_4 has the lower max abs error for \
          n ∈ {} ({} of {SWEEP_MAX} values); G_4 has it for n ∈ {}; they tie for n ∈ {} \
          (n = 2^v = 16 makes both fits cos^16 exactly). **Verdict: {}**\n",
-        ranges(&rows, kless),
-        count(&rows, kless),
-        ranges(&rows, gless),
-        ranges(&rows, tie),
-        if count(&rows, gless) == 0 {
+        ranges(rows, kless),
+        count(rows, kless),
+        ranges(rows, gless),
+        ranges(rows, tie),
+        if count(rows, gless) == 0 {
             "holds for every n tested (except the exact tie at n = 2^v)."
         } else {
             "holds only for the n listed for K_4 above."
@@ -222,10 +238,16 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
          the lobes fall to 0 faster than cos^n); K_4 is lower for n ∈ {}.\n",
         f4(k1.k.max_rel.value),
         f4(k1.g.max_rel.value),
-        ranges(&rows, rel_less),
+        ranges(rows, rel_less),
     );
 
-    // ---------------------------------------------------------------- claim 2
+    Ok(())
+}
+
+/// Claim 2: G_4 better at the epicentre, K_4 in the bloom zone.
+fn claim2(w: &mut String, rows: &[SweepRow]) {
+    let at = |n: u32| &rows[(n - 1) as usize];
+    let k1 = at(100);
     let _ = writeln!(
         w,
         "### Claim 2: G_4 is better at the epicentre, K_4 in the bloom zone\n"
@@ -262,18 +284,20 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
          the bloom errors {} (K_4) vs {} (G_4). K_4's epicentre error ({}) is as large as \
          its bloom error: it buys its better bloom and lower maximum with a brighter, \
          wider core (positive error over the core, see Fig. 2).\n",
-        ranges(&rows, epi),
-        ranges(&rows, bloom),
-        ranges(&rows, both),
-        count(&rows, both),
+        ranges(rows, epi),
+        ranges(rows, bloom),
+        ranges(rows, both),
+        count(rows, both),
         f4(k1.g.epicentre.value),
         f4(k1.k.epicentre.value),
         f4(k1.k.bloom.map(|p| p.value).unwrap_or(f64::NAN)),
         f4(k1.g.bloom.map(|p| p.value).unwrap_or(f64::NAN)),
         f4(k1.k.epicentre.value),
     );
+}
 
-    // ---------------------------------------------------------------- claim 3
+/// Claim 3: degree 16 instead of up to 1000, and constant.
+fn claim3(w: &mut String, rows: &[SweepRow], v: u32) -> Result<(), AnalysisError> {
     let _ = writeln!(
         w,
         "### Claim 3: degree 16 instead of up to 1000, and constant\n"
@@ -345,7 +369,11 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
         f4(kmax)
     );
 
-    // ---------------------------------------------------------------- tables, figures
+    Ok(())
+}
+
+/// The summary table, the figures and the method.
+fn summary_and_method(w: &mut String, table: &[LobeMetrics], v: u32) {
     let _ = writeln!(
         w,
         "## Summary for n = 10, 100, 1000 (v = {v})\n\n\
@@ -353,7 +381,7 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
          summary.md. RMS is over γ uniform in [0°, 90°]; the energy ratio is \
          (n+1)·∫ lobe·sin γ dγ (1 = cos^n's energy; K_v keeps it exactly where n ≥ 2^v).\n"
     );
-    let _ = writeln!(w, "{}", summary_markdown(&table));
+    let _ = writeln!(w, "{}", summary_markdown(table));
     let _ = writeln!(
         w,
         "## Figures\n\n\
@@ -382,9 +410,6 @@ pub fn write_report(docs: &Path, command: &str) -> Result<Vec<PathBuf>, Analysis
          (1 − (1−a)^(m+1))/(a(m+1))·(n+1) or (n+1)/(a(m+1)), of the Gaussian \
          (n+1)(1 − e^(−n))/n and of Schlick (n+1)(n ln n − (n−1))/(n−1)²."
     );
-
-    staging.write("accuracy.md", d.as_bytes())?;
-    staging.commit()
 }
 
 #[cfg(test)]

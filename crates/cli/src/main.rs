@@ -1,6 +1,8 @@
 //! `glint`: thin glue over the glint crates. Each subcommand lives in `cmd/<name>.rs`
 //! with its own `Args` and `run`.
 
+#![forbid(unsafe_code)]
+
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};

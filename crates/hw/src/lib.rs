@@ -35,6 +35,7 @@
 //! Formats and the default configuration are explained in `docs/hardware.md`.
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 mod accuracy;
 mod arith;

@@ -39,6 +39,10 @@ impl Unit {
     /// A renderer evaluates it at `c` as `eval` at `cos_code(c)` (same rounding, `c`
     /// clamped to `[-1, 1]`).
     ///
+    /// The table carries `n` and the unit's `v`
+    /// ([`CosTable::with_shininess`](glint_lobe::CosTable::with_shininess)), so a path
+    /// tracer can sample it as K_v(n) (`glint_lobe::Specular::sampler`).
+    ///
     /// Errors if `n` does not fit `n_bits` or the cosine has more than
     /// [`glint_lobe::MAX_TABLE_FRAC_BITS`] fraction bits.
     pub fn cos_table(&self, n: u32) -> Result<CosTable, CosTableError> {
@@ -53,7 +57,8 @@ impl Unit {
         Ok(CosTable::from_fn(self.formats().cos_frac, |code| {
             let out = self.output_code(self.lobe_code(i64::from(code), n), full);
             (out as f64 / full_f) as f32
-        })?)
+        })?
+        .with_shininess(f64::from(n), self.config().v))
     }
 }
 
@@ -82,6 +87,7 @@ mod tests {
         for &n in ns {
             let table = unit.cos_table(n).unwrap();
             assert_eq!(table.frac_bits(), f);
+            assert_eq!(table.shininess(), Some((f64::from(n), unit.config().v)));
             let mut nonzero = 0;
             for code in -one..=one {
                 let want = model(unit, code, n);
@@ -135,6 +141,18 @@ mod tests {
             let max = (1u32 << unit.config().n_bits) - 1;
             let two_v = 1u32 << unit.config().v;
             check_every_code(&unit, &[0, two_v, max]);
+        }
+    }
+
+    #[test]
+    fn the_default_units_table_is_sampled_as_k_v_alone() {
+        // The unit's table stays within glint_lobe::DOMINANCE times K_v wherever it
+        // is lit, so sampling it as K_v needs no defensive share.
+        let unit = Unit::new(Config::default()).unwrap();
+        for n in [0, 1, 7, 16, 60, 100, 1023] {
+            let table = glint_lobe::Specular::from(unit.cos_table(n).unwrap());
+            let sampler = table.sampler().unwrap();
+            assert!(!sampler.is_defensive(), "n = {n}");
         }
     }
 

@@ -18,7 +18,8 @@ pub const SINGULAR_RTOL: f64 = 1e-6;
 pub enum AffineError {
     /// An entry is NaN or infinite.
     #[error("the voxel-to-world affine has non-finite entries: {0:?}")]
-    NonFinite(Affine),
+    // Boxed: the error stays small on the Ok path (clippy::result_large_err).
+    NonFinite(Box<Affine>),
     /// The last row is not `[0, 0, 0, 1]`.
     #[error("the voxel-to-world affine's last row must be [0, 0, 0, 1], got {0:?}")]
     LastRow([f64; 4]),
@@ -44,7 +45,7 @@ pub enum AffineError {
 /// ```
 pub fn check(affine: &Affine) -> Result<[f64; 3], AffineError> {
     if affine.iter().flatten().any(|x| !x.is_finite()) {
-        return Err(AffineError::NonFinite(*affine));
+        return Err(AffineError::NonFinite(Box::new(*affine)));
     }
     if affine[3] != [0.0, 0.0, 0.0, 1.0] {
         return Err(AffineError::LastRow(affine[3]));
@@ -139,8 +140,8 @@ mod tests {
     fn inverse_times_matrix_is_identity() {
         let m = [[0.9, 0.1, 0.0], [-0.2, 1.1, 0.3], [0.05, 0.0, 2.5]];
         let inv = inverse3(&m).unwrap();
-        for r in 0..3 {
-            let col: [f64; 3] = std::array::from_fn(|c| inv[c][r]);
+        // Column r of the inverse is row r of its transpose.
+        for (r, col) in transpose3(&inv).into_iter().enumerate() {
             let e = mul3(&m, col);
             for (c, x) in e.iter().enumerate() {
                 assert!((x - f64::from(u8::from(c == r))).abs() < 1e-12, "{e:?}");

@@ -29,6 +29,54 @@ pub fn power_lobe_integral(a: f64, m: u32) -> f64 {
     }
 }
 
+/// `∫ max(0, 1 - a(1-c))^m dω` over the whole sphere (`c ∈ [-1, 1]`), times nothing:
+/// `2π ∫_0^{min(1/a, 2)} (1 - a x)^m dx` with `x = 1 - c`.
+///
+/// `2π/(a(m+1))` when `a >= 1/2` (the base reaches 0 at `x = 1/a <= 2`), else
+/// `2π (1 - (1-2a)^(m+1))/(a(m+1))` (the support is cut at `c = -1`); `4π` at `a = 0`.
+pub(crate) fn power_sphere_integral(a: f64, m: u32) -> f64 {
+    use std::f64::consts::TAU;
+    let m1 = f64::from(m) + 1.0;
+    if a <= 0.0 {
+        2.0 * TAU
+    } else {
+        TAU * power_support_mass(a, m) / (a * m1)
+    }
+}
+
+/// `1 - (1 - a·min(1/a, 2))^(m+1)`: the share of the uncut power lobe's mass that lies
+/// on the sphere (1 when `a >= 1/2`), computed without cancellation for small `a`.
+pub(crate) fn power_support_mass(a: f64, m: u32) -> f64 {
+    if a >= 0.5 {
+        1.0
+    } else {
+        -((f64::from(m) + 1.0) * (-2.0 * a).ln_1p()).exp_m1()
+    }
+}
+
+/// `∫_0^1 c/(n(1-c) + c) dc`, Schlick's lobe over the hemisphere (it is 0 for
+/// `c <= 0`): with `x = 1 - c` and `k = n - 1`, `∫_0^1 (1-x)/(1+kx) dx =
+/// n ln(n)/k^2 - 1/k`. Near `n = 1` that cancels, so there the series
+/// `1 - n Σ_{i>=0} (-k)^i/(i+2)` (from `ln(1+y) - y = Σ_{j>=2} (-1)^(j+1) y^j/j`) is
+/// summed instead. 1 at `n = 0` (the lobe is 1 for every `c > 0`).
+pub(crate) fn schlick_hemisphere_integral(n: f64) -> f64 {
+    let k = n - 1.0;
+    if n == 0.0 {
+        1.0
+    } else if k.abs() < 0.5 {
+        // |k| < 1/2: 60 terms leave < 2^-60 of the sum.
+        let mut sum = 0.0;
+        let mut pow = 1.0;
+        for i in 0..60 {
+            sum += pow / f64::from(i + 2);
+            pow *= -k;
+        }
+        1.0 - n * sum
+    } else {
+        n * n.ln() / (k * k) - 1.0 / k
+    }
+}
+
 /// Where a lobe's error against `cos^n` peaks.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ErrorPeak {
@@ -208,6 +256,19 @@ mod tests {
         assert!((power_lobe_integral(1.0 - 1e-12, 16) - 1.0 / 17.0).abs() < 1e-10);
         // a -> 0: the lobe tends to 1 on the whole range.
         assert!((power_lobe_integral(1e-14, 16) - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn schlick_integral_branches_agree() {
+        // The series (|k| < 1/2) and the closed form meet continuously at k = ±1/2.
+        for n in [0.5f64, 1.5] {
+            let closed = n * n.ln() / ((n - 1.0) * (n - 1.0)) - 1.0 / (n - 1.0);
+            let below = schlick_hemisphere_integral(n - 1e-9);
+            let above = schlick_hemisphere_integral(n + 1e-9);
+            assert!((below - closed).abs() < 1e-8 && (above - closed).abs() < 1e-8);
+        }
+        // n = 1: the lobe is c, whose integral is 1/2.
+        assert!((schlick_hemisphere_integral(1.0) - 0.5).abs() < 1e-16);
     }
 
     #[test]

@@ -1,9 +1,11 @@
 //! The closed set of lobes behind one `eval`.
 
 use std::fmt;
-use std::str::FromStr;
 
-use crate::coefficient::{energy_fit_coefficient, minimax_coefficient, slope_fit_coefficient};
+use crate::coefficient::{
+    energy_fit_coefficient, minimax_coefficient, power_sphere_integral,
+    schlick_hemisphere_integral, slope_fit_coefficient,
+};
 
 /// Largest shininess exponent accepted. Phong exponents in practice stay below ~1000
 /// (the paper's range); 10000 leaves room for very sharp mirrors.
@@ -30,19 +32,49 @@ impl Real for f64 {
     }
 }
 
-/// Which lobe: the names users type are `exact`, `k`, `g`, `schlick`, `gauss`, `minimax`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+/// Which lobe: the names users type are `exact`, `k`, `g`, `schlick`, `gauss`, `minimax`
+/// (case-insensitive; a few aliases such as `phong`, `energy`, `slope`, `gaussian`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = LobeError,
+    parse_err_fn = LobeError::unknown_kind
+)]
 pub enum LobeKind {
     /// `max(c, 0)^n`, the Phong/Blinn reference.
+    #[strum(
+        to_string = "exact",
+        serialize = "phong",
+        serialize = "blinn",
+        serialize = "pow"
+    )]
     Exact,
     /// The paper's energy fit K_v: `a = (n+1)/(2^v+1)`.
+    #[strum(to_string = "k", serialize = "energy", serialize = "energy-fit")]
     EnergyFit,
     /// The slope fit G_v (Lyon 1993): `a = n/2^v`.
+    #[strum(to_string = "g", serialize = "slope", serialize = "slope-fit")]
     SlopeFit,
     /// Schlick's rational form `c / (n - n·c + c)` for `c > 0`, else 0 (evaluated as
     /// `c / (n(1 - c) + c)`, which does not cancel).
     Schlick,
     /// The spherical-Gaussian form `exp(n·(c - 1))`.
+    #[strum(to_string = "gauss", serialize = "gaussian", serialize = "sg")]
     Gauss,
     /// The power form with `a` minimising the maximum absolute error against `cos^n`.
     Minimax,
@@ -50,25 +82,14 @@ pub enum LobeKind {
 
 impl LobeKind {
     /// Every kind, in the order tables and plots list them.
-    pub const ALL: [LobeKind; 6] = [
-        LobeKind::Exact,
-        LobeKind::EnergyFit,
-        LobeKind::SlopeFit,
-        LobeKind::Schlick,
-        LobeKind::Gauss,
-        LobeKind::Minimax,
-    ];
+    pub const ALL: &'static [LobeKind] = <LobeKind as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`LobeKind::ALL`].
+    pub const NAMES: &'static [&'static str] = <LobeKind as strum::VariantNames>::VARIANTS;
 
     /// The short name users type (`exact`, `k`, `g`, `schlick`, `gauss`, `minimax`).
     pub fn name(self) -> &'static str {
-        match self {
-            LobeKind::Exact => "exact",
-            LobeKind::EnergyFit => "k",
-            LobeKind::SlopeFit => "g",
-            LobeKind::Schlick => "schlick",
-            LobeKind::Gauss => "gauss",
-            LobeKind::Minimax => "minimax",
-        }
+        self.into()
     }
 
     /// Whether the lobe is a power fit `max(0, 1 - a(1-c))^(2^v)` and so depends on `v`.
@@ -80,27 +101,8 @@ impl LobeKind {
     }
 }
 
-impl fmt::Display for LobeKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for LobeKind {
-    type Err = LobeError;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let lower = s.trim().to_ascii_lowercase();
-        Ok(match lower.as_str() {
-            "exact" | "phong" | "blinn" | "pow" => LobeKind::Exact,
-            "k" | "energy" | "energy-fit" => LobeKind::EnergyFit,
-            "g" | "slope" | "slope-fit" => LobeKind::SlopeFit,
-            "schlick" => LobeKind::Schlick,
-            "gauss" | "gaussian" | "sg" => LobeKind::Gauss,
-            "minimax" => LobeKind::Minimax,
-            _ => return Err(LobeError::UnknownKind(s.to_string())),
-        })
-    }
+impl crate::names::Named for LobeKind {
+    const WHAT: &'static str = "lobe";
 }
 
 /// Why a lobe could not be built.
@@ -115,6 +117,22 @@ pub enum LobeError {
     /// The lobe name is not one of the known kinds.
     #[error("unknown lobe '{0}': expected one of exact, k, g, schlick, gauss, minimax")]
     UnknownKind(String),
+    /// A name that is none of a named enum's ([`crate::names::unknown`] words it).
+    #[error("{0}")]
+    UnknownName(String),
+    /// A [`CosTable`](crate::CosTable) was to be sampled but does not say which
+    /// shininess it was made for ([`CosTable::with_shininess`](crate::CosTable::with_shininess)).
+    #[error(
+        "a cosine table without its shininess n and v cannot be sampled (CosTable::with_shininess)"
+    )]
+    TableWithoutShininess,
+}
+
+impl LobeError {
+    /// The error for a lobe name that is none of [`LobeKind`]'s.
+    fn unknown_kind(name: &str) -> LobeError {
+        LobeError::UnknownKind(name.to_string())
+    }
 }
 
 /// The evaluation form, with its parameters already converted to `T`.
@@ -198,6 +216,30 @@ impl<T: Real> Lobe<T> {
     /// The coefficient `a` of a power fit, `None` for the other kinds.
     pub fn coefficient(&self) -> Option<f64> {
         self.kind.uses_v().then_some(self.a)
+    }
+
+    /// `∫ eval dω` over the whole sphere of directions, in closed form (f64).
+    ///
+    /// `eval` is a function of `c = cos γ` on `[-1, 1]`, so this is `2π ∫_{-1}^{1}
+    /// eval(c) dc`. `exact`: `2π/(n+1)` (`4π` at `n = 0`, where `max(c, 0)^0 = 1` on
+    /// the whole sphere); the power fits with `x = 1 - c`, `m = 2^v`:
+    /// `2π (1 - (1 - a·min(1/a, 2))^(m+1)) / (a(m+1))`, which is `2π/(a(m+1))` wherever
+    /// `a >= 1/2`, so `2π/(n+1)` for K_v whenever `n >= (2^v - 1)/2` (docs/lobes.md,
+    /// "Sampling"); `schlick`: `2π ((n ln n)/(n-1)^2 - 1/(n-1))` (`π` at `n = 1`);
+    /// `gauss`: `2π (1 - e^(-2n))/n`.
+    pub fn sphere_integral(&self) -> f64 {
+        use std::f64::consts::TAU;
+        let n = self.n;
+        match self.kind {
+            LobeKind::Exact if n == 0.0 => 2.0 * TAU,
+            LobeKind::Exact => TAU / (n + 1.0),
+            LobeKind::EnergyFit | LobeKind::SlopeFit | LobeKind::Minimax => {
+                power_sphere_integral(self.a, 1 << self.v)
+            }
+            LobeKind::Schlick => TAU * schlick_hemisphere_integral(n),
+            LobeKind::Gauss if n == 0.0 => 2.0 * TAU,
+            LobeKind::Gauss => TAU * -(-2.0 * n).exp_m1() / n,
+        }
     }
 
     /// Evaluates the lobe at `c = cos γ`.

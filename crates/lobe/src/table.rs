@@ -68,6 +68,9 @@ pub struct CosTable {
     lo: i32,
     /// Values for codes `lo ..= 2^frac_bits`.
     values: Vec<f32>,
+    /// The shininess `n` and `v` the table was made for, if its builder said so: a
+    /// [`SpecularSampler`](crate::SpecularSampler) samples the table as K_v(n).
+    shininess: Option<(f64, u32)>,
 }
 
 impl fmt::Debug for CosTable {
@@ -76,6 +79,7 @@ impl fmt::Debug for CosTable {
             .field("frac_bits", &self.frac_bits)
             .field("lo", &self.lo)
             .field("stored", &self.values.len())
+            .field("shininess", &self.shininess)
             .finish()
     }
 }
@@ -110,6 +114,33 @@ impl CosTable {
             scale: one as f32,
             lo: one - (values.len() as i32 - 1),
             values,
+            shininess: None,
+        })
+    }
+
+    /// Records the shininess `n` and `v` the table was made for (a hardware unit's
+    /// table of K_v(n), say), so that [`Specular::sampler`] can sample it as K_v(n):
+    /// a table has no closed-form inverse CDF of its own. The values are checked when
+    /// a sampler is built.
+    pub fn with_shininess(mut self, n: f64, v: u32) -> CosTable {
+        self.shininess = Some((n, v));
+        self
+    }
+
+    /// The shininess `n` and `v` given by [`with_shininess`](Self::with_shininess).
+    pub fn shininess(&self) -> Option<(f64, u32)> {
+        self.shininess
+    }
+
+    /// The smallest code whose value is not 0 (`None` for an all-zero table): the
+    /// widest angle the table lights.
+    pub fn first_nonzero_code(&self) -> Option<i32> {
+        let i = self.values.iter().position(|&v| v != 0.0)?;
+        // A nonzero leading run stands for every code below `lo` too.
+        Some(if i == 0 {
+            -(1i32 << self.frac_bits)
+        } else {
+            self.lo + i as i32
         })
     }
 
@@ -301,6 +332,16 @@ impl Specular {
         }
     }
 
+    /// A sampler for this specular term: the lobe's own (see
+    /// [`LobeSampler`](crate::LobeSampler)), or for a table, K_v with the table's
+    /// [`shininess`](CosTable::shininess) while `eval` stays the table's (see
+    /// [`SpecularSampler`](crate::SpecularSampler)).
+    ///
+    /// Errors if a table carries no shininess, or an invalid one.
+    pub fn sampler(&self) -> Result<crate::SpecularSampler, crate::LobeError> {
+        crate::SpecularSampler::new(self)
+    }
+
     /// The closed-form lobe, if it is one.
     pub fn lobe(&self) -> Option<&Lobe<f32>> {
         match self {
@@ -367,6 +408,18 @@ mod tests {
         }
         // The leading zeros are stored once.
         assert_eq!(t.values.len() as i32, one + one / 2 + 1);
+        // The first lit code: -one/2 + 1.
+        assert_eq!(t.first_nonzero_code(), Some(-one / 2 + 1));
+        assert_eq!(
+            CosTable::from_fn(3, |_| 0.5).unwrap().first_nonzero_code(),
+            Some(-8)
+        );
+        assert_eq!(
+            CosTable::from_fn(3, |_| 0.0).unwrap().first_nonzero_code(),
+            None
+        );
+        assert_eq!(t.shininess(), None);
+        assert_eq!(t.with_shininess(40.0, 4).shininess(), Some((40.0, 4)));
     }
 
     #[test]

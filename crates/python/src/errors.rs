@@ -9,18 +9,8 @@ use pyo3::exceptions::{
 };
 use pyo3::prelude::*;
 
-/// The error and its sources joined with `": "`: the line `glint` prints after
-/// `glint: error: ` (anyhow's `{:#}` format).
-pub fn one_line(err: &dyn Error) -> String {
-    let mut line = err.to_string();
-    let mut source = err.source();
-    while let Some(s) = source {
-        line.push_str(": ");
-        line.push_str(&s.to_string());
-        source = s.source();
-    }
-    line
-}
+pub use glint_io::one_line;
+use glint_render::RenderError;
 
 /// A `ValueError` with the error's one-line message.
 pub fn value_error(err: &dyn Error) -> PyErr {
@@ -33,18 +23,53 @@ pub fn value_error(err: &dyn Error) -> PyErr {
 pub fn io_error(py: Python<'_>, err: glint_io::IoError) -> PyErr {
     let message = one_line(&err);
     match err {
-        glint_io::IoError::Os { source, .. } => {
-            let exc = match source.kind() {
-                ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
-                ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
-                ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
-                ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
-                ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
-                _ => PyOSError::new_err(message),
-            };
-            exc.set_cause(py, Some(PyErr::from(source)));
+        glint_io::IoError::Os { source, .. } => os_error(py, message, source),
+        _ => PyValueError::new_err(message),
+    }
+}
+
+/// An `OSError` (the subclass for the cause) with `message`, the OS error as its
+/// `__cause__`.
+pub fn os_error(py: Python<'_>, message: String, source: std::io::Error) -> PyErr {
+    let exc = match source.kind() {
+        ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+        ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
+        ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
+        ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
+        _ => PyOSError::new_err(message),
+    };
+    exc.set_cause(py, Some(PyErr::from(source)));
+    exc
+}
+
+/// A render error as Python sees it: reading and writing failures as `glint.read`
+/// raises them, other OS failures `OSError`, everything else `ValueError`.
+pub fn render_error(py: Python<'_>, err: RenderError) -> PyErr {
+    match err {
+        RenderError::Read(e) | RenderError::Write(e) => io_error(py, e),
+        RenderError::Io(e) => {
+            let exc = PyOSError::new_err(one_line(&e));
+            exc.set_cause(py, Some(PyErr::from(e)));
             exc
         }
-        _ => PyValueError::new_err(message),
+        // A scene file the system refused (missing, unreadable): the OSError for it.
+        RenderError::SceneFile { path, source } => match *source {
+            RenderError::Io(e) => {
+                let message = one_line(&RenderError::SceneFile {
+                    path,
+                    source: Box::new(RenderError::Io(std::io::Error::new(
+                        e.kind(),
+                        e.to_string(),
+                    ))),
+                });
+                os_error(py, message, e)
+            }
+            source => value_error(&RenderError::SceneFile {
+                path,
+                source: Box::new(source),
+            }),
+        },
+        other => value_error(&other),
     }
 }

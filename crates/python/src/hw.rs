@@ -76,8 +76,7 @@ impl Unit {
     #[pyo3(signature = (config=None))]
     fn new(py: Python<'_>, config: Option<&Bound<'_, PyAny>>) -> PyResult<Unit> {
         let config = config_of(py, config)?;
-        let unit = py
-            .detach(move || glint_hw::Unit::new(config))
+        let unit = crate::pool::detach(py, move || glint_hw::Unit::new(config))?
             .map_err(|e| errors::value_error(&e))?;
         Ok(Unit {
             unit: Arc::new(unit),
@@ -132,14 +131,13 @@ impl Unit {
         })?;
         let values: Vec<f64> = a.try_readonly()?.as_array().iter().copied().collect();
         let unit = Arc::clone(&self.unit);
-        let codes = py
-            .detach(move || {
-                values
-                    .iter()
-                    .map(|&c| unit.cos_code(c))
-                    .collect::<Result<Vec<i64>, _>>()
-            })
-            .map_err(|e| errors::value_error(&e))?;
+        let codes = crate::pool::detach(py, move || {
+            values
+                .iter()
+                .map(|&c| unit.cos_code(c))
+                .collect::<Result<Vec<i64>, _>>()
+        })?
+        .map_err(|e| errors::value_error(&e))?;
         Ok(PyArray1::from_vec(py, codes)
             .reshape(arr.shape())?
             .into_any())
@@ -164,8 +162,7 @@ impl Unit {
             )));
         }
         let unit = Arc::clone(&self.unit);
-        let rgb = py
-            .detach(move || eval_codes(&unit, &cos, &ns, ks))
+        let rgb = crate::pool::detach(py, move || eval_codes(&unit, &cos, &ns, ks))?
             .map_err(PyValueError::new_err)?;
         let mut out_shape = shape;
         out_shape.push(3);

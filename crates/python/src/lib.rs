@@ -18,6 +18,7 @@ mod errors;
 mod hw;
 mod json;
 mod lobe;
+mod pool;
 mod render;
 mod scene;
 mod volume;
@@ -32,6 +33,7 @@ fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<render::Renderer>()?;
     m.add_class::<render::Image>()?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(render::compare, m)?)?;
     m.add_function(wrap_pyfunction!(volume::read, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe_kinds, m)?)?;

@@ -25,11 +25,11 @@ fn eval_array<'py, T: Real + Element>(
         .as_slice()
         .map_err(|e| PyValueError::new_err(format!("cos: {e}")))?
         .to_vec();
-    let out = py.detach(move || {
+    let out = crate::pool::detach(py, move || {
         let mut out = vec![T::zero(); cos.len()];
         lobe.eval_slice(&cos, &mut out);
         out
-    });
+    })?;
     // An element-wise map keeps the memory order: a Fortran-ordered input's output is
     // Fortran-ordered too (C for 0-D and 1-D, where both coincide).
     let order = if arr.is_c_contiguous() {

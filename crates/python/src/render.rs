@@ -5,29 +5,14 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use numpy::{PyArray1, PyArrayMethods as _};
-use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
-use glint_render::{Depth, Input, RenderError, Rendered, Renderer as RRenderer};
+use glint_render::{Depth, Input, RenderError, Rendered, Renderer as RRenderer, SceneLobe};
 
-use crate::errors;
+use crate::errors::{self, render_error};
 use crate::scene::{with_fields, Scene};
 use crate::volume::Volume;
-
-/// A render error as Python sees it: reading and writing failures as `glint.read`
-/// raises them, other OS failures `OSError`, everything else `ValueError`.
-pub fn render_error(py: Python<'_>, err: RenderError) -> PyErr {
-    match err {
-        RenderError::Read(e) | RenderError::Write(e) => errors::io_error(py, e),
-        RenderError::Io(e) => {
-            let exc = PyOSError::new_err(errors::one_line(&e));
-            exc.set_cause(py, Some(PyErr::from(e)));
-            exc
-        }
-        other => errors::value_error(&other),
-    }
-}
 
 /// What a renderer draws: a volume in memory, or a file to read.
 enum Source {
@@ -67,10 +52,16 @@ impl Renderer {
     /// Opens `source` with the GIL released.
     fn open(py: Python<'_>, source: Source) -> PyResult<Renderer> {
         let (result, path) = match source {
-            Source::Volume(v, path) => (py.detach(move || RRenderer::from_volume(&v)), path),
+            Source::Volume(v, path) => (
+                crate::pool::detach(py, move || RRenderer::from_volume(&v))?,
+                path,
+            ),
             Source::Path(p) => {
                 let input = Input::Path(p.clone());
-                (py.detach(move || RRenderer::open(&input)), Some(p))
+                (
+                    crate::pool::detach(py, move || RRenderer::open(&input))?,
+                    Some(p),
+                )
             }
         };
         let inner = result.map_err(|e| render_error(py, e))?;
@@ -80,21 +71,41 @@ impl Renderer {
         })
     }
 
+    /// The renderer of `volume` (a `glint.Volume` or a path), else of `scene`'s own
+    /// input.
+    fn for_scene(
+        py: Python<'_>,
+        volume: Option<&Bound<'_, PyAny>>,
+        scene: &glint_render::Scene,
+    ) -> PyResult<Renderer> {
+        match volume {
+            Some(v) => Renderer::open(py, source_of(v)?),
+            None => {
+                let input = scene.input.clone();
+                let inner = crate::pool::detach(py, move || RRenderer::open(&input))?
+                    .map_err(|e| render_error(py, e))?;
+                Ok(Renderer {
+                    inner: Mutex::new(inner),
+                    path: None,
+                })
+            }
+        }
+    }
+
     /// Renders with the GIL released (other threads wait for this renderer's lock
     /// without holding the GIL).
     fn render_scene(&self, py: Python<'_>, mut scene: glint_render::Scene) -> PyResult<Image> {
         if let Some(p) = &self.path {
             scene.input = Input::Path(p.clone());
         }
-        let rendered = py
-            .detach(|| {
-                let mut r = self
-                    .inner
-                    .lock()
-                    .unwrap_or_else(|poisoned| poisoned.into_inner());
-                r.render(&scene, &|_| {})
-            })
-            .map_err(|e| render_error(py, e))?;
+        let rendered = crate::pool::detach(py, || {
+            let mut r = self
+                .inner
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            r.render(&scene, &|_| {})
+        })?
+        .map_err(|e| render_error(py, e))?;
         Ok(Image { rendered })
     }
 }
@@ -136,20 +147,47 @@ pub fn render<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
     let scene = with_fields(&base, fields)?;
-    let renderer = match volume {
-        Some(v) => Renderer::open(py, source_of(v)?)?,
-        None => {
-            let input = scene.input.clone();
-            let inner = py
-                .detach(move || RRenderer::open(&input))
-                .map_err(|e| render_error(py, e))?;
-            Renderer {
-                inner: Mutex::new(inner),
-                path: None,
-            }
-        }
-    };
+    let renderer = Renderer::for_scene(py, volume, &scene)?;
     renderer.render_scene(py, scene)?.array(py)
+}
+
+/// Compares a volume's rendering with the exact `cos^n` lobe and with each of `lobes`
+/// (names as `glint compare --lobe` takes them), as `glint compare --json` does: a dict
+/// with the same keys and the same numbers (the resolved scene, the highlight, per
+/// lobe PSNR, SSIM, CIEDE2000 ΔE and ꟻLIP over the image and the highlight). The volume
+/// and scene are taken as by `glint.render`; the GIL is released throughout.
+#[pyfunction]
+#[pyo3(signature = (volume=None, scene=None, lobes=vec!["k".to_string()], **fields))]
+pub fn compare<'py>(
+    py: Python<'py>,
+    volume: Option<&Bound<'py, PyAny>>,
+    scene: Option<&Bound<'py, Scene>>,
+    lobes: Vec<String>,
+    fields: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
+    let mut scene = glint_compare::exact_scene(&with_fields(&base, fields)?);
+    let lobes = lobes
+        .iter()
+        .map(|l| l.parse::<SceneLobe>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| render_error(py, e))?;
+    let renderer = Renderer::for_scene(py, volume, &scene)?;
+    if let Some(p) = &renderer.path {
+        scene.input = Input::Path(p.clone());
+    }
+    let inner = renderer
+        .inner
+        .into_inner()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let report = crate::pool::detach(py, || {
+        glint_compare::run(inner, &scene, &lobes, None)?.to_json()
+    })?
+    .map_err(|e| match e {
+        glint_compare::CompareError::Render(e) => render_error(py, e),
+        other => errors::value_error(&other),
+    })?;
+    crate::json::to_py(py, &report)
 }
 
 /// A rendered image: `array` (sRGB uint8, (height, width, 3)), the resolved `scene`,
@@ -167,7 +205,7 @@ impl Image {
     fn array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let img = &self.rendered.image;
         let shape = [img.height as usize, img.width as usize, 3];
-        let bytes = py.detach(|| img.encode_srgb(Depth::Eight));
+        let bytes = crate::pool::detach(py, || img.encode_srgb(Depth::Eight))?;
         Ok(PyArray1::from_vec(py, bytes).reshape(shape)?.into_any())
     }
 
@@ -227,8 +265,7 @@ impl Image {
     /// The image as an 8-bit sRGB PNG file's bytes.
     fn png<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
         let img = &self.rendered.image;
-        let bytes = py
-            .detach(|| img.encode_png(Depth::Eight))
+        let bytes = crate::pool::detach(py, || img.encode_png(Depth::Eight))?
             .map_err(|e| render_error(py, RenderError::Encode(e)))?;
         Ok(PyBytes::new(py, &bytes))
     }
@@ -248,8 +285,7 @@ impl Image {
             Depth::Eight
         };
         let img = &self.rendered.image;
-        py.detach(|| img.write_png(&path, depth))
-            .map_err(|e| render_error(py, e))
+        crate::pool::detach(py, || img.write_png(&path, depth))?.map_err(|e| render_error(py, e))
     }
 
     /// `numpy.asarray(image)` gives `image.array`.

@@ -39,28 +39,29 @@ fn as_object(scene: &RScene) -> PyResult<serde_json::Map<String, Value>> {
     }
 }
 
-/// `base` with the keyword arguments' fields replaced (None resets a field to its
-/// default); unknown fields and bad values are ValueErrors with the scene parser's
-/// message.
+/// `base` patched with the keyword arguments ([`RScene::patch`], the rule the viewer
+/// uses too: `camera`, `lobe` and `material` merged field by field, other fields
+/// replaced, None resetting a field to its default); unknown fields and bad values are
+/// ValueErrors with the scene parser's message.
 pub fn with_fields(base: &RScene, fields: Option<&Bound<'_, PyDict>>) -> PyResult<RScene> {
     let Some(fields) = fields else {
         return Ok(base.clone());
     };
-    let mut map = as_object(base)?;
+    let mut patch = serde_json::Map::new();
     for (k, v) in fields.iter() {
         let key: String = k.extract()?;
-        if v.is_none() {
-            map.remove(&key);
-            continue;
-        }
-        let mut value = json::to_json(&v)?;
+        let mut value = if v.is_none() {
+            Value::Null
+        } else {
+            json::to_json(&v)?
+        };
         // A bare path for `input` means a file, as on the command line.
         if key == "input" && value.is_string() {
             value = serde_json::json!({ "path": value });
         }
-        map.insert(key, value);
+        patch.insert(key, value);
     }
-    RScene::from_json(&Value::Object(map).to_string()).map_err(|e| errors::value_error(&e))
+    base.patch(&patch).map_err(|e| errors::value_error(&e))
 }
 
 #[pymethods]
@@ -86,6 +87,22 @@ impl Scene {
     /// The scene as JSON (`glint render --scene` reads it).
     fn to_json(&self) -> PyResult<String> {
         self.inner.to_json().map_err(|e| errors::value_error(&e))
+    }
+
+    /// Reads a scene file as `glint render --scene` does: relative paths in it are
+    /// relative to the file.
+    #[staticmethod]
+    fn load(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Scene> {
+        let inner = RScene::load(&path).map_err(|e| errors::render_error(py, e))?;
+        Ok(Scene { inner })
+    }
+
+    /// Writes the scene file atomically as `glint render --dump-scene` does, with
+    /// absolute paths, so it renders the same from anywhere.
+    fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+        self.inner
+            .save(&path)
+            .map_err(|e| errors::render_error(py, e))
     }
 
     /// The scene as a dict of plain Python values.
@@ -119,7 +136,7 @@ impl Scene {
         names.extend(OPTIONAL_FIELDS.iter().map(|s| s.to_string()));
         names.push("meshes".into());
         names.extend(
-            ["from_json", "to_json", "to_dict", "replace"]
+            ["from_json", "to_json", "to_dict", "replace", "load", "save"]
                 .iter()
                 .map(|s| s.to_string()),
         );

@@ -49,8 +49,7 @@ pub fn read(py: Python<'_>, path: PathBuf, max_voxels: Option<u64>) -> PyResult<
         options.max_voxels = m;
     }
     let p = path.clone();
-    let file = py
-        .detach(move || glint_io::open_volume(&p, &options))
+    let file = crate::pool::detach(py, move || glint_io::open_volume(&p, &options))?
         .map_err(|e| errors::io_error(py, e))?;
     Ok(Volume {
         inner: Arc::new(file.volume),
@@ -160,7 +159,7 @@ impl Volume {
     /// what nibabel's `img.get_fdata()` returns for the same file.
     fn fdata<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let inner = Arc::clone(&self.inner);
-        let values = py.detach(move || physical_f64(&inner));
+        let values = crate::pool::detach(py, move || physical_f64(&inner))?;
         let d = self.inner.dims;
         Ok(PyArray1::from_vec(py, values)
             .reshape_with_order(d, NPY_ORDER::NPY_FORTRANORDER)?

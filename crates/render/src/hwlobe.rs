@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use glint_hw::{Config, Unit};
 use glint_lobe::CosTable;
 
-use crate::error::RenderError;
+use glint_core::RenderError;
 
 /// The last unit built and its last table.
 #[derive(Clone)]
@@ -54,21 +54,28 @@ impl HwCache {
             Some(e) if e.config == *config => e,
             _ => Entry {
                 config: config.clone(),
-                unit: Arc::new(Unit::new(config.clone()).map_err(RenderError::HwConfig)?),
+                unit: Arc::new(
+                    Unit::new(config.clone()).map_err(|e| RenderError::HwConfig(Box::new(e)))?,
+                ),
                 table: None,
             },
         };
         let entry = last.insert(entry);
-        let code = entry
-            .unit
-            .n_code(n)
-            .map_err(|source| RenderError::HwN { n, source })?;
+        let code = entry.unit.n_code(n).map_err(|source| RenderError::HwN {
+            n,
+            source: Box::new(source),
+        })?;
         if let Some((c, table)) = &entry.table {
             if *c == code {
                 return Ok(table.clone());
             }
         }
-        let table = Arc::new(entry.unit.cos_table(code).map_err(RenderError::HwTable)?);
+        let table = Arc::new(
+            entry
+                .unit
+                .cos_table(code)
+                .map_err(|e| RenderError::HwTable(Box::new(e)))?,
+        );
         entry.table = Some((code, table.clone()));
         Ok(table)
     }

@@ -34,49 +34,58 @@
 //! [`Shader`] lights samples (ambient + diffuse + lobe specular, Phong or Blinn
 //! geometry); the ray caster casts one ray per pixel, tiles in parallel, and returns a
 //! linear [`Image`] that [`Image::write_png`] writes as sRGB.
+//!
+//! This crate is the facade of the renderer crates, each with one job, whose
+//! dependencies point one way (front ends -> glint-render -> glint-volume,
+//! glint-raster, glint-mesh -> glint-core -> glint-lobe; glint-io below them all):
+//!
+//! | crate | job |
+//! | --- | --- |
+//! | [`glint_core`] | vector math, cameras, images and PNG, colour, colour maps, the lighting model, timings, the error type |
+//! | [`glint_volume`] | the field, transfer functions and pre-integration, presets, the built-in phantoms, the ray caster and its SIMD march |
+//! | [`glint_raster`] | the mesh rasterizer |
+//! | [`glint_mesh`] | isosurface extraction, vertex normals, smoothing (no image or font dependencies) |
+//! | glint-render | the [`Scene`] value and its files, the [`Renderer`], the hardware lobe |
+//!
+//! It re-exports what front ends use, so they depend on it alone.
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
-pub mod camera;
-mod colormap;
-mod error;
-mod field;
 mod hwlobe;
-mod image;
-pub mod isosurface;
-pub mod math;
 mod meshes;
-pub mod phantom;
-mod preint;
-pub mod presets;
-mod raster;
-mod raycast;
+mod renderer;
 mod scene;
-mod shading;
-mod tf;
-mod timings;
 
-pub use camera::{Camera, CameraSpec, Projection, View};
-pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
-pub use error::RenderError;
-pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
-pub use image::{Depth, Image, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA};
+pub use glint_core::{camera, math};
+pub use glint_core::{
+    linear_to_srgb, luminance, luminance_f32, srgb_to_linear, Camera, CameraSpec, ColorMap, Depth,
+    Image, Light, Material, MaterialOverrides, Projection, RenderError, RenderMode, RenderStats,
+    ScalarColors, Shader, Timings, View, COLORMAP_TABLE, MAX_IMAGE_SIDE, MAX_LIGHTS,
+    RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
+};
+pub use glint_mesh as mesh;
+pub use glint_mesh::vertex_normals;
+pub use glint_raster::{SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
+pub use glint_volume::{phantom, presets};
+pub use glint_volume::{
+    preset, Classification, ClassifySettings, Field, FrameSettings, Kernel, Phantom, Prefilter,
+    Preset, Sampling, TransferFunction, TransferFunctionFile, MACRO_CELL, MAX_FIELD_VOXELS,
+    PRESETS, TERMINATION_OPACITY,
+};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
-pub use phantom::Phantom;
-pub use preint::Sampling;
-pub use presets::{preset, Preset, PRESETS};
-pub use raster::{vertex_normals, SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
-pub use raycast::{
-    Classification, ClassifySettings, FrameSettings, Kernel, Mode, RenderStats, MAX_IMAGE_SIDE,
-    TERMINATION_OPACITY,
-};
+pub use renderer::{Rendered, Renderer};
 pub use scene::{
-    Derived, Input, LobeSpec, MeshLayer, OpenedVolume, Plan, RenderMode, Rendered, Renderer,
-    Resolved, Scene, SceneLobe, DEFAULT_SHININESS, MAX_SCENE_BYTES, SCENE_VERSION,
+    Derived, Input, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,
+    DEFAULT_SHININESS, MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
 };
-pub use shading::{Light, Shader, MAX_LIGHTS};
-pub use tf::{
-    linear_to_srgb, srgb_to_linear, Lut, Material, MaterialOverrides, TransferFunction,
-    TransferFunctionFile, LUT_SIZE,
-};
-pub use timings::Timings;
+
+/// A mesh-extraction error as the renderer's: the same variant and message.
+pub(crate) fn mesh_error(e: glint_mesh::MeshError) -> RenderError {
+    match e {
+        glint_mesh::MeshError::Volume(s) => RenderError::Volume(s),
+        glint_mesh::MeshError::Parameter(s) => RenderError::Parameter(s),
+        glint_mesh::MeshError::Mesh(e) => RenderError::Mesh(e),
+        other => RenderError::Volume(other.to_string()),
+    }
+}

@@ -8,10 +8,8 @@ use std::sync::Arc;
 use glint_io::{read_mesh, read_surface_data, Format, IoError, Mesh, VertexValues};
 use serde::{Deserialize, Serialize};
 
-use crate::colormap::{ColorMap, ScalarColors};
-use crate::error::RenderError;
-use crate::raster::Surfaces;
-use crate::tf::{srgb_to_linear, Material};
+use glint_core::{srgb_to_linear, ColorMap, Material, RenderError, ScalarColors};
+use glint_raster::Surfaces;
 
 /// Supersampling factor of surface renders when the scene gives none: 2x2 samples a
 /// pixel removes most stair-stepping at a quarter of 4x4's cost.

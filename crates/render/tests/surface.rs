@@ -6,8 +6,8 @@ use std::f64::consts::PI;
 
 use glint_io::{Mesh, Samples, Volume};
 use glint_lobe::{Geometry, LobeKind};
-use glint_render::isosurface::{extract, taubin_smooth, Taubin};
 use glint_render::math::Vec3;
+use glint_render::mesh::{extract, taubin_smooth, Taubin};
 use glint_render::{
     CameraSpec, ColorMap, Light, Material, Projection, RenderError, ScalarColors, Shader,
     SurfaceSettings, Surfaces, View,
@@ -493,11 +493,14 @@ fn taubin_smoothing_keeps_the_sphere_closed_and_its_size() {
 #[test]
 fn isosurface_rejects_bad_input_and_tolerates_nan_samples() {
     let flat = Volume::new([4, 4, 1], [1.0; 3], Samples::U8(vec![0; 16])).unwrap();
-    assert!(matches!(extract(&flat, 0.5), Err(RenderError::Volume(_))));
+    assert!(matches!(
+        extract(&flat, 0.5),
+        Err(glint_render::mesh::MeshError::Volume(_))
+    ));
     let mut vol = sphere_volume([12.0, 11.0, 20.0], 8.0);
     assert!(matches!(
         extract(&vol, f32::NAN),
-        Err(RenderError::Parameter(_))
+        Err(glint_render::mesh::MeshError::Parameter(_))
     ));
     if let Samples::F32(v) = &mut vol.samples {
         for x in v.iter_mut().step_by(7) {

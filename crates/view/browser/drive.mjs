@@ -1,17 +1,21 @@
 // Drives glint view in Debian's headless Chromium through playwright-core (no browser
 // download: the executable is /usr/bin/chromium or $CHROMIUM).
 //
-//   node drive.mjs test URL SCREENSHOT.png   load, wait for the first frame, drag,
-//                                            check the canvas changed, screenshot
+//   node drive.mjs test URL SCREENSHOT.png [FOREIGN_URL]
+//                                            load, wait for the first frame, drag,
+//                                            check the canvas changed, screenshot;
+//                                            then the page at FOREIGN_URL (another
+//                                            origin) opens the viewer's socket with
+//                                            the URL's token: it must be refused
 //   node drive.mjs bench URL SECONDS         drag for SECONDS; frames/s received
 //                                            during the drag, input-to-frame latency
 //
 // Prints one JSON line; exits non-zero on failure.
 import { chromium } from "playwright-core";
 
-const [mode, url, arg] = process.argv.slice(2);
+const [mode, url, arg, foreignUrl] = process.argv.slice(2);
 if (!["test", "bench"].includes(mode) || !url) {
-  console.error("usage: drive.mjs test URL OUT.png | drive.mjs bench URL SECONDS");
+  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs bench URL SECONDS");
   process.exit(2);
 }
 const browser = await chromium.launch({
@@ -47,8 +51,9 @@ try {
     await page.screenshot({ path: arg });
     const g = await page.evaluate(() => ({ frames: window.glint.frames, full: window.glint.full, errors: window.glint.errors }));
     const changed = before !== after;
-    console.log(JSON.stringify({ ...g, changed }));
-    if (!changed || g.errors.length) process.exitCode = 1;
+    const foreign = foreignUrl ? await foreignSocket(url, foreignUrl) : "not tried";
+    console.log(JSON.stringify({ ...g, changed, foreign }));
+    if (!changed || g.errors.length || (foreignUrl && foreign !== "refused")) process.exitCode = 1;
   } else {
     const seconds = Number(arg || 5);
     await page.evaluate(() => { window.glint.latencies.length = 0; });
@@ -73,4 +78,20 @@ try {
   }
 } finally {
   await browser.close();
+}
+
+// The page at foreignUrl (another server: another origin) opens the viewer's socket
+// with the viewer's own query (its token): "opened", "refused" or "timeout".
+async function foreignSocket(viewerUrl, foreignUrl) {
+  const socket = new URL(viewerUrl);
+  socket.protocol = "ws:";
+  socket.pathname = "/ws";
+  const page = await browser.newPage();
+  await page.goto(foreignUrl);
+  return page.evaluate((u) => new Promise((resolve) => {
+    const s = new WebSocket(u);
+    s.onopen = () => { s.close(); resolve("opened"); };
+    s.onerror = () => resolve("refused");
+    setTimeout(() => resolve("timeout"), 20000);
+  }), socket.href);
 }

@@ -6,13 +6,15 @@
 //! ```no_run
 //! use std::sync::Arc;
 //! use glint_render::Scene;
-//! use glint_view::{Viewer, ViewerConfig};
+//! use glint_view::{Access, Viewer, ViewerConfig};
 //!
 //! # async fn run() -> Result<(), Box<dyn std::error::Error>> {
 //! let viewer = Arc::new(Viewer::new(Scene::default(), ViewerConfig::default())?);
 //! let listener = tokio::net::TcpListener::bind("127.0.0.1:8080").await?;
-//! println!("open http://{}/", listener.local_addr()?);
-//! glint_view::serve(listener, viewer).await?;
+//! // Loopback: no token needed; any other address needs one (Token::random()).
+//! let access = Arc::new(Access::new(listener.local_addr()?, None)?);
+//! println!("open {}", access.url());
+//! glint_view::serve(listener, viewer, access).await?;
 //! # Ok(())
 //! # }
 //! ```
@@ -24,12 +26,20 @@
 //! arrive while a frame renders are merged, never queued. While the user drags,
 //! frames are half size and JPEG at quality 70; 150 ms after the last interactive
 //! update a full-resolution frame follows.
+//!
+//! Access ([`access`]): only the viewer's own page may use it.
+//! Requests must name this machine in `Host` (DNS rebinding), a WebSocket handshake
+//! from a page must come from the origin the page was served from, and a viewer on a
+//! non-loopback address asks for a random token in the URL, as Jupyter does.
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
+pub mod access;
 pub mod protocol;
 mod session;
 
+use std::net::SocketAddr;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -39,9 +49,10 @@ use axum::extract::State;
 use axum::http::header;
 use axum::response::{Html, IntoResponse};
 use axum::routing::get;
-use axum::Router;
+use axum::{middleware, Router};
 use glint_render::{RenderError, Renderer, Scene, SceneLobe, View, PRESETS};
 
+pub use access::{is_loopback, Access, Token};
 pub use session::{apply_patch, render_frame, Frame, MAX_VIEW_SIDE};
 
 use protocol::{ClientMessage, Purpose, ServerMessage, Split};
@@ -55,19 +66,48 @@ pub enum ViewError {
     /// A client message was refused.
     #[error("{0}")]
     Message(String),
-}
-
-/// The error and its sources joined with `": "` (what `glint` prints, anyhow's `{:#}`),
-/// on one line: e.g. an invalid hardware unit names the field at fault.
-fn one_line(err: &dyn std::error::Error) -> String {
-    let mut line = err.to_string();
-    let mut source = err.source();
-    while let Some(s) = source {
-        line.push_str(": ");
-        line.push_str(&s.to_string());
-        source = s.source();
-    }
-    line.replace('\n', " ")
+    /// A non-loopback address without a token.
+    #[error("{addr} is not a loopback address: serving it needs a token")]
+    TokenRequired {
+        /// The address.
+        addr: SocketAddr,
+    },
+    /// A token given by hand that is too short, too long or needs escaping.
+    #[error(
+        "a token is {min} to {max} characters from A-Z a-z 0-9 - . _ ~",
+        min = Token::MIN_CHARS,
+        max = Token::MAX_CHARS
+    )]
+    BadToken,
+    /// The operating system's random number generator failed.
+    #[error("cannot make a token: the OS random number generator failed: {0}")]
+    Random(String),
+    /// A request without one well-formed `Host` header.
+    #[error("a request needs one Host header naming host and port")]
+    BadHost,
+    /// A request naming a host this viewer does not answer for (DNS rebinding).
+    #[error(
+        "Host {host} is not this viewer: it answers for localhost, a loopback address \
+         or the address it is bound to, on port {port}"
+    )]
+    ForeignHost {
+        /// The Host header as sent (escaped, cut).
+        host: String,
+        /// The viewer's port.
+        port: u16,
+    },
+    /// A request from a page of another origin.
+    #[error("Origin {origin} is not this viewer's page: only its own page may use it")]
+    ForeignOrigin {
+        /// The Origin header as sent (escaped, cut).
+        origin: String,
+    },
+    /// A request without the viewer's token.
+    #[error("this viewer needs its token: open the URL glint view printed (…/?token=…)")]
+    TokenMissing,
+    /// A request with another token.
+    #[error("wrong token: open the URL glint view printed (…/?token=…)")]
+    TokenWrong,
 }
 
 /// Limits and timing of a viewer.
@@ -124,13 +164,30 @@ impl Viewer {
     }
 }
 
-/// Serves the page and the WebSocket on `listener` until the process ends.
-pub async fn serve(listener: tokio::net::TcpListener, viewer: Arc<Viewer>) -> std::io::Result<()> {
-    axum::serve(listener, router(viewer)).await
+/// Serves the page and the WebSocket on `listener` until the process ends, to the
+/// requests `access` lets through; `access` must be made for the listener's address.
+pub async fn serve(
+    listener: tokio::net::TcpListener,
+    viewer: Arc<Viewer>,
+    access: Arc<Access>,
+) -> std::io::Result<()> {
+    let addr = listener.local_addr()?;
+    if addr != access.bound() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "the access policy is for {}, the listener is on {addr}",
+                access.bound()
+            ),
+        ));
+    }
+    let app = router(viewer, access).into_make_service_with_connect_info::<SocketAddr>();
+    axum::serve(listener, app).await
 }
 
-/// The viewer's routes: `/` (the page), `/app.js`, `/style.css`, `/ws`.
-pub fn router(viewer: Arc<Viewer>) -> Router {
+/// The viewer's routes: `/` (the page), `/app.js`, `/style.css`, `/ws`, behind the
+/// checks of `access`.
+pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
     Router::new()
         .route("/", get(|| async { Html(include_str!("page/index.html")) }))
         .route(
@@ -153,6 +210,7 @@ pub fn router(viewer: Arc<Viewer>) -> Router {
         )
         .route("/ws", get(upgrade))
         .with_state(viewer)
+        .layer(middleware::from_fn_with_state(access, access::guard))
 }
 
 async fn upgrade(ws: WebSocketUpgrade, State(viewer): State<Arc<Viewer>>) -> impl IntoResponse {
@@ -211,7 +269,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         scene: serde_json::to_value(&viewer.scene).expect("scenes serialise"),
         presets: PRESETS.iter().map(|p| p.name).collect(),
         lobes: SceneLobe::ALL.map(|k| k.name()).to_vec(),
-        views: View::ALL.map(|v| v.name()).to_vec(),
+        views: View::NAMES.to_vec(),
         range: viewer.range,
     };
     if !send_json(&mut socket, &hello).await {
@@ -275,7 +333,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                     }
                     Ok(Action::Save) => save = true,
                     Err(e) => {
-                        let message = one_line(&e);
+                        let message = glint_io::one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
                     }
                 }
@@ -292,7 +350,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                         }
                     }
                     Ok(Err(e)) => {
-                        let message = one_line(&e);
+                        let message = glint_io::one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
                     }
                     Err(_) => {

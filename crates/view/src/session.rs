@@ -4,9 +4,9 @@
 
 use std::time::Instant;
 
-use glint_lobe::LobeKind;
 use glint_render::{
-    srgb_to_linear, Depth, Image, RenderError, RenderStats, Renderer, Scene, MAX_IMAGE_SIDE,
+    luminance_f32, srgb_to_linear, Depth, Image, RenderError, RenderStats, Renderer, Scene,
+    MAX_IMAGE_SIDE,
 };
 use serde_json::{Map, Value};
 
@@ -21,9 +21,6 @@ pub const MAX_VIEW_SIDE: u32 = 2048;
 /// started with.
 const FIXED_FIELDS: [&str; 4] = ["input", "meshes", "version", "derived"];
 
-/// Scene fields that are objects merged field by field.
-const MERGED_FIELDS: [&str; 3] = ["camera", "lobe", "material"];
-
 /// JPEG quality of frames sent while the user drags (small and quick).
 const INTERACTIVE_QUALITY: u8 = 70;
 
@@ -33,34 +30,20 @@ const FULL_QUALITY: u8 = 92;
 /// Difference in luminance (linear, 0..1) shown at full heat in the diff view: 5%.
 const DIFF_FULL_SCALE: f32 = 0.05;
 
-/// `scene` with the fields of `patch` applied, checked against `renderer`'s volume.
+/// `scene` with the fields of `patch` applied ([`Scene::patch`]: the rule every front
+/// end shares), checked against `renderer`'s volume; the fields naming the data are
+/// the server's and cannot be changed.
 pub fn apply_patch(
     renderer: &Renderer,
     scene: &Scene,
     patch: &Map<String, Value>,
 ) -> Result<Scene, ViewError> {
-    let mut doc = serde_json::to_value(scene).map_err(|e| ViewError::Message(e.to_string()))?;
-    let obj = doc.as_object_mut().expect("a scene is a JSON object");
-    for (key, value) in patch {
-        if FIXED_FIELDS.contains(&key.as_str()) {
-            return Err(ViewError::Message(format!(
-                "the viewer does not change '{key}'"
-            )));
-        }
-        match (obj.get_mut(key), value) {
-            (Some(Value::Object(current)), Value::Object(fields))
-                if MERGED_FIELDS.contains(&key.as_str()) =>
-            {
-                for (k, v) in fields {
-                    current.insert(k.clone(), v.clone());
-                }
-            }
-            _ => {
-                obj.insert(key.clone(), value.clone());
-            }
-        }
+    if let Some(key) = patch.keys().find(|k| FIXED_FIELDS.contains(&k.as_str())) {
+        return Err(ViewError::Message(format!(
+            "the viewer does not change '{key}'"
+        )));
     }
-    let next = Scene::from_value(doc)?;
+    let next = scene.patch(patch)?;
     if next.size.iter().any(|&s| s > MAX_VIEW_SIDE) {
         return Err(ViewError::Message(format!(
             "image size {}x{}: the viewer renders at most {MAX_VIEW_SIDE} per side",
@@ -100,9 +83,9 @@ pub fn render_frame(
     let image = match split {
         Split::Off => main.image,
         Split::Side | Split::Diff => {
-            let mut exact = main.scene.clone();
-            exact.lobe.kind = LobeKind::Exact.into();
-            let reference = renderer.render(&exact, &|_| {})?.image;
+            let reference = renderer
+                .render(&glint_compare::exact_scene(&main.scene), &|_| {})?
+                .image;
             if split == Split::Side {
                 side_by_side(&reference, &main.image)
             } else {
@@ -179,7 +162,7 @@ fn side_by_side(left: &Image, right: &Image) -> Image {
 /// The absolute difference of CIE luminance (Rec. 709 weights on linear RGB) as a
 /// black-red-yellow-white heat map, full heat at [`DIFF_FULL_SCALE`].
 fn difference(a: &Image, b: &Image) -> Image {
-    let lum = |c: &[f32; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    let lum = |c: &[f32; 3]| luminance_f32(*c);
     let rgb = a
         .rgb
         .iter()
@@ -202,6 +185,7 @@ fn difference(a: &Image, b: &Image) -> Image {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glint_lobe::LobeKind;
     use glint_render::{Input, Phantom};
 
     fn scene() -> Scene {

@@ -7,7 +7,7 @@ use std::time::Duration;
 use futures_util::{SinkExt, StreamExt};
 use glint_render::{Input, Phantom, Scene};
 use glint_view::protocol::{FrameHeader, Purpose};
-use glint_view::{Viewer, ViewerConfig};
+use glint_view::{Access, Viewer, ViewerConfig};
 use tokio::net::TcpStream;
 use tokio_tungstenite::tungstenite::Message;
 use tokio_tungstenite::{MaybeTlsStream, WebSocketStream};
@@ -31,7 +31,8 @@ async fn start(max_clients: usize) -> (Arc<Viewer>, String) {
     let viewer = Arc::new(Viewer::new(scene, config).unwrap());
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let url = format!("ws://{}/ws", listener.local_addr().unwrap());
-    tokio::spawn(glint_view::serve(listener, viewer.clone()));
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer.clone(), access));
     (viewer, url)
 }
 
@@ -227,7 +228,8 @@ async fn a_mesh_scene_is_served_and_rotates() {
     let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let url = format!("ws://{}/ws", listener.local_addr().unwrap());
-    tokio::spawn(glint_view::serve(listener, viewer));
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer, access));
     let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
     let hello = json_of(&mut c, "hello").await;
     assert_eq!(hello["scene"]["input"], "none");

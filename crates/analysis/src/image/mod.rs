@@ -34,8 +34,7 @@ use palette::{LinSrgb, Srgb};
 
 use crate::error::AnalysisError;
 
-/// The largest accepted width or height (a sanity bound: 16384² pixels is 800 MB of RGB).
-pub const MAX_SIDE: u32 = 16384;
+pub use crate::MAX_IMAGE_SIDE as MAX_SIDE;
 
 /// An 8-bit sRGB image (no alpha: the renderer composites over its background), row 0
 /// at the top, row-major.

@@ -22,7 +22,7 @@ pub const SSIM_C2: f64 = 0.03 * 0.03;
 
 /// Rec. 709 luma weights applied to the sRGB-encoded samples (a gamma-encoded
 /// grey level, as SSIM was defined on 8-bit grey images).
-const LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
+const LUMA: [f64; 3] = glint_core::REC709_LUMA;
 
 /// The local SSIM of every position where the window fits.
 #[derive(Clone, Debug, PartialEq)]

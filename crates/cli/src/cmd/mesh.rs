@@ -6,8 +6,7 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use glint_io::mesh::{write_obj, write_ply, write_stl, PlyEncoding};
 use glint_io::{read_volume, Format, Mesh, ReadOptions};
-use glint_render::isosurface::{extract, taubin_smooth, Taubin};
-use glint_render::math::Vec3;
+use glint_render::mesh::{extract, taubin_smooth, Taubin};
 use glint_render::vertex_normals;
 
 /// Arguments of `glint mesh`.
@@ -138,13 +137,7 @@ fn convert(args: &Args, taubin: &Taubin, write: MeshWriter) -> anyhow::Result<()
         taubin_smooth(&mut mesh, taubin)?;
     }
     if mesh.normals.is_none() {
-        let positions: Vec<Vec3> = mesh
-            .positions
-            .iter()
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect();
-        let normals = vertex_normals(&positions, &mesh.triangles);
-        mesh.normals = Some(normals.iter().map(|n| n.to_array()).collect());
+        mesh.normals = Some(vertex_normals(&mesh.positions, &mesh.triangles));
     }
     write_and_report(args, &mesh, write)
 }

@@ -134,7 +134,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     glint_io::write_atomic(&args.output, |w| w.write_all(&png))?;
     let write = start.elapsed();
     if let Some(path) = &args.dump_scene {
-        dump_scene(path, &rendered.scene)?;
+        rendered.scene.save(path)?;
     }
     if args.timings {
         print_timings(&rendered, encode, write);
@@ -199,28 +199,6 @@ fn progress_bar(args: &Options, scene: &Scene) -> Option<indicatif::ProgressBar>
         .progress_chars("=> "),
     );
     Some(bar)
-}
-
-/// Writes the resolved scene atomically (absolute input path, so it renders the same
-/// from anywhere).
-fn dump_scene(path: &Path, scene: &Scene) -> anyhow::Result<()> {
-    let mut scene = scene.clone();
-    let absolute = |p: &mut PathBuf| -> anyhow::Result<()> {
-        *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
-        Ok(())
-    };
-    if let Input::Path(p) = &mut scene.input {
-        absolute(p)?;
-    }
-    for m in &mut scene.meshes {
-        absolute(&mut m.path)?;
-        if let Some(o) = &mut m.overlay {
-            absolute(&mut o.path)?;
-        }
-    }
-    let json = scene.to_json()?;
-    glint_io::write_atomic(path, |w| w.write_all(json.as_bytes()))?;
-    Ok(())
 }
 
 /// `--repeat`: the frames after the first (which classifies), in ms per frame: their

@@ -4,8 +4,8 @@ use std::net::IpAddr;
 use std::sync::Arc;
 
 use anyhow::Context;
-use glint_render::{Input, SceneLobe};
-use glint_view::{Viewer, ViewerConfig};
+use glint_render::SceneLobe;
+use glint_view::{Access, Token, Viewer, ViewerConfig};
 
 use super::choice::choice;
 use super::scene_flags::SceneFlags;
@@ -18,7 +18,15 @@ use super::scene_flags::SceneFlags;
     glint view --scene brain.json --port 9000\n\n\
 Open the printed URL in a browser: drag to orbit, wheel to zoom, the panel sets the\n\
 preset, mode, lobe, n, v, geometry, light and split view (exact | lobe, or their\n\
-difference); Save downloads the scene (for glint render --scene) and a PNG.")]
+difference); Save downloads the scene (for glint render --scene) and a PNG.\n\n\
+Access: only the viewer's own page may use it. A request must name this machine\n\
+(localhost, a loopback address or the --host address, with the port; else 421), and a\n\
+WebSocket opened by a page of any other origin is refused (403); clients that send no\n\
+Origin (scripts) are let through. On an address other than loopback the URL carries a\n\
+token, random unless --token sets it, without which the page and its socket are\n\
+refused (403); there is no way to turn it off. The token travels in clear: on a network\n\
+you do not trust, serve loopback and forward the port over SSH with the same number on\n\
+both ends (ssh -L 8080:127.0.0.1:8080 host).")]
 pub struct Args {
     // Boxed: the options are many, and main's subcommand enum should stay small.
     #[command(flatten)]
@@ -29,9 +37,15 @@ pub struct Args {
     /// Port to listen on (0 picks a free one).
     #[arg(long, default_value_t = 8080)]
     port: u16,
-    /// Address to listen on; the default serves this machine only.
+    /// Address to listen on; the default serves this machine only. Any other address
+    /// needs a token, printed in the URL.
     #[arg(long, default_value = "127.0.0.1")]
     host: IpAddr,
+    /// The token the URL carries, on any address (16 to 256 of A-Z a-z 0-9 - . _ ~;
+    /// other users of this machine can read it in the process list) [default: none on
+    /// loopback, 192 random bits otherwise].
+    #[arg(long, value_name = "TOKEN", value_parser = parse_token)]
+    token: Option<Token>,
     /// Clients served at once.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=64))]
     max_clients: u64,
@@ -43,10 +57,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(kind) = args.lobe {
         args.scene.set_lobe(&mut scene, kind);
     }
-    if let Input::Path(p) = &mut scene.input {
-        // Saved scenes name the volume absolutely, so they render from anywhere.
-        *p = std::path::absolute(&*p).with_context(|| format!("resolving {}", p.display()))?;
-    }
+    // Saved scenes name their files absolutely, so they render from anywhere.
+    let scene = scene.with_absolute_paths()?;
     let config = ViewerConfig {
         max_clients: args.max_clients as usize,
         ..ViewerConfig::default()
@@ -59,9 +71,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .await
             .with_context(|| format!("cannot listen on {}:{}", args.host, args.port))?;
         let addr = listener.local_addr()?;
-        println!("glint view: open http://{addr}/ (Ctrl-C to stop)");
-        glint_view::serve(listener, viewer)
+        let token = match args.token {
+            None if !glint_view::is_loopback(addr.ip()) => Some(Token::random()?),
+            t => t,
+        };
+        let access = Arc::new(Access::new(addr, token)?);
+        if !access.loopback() {
+            eprintln!(
+                "glint view: serving on a non-loopback address: the URL carries a token; \
+                 anyone with it can see the volume"
+            );
+            if addr.ip().is_unspecified() {
+                eprintln!(
+                    "glint view: from another machine, use this machine's address in the URL"
+                );
+            }
+        }
+        println!("glint view: open {} (Ctrl-C to stop)", access.url());
+        glint_view::serve(listener, viewer, access)
             .await
             .context("the server stopped")
     })
+}
+
+/// `--token`: the viewer's rule (one line, for clap's error).
+fn parse_token(s: &str) -> Result<Token, String> {
+    s.parse().map_err(|e: glint_view::ViewError| e.to_string())
 }

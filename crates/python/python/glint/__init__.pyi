@@ -92,8 +92,14 @@ class Scene:
     @staticmethod
     def from_json(text: str) -> Scene: ...
     def to_json(self) -> str: ...
+    @staticmethod
+    def load(path: _Path) -> Scene:
+        """Reads a scene file; relative paths in it are relative to the file."""
+    def save(self, path: _Path) -> None:
+        """Writes the scene file atomically, with absolute paths."""
     def to_dict(self) -> Dict[str, Any]: ...
-    def replace(self, **fields: Any) -> Scene: ...
+    def replace(self, **fields: Any) -> Scene:
+        """A copy with fields patched: camera, lobe and material merged field by field."""
     version: int
     input: Union[Dict[str, Any], Literal["none"]]
     meshes: List[Dict[str, Any]]
@@ -151,3 +157,11 @@ def render(
     volume: Union[Volume, _Path, None] = None, scene: Optional[Scene] = None, **fields: Any
 ) -> npt.NDArray[np.uint8]:
     """Renders volume (None: the scene's input) with scene: sRGB uint8 (H, W, 3)."""
+
+def compare(
+    volume: Union[Volume, _Path, None] = None,
+    scene: Optional[Scene] = None,
+    lobes: Sequence[str] = ("k",),
+    **fields: Any,
+) -> Dict[str, Any]:
+    """Exact cos^n against each lobe, as ``glint compare --json`` reports it."""

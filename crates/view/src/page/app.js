@@ -9,7 +9,11 @@ let seq = 0;
 let scene = null;
 const frameTimes = [];
 
-const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+// A viewer on a non-loopback address needs its token (the printed URL's ?token=...):
+// the page passes it on to its own socket, the only other request that needs it.
+const token = new URLSearchParams(location.search).get("token");
+const query = token === null ? "" : `?token=${encodeURIComponent(token)}`;
+const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws${query}`);
 ws.binaryType = "arraybuffer";
 
 function send(msg) {

@@ -1,0 +1,528 @@
+//! The one lighting model of glint's renderers: a sample of colour `c` with unit
+//! normal `N` (facing the viewer: two-sided) takes, over camera-relative lights `L` of
+//! intensity `I`,
+//!
+//! `c · (ambient + diffuse · Σ I·max(N·L, 0)) + specular · Σ_{N·L > 0} I·lobe(cos γ)`
+//!
+//! where `cos γ` is Phong's `R·V` or Blinn's `N·H` ([`glint_lobe::Geometry`]) and the
+//! lobe any [`glint_lobe::Specular`] (a closed-form lobe or a table over the quantised
+//! cosine, e.g. the hardware unit's). Volume samples take their normal from the
+//! gradient and blend towards the flat colour `c · (ambient + diffuse)` where the
+//! gradient is weak (the gate); surface samples have a normal and no gate.
+//!
+//! The model has a scalar form ([`Shader::shade`] for a gradient, [`Shader::shade_normal`]
+//! for a unit normal) and a batch form over columns of samples ([`ShadeBatch`], on
+//! AVX2 where the CPU has it), which gives the scalar form's results bit for bit (the
+//! same operations in the same order, no FMA contraction; tested). The ray caster and
+//! the rasterizer use these and nothing else to light a sample.
+
+use glint_lobe::{Geometry, Lobe, LobeKind, Specular};
+use serde::{Deserialize, Serialize};
+
+use crate::camera::Camera;
+use crate::error::RenderError;
+use crate::math::Vec3;
+
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+mod batch;
+mod material;
+
+pub use batch::ShadeBatch;
+pub use material::{Material, MaterialOverrides};
+
+/// A directional light given relative to the camera: `azimuth` degrees towards the
+/// image's right and `elevation` degrees towards its top, from the viewing direction.
+/// `(0, 0)` is a headlight.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    /// Degrees towards the image's right.
+    pub azimuth: f64,
+    /// Degrees towards the image's top.
+    pub elevation: f64,
+    /// Intensity (white light).
+    #[serde(default = "unit_intensity")]
+    pub intensity: f32,
+}
+
+fn unit_intensity() -> f32 {
+    1.0
+}
+
+impl Light {
+    /// The headlight: along the view direction, intensity 1.
+    pub const HEADLIGHT: Light = Light {
+        azimuth: 0.0,
+        elevation: 0.0,
+        intensity: 1.0,
+    };
+
+    /// Unit world vector from a surface towards the light, for `camera`.
+    pub fn direction(&self, camera: &Camera) -> Vec3 {
+        let (sa, ca) = (
+            self.azimuth.to_radians().sin() as f32,
+            self.azimuth.to_radians().cos() as f32,
+        );
+        let (se, ce) = (
+            self.elevation.to_radians().sin() as f32,
+            self.elevation.to_radians().cos() as f32,
+        );
+        ((-camera.forward * ca + camera.right * sa) * ce + camera.up * se).normalize_or_zero()
+    }
+
+    /// Checks the angles and intensity are finite and sensible.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if !self.azimuth.is_finite()
+            || !self.elevation.is_finite()
+            || self.azimuth.abs() > 360.0
+            || self.elevation.abs() > 90.0
+        {
+            return Err(RenderError::Parameter(format!(
+                "light at azimuth {}, elevation {}: expected |azimuth| <= 360 and |elevation| <= 90 degrees",
+                self.azimuth, self.elevation
+            )));
+        }
+        if !self.intensity.is_finite() || !(0.0..=100.0).contains(&self.intensity) {
+            return Err(RenderError::Parameter(format!(
+                "light intensity {}: expected 0..=100",
+                self.intensity
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Everything the lighting of one sample needs that does not change along a ray.
+#[derive(Clone, Debug)]
+pub struct Shader {
+    specular: Specular,
+    geometry: Geometry,
+    material: Material,
+    /// The lights, relative to the camera.
+    relative: Vec<Light>,
+    /// World directions towards each light, and their intensities, for the camera the
+    /// shader was last [placed](Shader::placed) for (empty before).
+    lights: Vec<(Vec3, f32)>,
+    /// Gradient magnitude (value per mm) below which a sample is unshaded; full
+    /// shading from twice this value (a linear ramp between).
+    gate: f32,
+}
+
+/// Per-ray constants of the lighting: the view vector and, per light, `L·V`
+/// (Phong) or the half vector (Blinn).
+pub struct RayLighting {
+    /// Unit vector towards the eye.
+    pub view: Vec3,
+    /// Per light: direction, intensity, `L·V`, half vector (the first `count`).
+    pub lights: [(Vec3, f32, f32, Vec3); MAX_LIGHTS],
+    /// How many lights.
+    pub count: usize,
+}
+
+/// Most lights a [`Shader`] takes.
+pub const MAX_LIGHTS: usize = 8;
+
+impl Shader {
+    /// A shader for `lobe` (kind, n, v), `geometry`, `material`, lights given relative
+    /// to the camera (placed in the world by each render), and a gradient gate in value
+    /// per mm.
+    pub fn new(
+        kind: LobeKind,
+        n: f64,
+        v: u32,
+        geometry: Geometry,
+        material: Material,
+        lights: Vec<Light>,
+        gate: f32,
+    ) -> Result<Shader, RenderError> {
+        let lobe = Lobe::<f32>::new(kind, n, v)?;
+        Shader::with_specular(lobe.into(), geometry, material, lights, gate)
+    }
+
+    /// A shader whose specular term is `specular`: a closed-form lobe or a table over
+    /// the quantised cosine (e.g. `glint_hw::Unit::cos_table`); otherwise as
+    /// [`Shader::new`].
+    pub fn with_specular(
+        specular: Specular,
+        geometry: Geometry,
+        material: Material,
+        lights: Vec<Light>,
+        gate: f32,
+    ) -> Result<Shader, RenderError> {
+        material.validate()?;
+        for light in &lights {
+            light.validate()?;
+        }
+        if lights.len() > MAX_LIGHTS {
+            return Err(RenderError::Parameter(format!(
+                "{} lights: at most {MAX_LIGHTS}",
+                lights.len()
+            )));
+        }
+        if !gate.is_finite() || gate < 0.0 {
+            return Err(RenderError::Parameter(format!(
+                "gradient gate {gate}: expected a finite number >= 0"
+            )));
+        }
+        Ok(Shader {
+            specular,
+            geometry,
+            material,
+            relative: lights,
+            lights: Vec::new(),
+            gate,
+        })
+    }
+
+    /// This shader with its lights placed in the world for `camera`.
+    pub fn placed(&self, camera: &Camera) -> Shader {
+        Shader {
+            lights: self
+                .relative
+                .iter()
+                .map(|l| (l.direction(camera), l.intensity))
+                .collect(),
+            ..self.clone()
+        }
+    }
+
+    /// The specular term.
+    pub fn specular(&self) -> &Specular {
+        &self.specular
+    }
+
+    /// The closed-form lobe, `None` for a table.
+    pub fn lobe(&self) -> Option<&Lobe<f32>> {
+        self.specular.lobe()
+    }
+
+    /// Replaces the specular term (e.g. by a hardware unit's table for the same `n`),
+    /// keeping the geometry, material, lights and gate.
+    pub fn set_specular(&mut self, specular: Specular) {
+        self.specular = specular;
+    }
+
+    /// The material.
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+
+    /// The lighting geometry (Phong or Blinn).
+    pub fn geometry(&self) -> Geometry {
+        self.geometry
+    }
+
+    /// The world directions towards the lights and their intensities, for the camera
+    /// the shader was [placed](Shader::placed) for (empty before).
+    pub fn world_lights(&self) -> &[(Vec3, f32)] {
+        &self.lights
+    }
+
+    /// The per-ray terms of the lighting for the unit view vector `view` (towards the
+    /// eye): `L·V` and the half vector of each placed light.
+    pub fn for_ray(&self, view: Vec3) -> RayLighting {
+        let mut lights = [(Vec3::ZERO, 0.0, 0.0, Vec3::ZERO); MAX_LIGHTS];
+        for (slot, &(l, i)) in lights.iter_mut().zip(&self.lights) {
+            *slot = (l, i, l.dot(view), (l + view).normalize_or_zero());
+        }
+        RayLighting {
+            view,
+            lights,
+            count: self.lights.len(),
+        }
+    }
+
+    /// The cosine the lobe is evaluated at, from unit `n`, unit `l`, unit `v`:
+    /// Phong `R·V = 2(N·L)(N·V) - L·V`, Blinn `N·H`. Equal to
+    /// [`Geometry::cos`] for unit vectors (tested), with the per-ray parts hoisted.
+    #[inline(always)]
+    fn cos(&self, n_dot_l: f32, n_dot_v: f32, l_dot_v: f32, n: Vec3, h: Vec3) -> f32 {
+        match self.geometry {
+            Geometry::Phong => 2.0 * n_dot_l * n_dot_v - l_dot_v,
+            Geometry::Blinn => n.dot(h),
+        }
+    }
+
+    /// Lit linear colour of a volume sample with transfer-function colour `base` and
+    /// world gradient `grad` (the normal points down the gradient: out of dense
+    /// structures), under the gradient gate.
+    #[inline(always)]
+    pub fn shade(&self, base: [f32; 3], grad: Vec3, ray: &RayLighting) -> [f32; 3] {
+        let m = &self.material;
+        if !m.shade {
+            return base;
+        }
+        let gm2 = grad.dot(grad);
+        let g0 = self.gate;
+        if gm2 <= g0 * g0 || !gm2.is_finite() {
+            return base.map(|c| c * flat(m));
+        }
+        let gm = gm2.sqrt();
+        let (diffuse, specular) = self.sums(grad * (-1.0 / gm), ray);
+        gated(m, base, diffuse, specular, self.gate_weight(gm))
+    }
+
+    /// Lit linear colour of a surface point of colour `base`, unit `normal` and unit
+    /// `view` (towards the eye), with no gate. Two-sided: a normal facing away from the
+    /// viewer is flipped, so open surfaces and inner walls are lit from the side that
+    /// is seen.
+    #[inline(always)]
+    pub fn shade_normal(&self, base: [f32; 3], normal: Vec3, view: Vec3) -> [f32; 3] {
+        let m = &self.material;
+        if !m.shade {
+            return base;
+        }
+        let (diffuse, specular) = self.sums(normal, &self.for_ray(view));
+        ungated(m, base, diffuse, specular)
+    }
+
+    /// The diffuse and specular sums over the lights, `Σ I·N·L` and `Σ I·lobe(cos γ)`
+    /// over the lights with `N·L > 0`, for the unit normal `n` turned to face the
+    /// viewer.
+    #[inline(always)]
+    fn sums(&self, n: Vec3, ray: &RayLighting) -> (f32, f32) {
+        let (n, n_dot_v) = facing(n, ray.view);
+        let mut diffuse = 0.0f32;
+        let mut specular = 0.0f32;
+        for &(l, intensity, l_dot_v, h) in &ray.lights[..ray.count] {
+            let n_dot_l = n.dot(l);
+            if n_dot_l > 0.0 {
+                diffuse += intensity * n_dot_l;
+                let c = self.cos(n_dot_l, n_dot_v, l_dot_v, n, h);
+                specular += intensity * self.specular.eval(c);
+            }
+        }
+        (diffuse, specular)
+    }
+
+    /// The gate's blend weight for gradient magnitude `gm` (above the gate): from 0 at
+    /// the gate to 1 at twice it, so near-zero gradients give no random highlights.
+    #[inline(always)]
+    fn gate_weight(&self, gm: f32) -> f32 {
+        let g0 = self.gate;
+        if g0 > 0.0 {
+            ((gm - g0) / g0).min(1.0)
+        } else {
+            1.0
+        }
+    }
+}
+
+/// `ambient + diffuse`: the factor of a sample without a usable normal.
+#[inline(always)]
+fn flat(m: &Material) -> f32 {
+    m.ambient + m.diffuse
+}
+
+/// The unit normal `n` turned to face the viewer, and `N·V` (two-sided lighting).
+#[inline(always)]
+fn facing(n: Vec3, view: Vec3) -> (Vec3, f32) {
+    let n_dot_v = n.dot(view);
+    if n_dot_v < 0.0 {
+        (-n, -n_dot_v)
+    } else {
+        (n, n_dot_v)
+    }
+}
+
+/// A surface sample's colour from its sums: `c · lit + spec`.
+#[inline(always)]
+fn ungated(m: &Material, base: [f32; 3], diffuse: f32, specular: f32) -> [f32; 3] {
+    let lit = m.ambient + m.diffuse * diffuse;
+    let spec = m.specular * specular;
+    base.map(|c| c * lit + spec)
+}
+
+/// A volume sample's colour from its sums: the lit colour blended with the flat one by
+/// the gate's weight `w`.
+#[inline(always)]
+fn gated(m: &Material, base: [f32; 3], diffuse: f32, specular: f32, w: f32) -> [f32; 3] {
+    let lit = m.ambient + m.diffuse * diffuse;
+    let spec = m.specular * specular;
+    let mut out = [0.0f32; 3];
+    for c in 0..3 {
+        let shaded = base[c] * lit + spec;
+        let unshaded = base[c] * flat(m);
+        out[c] = unshaded + w * (shaded - unshaded);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hoisted_cosines_match_glint_lobe_geometry() {
+        let dirs = [
+            Vec3::new(0.3, -0.2, 0.9),
+            Vec3::new(-0.7, 0.1, 0.4),
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(0.5, 0.5, -0.2),
+        ];
+        for geometry in [Geometry::Phong, Geometry::Blinn] {
+            let shader = Shader::new(
+                LobeKind::Exact,
+                10.0,
+                4,
+                geometry,
+                Material::default(),
+                vec![],
+                0.0,
+            )
+            .unwrap();
+            for n in dirs {
+                for l in dirs {
+                    for v in dirs {
+                        let (n, l, v) = (
+                            n.normalize_or_zero(),
+                            l.normalize_or_zero(),
+                            v.normalize_or_zero(),
+                        );
+                        let h = (l + v).normalize_or_zero();
+                        let ours = shader.cos(n.dot(l), n.dot(v), l.dot(v), n, h);
+                        let theirs = geometry.cos(n.to_array(), l.to_array(), v.to_array());
+                        if h != Vec3::ZERO {
+                            assert!((ours - theirs).abs() < 1e-5, "{geometry}: {ours} {theirs}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn headlight_points_back_along_the_view() {
+        let cam =
+            Camera::frame(&crate::camera::CameraSpec::default(), Vec3::ZERO, 1.0, 4, 4).unwrap();
+        let l = Light::HEADLIGHT.direction(&cam);
+        assert!((l + cam.forward).length() < 1e-6);
+        let side = Light {
+            azimuth: 90.0,
+            elevation: 0.0,
+            intensity: 1.0,
+        };
+        assert!((side.direction(&cam) - cam.right).length() < 1e-6);
+    }
+
+    #[test]
+    fn table_specular_is_the_units_output_per_sample() {
+        // Normal along the view (0, 0, 1) and a light l with l·view = l.z: Phong's
+        // cosine 2(N·L)(N·V) - L·V is exactly l.z in f32, so each sample's specular
+        // is material.specular times the unit's output for cos_code(l.z), which
+        // `Unit::eval` gives independently of the table.
+        use glint_hw::{Config, Input, Unit};
+        for config in [
+            Config::default(),
+            Config {
+                out_bits: 12,
+                ..Config::default()
+            },
+        ] {
+            let unit = Unit::new(config).unwrap();
+            let n = 60;
+            let m = Material::default();
+            let full = unit.full_scale();
+            let one = unit.cos_one() as f32;
+            let table = unit.cos_table(n).unwrap();
+            let mut distinct = std::collections::BTreeSet::new();
+            // Every code in (0.75, 1] and the cosines halfway between codes.
+            for k in (1..=(one as i32) / 2).rev() {
+                let c = (2.0 * one - k as f32) / (2.0 * one);
+                for c in [c, c.next_up(), c.next_down()] {
+                    let light = Vec3::new((1.0 - c * c).sqrt(), 0.0, c);
+                    let shader = Shader::with_specular(
+                        Specular::from(table.clone()),
+                        Geometry::Phong,
+                        m,
+                        vec![],
+                        0.0,
+                    )
+                    .unwrap();
+                    // The light in world space, as `placed` would put it.
+                    let shader = Shader {
+                        lights: vec![(light, 1.0)],
+                        ..shader
+                    };
+                    let ray = shader.for_ray(Vec3::new(0.0, 0.0, 1.0));
+                    // Black base colour: the shaded colour is the specular term alone.
+                    let got = shader.shade([0.0; 3], Vec3::new(0.0, 0.0, -2.0), &ray);
+                    let code = unit.cos_code(f64::from(c)).unwrap();
+                    let out = unit
+                        .eval(&Input {
+                            cos: code,
+                            n,
+                            ks: [full; 3],
+                        })
+                        .unwrap();
+                    let value = (out.rgb[0] as f64 / full as f64) as f32;
+                    assert_eq!(got, [m.specular * value; 3], "c = {c}, code {code}");
+                    distinct.insert(out.rgb[0]);
+                }
+            }
+            // Not vacuous: the unit's output takes many values over this range.
+            assert!(distinct.len() > 50, "{} output codes", distinct.len());
+        }
+    }
+
+    #[test]
+    fn flat_regions_get_no_highlight() {
+        let shader = Shader::new(
+            LobeKind::EnergyFit,
+            40.0,
+            4,
+            Geometry::Phong,
+            Material::default(),
+            vec![Light::HEADLIGHT],
+            0.5,
+        )
+        .unwrap();
+        // A camera looking down -z: the headlight shines along +z.
+        let cam = Camera::frame(
+            &crate::camera::CameraSpec {
+                view: crate::camera::View::Superior,
+                ..Default::default()
+            },
+            Vec3::ZERO,
+            1.0,
+            4,
+            4,
+        )
+        .unwrap();
+        let shader = shader.placed(&cam);
+        assert!((shader.lights[0].0 - Vec3::new(0.0, 0.0, 1.0)).length() < 1e-6);
+        let ray = shader.for_ray(Vec3::new(0.0, 0.0, 1.0));
+        let m = Material::default();
+        // Below the gate: ambient + diffuse, no specular.
+        let c = shader.shade([1.0, 1.0, 1.0], Vec3::new(0.0, 0.0, -0.1), &ray);
+        assert!((c[0] - (m.ambient + m.diffuse)).abs() < 1e-6);
+        // Well above: full mirror highlight (normal towards the light and viewer).
+        let c = shader.shade([1.0, 1.0, 1.0], Vec3::new(0.0, 0.0, -10.0), &ray);
+        assert!((c[0] - (m.ambient + m.diffuse + m.specular)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn surface_shading_matches_glint_lobe_geometry_and_is_two_sided() {
+        // An independent restatement of the model for one light: ambient + diffuse
+        // N·L + specular cos^n of glint-lobe's own geometry.
+        let l = Vec3::new(0.3, 0.2, 0.9).normalize_or_zero();
+        let v = Vec3::new(-0.1, 0.1, 1.0).normalize_or_zero();
+        let n = Vec3::new(0.1, 0.0, 1.0).normalize_or_zero();
+        let m = Material::default();
+        for geometry in [Geometry::Phong, Geometry::Blinn] {
+            let mut shader =
+                Shader::new(LobeKind::Exact, 20.0, 4, geometry, m, vec![], 0.0).unwrap();
+            shader.lights = vec![(l, 1.0)];
+            let c = geometry.cos(n.to_array(), l.to_array(), v.to_array());
+            let want = m.ambient + m.diffuse * n.dot(l) + m.specular * c.max(0.0).powf(20.0);
+            let got = shader.shade_normal([1.0; 3], n, v);
+            assert!(
+                (got[0] - want).abs() < 1e-5,
+                "{geometry}: {got:?} vs {want}"
+            );
+            // The back face seen from the front is lit like the front.
+            assert_eq!(shader.shade_normal([1.0; 3], -n, v), got);
+        }
+    }
+}

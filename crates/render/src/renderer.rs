@@ -1,0 +1,372 @@
+//! The [`Renderer`]: scenes of one volume and one set of meshes turned into images,
+//! keeping what frames share (the field, the meshes, the classification).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glint_core::camera::{Camera, Projection};
+use glint_core::{Image, RenderError, RenderMode, ScalarColors, Timings};
+use glint_io::{ReadOptions, Volume};
+use glint_volume::{Classification, ClassifySettings, Field, Kernel, Prefilter, TransferFunction};
+
+use crate::hwlobe::HwCache;
+use crate::meshes::{MeshKey, MeshSet};
+use crate::scene::{Derived, Input, Plan, Resolved, Scene};
+
+/// A rendered image and the resolved scene that made it.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image.
+    pub image: Image,
+    /// The scene with every default written in, and [`Scene::derived`] filled.
+    pub scene: Scene,
+    /// Stage times: `read` and the field's stages from [`Renderer::open`] (`meshes`
+    /// and `isosurface` when they were read or extracted for this scene), then
+    /// `classify` (when the classification was built) and `frame`.
+    pub timings: Timings,
+    /// The colours of the scalar overlays, for a colour bar
+    /// ([`ScalarColors::draw_bar`]); `None` without scalar overlays.
+    pub colors: Option<ScalarColors>,
+}
+
+/// Renders scenes of one volume and one set of meshes, keeping the field, the meshes
+/// read (and the isosurface extracted) and the last classification, so frames that
+/// change only the camera, lights, lobe or size do not read, extract or classify again
+/// (an interactive viewer, a notebook rendering many views). Cloning is cheap (the
+/// data are shared): one clone per viewer client.
+#[derive(Clone)]
+pub struct Renderer {
+    field: Option<Arc<Field>>,
+    classification: Option<(TransferFunction, Arc<Classification>)>,
+    pub(crate) meshes: Option<(MeshKey, Arc<MeshSet>)>,
+    /// The last `hw` lobe's unit and table.
+    hw: HwCache,
+    /// Which compositing loop frames use (the SIMD one by default).
+    pub kernel: Kernel,
+    opened: Timings,
+    notes: Vec<String>,
+    /// The volume the field was built from, kept to rebuild the field when a scene
+    /// asks for another [`Prefilter`]; `None` for a renderer made from a field.
+    volume: Option<Arc<Volume>>,
+}
+
+impl Renderer {
+    /// Reads `input` and builds its field (nothing for [`Input::None`]).
+    pub fn open(input: &Input) -> Result<Renderer, RenderError> {
+        Renderer::open_with(input, &ReadOptions::default())
+    }
+
+    /// [`Renderer::open`] with reader options (e.g. `strict`); the reader's notes are
+    /// kept ([`Renderer::notes`]).
+    pub fn open_with(input: &Input, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        Renderer::open_prefiltered(input, options, Prefilter::default())
+    }
+
+    /// [`Renderer::open_with`] for `scene`: its input, its field built with the scene's
+    /// prefilter (so rendering it builds no second field).
+    pub fn open_for(scene: &Scene, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        Renderer::open_prefiltered(&scene.input, options, scene.prefilter)
+    }
+
+    fn open_prefiltered(
+        input: &Input,
+        options: &ReadOptions,
+        prefilter: Prefilter,
+    ) -> Result<Renderer, RenderError> {
+        if *input == Input::None {
+            return Ok(Renderer {
+                field: None,
+                classification: None,
+                meshes: None,
+                hw: HwCache::default(),
+                kernel: Kernel::Auto,
+                opened: Timings::default(),
+                notes: Vec::new(),
+                volume: None,
+            });
+        }
+        let start = Instant::now();
+        let opened = input.open_with(options)?;
+        let mut read = Timings::default();
+        // Inflating is reported apart from reading and parsing (issue 12).
+        let inflate = opened.inflate.unwrap_or_default();
+        read.record("read", start.elapsed().saturating_sub(inflate));
+        if let Some(inflate) = opened.inflate {
+            read.record("read: inflate", inflate);
+        }
+        let mut renderer = Renderer::from_shared_volume(Arc::new(opened.volume), prefilter)?;
+        read.extend(&renderer.opened);
+        renderer.opened = read;
+        renderer.notes = opened.notes;
+        Ok(renderer)
+    }
+
+    /// What the reader said about the input: where the affine came from, what it
+    /// assumed (lines starting "geometry assumed:"), dropped dimensions.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    /// Reads `scene`'s input and its meshes (with their overlays, and the volume's
+    /// isosurface in surface mode).
+    pub fn open_scene(scene: &Scene) -> Result<Renderer, RenderError> {
+        let mut renderer = Renderer::open(&scene.input)?;
+        if !scene.meshes.is_empty() || scene.is_surface() {
+            renderer.mesh_set(scene)?;
+        }
+        Ok(renderer)
+    }
+
+    /// A renderer of a volume already in memory (copied: the renderer keeps it to
+    /// rebuild the field for another [`Prefilter`]).
+    pub fn from_volume(volume: &Volume) -> Result<Renderer, RenderError> {
+        Renderer::from_shared_volume(Arc::new(volume.clone()), Prefilter::default())
+    }
+
+    /// A renderer of a shared volume, its field built with `prefilter` (a scene asking
+    /// for another one rebuilds it).
+    pub fn from_shared_volume(
+        volume: Arc<Volume>,
+        prefilter: Prefilter,
+    ) -> Result<Renderer, RenderError> {
+        let field = Field::with_prefilter(&volume, prefilter)?;
+        let mut renderer = Renderer::from_field(Arc::new(field));
+        renderer.volume = Some(volume);
+        Ok(renderer)
+    }
+
+    /// Rebuilds the field when `prefilter` is not the one it was built with (and
+    /// forgets what depended on it).
+    fn use_prefilter(&mut self, prefilter: Prefilter) -> Result<(), RenderError> {
+        let Some(field) = &self.field else {
+            return Ok(());
+        };
+        if field.prefilter() == prefilter {
+            return Ok(());
+        }
+        let Some(volume) = &self.volume else {
+            return Err(RenderError::Parameter(format!(
+                "prefilter {}: this renderer was given a field built with prefilter {}",
+                prefilter.name(),
+                field.prefilter().name()
+            )));
+        };
+        let field = Field::with_prefilter(volume, prefilter)?;
+        self.opened.extend(field.timings());
+        self.field = Some(Arc::new(field));
+        self.classification = None;
+        self.meshes = None;
+        Ok(())
+    }
+
+    /// A renderer of a field already built (several renderers, each with its own
+    /// classification, can share one field: one per viewer client).
+    pub fn from_field(field: Arc<Field>) -> Renderer {
+        Renderer {
+            opened: field.timings().clone(),
+            field: Some(field),
+            classification: None,
+            meshes: None,
+            hw: HwCache::default(),
+            kernel: Kernel::Auto,
+            notes: Vec::new(),
+            volume: None,
+        }
+    }
+
+    /// The field every scene is rendered from; `None` for a renderer of meshes only.
+    pub fn field(&self) -> Option<&Arc<Field>> {
+        self.field.as_ref()
+    }
+
+    /// The meshes of `scene` (and the isosurface it asks for): the ones read last when
+    /// the scene names the same files and iso value, else read now.
+    fn mesh_set(&mut self, scene: &Scene) -> Result<Arc<MeshSet>, RenderError> {
+        let field = self.field.as_deref();
+        let iso = if scene.mode == RenderMode::Surface {
+            scene.surface_iso(field)
+        } else {
+            None
+        };
+        let key = MeshKey::new(&scene.meshes, iso);
+        if let Some((k, set)) = &self.meshes {
+            if *k == key {
+                return Ok(set.clone());
+            }
+        }
+        let extra = match (field, iso) {
+            (Some(f), Some(iso)) => {
+                let mesh = self.opened.time("isosurface", || {
+                    glint_mesh::extract_grid(f.values(), f.dims(), &f.affine(), iso)
+                        .map_err(crate::mesh_error)
+                })?;
+                if mesh.triangles.is_empty() {
+                    return Err(RenderError::Parameter(format!(
+                        "no isosurface at iso value {iso}: no voxel edge crosses it"
+                    )));
+                }
+                Some(mesh)
+            }
+            _ => None,
+        };
+        let set = self
+            .opened
+            .time("meshes", || MeshSet::load(&scene.meshes, extra))?;
+        let set = Arc::new(set);
+        self.meshes = Some((key, set.clone()));
+        Ok(set)
+    }
+
+    /// Resolves `scene` against this renderer's volume ([`Scene::resolve_for`]) or,
+    /// for a surface scene, its meshes (read now if the scene names others); a `hw`
+    /// lobe's table is built once per (configuration, n) and kept.
+    pub fn resolve(&mut self, scene: &Scene) -> Result<Resolved, RenderError> {
+        self.use_prefilter(scene.prefilter)?;
+        if scene.is_surface() || self.field.is_none() {
+            let set = self.mesh_set(scene)?;
+            return scene.resolve_surface(self.field.as_deref(), &set, &self.hw);
+        }
+        let mut resolved = if !scene.meshes.is_empty() {
+            let set = self.mesh_set(scene)?;
+            let field = self.field.as_ref().expect("checked above");
+            scene.resolve_hybrid(field, &set, &self.hw)?
+        } else {
+            let field = self.field.as_ref().expect("checked above");
+            scene.resolve_cached(field, &self.hw)?
+        };
+        if let Plan::Volume { frame, .. } = &mut resolved.plan {
+            frame.kernel = self.kernel;
+        }
+        Ok(resolved)
+    }
+
+    /// The camera a render of `scene` uses (for a volume it frames what the scene's
+    /// transfer function makes visible, so it classifies, and keeps the
+    /// classification; for surfaces, the bounding sphere of every mesh).
+    pub fn camera(&mut self, scene: &Scene) -> Result<Camera, RenderError> {
+        match self.resolve(scene)?.plan {
+            Plan::Volume {
+                tf,
+                classify,
+                frame,
+                ..
+            } => {
+                let (class, _) = self.classification(&tf, &classify)?;
+                class.camera(&frame)
+            }
+            Plan::Surface {
+                surfaces, settings, ..
+            } => surfaces.camera(&settings),
+        }
+    }
+
+    /// The classification for `tf` and `settings`: the last one when they are the
+    /// same, else a new one (which replaces it). Returns it and whether it was built.
+    pub fn classification(
+        &mut self,
+        tf: &TransferFunction,
+        settings: &ClassifySettings,
+    ) -> Result<(Arc<Classification>, bool), RenderError> {
+        if let Some((t, c)) = &self.classification {
+            if t == tf && c.settings() == settings {
+                return Ok((c.clone(), false));
+            }
+        }
+        let field = self
+            .field
+            .clone()
+            .ok_or_else(|| RenderError::Parameter("the renderer has no volume".into()))?;
+        let c = Arc::new(Classification::new(field, tf, settings)?);
+        self.classification = Some((tf.clone(), c.clone()));
+        Ok((c, true))
+    }
+
+    /// Renders `scene` (its input is not read again: the renderer's volume is used;
+    /// its meshes are read when they are not the ones read last).
+    /// `progress` is called with the number of pixels finished after each tile
+    /// (volumes) or once at the end (surfaces).
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Rendered, RenderError> {
+        let resolved = self.resolve(scene)?;
+        self.render_resolved(resolved, progress)
+    }
+
+    /// Renders a scene resolved by [`Renderer::resolve`].
+    pub fn render_resolved(
+        &mut self,
+        resolved: Resolved,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Rendered, RenderError> {
+        let mut timings = self.opened.clone();
+        let mut scene = resolved.scene;
+        let (image, derived, colors) = match resolved.plan {
+            Plan::Volume {
+                tf,
+                classify,
+                frame,
+                meshes,
+            } => {
+                let start = Instant::now();
+                let (class, built) = self.classification(&tf, &classify)?;
+                if built {
+                    timings.record("classify", start.elapsed());
+                }
+                let camera = class.camera(&frame)?;
+                let shader = &resolved.shader;
+                let image = timings.time("frame", || match &meshes {
+                    None => class.render(shader, &frame, progress),
+                    Some(layer) => layer.render(&camera, shader, |far| {
+                        class.render_in_front(shader, &frame, progress, far)
+                    }),
+                })?;
+                let field = self.field.as_deref().expect("a volume plan has a field");
+                let step_mm = scene.step * field.min_spacing();
+                let mut d = derived(&camera);
+                d.step_mm = Some(step_mm);
+                d.min_spacing_mm = Some(field.min_spacing());
+                d.transfer_function = Some(tf);
+                (image, d, None)
+            }
+            Plan::Surface {
+                surfaces,
+                settings,
+                colors,
+            } => {
+                let camera = surfaces.camera(&settings)?;
+                let image = timings.time("frame", || {
+                    surfaces.render(&camera, &resolved.shader, &settings, colors.as_ref())
+                })?;
+                progress(u64::from(settings.width) * u64::from(settings.height));
+                (image, derived(&camera), colors)
+            }
+        };
+        scene.derived = Some(derived);
+        Ok(Rendered {
+            image,
+            scene,
+            timings,
+            colors,
+        })
+    }
+}
+
+/// The camera in world units (the volume's fields are filled by the caller).
+fn derived(camera: &Camera) -> Derived {
+    let focal = camera.eye + camera.forward * 100.0;
+    Derived {
+        eye: camera.eye.to_array(),
+        focal_point: focal.to_array(),
+        view_up: camera.up.to_array(),
+        view_angle_deg: match camera.projection {
+            Projection::Perspective => 2.0 * (camera.half_height as f64).atan().to_degrees(),
+            Projection::Orthographic => glint_core::camera::FIELD_OF_VIEW_DEG,
+        },
+        parallel_scale: camera.half_height,
+        step_mm: None,
+        min_spacing_mm: None,
+        transfer_function: None,
+    }
+}

@@ -1,0 +1,263 @@
+//! The one description of a render: [`Scene`], a serialisable value (versioned JSON) that
+//! every front end builds (the command line, compare mode, the viewer, the Python
+//! module, benches and tests), and [`Renderer`], which turns scenes into images.
+//!
+//! [`Scene::resolve`] is the only place where defaults are chosen (the preset guessed
+//! from the data, the shininess from the preset, the iso value from the range, ...);
+//! each choice is written back into the resolved scene, so a dumped scene renders the
+//! same image again.
+
+use std::path::PathBuf;
+
+use glint_core::{CameraSpec, Light, MaterialOverrides, RenderError, RenderMode};
+use glint_io::{open_volume, ReadOptions, Volume};
+use glint_volume::{Field, Phantom, Prefilter, Sampling, TransferFunction};
+use serde::{Deserialize, Serialize};
+
+use crate::meshes::MeshSpec;
+
+mod file;
+mod lobe;
+mod patch;
+mod resolve;
+#[cfg(test)]
+mod tests;
+
+pub use lobe::{LobeSpec, SceneLobe};
+pub use patch::MERGED_FIELDS;
+pub use resolve::{MeshLayer, Plan, Resolved};
+
+/// The scene schema version this build reads and writes.
+pub const SCENE_VERSION: u32 = 1;
+
+/// The largest scene file accepted (a scene is a few kilobytes; an inline transfer
+/// function of a few hundred points stays far below this).
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// Shininess used when neither the scene nor a preset gives one (VTK's usual volume
+/// specular power in Slicer's CT presets).
+pub const DEFAULT_SHININESS: f64 = 10.0;
+
+/// A render, described completely: what to read, how to classify it, how to light and
+/// view it, and the image size. Fields left unset are chosen by [`Scene::resolve`].
+///
+/// ```
+/// use glint_render::{Input, Phantom, Renderer, Scene};
+///
+/// let scene = Scene {
+///     input: Input::Phantom { name: Phantom::SheppLogan, size: 32 },
+///     size: [32, 32],
+///     ..Scene::default()
+/// };
+/// let json = scene.to_json().unwrap();
+/// assert_eq!(Scene::from_json(&json).unwrap(), scene);
+/// let mut renderer = Renderer::open(&scene.input).unwrap();
+/// let rendered = renderer.render(&scene, &|_| {}).unwrap();
+/// assert_eq!(rendered.image.rgb.len(), 32 * 32);
+/// // The resolved scene names what was chosen: the phantom's preset and its power.
+/// assert_eq!(rendered.scene.preset.as_deref(), Some("phantom"));
+/// assert!(rendered.scene.lobe.n.is_some());
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Scene {
+    /// Schema version ([`SCENE_VERSION`]).
+    pub version: u32,
+    /// The volume ([`Input::None`] for a scene of meshes only).
+    pub input: Input,
+    /// Surface meshes, rasterised ([`RenderMode::Surface`]). A scene of meshes only
+    /// may leave `input` out: a scene read from JSON with meshes and no `input` key
+    /// has no volume.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<MeshSpec>,
+    /// Surface renders: samples per pixel along each axis, 1, 2 or 4 (default
+    /// [`DEFAULT_SSAA`](crate::DEFAULT_SSAA)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ssaa: Option<u32>,
+    /// How samples along a ray make a pixel.
+    pub mode: RenderMode,
+    /// Iso value for [`RenderMode::Iso`] and for the isosurface [`RenderMode::Surface`]
+    /// extracts from the volume (default: the middle of the value range).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iso: Option<f32>,
+    /// Transfer-function and material preset (default: guessed from the data); unused
+    /// when `transfer_function` is given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
+    /// An inline transfer function, which replaces the preset's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transfer_function: Option<TransferFunction>,
+    /// Material coefficients that replace the preset's.
+    pub material: MaterialOverrides,
+    /// The specular lobe.
+    pub lobe: LobeSpec,
+    /// Directional lights relative to the camera (the headlight is `(0, 0)`).
+    pub lights: Vec<Light>,
+    /// Camera placement.
+    pub camera: CameraSpec,
+    /// Image width and height in pixels.
+    pub size: [u32; 2],
+    /// Sample distance along rays, in voxels of the smallest spacing.
+    pub step: f64,
+    /// Gradient-magnitude gate, as a fraction of the value range per voxel: samples
+    /// with a weaker gradient get no directional shading.
+    pub gate: f64,
+    /// Empty-space skipping (never changes the image, only the speed).
+    pub skip_empty: bool,
+    /// How the volume's samples are filtered before trilinear reconstruction
+    /// ([`Prefilter`]; `binomial` by default: no "wood grain" rings).
+    pub prefilter: Prefilter,
+    /// Composite mode: the transfer function read at each sample (`point`, the
+    /// default) or integrated over the segments between samples (`pre-integrated`:
+    /// thin shells of opacity show whatever the step) ([`Sampling`]).
+    pub sampling: Sampling,
+    /// The length of matter, in mm, whose opacity the transfer function gives (VTK's
+    /// scalar opacity unit distance); absent: one voxel of the smallest spacing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opacity_unit: Option<f64>,
+    /// Background colour, linear RGB.
+    pub background: [f32; 3],
+    /// Written by a render for other tools (e.g. scripts/bench_vtk.py): the camera
+    /// and transfer function that were used, in world units. Ignored on input.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub derived: Option<Derived>,
+}
+
+impl Default for Scene {
+    /// The built-in phantom, composite, lobe `k` (n from the preset, v = 4, Phong),
+    /// headlight, anterior perspective view, 512x512, step 0.5 voxel.
+    fn default() -> Self {
+        Scene {
+            version: SCENE_VERSION,
+            input: Input::default(),
+            meshes: Vec::new(),
+            ssaa: None,
+            mode: RenderMode::Composite,
+            iso: None,
+            preset: None,
+            transfer_function: None,
+            material: MaterialOverrides::default(),
+            lobe: LobeSpec::default(),
+            lights: vec![Light::HEADLIGHT],
+            camera: CameraSpec::default(),
+            size: [512, 512],
+            step: 0.5,
+            gate: 0.01,
+            skip_empty: true,
+            prefilter: Prefilter::default(),
+            sampling: Sampling::default(),
+            opacity_unit: None,
+            background: [0.0; 3],
+            derived: None,
+        }
+    }
+}
+
+/// Where the volume comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum Input {
+    /// A file (or DICOM directory) any glint reader opens.
+    Path(PathBuf),
+    /// A built-in phantom sampled on a `size`^3 grid.
+    Phantom {
+        /// Which phantom.
+        name: Phantom,
+        /// Grid edge in voxels.
+        size: usize,
+    },
+    /// No volume: a scene of meshes only (`"input": "none"`).
+    None,
+}
+
+impl Default for Input {
+    /// The default phantom at its default size.
+    fn default() -> Self {
+        Input::Phantom {
+            name: Phantom::default(),
+            size: Phantom::DEFAULT_SIZE,
+        }
+    }
+}
+
+impl Input {
+    /// Reads the file or builds the phantom.
+    pub fn open(&self) -> Result<Volume, RenderError> {
+        Ok(self.open_with(&ReadOptions::default())?.volume)
+    }
+
+    /// The volume with what the reader said and measured.
+    pub fn open_with(&self, options: &ReadOptions) -> Result<OpenedVolume, RenderError> {
+        match self {
+            Input::Path(path) => {
+                let file = open_volume(path, options)?;
+                Ok(OpenedVolume {
+                    volume: file.volume,
+                    notes: file.notes,
+                    inflate: file.inflate,
+                })
+            }
+            Input::Phantom { name, size } => Ok(OpenedVolume {
+                volume: name.volume(*size)?,
+                notes: Vec::new(),
+                inflate: None,
+            }),
+            Input::None => Err(RenderError::Parameter(
+                "the scene has no volume (input \"none\")".into(),
+            )),
+        }
+    }
+}
+
+/// A volume read by [`Input::open_with`].
+#[derive(Clone, Debug)]
+pub struct OpenedVolume {
+    /// The volume.
+    pub volume: Volume,
+    /// The reader's notes (e.g. DICOM's "geometry assumed: ..."); a phantom has none.
+    pub notes: Vec<String>,
+    /// Time spent inflating gzip data, when the reader measured it.
+    pub inflate: Option<std::time::Duration>,
+}
+
+/// What a render used, in world units, for tools that rebuild the scene elsewhere
+/// (VTK in scripts/bench_vtk.py). Written by [`Renderer::render`](crate::Renderer::render); ignored on input.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Derived {
+    /// Eye position, mm (RAS+).
+    pub eye: [f32; 3],
+    /// A point on the view axis, mm.
+    pub focal_point: [f32; 3],
+    /// Up vector.
+    pub view_up: [f32; 3],
+    /// Perspective: full vertical view angle, degrees.
+    pub view_angle_deg: f64,
+    /// Orthographic: half the image height, mm.
+    pub parallel_scale: f32,
+    /// Sample distance, mm (ray-cast volumes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step_mm: Option<f64>,
+    /// The smallest voxel spacing, mm (the transfer function's unit distance).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_spacing_mm: Option<f64>,
+    /// The transfer function used (ray-cast volumes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transfer_function: Option<TransferFunction>,
+}
+
+impl Scene {
+    /// Whether the scene is rasterised (meshes without a volume, or the volume's
+    /// isosurface asked for) rather than ray cast (a volume, with or without meshes
+    /// drawn into its frame).
+    pub fn is_surface(&self) -> bool {
+        self.mode == RenderMode::Surface || (!self.meshes.is_empty() && self.input == Input::None)
+    }
+
+    /// The iso value of the volume's isosurface in a surface scene (the scene's, else
+    /// the middle of the robust range), `None` when the scene has no volume.
+    pub(crate) fn surface_iso(&self, field: Option<&Field>) -> Option<f32> {
+        let field = field?;
+        let (lo, hi) = field.robust_range();
+        Some(self.iso.unwrap_or((lo + hi) / 2.0))
+    }
+}

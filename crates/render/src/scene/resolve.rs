@@ -1,0 +1,367 @@
+//! Resolving a scene: every default chosen (the one place glint picks what the user
+//! did not say), written back into the scene, and the settings each pipeline needs.
+
+use std::sync::Arc;
+
+use glint_core::camera::Camera;
+use glint_core::{
+    Image, Light, Material, MaterialOverrides, RenderError, RenderMode, ScalarColors, Shader,
+    MAX_LIGHTS,
+};
+use glint_raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
+use glint_volume::{preset, ClassifySettings, Field, FrameSettings, Kernel, TransferFunction};
+
+use super::{Input, Scene, DEFAULT_SHININESS};
+use crate::hwlobe::HwCache;
+use crate::meshes::{MeshSet, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
+use crate::Renderer;
+
+/// A scene with every default chosen, and what the ray caster or the rasterizer
+/// needs to render it.
+#[derive(Clone, Debug)]
+pub struct Resolved {
+    /// The scene with every default written in.
+    pub scene: Scene,
+    /// The lighting.
+    pub shader: Shader,
+    /// How the image is made.
+    pub plan: Plan,
+}
+
+/// How a resolved scene is rendered.
+#[derive(Clone, Debug)]
+#[allow(clippy::large_enum_variant)]
+pub enum Plan {
+    /// Ray casting the volume.
+    Volume {
+        /// The transfer function.
+        tf: TransferFunction,
+        /// What the classification depends on.
+        classify: ClassifySettings,
+        /// What the frame depends on.
+        frame: FrameSettings,
+        /// Meshes drawn in the volume with the same camera, when the scene has any:
+        /// rays stop at the nearest surface and the volume composites over it.
+        meshes: Option<MeshLayer>,
+    },
+    /// Rasterising the meshes (and the volume's isosurface).
+    Surface {
+        /// The meshes, read.
+        surfaces: Arc<Surfaces>,
+        /// Size, supersampling, camera, colours.
+        settings: SurfaceSettings,
+        /// The colours of the scalar overlays, when any.
+        colors: Option<ScalarColors>,
+    },
+}
+
+/// Meshes rasterised into a ray-cast volume's frame ([`Plan::Volume`]).
+#[derive(Clone, Debug)]
+pub struct MeshLayer {
+    /// The meshes, read.
+    pub surfaces: Arc<Surfaces>,
+    /// Size, supersampling, colours (the camera is the volume's).
+    pub settings: SurfaceSettings,
+    /// The colours of the scalar overlays, when any.
+    pub colors: Option<ScalarColors>,
+}
+
+impl MeshLayer {
+    /// Draws the meshes with `camera`, then composites `frame` (rendered by `volume`,
+    /// given each pixel's distance to the surfaces) over them: volume colour plus
+    /// (1 - volume opacity) times what lies behind (the surfaces over the background).
+    pub(crate) fn render(
+        &self,
+        camera: &Camera,
+        shader: &Shader,
+        volume: impl FnOnce(&[f32]) -> Result<Image, RenderError>,
+    ) -> Result<Image, RenderError> {
+        let (behind, far) =
+            self.surfaces
+                .render_layer(camera, shader, &self.settings, self.colors.as_ref())?;
+        let mut image = volume(&far)?;
+        let bg = self.settings.background;
+        for ((rgb, a), (b_rgb, b_a)) in image
+            .rgb
+            .iter_mut()
+            .zip(image.alpha.iter_mut())
+            .zip(behind.rgb.iter().zip(&behind.alpha))
+        {
+            let t = 1.0 - *a;
+            for i in 0..3 {
+                rgb[i] += t * (b_rgb[i] - bg[i]);
+            }
+            *a += t * b_a;
+        }
+        image.stats.shaded += behind.stats.shaded;
+        Ok(image)
+    }
+}
+
+/// The lights of a scene: at least one, at most [`MAX_LIGHTS`].
+fn check_lights(lights: &[Light]) -> Result<(), RenderError> {
+    if lights.is_empty() {
+        return Err(RenderError::Parameter(
+            "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0)"
+                .into(),
+        ));
+    }
+    if lights.len() > MAX_LIGHTS {
+        return Err(RenderError::Parameter(format!(
+            "{} lights: at most {MAX_LIGHTS}",
+            lights.len()
+        )));
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Reads the input and the meshes and resolves the scene against them (one-shot;
+    /// a [`Renderer`] keeps the volume, the meshes and the classification across
+    /// scenes).
+    pub fn resolve(&self) -> Result<Resolved, RenderError> {
+        Renderer::open_scene(self)?.resolve(self)
+    }
+
+    /// Resolves a surface scene: `field` the volume (if any), `set` its meshes and
+    /// isosurface as read for this scene.
+    pub(crate) fn resolve_surface(
+        &self,
+        field: Option<&Field>,
+        set: &MeshSet,
+        hw: &HwCache,
+    ) -> Result<Resolved, RenderError> {
+        let mut scene = self.clone();
+        scene.derived = None;
+        match (&scene.input, scene.mode) {
+            (_, RenderMode::Surface) => {}
+            // A scene of meshes only: rasterising is the only way to render it.
+            (Input::None, RenderMode::Composite) => scene.mode = RenderMode::Surface,
+            (Input::None, mode) => {
+                return Err(RenderError::Parameter(format!(
+                    "mode {} needs a volume; a scene of meshes only renders in surface mode",
+                    mode.name()
+                )))
+            }
+            (_, mode) => {
+                return Err(RenderError::Parameter(format!(
+                    "mode {} needs the volume, which this renderer does not hold",
+                    mode.name()
+                )))
+            }
+        }
+        scene.iso = scene.surface_iso(field);
+        if field.is_none() && self.iso.is_some() {
+            return Err(RenderError::Parameter(
+                "an iso value needs a volume to extract the isosurface from".into(),
+            ));
+        }
+        check_lights(&scene.lights)?;
+        let material = scene.material.apply(SURFACE_MATERIAL);
+        material.validate()?;
+        scene.material = MaterialOverrides {
+            ambient: Some(material.ambient),
+            diffuse: Some(material.diffuse),
+            specular: Some(material.specular),
+            shade: Some(material.shade),
+        };
+        let n = *scene.lobe.n.get_or_insert(SURFACE_SHININESS);
+        let layer = scene.resolve_mesh_layer(set)?;
+        scene.camera.validate()?;
+        let specular = scene.lobe.specular(n, hw)?;
+        let shader = Shader::with_specular(
+            specular,
+            scene.lobe.geometry,
+            material,
+            scene.lights.clone(),
+            0.0,
+        )?;
+        Ok(Resolved {
+            scene,
+            shader,
+            plan: Plan::Surface {
+                surfaces: layer.surfaces,
+                settings: layer.settings,
+                colors: layer.colors,
+            },
+        })
+    }
+
+    /// The meshes' part of a scene with meshes, `set` as read for it: writes the
+    /// supersampling, mesh colours, colour maps and ranges back into the scene.
+    fn resolve_mesh_layer(&mut self, set: &MeshSet) -> Result<MeshLayer, RenderError> {
+        let ssaa = *self.ssaa.get_or_insert(DEFAULT_SSAA);
+        let mesh_colors = self
+            .meshes
+            .iter_mut()
+            .map(|m| *m.color.get_or_insert(SURFACE_COLOR))
+            .collect();
+        let colors = set.resolve_overlays(&mut self.meshes)?;
+        let settings = SurfaceSettings {
+            width: self.size[0],
+            height: self.size[1],
+            ssaa,
+            camera: self.camera,
+            background: self.background,
+            color: SURFACE_COLOR,
+            mesh_colors,
+        };
+        settings.validate()?;
+        Ok(MeshLayer {
+            surfaces: set.surfaces.clone(),
+            settings,
+            colors,
+        })
+    }
+
+    /// Resolves a scene of a volume with meshes in a ray-cast mode: the volume's
+    /// settings as [`Scene::resolve_for`] chooses them, and the meshes drawn in its
+    /// frame.
+    pub(crate) fn resolve_hybrid(
+        &self,
+        field: &Field,
+        set: &MeshSet,
+        hw: &HwCache,
+    ) -> Result<Resolved, RenderError> {
+        let mut volume = self.clone();
+        let meshes = std::mem::take(&mut volume.meshes);
+        volume.ssaa = None;
+        let mut resolved = volume.resolve_cached(field, hw)?;
+        resolved.scene.meshes = meshes;
+        resolved.scene.ssaa = self.ssaa;
+        let layer = resolved.scene.resolve_mesh_layer(set)?;
+        if let Plan::Volume { meshes, .. } = &mut resolved.plan {
+            *meshes = Some(layer);
+        }
+        Ok(resolved)
+    }
+
+    /// Chooses every default for `field` and builds the settings and shader: the one
+    /// place where glint picks anything the user did not say.
+    pub fn resolve_for(&self, field: &Field) -> Result<Resolved, RenderError> {
+        self.resolve_cached(field, &HwCache::default())
+    }
+
+    /// [`Scene::resolve_for`], taking a `hw` lobe's table from `hw` when it has it.
+    pub(crate) fn resolve_cached(
+        &self,
+        field: &Field,
+        hw: &HwCache,
+    ) -> Result<Resolved, RenderError> {
+        if self.is_surface() || !self.meshes.is_empty() {
+            return Err(RenderError::Parameter(
+                "a scene with meshes is resolved by a Renderer, which reads them".into(),
+            ));
+        }
+        let mut scene = self.clone();
+        scene.derived = None;
+        // Presets, the MIP ramp, the default iso value and the gate follow the robust
+        // range (0.5th-99.5th percentile), so a few outlier voxels cannot black out
+        // the image.
+        let (lo, hi) = field.robust_range();
+        let (tf, base, power) = scene.resolve_classification(lo, hi)?;
+        let material = scene.material.apply(base);
+        scene.material = MaterialOverrides {
+            ambient: Some(material.ambient),
+            diffuse: Some(material.diffuse),
+            specular: Some(material.specular),
+            shade: Some(material.shade),
+        };
+        let n = *scene.lobe.n.get_or_insert(power);
+        let iso = match (scene.mode, scene.iso) {
+            (RenderMode::Iso, iso) => *scene.iso.get_or_insert(iso.unwrap_or((lo + hi) / 2.0)),
+            (_, Some(_)) => {
+                return Err(RenderError::Parameter(
+                    "an iso value is only used in iso mode".into(),
+                ))
+            }
+            (_, None) => 0.0,
+        };
+        check_lights(&scene.lights)?;
+        if !scene.gate.is_finite() || !(0.0..=1.0).contains(&scene.gate) {
+            return Err(RenderError::Parameter(format!(
+                "gate {}: expected a fraction in 0..=1",
+                scene.gate
+            )));
+        }
+        let gate = (scene.gate * (hi - lo) as f64 / field.min_spacing()) as f32;
+        let classify = ClassifySettings {
+            mode: scene.mode,
+            iso,
+            step: scene.step,
+            skip_empty: scene.skip_empty,
+            sampling: scene.sampling,
+            opacity_unit: scene.opacity_unit,
+        };
+        classify.validate()?;
+        let frame = FrameSettings {
+            width: scene.size[0],
+            height: scene.size[1],
+            camera: scene.camera,
+            background: scene.background,
+            kernel: Kernel::Auto,
+        };
+        frame.validate()?;
+        scene.camera.validate()?;
+        let specular = scene.lobe.specular(n, hw)?;
+        let shader = Shader::with_specular(
+            specular,
+            scene.lobe.geometry,
+            material,
+            scene.lights.clone(),
+            gate,
+        )?;
+        Ok(Resolved {
+            scene,
+            shader,
+            plan: Plan::Volume {
+                tf,
+                classify,
+                frame,
+                meshes: None,
+            },
+        })
+    }
+
+    /// The transfer function, the material it comes with and the default shininess,
+    /// for a volume whose values span `lo..=hi`; writes the preset (or the MIP ramp)
+    /// that was chosen back into the scene.
+    fn resolve_classification(
+        &mut self,
+        lo: f32,
+        hi: f32,
+    ) -> Result<(TransferFunction, Material, f64), RenderError> {
+        if let Some(tf) = &self.transfer_function {
+            tf.validate()?;
+            let power = match &self.preset {
+                Some(name) => preset(name)?.specular_power(),
+                None => DEFAULT_SHININESS,
+            };
+            return Ok((tf.clone(), Material::default(), power));
+        }
+        let name = match (&self.preset, &self.input) {
+            (Some(p), _) => p.clone(),
+            (None, Input::Phantom { name, .. }) => name.preset().into(),
+            // Hounsfield units reach air at -1000: CT.
+            (None, Input::Path(_)) if lo < -500.0 => "ct-bone".into(),
+            (None, Input::Path(_) | Input::None) => "mr-t2-brain".into(),
+        };
+        let p = preset(&name)?;
+        if self.mode == RenderMode::Mip && self.preset.is_none() {
+            // MIP without a preset: a grey ramp over the volume's range, written back
+            // as an inline transfer function.
+            let ramp = TransferFunction::from_flat(
+                &[lo as f64, 0.0, (hi as f64).max(lo as f64 + 1e-6), 1.0],
+                &[lo as f64, 1.0, 1.0, 1.0],
+            )?;
+            self.transfer_function = Some(ramp.clone());
+            return Ok((ramp, p.material(), p.specular_power()));
+        }
+        self.preset = Some(p.name.to_string());
+        Ok((
+            p.transfer_function(hi as f64)?,
+            p.material(),
+            p.specular_power(),
+        ))
+    }
+}

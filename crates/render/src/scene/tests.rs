@@ -1,0 +1,548 @@
+//! Tests of scenes: JSON, resolution, rendering through the Renderer.
+
+use std::sync::Arc;
+
+use glint_core::Timings;
+use glint_hw::Config as HwConfig;
+use glint_lobe::{Geometry, LobeKind, Specular};
+use glint_raster::SURFACE_COLOR;
+
+use super::*;
+use crate::meshes::{DEFAULT_SSAA, SURFACE_SHININESS};
+use crate::{Plan, Renderer};
+
+fn small() -> Scene {
+    Scene {
+        input: Input::Phantom {
+            name: Phantom::SheppLogan,
+            size: 24,
+        },
+        size: [24, 20],
+        ..Scene::default()
+    }
+}
+
+/// The field follows the scene's prefilter: rebuilt from the kept volume when a
+/// scene asks for another one, with a different image; a renderer given only a
+/// field refuses another prefilter with a typed error.
+#[test]
+fn the_field_follows_the_scenes_prefilter() {
+    let scene = small();
+    assert_eq!(scene.prefilter, Prefilter::Binomial);
+    let mut r = Renderer::open(&scene.input).unwrap();
+    let smooth = r.render(&scene, &|_| {}).unwrap();
+    assert_eq!(r.field().unwrap().prefilter(), Prefilter::Binomial);
+    let raw_scene = Scene {
+        prefilter: Prefilter::None,
+        ..scene.clone()
+    };
+    let raw = r.render(&raw_scene, &|_| {}).unwrap();
+    assert_eq!(r.field().unwrap().prefilter(), Prefilter::None);
+    assert_ne!(smooth.image.rgb, raw.image.rgb);
+    assert_eq!(raw.scene.prefilter, Prefilter::None);
+    let volume = scene.input.open().unwrap();
+    let mut fixed = Renderer::from_field(Arc::new(Field::new(&volume).unwrap()));
+    let err = fixed.render(&scene, &|_| {}).unwrap_err();
+    assert!(matches!(err, RenderError::Parameter(_)), "{err}");
+    assert!(fixed.render(&raw_scene, &|_| {}).is_ok());
+    // Opened for the scene, the field is built once, with its prefilter.
+    let opened = Renderer::open_for(&raw_scene, &ReadOptions::default()).unwrap();
+    assert_eq!(opened.field().unwrap().prefilter(), Prefilter::None);
+}
+
+#[test]
+fn json_round_trip_keeps_every_field() {
+    let mut scene = small();
+    scene.mode = RenderMode::Iso;
+    scene.iso = Some(0.25);
+    scene.lobe = LobeSpec {
+        kind: LobeKind::Schlick.into(),
+        n: Some(33.0),
+        v: 3,
+        geometry: Geometry::Blinn,
+        hw: None,
+    };
+    scene.lights.push(Light {
+        azimuth: -40.0,
+        elevation: 20.0,
+        intensity: 0.5,
+    });
+    scene.material.specular = Some(0.7);
+    let json = scene.to_json().unwrap();
+    assert!(json.contains("\"version\": 1"), "{json}");
+    assert!(
+        json.contains("\"schlick\"") && json.contains("\"blinn\""),
+        "{json}"
+    );
+    assert_eq!(Scene::from_json(&json).unwrap(), scene);
+}
+
+#[test]
+fn missing_fields_take_defaults_and_unknown_ones_are_refused() {
+    assert_eq!(Scene::from_json("{}").unwrap(), Scene::default());
+    let err = Scene::from_json(r#"{"colour": 1}"#)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("colour"), "{err}");
+    let err = Scene::from_json(r#"{"version": 7}"#)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("version 7"), "{err}");
+    let err = Scene::from_json(r#"{"lobe": {"kind": "cosine"}}"#)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("cosine"), "{err}");
+}
+
+#[test]
+fn hw_lobes_parse_by_name_and_take_v_from_the_unit() {
+    let parse = |lobe: &str| Scene::from_json(&format!(r#"{{"lobe": {lobe}}}"#));
+    let plain = parse(r#"{"kind": "hw", "n": 40}"#).unwrap().lobe;
+    assert_eq!(plain.kind, SceneLobe::Hw);
+    assert_eq!((plain.v, plain.hw), (HwConfig::default().v, None));
+    // v left out: the unit's; given: kept as written (resolution checks it).
+    let v3 = r#""hw": {"v": 3, "square_frac": [14, 14, 12]}"#;
+    let lobe = parse(&format!(r#"{{"kind": "HW", {v3}}}"#)).unwrap().lobe;
+    assert_eq!(lobe.v, 3);
+    assert_eq!(lobe.hw.as_ref().unwrap().square_frac, [14, 14, 12]);
+    assert_eq!(
+        lobe.hw.as_ref().unwrap().out_bits,
+        HwConfig::default().out_bits
+    );
+    let lobe = parse(&format!(r#"{{"kind": "hw", "v": 5, {v3}}}"#))
+        .unwrap()
+        .lobe;
+    assert_eq!(lobe.v, 5);
+    // Float lobes keep the default v whatever the unit says.
+    let lobe = parse(&format!(r#"{{"kind": "g", {v3}}}"#)).unwrap().lobe;
+    assert_eq!((lobe.kind, lobe.v), (LobeKind::SlopeFit.into(), 4));
+    // Unknown fields of the unit are refused, naming the path.
+    let err = parse(r#"{"kind": "hw", "hw": {"out_bitz": 8}}"#).unwrap_err();
+    assert!(err.to_string().contains("lobe.hw"), "{err}");
+    let err = parse(r#"{"kind": "hardware"}"#).unwrap_err().to_string();
+    assert!(err.contains("hardware") && err.contains("hw"), "{err}");
+    for lobe in SceneLobe::ALL {
+        assert_eq!(lobe.name().parse::<SceneLobe>().unwrap(), lobe);
+    }
+}
+
+#[test]
+fn a_resolved_hw_scene_names_the_whole_unit_and_round_trips() {
+    let field = Field::new(&small().input.open().unwrap()).unwrap();
+    let scene = Scene::from_json(
+        r#"{"input": {"phantom": {"name": "shepp-logan", "size": 24}},
+        "size": [24, 20], "lobe": {"kind": "hw", "n": 40}}"#,
+    )
+    .unwrap();
+    let resolved = scene.resolve_for(&field).unwrap();
+    assert_eq!(resolved.scene.lobe.hw, Some(HwConfig::default()));
+    let json = resolved.scene.to_json().unwrap();
+    for field in ["\"hw\"", "out_bits", "square_frac", "coefficients"] {
+        assert!(json.contains(field), "{field} missing: {json}");
+    }
+    let again = Scene::from_json(&json).unwrap();
+    assert_eq!(again, resolved.scene);
+    assert_eq!(again.resolve_for(&field).unwrap().scene, resolved.scene);
+}
+
+#[test]
+fn a_resolved_hw_lobe_is_the_units_output_per_cosine() {
+    use glint_hw::{Input as HwInput, Unit};
+    let field = Field::new(&small().input.open().unwrap()).unwrap();
+    for (config, n) in [
+        (HwConfig::default(), 40.4),
+        (
+            HwConfig {
+                out_bits: 12,
+                ..HwConfig::default()
+            },
+            100.0,
+        ),
+    ] {
+        let scene = Scene {
+            lobe: LobeSpec {
+                n: Some(n),
+                geometry: Geometry::Blinn,
+                ..LobeSpec::hw(config.clone())
+            },
+            ..small()
+        };
+        let resolved = scene.resolve_for(&field).unwrap();
+        let specular = resolved.shader.specular();
+        let unit = Unit::new(config).unwrap();
+        let full = unit.full_scale();
+        // n is rounded to the unit's integer input.
+        let n_in = n.round() as u32;
+        let mut distinct = std::collections::BTreeSet::new();
+        for i in 0..=20_000 {
+            let c = 0.9f32 + 0.1 * i as f32 / 20_000.0;
+            let out = unit
+                .eval(&HwInput {
+                    cos: unit.cos_code(f64::from(c)).unwrap(),
+                    n: n_in,
+                    ks: [full; 3],
+                })
+                .unwrap();
+            let want = (out.rgb[0] as f64 / full as f64) as f32;
+            assert_eq!(specular.eval(c).to_bits(), want.to_bits(), "n {n}, c {c}");
+            distinct.insert(out.rgb[0]);
+        }
+        assert!(distinct.len() > 100, "{} output codes", distinct.len());
+    }
+}
+
+#[test]
+fn contradictory_or_bad_hw_lobes_are_typed_errors() {
+    let field = Field::new(&small().input.open().unwrap()).unwrap();
+    let hw = |v: u32, config: Option<HwConfig>, n: f64| Scene {
+        lobe: LobeSpec {
+            kind: SceneLobe::Hw,
+            v,
+            n: Some(n),
+            hw: config,
+            ..LobeSpec::default()
+        },
+        ..small()
+    };
+    let err = hw(3, None, 40.0).resolve_for(&field).unwrap_err();
+    assert!(
+        matches!(err, RenderError::HwV { lobe: 3, unit: 4 }),
+        "{err:?}"
+    );
+    let v3 = HwConfig {
+        v: 3,
+        square_frac: vec![14, 14, 12],
+        ..HwConfig::default()
+    };
+    assert!(hw(3, Some(v3.clone()), 40.0).resolve_for(&field).is_ok());
+    let err = hw(4, Some(v3), 40.0).resolve_for(&field).unwrap_err();
+    assert!(
+        matches!(err, RenderError::HwV { lobe: 4, unit: 3 }),
+        "{err:?}"
+    );
+    let bad = HwConfig {
+        out_bits: 0,
+        ..HwConfig::default()
+    };
+    let err = hw(4, Some(bad), 40.0).resolve_for(&field).unwrap_err();
+    assert!(matches!(err, RenderError::HwConfig(_)), "{err:?}");
+    let err = hw(4, None, 1024.0).resolve_for(&field).unwrap_err();
+    assert!(matches!(err, RenderError::HwN { .. }), "{err:?}");
+    // A float lobe ignores the unit, even an invalid one.
+    let mut k = hw(
+        4,
+        Some(HwConfig {
+            v: 11,
+            ..HwConfig::default()
+        }),
+        40.0,
+    );
+    k.lobe.kind = LobeKind::EnergyFit.into();
+    assert!(k.resolve_for(&field).is_ok());
+}
+
+#[test]
+fn a_renderer_builds_a_units_table_once_per_configuration_and_n() {
+    let scene = Scene {
+        lobe: LobeSpec {
+            n: Some(30.0),
+            ..LobeSpec::hw(HwConfig::default())
+        },
+        ..small()
+    };
+    let mut r = Renderer::open(&scene.input).unwrap();
+    let mut table = |s: &Scene| match r.resolve(s).unwrap().shader.specular() {
+        Specular::Table(t) => t.clone(),
+        Specular::Lobe(l) => panic!("a hw scene resolved to {l:?}"),
+    };
+    let first = table(&scene);
+    // Another frame of the viewer: the camera moved.
+    let mut moved = scene.clone();
+    moved.camera.azimuth = 20.0;
+    assert!(Arc::ptr_eq(&first, &table(&moved)));
+    // Another n: another table.
+    moved.lobe.n = Some(31.0);
+    assert!(!Arc::ptr_eq(&first, &table(&moved)));
+}
+
+#[test]
+fn resolution_writes_its_choices_back_and_is_idempotent() {
+    let field = Field::new(&small().input.open().unwrap()).unwrap();
+    for mode in [RenderMode::Composite, RenderMode::Iso, RenderMode::Mip] {
+        let scene = Scene { mode, ..small() };
+        let first = scene.resolve_for(&field).unwrap();
+        let s = &first.scene;
+        assert!(s.lobe.n.is_some() && s.material.ambient.is_some());
+        assert!(s.preset.is_some() || s.transfer_function.is_some());
+        assert_eq!(s.iso.is_some(), mode == RenderMode::Iso);
+        // Resolving the resolved scene chooses nothing new.
+        let again = s.resolve_for(&field).unwrap();
+        assert_eq!(&again.scene, s, "{mode:?}");
+        let tf = |r: &Resolved| match &r.plan {
+            Plan::Volume { tf, .. } => tf.clone(),
+            Plan::Surface { .. } => panic!("a volume scene resolved to a surface plan"),
+        };
+        assert_eq!(tf(&again), tf(&first));
+    }
+}
+
+#[test]
+fn bad_scenes_are_refused_with_the_reason() {
+    let field = Field::new(&small().input.open().unwrap()).unwrap();
+    let cases: Vec<(Scene, &str)> = vec![
+        (
+            Scene {
+                lights: vec![],
+                ..small()
+            },
+            "no light",
+        ),
+        (
+            Scene {
+                iso: Some(1.0),
+                ..small()
+            },
+            "iso",
+        ),
+        (
+            Scene {
+                preset: Some("ct-nonsense".into()),
+                ..small()
+            },
+            "ct-nonsense",
+        ),
+        (
+            Scene {
+                step: 0.0,
+                ..small()
+            },
+            "step",
+        ),
+        (
+            Scene {
+                size: [0, 4],
+                ..small()
+            },
+            "image size",
+        ),
+        (
+            Scene {
+                gate: f64::NAN,
+                ..small()
+            },
+            "gate",
+        ),
+    ];
+    for (scene, needle) in cases {
+        let err = scene.resolve_for(&field).unwrap_err().to_string();
+        assert!(err.contains(needle), "'{err}' lacks '{needle}'");
+    }
+}
+
+#[test]
+fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
+    let scene = small();
+    let mut r = Renderer::open(&scene.input).unwrap();
+    let classified = |t: &Timings| t.stages().iter().any(|(s, _)| *s == "classify");
+    let first = r.render(&scene, &|_| {}).unwrap();
+    assert!(classified(&first.timings));
+    // Another view and lobe: same classification.
+    let moved = Scene {
+        camera: CameraSpec {
+            azimuth: 30.0,
+            ..scene.camera
+        },
+        lobe: LobeSpec {
+            kind: LobeKind::Exact.into(),
+            ..scene.lobe.clone()
+        },
+        ..scene.clone()
+    };
+    let second = r.render(&moved, &|_| {}).unwrap();
+    assert!(!classified(&second.timings));
+    assert_ne!(second.image.rgb, first.image.rgb);
+    // Another step: classified again, and the image equals a fresh renderer's.
+    let finer = Scene {
+        step: 0.25,
+        ..scene.clone()
+    };
+    let third = r.render(&finer, &|_| {}).unwrap();
+    assert!(classified(&third.timings));
+    let fresh = Renderer::open(&scene.input)
+        .unwrap()
+        .render(&finer, &|_| {})
+        .unwrap();
+    assert_eq!(third.image, fresh.image);
+}
+
+/// A closed octahedron as OBJ in `dir`.
+fn octahedron(dir: &std::path::Path) -> PathBuf {
+    let path = dir.join("octa.obj");
+    std::fs::write(
+        &path,
+        "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+         f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n",
+    )
+    .unwrap();
+    path
+}
+
+#[test]
+fn a_mesh_scene_resolves_once_and_reads_its_meshes_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = format!(
+        r#"{{"meshes": [{{"path": {:?}}}], "size": [32, 24]}}"#,
+        octahedron(dir.path())
+    );
+    // Meshes without an input key: no volume.
+    let scene = Scene::from_json(&json).unwrap();
+    assert_eq!(scene.input, Input::None);
+    let mut r = Renderer::open_scene(&scene).unwrap();
+    assert!(r.field().is_none());
+    let first = r.render(&scene, &|_| {}).unwrap();
+    let s = &first.scene;
+    assert_eq!(s.mode, RenderMode::Surface);
+    assert_eq!(s.ssaa, Some(DEFAULT_SSAA));
+    assert_eq!(s.lobe.n, Some(SURFACE_SHININESS));
+    assert_eq!(s.meshes[0].color, Some(SURFACE_COLOR));
+    assert!(first.colors.is_none());
+    // The resolved scene chooses nothing new and renders the same image.
+    let mut again = s.clone();
+    again.derived = None;
+    let second = r.render(&again, &|_| {}).unwrap();
+    assert_eq!(second.scene, first.scene);
+    assert_eq!(second.image, first.image);
+    // Its JSON names the lack of a volume, and reads back to the same scene.
+    let text = again.to_json().unwrap();
+    assert!(text.contains(r#""input": "none""#), "{text}");
+    assert_eq!(Scene::from_json(&text).unwrap(), again);
+    // The octahedron covers the centre of the image.
+    assert!(first.image.alpha[12 * 32 + 16] > 0.99);
+    // A new camera reuses the meshes read (same Arc).
+    let moved = Scene {
+        camera: CameraSpec {
+            azimuth: 40.0,
+            ..again.camera
+        },
+        ..again.clone()
+    };
+    let before = r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m));
+    r.render(&moved, &|_| {}).unwrap();
+    assert_eq!(r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m)), before);
+}
+
+/// An octahedron of radius `r` about `c` (mm) as OBJ in `dir`.
+fn octahedron_at(dir: &std::path::Path, c: [f32; 3], r: f32) -> PathBuf {
+    let path = dir.join("octa-at.obj");
+    let mut text = String::new();
+    for a in 0..3 {
+        for sign in [1.0, -1.0] {
+            let mut p = c;
+            p[a] += sign * r;
+            text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        }
+    }
+    text += "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A volume with meshes in a ray-cast mode: the meshes are drawn with the
+/// volume's camera and the volume composited over them. Pixels no mesh covers are
+/// the volume's alone; a mesh between the eye and the volume hides it, so there
+/// the image is the meshes' alone (the surface renderer with the same camera).
+#[test]
+fn a_volume_with_meshes_composites_the_volume_over_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = Scene {
+        size: [40, 40],
+        ssaa: Some(1),
+        ..small()
+    };
+    // In front of the phantom (it spans +-100 mm; anterior is +y).
+    let scene = Scene {
+        meshes: vec![MeshSpec::new(octahedron_at(
+            dir.path(),
+            [0.0, 160.0, 0.0],
+            40.0,
+        ))],
+        ..base.clone()
+    };
+    let mut r = Renderer::open_scene(&scene).unwrap();
+    let resolved = r.resolve(&scene).unwrap();
+    let Plan::Volume {
+        meshes: Some(layer),
+        ..
+    } = &resolved.plan
+    else {
+        panic!("a volume plan with meshes expected");
+    };
+    let layer = layer.clone();
+    let shader = resolved.shader.clone();
+    let both = r.render(&scene, &|_| {}).unwrap();
+    let alone = r.render(&base, &|_| {}).unwrap();
+    let camera = r.camera(&base).unwrap();
+    let meshes = layer
+        .surfaces
+        .render(&camera, &shader, &layer.settings, None)
+        .unwrap();
+    let (mut covered, mut uncovered) = (0, 0);
+    for i in 0..40 * 40 {
+        if meshes.alpha[i] == 0.0 {
+            assert_eq!(both.image.rgb[i], alone.image.rgb[i], "pixel {i}");
+            assert_eq!(both.image.alpha[i], alone.image.alpha[i], "pixel {i}");
+            uncovered += 1;
+        } else if meshes.alpha[i] == 1.0 {
+            for c in 0..3 {
+                let d = (both.image.rgb[i][c] - meshes.rgb[i][c]).abs();
+                assert!(
+                    d < 1e-6,
+                    "pixel {i}: {:?} vs {:?}",
+                    both.image.rgb[i],
+                    meshes.rgb[i]
+                );
+            }
+            assert_eq!(both.image.alpha[i], 1.0);
+            covered += 1;
+        }
+    }
+    // The mesh covers the middle of the image and the volume shows around it.
+    assert!(
+        meshes.alpha[20 * 40 + 20] == 1.0 && covered > 50,
+        "{covered}"
+    );
+    assert!(
+        (0..1600).any(|i| meshes.alpha[i] == 0.0 && alone.image.alpha[i] > 0.5),
+        "{uncovered}"
+    );
+    // The dumped scene names the meshes and renders again bit for bit.
+    let mut again = both.scene.clone();
+    again.derived = None;
+    assert_eq!(again.meshes.len(), 1);
+    assert_eq!(again.mode, RenderMode::Composite);
+    let text = again.to_json().unwrap();
+    let reread = Scene::from_json(&text).unwrap();
+    let fresh = Renderer::open_scene(&reread)
+        .unwrap()
+        .render(&reread, &|_| {})
+        .unwrap();
+    assert_eq!(fresh.image, both.image);
+}
+
+#[test]
+fn a_volume_with_meshes_in_surface_mode_joins_its_isosurface() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Scene {
+        meshes: vec![MeshSpec::new(octahedron(dir.path()))],
+        mode: RenderMode::Surface,
+        ..small()
+    };
+    let mut r = Renderer::open_scene(&scene).unwrap();
+    // The phantom's isosurface joins the octahedron.
+    let resolved = r.resolve(&scene).unwrap();
+    assert!(resolved.scene.iso.is_some());
+    let Plan::Surface { surfaces, .. } = &resolved.plan else {
+        panic!("a surface plan expected");
+    };
+    assert_eq!(surfaces.mesh_count(), 2);
+}

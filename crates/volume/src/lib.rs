@@ -1,0 +1,54 @@
+//! glint-volume: CPU volume rendering of CT and MRI. A [`Field`] holds a volume's
+//! reconstruction values, world gradients and macro-cell ranges; a
+//! [`TransferFunction`] (or one of 3D Slicer's [`presets`]) classifies it into a
+//! [`Classification`] (the function tabulated, point-sampled or pre-integrated, and the
+//! empty-space map); frames are ray cast from it, every sample lit by a
+//! [`glint_core::Shader`]. The built-in [`phantom`]s are analytic test volumes with
+//! presets of their own.
+//!
+//! ```
+//! use std::sync::Arc;
+//! use glint_core::{Light, Material, RenderMode, Shader};
+//! use glint_io::{Samples, Volume};
+//! use glint_lobe::{Geometry, LobeKind};
+//! use glint_volume::{Classification, ClassifySettings, Field, FrameSettings, TransferFunction};
+//!
+//! // A ball of value 1 in a 16^3 volume of 0.
+//! let n = 16;
+//! let values: Vec<f32> = (0..n * n * n)
+//!     .map(|i| {
+//!         let p = [i % n, i / n % n, i / (n * n)].map(|x| x as f32 - 7.5);
+//!         if p.iter().map(|x| x * x).sum::<f32>() < 25.0 { 1.0 } else { 0.0 }
+//!     })
+//!     .collect();
+//! let volume = Volume::new([n; 3], [1.0; 3], Samples::F32(values)).unwrap();
+//! let field = Arc::new(Field::new(&volume).unwrap());
+//! let tf = TransferFunction::from_flat(&[0.0, 0.0, 0.5, 0.0, 1.0, 1.0], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+//! let settings = ClassifySettings { mode: RenderMode::Composite, ..Default::default() };
+//! let class = Classification::new(field, &tf, &settings).unwrap();
+//! let shader = Shader::new(LobeKind::EnergyFit, 40.0, 4, Geometry::Phong,
+//!     Material::default(), vec![Light::HEADLIGHT], 0.0).unwrap();
+//! let frame = FrameSettings { width: 32, height: 32, ..Default::default() };
+//! let image = class.render(&shader, &frame, &|_| {}).unwrap();
+//! // The ball covers the image's centre, not its corner.
+//! assert!(image.alpha[16 * 32 + 16] > 0.9);
+//! assert_eq!(image.alpha[0], 0.0);
+//! ```
+
+#![warn(missing_docs)]
+
+mod field;
+mod lut;
+pub mod phantom;
+mod preint;
+pub mod presets;
+mod raycast;
+mod tf;
+
+pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
+pub use lut::{Lut, LUT_SIZE};
+pub use phantom::Phantom;
+pub use preint::Sampling;
+pub use presets::{preset, Preset, PRESETS};
+pub use raycast::{Classification, ClassifySettings, FrameSettings, Kernel, TERMINATION_OPACITY};
+pub use tf::{TransferFunction, TransferFunctionFile};

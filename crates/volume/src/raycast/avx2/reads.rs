@@ -1,0 +1,278 @@
+//! Eight samples read at once: positions, cells, trilinear values, table entries.
+
+use std::arch::x86_64::*;
+
+use super::*;
+
+/// One sample per lane, as [`Lanes::keep_segments`] uses it.
+#[derive(Clone, Copy)]
+pub(super) struct Reads {
+    /// Fractions inside the trilinear cell, per axis.
+    pub(super) t: [[f32; LANES]; 3],
+    /// Corner-000 voxel.
+    pub(super) base: [i32; LANES],
+    /// Table coordinate (`Lut::position` of the trilinear value).
+    pub(super) u: [f32; LANES],
+    /// Sample index.
+    pub(super) k: [i32; LANES],
+}
+
+/// The samples at positions `p` (cells `ijk`, clamped) with sample indices `k`.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]); `ijk` must be
+/// clamped to the field's cells.
+#[inline(always)]
+pub(super) unsafe fn reads_at(
+    inv: &Invariants,
+    p: [__m256; 3],
+    ijk: [__m256i; 3],
+    k: __m256i,
+) -> Reads {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let (fr, base, uv) = values_at(inv, p, ijk);
+        let mut r = Reads {
+            t: [[0.0; LANES]; 3],
+            base,
+            u: [0.0; LANES],
+            k: [0; LANES],
+        };
+        for (a, v) in fr.iter().enumerate() {
+            _mm256_storeu_ps(r.t[a].as_mut_ptr(), *v);
+        }
+        _mm256_storeu_ps(r.u.as_mut_ptr(), uv);
+        _mm256_storeu_si256(r.k.as_mut_ptr().cast(), k);
+        r
+    }
+}
+
+/// The macro cells of the cells `ijk` (one per lane), their distance-map entries, and
+/// the lanes whose cell is visible (entry 0).
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]); `ijk` must be
+/// clamped to the field's cells.
+#[inline(always)]
+pub(super) unsafe fn cell_distances(
+    c: &Caster,
+    inv: &Invariants,
+    ijk: [__m256i; 3],
+) -> ([__m256i; 3], __m256i, u8) {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let cd = inv.cd;
+        let cells = axes!(|a| _mm256_srli_epi32::<2>(ijk[a]));
+        const _: () = assert!(MACRO_CELL == 4, "the shift above divides by MACRO_CELL");
+        let cell = _mm256_add_epi32(
+            cells[0],
+            _mm256_mullo_epi32(
+                _mm256_set1_epi32(cd[0] as i32),
+                _mm256_add_epi32(
+                    cells[1],
+                    _mm256_mullo_epi32(_mm256_set1_epi32(cd[1] as i32), cells[2]),
+                ),
+            ),
+        );
+        // Scalar loads, not a gather (see the module's notes).
+        let mut ci = [0i32; LANES];
+        _mm256_storeu_si256(ci.as_mut_ptr().cast(), cell);
+        let mut dist = [0i32; LANES];
+        for (d, &i) in dist.iter_mut().zip(&ci) {
+            // SAFETY: positions are clamped to the cells, so each index is a cell.
+            *d = i32::from(*c.distance.get_unchecked(i as usize));
+        }
+        let dist = _mm256_loadu_si256(dist.as_ptr().cast());
+        let visible = _mm256_cmpeq_epi32(dist, _mm256_setzero_si256());
+        (
+            cells,
+            dist,
+            _mm256_movemask_ps(_mm256_castsi256_ps(visible)) as u8,
+        )
+    }
+}
+
+/// Sample `k` per lane of rays `(o, d, j)`: its position and cell, as `Ray::t`,
+/// `Ray::at` and `Field::locate` compute them in the reference loop.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+#[inline(always)]
+pub(super) unsafe fn positions(
+    inv: &Invariants,
+    (o, d, j): ([__m256; 3], [__m256; 3], __m256),
+    k: __m256i,
+) -> ([__m256; 3], [__m256i; 3]) {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
+        let Invariants { dt, hi, zero, .. } = *inv;
+        let t = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(k), j), dt);
+        let p = axes!(|a| _mm256_add_ps(o[a], _mm256_mul_ps(d[a], t)));
+        let ijk = axes!(|a| _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(p[a], zero), hi[a])));
+        (p, ijk)
+    }
+}
+
+/// One sample per lane: its table entry, corner voxel, cell fractions, and which
+/// lanes' entries have opacity.
+pub(super) struct Probe {
+    pub(super) li: [i32; LANES],
+    pub(super) base: [i32; LANES],
+    pub(super) fr: [__m256; 3],
+    pub(super) opaque: u8,
+}
+
+/// For eight samples at positions `p` in the cells `ijk` (clamped to `[0, dims-2]`):
+/// their fractions in the cell, their corner voxels' indices, and their table
+/// coordinates (`Lut::position` of the trilinear value), with the reference loop's
+/// arithmetic.
+///
+/// # Safety
+/// The CPU must support AVX2; `ijk` must be clamped as said.
+#[inline(always)]
+pub(super) unsafe fn values_at(
+    inv: &Invariants,
+    p: [__m256; 3],
+    ijk: [__m256i; 3],
+) -> ([__m256; 3], [i32; LANES], __m256) {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let Invariants {
+            nx,
+            sxy,
+            zero,
+            one,
+            nxv,
+            sxyv,
+            lut_lo,
+            lut_scale,
+            half,
+            lut_max,
+            values,
+            ..
+        } = *inv;
+        let fr = axes!(|a| {
+            let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
+            _mm256_min_ps(_mm256_max_ps(t, zero), one)
+        });
+        let mut base = [0i32; LANES];
+        _mm256_storeu_si256(
+            base.as_mut_ptr().cast(),
+            _mm256_add_epi32(
+                ijk[0],
+                _mm256_add_epi32(
+                    _mm256_mullo_epi32(ijk[1], nxv),
+                    _mm256_mullo_epi32(ijk[2], sxyv),
+                ),
+            ),
+        );
+        // SAFETY: base + sxy + nx + 1 < nx ny nz, the cells being clamped.
+        let mut ptrs = [values; LANES];
+        for (p, &b) in ptrs.iter_mut().zip(&base) {
+            *p = values.add(b as usize);
+        }
+        let (c000, c100) = row(ptrs, 0);
+        let (c010, c110) = row(ptrs, nx);
+        let (c001, c101) = row(ptrs, sxy);
+        let (c011, c111) = row(ptrs, sxy + nx);
+        let x00 = lerp(c000, c100, fr[0]);
+        let x10 = lerp(c010, c110, fr[0]);
+        let x01 = lerp(c001, c101, fr[0]);
+        let x11 = lerp(c011, c111, fr[0]);
+        let y0 = lerp(x00, x10, fr[1]);
+        let y1 = lerp(x01, x11, fr[1]);
+        let v = lerp(y0, y1, fr[2]);
+        let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
+        (fr, base, _mm256_min_ps(_mm256_max_ps(x, zero), lut_max))
+    }
+}
+
+/// Reads the samples at positions `p` (cells `ijk`, clamped) for every lane: the
+/// reference loop's trilinear value and `Lut::index`.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+#[inline(always)]
+pub(super) unsafe fn probe(
+    c: &Caster,
+    inv: &Invariants,
+    p: [__m256; 3],
+    ijk: [__m256i; 3],
+) -> Probe {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let (fr, base, uv) = values_at(inv, p, ijk);
+        let mut li = [0i32; LANES];
+        _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
+        let mut opaque = 0u8;
+        for (l, &i) in li.iter().enumerate() {
+            // SAFETY: the index was clamped to the table.
+            opaque |= *c.lut.opaque.get_unchecked(i as usize) << l;
+        }
+        Probe {
+            li,
+            base,
+            fr,
+            opaque,
+        }
+    }
+}
+
+/// The lane steps' values that are the same for every ray of a frame, computed once per
+/// tile: the loop then keeps them in registers or on the stack. Read from the caster
+/// at each step, they were reloaded and recomputed after every push of a kept sample
+/// (a call that may reallocate, after which the compiler cannot assume the field
+/// unchanged).
+#[derive(Clone, Copy)]
+pub(super) struct Invariants {
+    pub(super) nx: usize,
+    pub(super) sxy: usize,
+    pub(super) cd: [usize; 3],
+    pub(super) dt: __m256,
+    /// The last cell's corner per axis, `dims - 2`.
+    pub(super) hi: [__m256; 3],
+    pub(super) zero: __m256,
+    pub(super) one: __m256,
+    pub(super) nxv: __m256i,
+    pub(super) sxyv: __m256i,
+    pub(super) lut_lo: __m256,
+    pub(super) lut_scale: __m256,
+    pub(super) half: __m256,
+    pub(super) lut_max: __m256,
+    pub(super) values: *const f32,
+}
+
+impl Invariants {
+    /// # Safety
+    /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    pub(super) unsafe fn new(c: &Caster) -> Invariants {
+        // SAFETY: the caller runs with AVX2 (this function's contract).
+        unsafe {
+            let f = c.field;
+            let [nx, ny, _] = f.dims;
+            let sxy = nx * ny;
+            Invariants {
+                nx,
+                sxy,
+                cd: f.cell_dims,
+                dt: _mm256_set1_ps(c.dt),
+                hi: axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32)),
+                zero: _mm256_setzero_ps(),
+                one: _mm256_set1_ps(1.0),
+                // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
+                nxv: _mm256_set1_epi32(nx as i32),
+                sxyv: _mm256_set1_epi32(sxy as i32),
+                lut_lo: _mm256_set1_ps(c.lut.lo),
+                lut_scale: _mm256_set1_ps(c.lut.scale),
+                half: _mm256_set1_ps(0.5),
+                lut_max: _mm256_set1_ps((crate::preint::LUT_SIZE - 1) as f32),
+                values: f.values.as_ptr(),
+            }
+        }
+    }
+}

@@ -1,0 +1,298 @@
+//! A field classified by a transfer function, and the frames rendered from it.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use glint_core::camera::Camera;
+use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
+
+use super::caster::{Caster, IndexRays, Pixels};
+use super::cells::{active_bounds, chessboard_distance, visible_blocks, visible_cells};
+use super::settings::{ClassifySettings, FrameSettings, Kernel};
+use super::start::StartBounds;
+use super::{simd_supported, Scratch, TILE};
+use crate::field::Field;
+use crate::lut::Lut;
+use crate::tf::TransferFunction;
+
+/// The transfer function tabulated for `settings` (MIP shows the function's own
+/// opacity, not a per-step one).
+fn lut_for(field: &Field, tf: &TransferFunction, settings: &ClassifySettings) -> Lut {
+    let (lo, hi) = field.range();
+    // The opacity correction's exponent: the step in units of the opacity's length.
+    let lut_step = match (settings.mode, settings.opacity_unit) {
+        (RenderMode::Mip, _) => 1.0,
+        (_, None) => settings.step,
+        (_, Some(unit)) => settings.step * field.min_spacing() / unit,
+    };
+    Lut::new(tf, lo, hi, lut_step)
+}
+
+/// A field classified by a transfer function for one mode and sample step: the
+/// tabulated transfer function, the empty-space map (per macro cell, the chessboard
+/// distance to the nearest cell that can show a sample) and the boxes rays are clipped
+/// to and cameras framed on.
+///
+/// Building it reads every macro cell; rendering only reads it. An interactive viewer
+/// builds it once per transfer function and renders every frame that changes only the
+/// camera, lights, lobe or image size from it (VTK's ray-cast mapper likewise keeps its
+/// min-max volume until the transfer function changes).
+pub struct Classification {
+    field: Arc<Field>,
+    lut: Lut,
+    settings: ClassifySettings,
+    /// Per macro cell: 0 where a sample can contribute, else the chessboard distance in
+    /// cells to the nearest such cell (capped at 255); every cell closer than that is
+    /// empty. All 0 when skipping is off.
+    distance: Vec<u8>,
+    /// Index-space box of the cells that can show a sample (`None`: no such cell).
+    visible_box: Option<([f64; 3], [f64; 3])>,
+    /// Index-space box rays are clipped to.
+    clip_box: ([f64; 3], [f64; 3]),
+    /// World corners of the blocks of `START_BLOCK`^3 macro cells that hold a cell
+    /// that can show a sample, for the rays' start bounds (empty when skipping is off
+    /// or in MIP, whose leaps depend on the ray's maximum so far).
+    pub(super) blocks: Vec<[Vec3; 8]>,
+}
+
+impl Classification {
+    /// Classifies `field` by `tf` for the mode, step and empty-space skipping of
+    /// `settings`. The classification keeps the field, so frames can be rendered from
+    /// it alone (a viewer or a Python object holds it across frames).
+    pub fn new(
+        field: Arc<Field>,
+        tf: &TransferFunction,
+        settings: &ClassifySettings,
+    ) -> Result<Classification, RenderError> {
+        settings.validate()?;
+        tf.validate()?;
+        let lut = lut_for(&field, tf, settings);
+        let visible = visible_cells(&field, &lut, settings);
+        let visible_box = active_bounds(&field, &visible);
+        let full_box = ([0.0; 3], field.dims.map(|d| (d - 1) as f64));
+        let (distance, clip_box) = if settings.skip_empty {
+            let clip_box = if settings.mode == RenderMode::Mip {
+                full_box
+            } else {
+                visible_box.unwrap_or(([0.0; 3], [-1.0; 3]))
+            };
+            (chessboard_distance(&visible, field.cell_dims), clip_box)
+        } else {
+            (vec![0; visible.len()], full_box)
+        };
+        let blocks = if settings.skip_empty && settings.mode != RenderMode::Mip {
+            visible_blocks(&field, &visible)
+        } else {
+            Vec::new()
+        };
+        Ok(Classification {
+            field,
+            lut,
+            blocks,
+            settings: *settings,
+            distance,
+            visible_box,
+            clip_box,
+        })
+    }
+
+    /// The field it classifies.
+    pub fn field(&self) -> &Arc<Field> {
+        &self.field
+    }
+
+    /// The settings it was built for.
+    pub fn settings(&self) -> &ClassifySettings {
+        &self.settings
+    }
+
+    /// The camera [`Classification::render`] uses for `settings`: it frames the
+    /// bounding sphere of what can be seen (the macro cells that can show a sample), or
+    /// of the whole volume when nothing can.
+    pub fn camera(&self, settings: &FrameSettings) -> Result<Camera, RenderError> {
+        settings.validate()?;
+        let field = &*self.field;
+        let (lo, hi) = self
+            .visible_box
+            .unwrap_or(([0.0; 3], field.dims.map(|d| (d - 1) as f64)));
+        let mut corners = Vec::with_capacity(8);
+        for n in 0..8 {
+            let p = [0, 1, 2].map(|a| if n & (1 << a) != 0 { hi[a] } else { lo[a] });
+            corners.push(field.index_to_world(p));
+        }
+        let mut wlo = [f64::INFINITY; 3];
+        let mut whi = [f64::NEG_INFINITY; 3];
+        for c in &corners {
+            for a in 0..3 {
+                wlo[a] = wlo[a].min(c[a]);
+                whi[a] = whi[a].max(c[a]);
+            }
+        }
+        let center = Vec3::new(
+            ((wlo[0] + whi[0]) / 2.0) as f32,
+            ((wlo[1] + whi[1]) / 2.0) as f32,
+            ((wlo[2] + whi[2]) / 2.0) as f32,
+        );
+        let radius = corners
+            .iter()
+            .map(|c| (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center).length())
+            .fold(0.0f32, f32::max);
+        // Place the camera for the bounding sphere, then tighten to the box's extent
+        // across the view (the sphere of a box's corners wastes much of the image),
+        // with a margin for perspective.
+        let (w, h) = (settings.width, settings.height);
+        let first = Camera::frame(&settings.camera, center, radius, w, h)?;
+        let aspect = w as f32 / h as f32;
+        let extent = corners
+            .iter()
+            .map(|c| {
+                let d = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - center;
+                let (x, y) = (d.dot(first.right).abs(), d.dot(first.up).abs());
+                // In units of the shorter image side.
+                (x / aspect.max(1.0)).max(y * aspect.min(1.0))
+            })
+            .fold(0.0f32, f32::max);
+        let margin = match settings.camera.projection {
+            glint_core::camera::Projection::Perspective => 1.1,
+            glint_core::camera::Projection::Orthographic => 1.02,
+        };
+        Camera::frame(&settings.camera, center, extent * margin, w, h)
+    }
+
+    /// Renders the classified field lit by `shader` (its lights placed relative to the
+    /// camera of `settings`) with the size, background and kernel of `settings`.
+    /// `progress` is called with the number of pixels finished after each tile (from
+    /// worker threads).
+    pub fn render(
+        &self,
+        shader: &Shader,
+        settings: &FrameSettings,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Image, RenderError> {
+        self.render_jittered(shader, settings, progress, true, None)
+    }
+
+    /// [`Classification::render`] with each ray stopped at a per-pixel distance:
+    /// `far[y * width + x]` is the distance (mm, along the pixel's ray from the
+    /// camera's eye, or from the image plane for orthographic cameras) past which the
+    /// volume is hidden (e.g. by an opaque surface drawn with the same camera);
+    /// `f32::INFINITY` where nothing hides it.
+    pub fn render_in_front(
+        &self,
+        shader: &Shader,
+        settings: &FrameSettings,
+        progress: &(dyn Fn(u64) + Sync),
+        far: &[f32],
+    ) -> Result<Image, RenderError> {
+        let pixels = settings.width as usize * settings.height as usize;
+        if far.len() != pixels {
+            return Err(RenderError::Parameter(format!(
+                "{} ray limits for {pixels} pixels",
+                far.len()
+            )));
+        }
+        self.render_jittered(shader, settings, progress, true, Some(far))
+    }
+
+    /// [`Classification::render`] with the per-pixel [`jitter`] on or off (off only
+    /// in tests that compare the two), and rays stopped at `far` when given
+    /// ([`Classification::render_in_front`]; `width * height` long).
+    pub(crate) fn render_jittered(
+        &self,
+        shader: &Shader,
+        settings: &FrameSettings,
+        progress: &(dyn Fn(u64) + Sync),
+        jitter: bool,
+        far: Option<&[f32]>,
+    ) -> Result<Image, RenderError> {
+        let camera = self.camera(settings)?;
+        let shader = &shader.placed(&camera);
+        let field = &*self.field;
+        let (w, h) = (settings.width as usize, settings.height as usize);
+        let rays = IndexRays::new(&camera, field, settings.width, settings.height);
+        let starts =
+            (!self.blocks.is_empty()).then(|| StartBounds::new(&self.blocks, &rays, &camera, w, h));
+        let caster = Caster {
+            field,
+            lut: &self.lut,
+            distance: &self.distance,
+            clip_box: (
+                self.clip_box.0.map(|x| x as f32),
+                self.clip_box.1.map(|x| x as f32),
+            ),
+            rays,
+            shader,
+            frame: settings,
+            mode: self.settings.mode,
+            iso_value: self.settings.iso,
+            skip_empty: self.settings.skip_empty,
+            dt: (self.settings.step * field.min_spacing()) as f32,
+            simd: settings.kernel == Kernel::Auto && simd_supported(),
+            jitter,
+            sampling: self.settings.sampling,
+        };
+        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
+            .into_par_iter()
+            .map_init(Scratch::default, |_scratch, t| {
+                let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let n = (x1 - x0) * (y1 - y0);
+                let start = match &starts {
+                    Some(s) => s.tile(t, (x0, x1), (y0, y1)),
+                    None => [0.0; TILE * TILE],
+                };
+                let mut end = [f32::INFINITY; TILE * TILE];
+                if let Some(far) = far {
+                    let tw = x1 - x0;
+                    for (y, row) in (y0..y1).zip(end.chunks_mut(tw)) {
+                        row.copy_from_slice(&far[y * w + x0..y * w + x1]);
+                    }
+                }
+                let mut rgb = Vec::with_capacity(n);
+                let mut alpha = Vec::with_capacity(n);
+                let mut stats = RenderStats::default();
+                let px = Pixels {
+                    xs: (x0, x1),
+                    ys: (y0, y1),
+                    start: &start,
+                    end: &end,
+                };
+                #[cfg(target_arch = "x86_64")]
+                if caster.simd {
+                    // SAFETY: `simd` is set only when avx2::supported() is true.
+                    unsafe { caster.tile_avx2(&px, _scratch, &mut rgb, &mut alpha, &mut stats) };
+                } else {
+                    caster.tile(&px, &mut rgb, &mut alpha, &mut stats);
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                caster.tile(&px, &mut rgb, &mut alpha, &mut stats);
+                progress(n as u64);
+                (rgb, alpha, stats)
+            })
+            .collect();
+        let mut rgb = vec![[0.0f32; 3]; w * h];
+        let mut alpha = vec![0.0f32; w * h];
+        let mut stats = RenderStats::default();
+        for (t, (trgb, talpha, tstats)) in tiles.into_iter().enumerate() {
+            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+            let tw = (x0 + TILE).min(w) - x0;
+            for (r, (crow, arow)) in trgb.chunks(tw).zip(talpha.chunks(tw)).enumerate() {
+                let o = (y0 + r) * w + x0;
+                rgb[o..o + tw].copy_from_slice(crow);
+                alpha[o..o + tw].copy_from_slice(arow);
+            }
+            stats.samples += tstats.samples;
+            stats.shaded += tstats.shaded;
+            stats.skips += tstats.skips;
+        }
+        Ok(Image {
+            width: settings.width,
+            height: settings.height,
+            rgb,
+            alpha,
+            stats,
+        })
+    }
+}

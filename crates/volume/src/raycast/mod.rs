@@ -1,0 +1,47 @@
+//! The CPU ray caster: tiles of rays in parallel (rayon), trilinear samples at a fixed
+//! step, empty-space skipping over macro cells, early ray termination.
+
+mod caster;
+mod cells;
+mod classify;
+mod settings;
+mod start;
+
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+
+#[cfg(target_arch = "x86_64")]
+use avx2::Scratch;
+/// The SIMD loops' per-thread buffers (none without them).
+#[cfg(not(target_arch = "x86_64"))]
+type Scratch = ();
+
+pub use classify::Classification;
+pub use settings::{ClassifySettings, FrameSettings, Kernel};
+
+/// Accumulated opacity at which a ray stops (early ray termination, Levoy 1990).
+pub const TERMINATION_OPACITY: f32 = 0.99;
+
+/// Bisection steps refining an iso hit between two samples (2^-8 of a step).
+const ISO_REFINE_STEPS: u32 = 8;
+
+/// Edge of the square image tiles rendered as parallel tasks (a tile's rays read a
+/// compact block of the volume that stays in the core's L2 cache).
+const TILE: usize = 16;
+
+/// Edge, in macro cells, of the blocks whose projections bound where rays start (2:
+/// 8 voxels; on the MNI152 scene 1 and 4 were 2% and 10% slower single-threaded,
+/// from more splats to project and looser bounds respectively).
+const START_BLOCK: usize = 2;
+
+/// Whether the CPU runs the SIMD compositing loop.
+fn simd_supported() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        avx2::supported()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
