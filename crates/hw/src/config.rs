@@ -2,7 +2,8 @@
 //! and its validation.
 
 use std::fmt;
-use std::str::FromStr;
+
+use glint_lobe::names::Named;
 
 use serde::de::value::MapAccessDeserializer;
 use serde::de::{MapAccess, Visitor};
@@ -28,51 +29,86 @@ pub const MAX_REGISTER_BITS: u32 = 64;
 /// [`MAX_REGISTER_BITS`] register.
 pub const MAX_COS_BITS: u32 = MAX_REGISTER_BITS - 1;
 
-/// How a stage drops fraction bits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// The error for `name`, which is none of `T`'s names (the message of
+/// [`glint_lobe::names::unknown`], as the other crates' named enums give).
+fn unknown<T: Named>(name: &str) -> HwError {
+    HwError::Parse(glint_lobe::names::unknown::<T>(name))
+}
+
+// The named enums derive their names, parser and lists with strum, as the other crates'
+// (see `glint_lobe::names`); serde keeps the JSON spellings of configuration files.
+
+/// How a stage drops fraction bits: `truncate` (also `trunc`, `floor`) or `nearest`
+/// (also `round`); case-insensitive.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<Rounding>
+)]
 pub enum Rounding {
     /// Drop the low bits (round toward zero; every rounded value here is >= 0).
+    #[strum(to_string = "truncate", serialize = "trunc", serialize = "floor")]
     Truncate,
     /// Round to nearest, ties up: add half an output LSB, then drop the low bits.
+    #[strum(to_string = "nearest", serialize = "round")]
     Nearest,
 }
 
 impl Rounding {
-    /// The name used in configuration files and on the command line.
+    /// The name used in configuration files, on the command line and in tables.
     pub fn name(self) -> &'static str {
-        match self {
-            Rounding::Truncate => "truncate",
-            Rounding::Nearest => "nearest",
-        }
+        self.into()
     }
 }
 
-impl fmt::Display for Rounding {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
+impl Named for Rounding {
+    const WHAT: &'static str = "rounding";
 }
 
-impl FromStr for Rounding {
-    type Err = HwError;
-
-    fn from_str(s: &str) -> Result<Self, HwError> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "truncate" | "trunc" | "floor" => Ok(Rounding::Truncate),
-            "nearest" | "round" => Ok(Rounding::Nearest),
-            _ => Err(HwError::Parse(format!(
-                "unknown rounding '{s}': expected truncate or nearest"
-            ))),
-        }
-    }
-}
-
-/// Which coefficient `a(n)` ROM1 holds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// Which coefficient `a(n)` ROM1 holds: `k` (also `energy`, `energy-fit`) or `minimax`;
+/// case-insensitive.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<Coefficients>
+)]
 pub enum Coefficients {
     /// The paper's energy fit `a = (n+1)/(2^v+1)` (K_v).
     #[serde(rename = "k")]
+    #[strum(to_string = "k", serialize = "energy", serialize = "energy-fit")]
     EnergyFit,
     /// The `a` minimising the maximum absolute error against `cos^n`
     /// ([`glint_lobe::minimax_coefficient`]); same hardware, other ROM contents.
@@ -81,39 +117,41 @@ pub enum Coefficients {
 }
 
 impl Coefficients {
-    /// The name used in configuration files and on the command line (`k`, `minimax`).
+    /// The name used in configuration files, on the command line and in tables.
     pub fn name(self) -> &'static str {
-        match self {
-            Coefficients::EnergyFit => "k",
-            Coefficients::Minimax => "minimax",
-        }
+        self.into()
     }
 }
 
-impl fmt::Display for Coefficients {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
+impl Named for Coefficients {
+    const WHAT: &'static str = "coefficients";
 }
 
-impl FromStr for Coefficients {
-    type Err = HwError;
-
-    fn from_str(s: &str) -> Result<Self, HwError> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "k" | "energy" | "energy-fit" => Ok(Coefficients::EnergyFit),
-            "minimax" => Ok(Coefficients::Minimax),
-            _ => Err(HwError::Parse(format!(
-                "unknown coefficients '{s}': expected k or minimax"
-            ))),
-        }
-    }
-}
-
-/// How the unit forms `a(n)`. Every source gives the same words as ROM1 (checked when
-/// the unit is built, see [`crate::CoefCircuit`]); only the hardware differs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// How the unit forms `a(n)`: `rom`, `const` or `table`. Every source gives the same
+/// words as ROM1 (checked when the unit is built, see [`crate::CoefCircuit`]); only the
+/// hardware differs.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<CoefSource>
+)]
 pub enum CoefSource {
     /// ROM1: one word per `n` (the paper's Fig. 4).
     Rom,
@@ -126,19 +164,39 @@ pub enum CoefSource {
 }
 
 impl CoefSource {
-    /// The name used in configuration files and tables.
+    /// The name used in configuration files, on the command line and in tables.
     pub fn name(self) -> &'static str {
-        match self {
-            CoefSource::Rom => "rom",
-            CoefSource::Const => "const",
-            CoefSource::Table => "table",
-        }
+        self.into()
     }
 }
 
-/// How a BMUL stage squares.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+impl Named for CoefSource {
+    const WHAT: &'static str = "coefficient source";
+}
+
+/// How a BMUL stage squares: `generic`, `symmetric` or `truncated`.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<Squarer>
+)]
 pub enum Squarer {
     /// A generic multiplier with both operands the same register (Fig. 4 as drawn).
     Generic,
@@ -151,14 +209,14 @@ pub enum Squarer {
 }
 
 impl Squarer {
-    /// The name used in configuration files and tables.
+    /// The name used in configuration files, on the command line and in tables.
     pub fn name(self) -> &'static str {
-        match self {
-            Squarer::Generic => "generic",
-            Squarer::Symmetric => "symmetric",
-            Squarer::Truncated => "truncated",
-        }
+        self.into()
     }
+}
+
+impl Named for Squarer {
+    const WHAT: &'static str = "squarer";
 }
 
 /// Every parameter of the unit. Formats (see `docs/hardware.md`):
