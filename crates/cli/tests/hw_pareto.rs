@@ -157,3 +157,40 @@ fn bad_designs_fail_with_one_line() {
         assert_eq!(err.trim().lines().count(), 1, "{name}: {err}");
     }
 }
+
+/// `glint hw check | head -1`: the reader closes the pipe after the first line; glint
+/// stops quietly (exit 0, nothing on stderr) instead of panicking on the next write.
+#[test]
+fn check_into_a_closed_pipe_exits_quietly() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let design = schlick_json_file();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args(["hw", "check", "--config"])
+        .arg(design.path())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run glint");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    // The reader is dropped here: the pipe is closed with more lines to come.
+    assert!(first.starts_with("# glint hw check"), "{first}");
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(stderr.is_empty(), "{stderr}");
+}
+
+/// A small design file (the 8-bit Schlick unit, checked in about a second).
+fn schlick_json_file() -> tempfile::NamedTempFile {
+    let file = tempfile::NamedTempFile::new().unwrap();
+    let design = Design::Schlick {
+        out_bits: 8,
+        params: SchlickParams::default(),
+    };
+    std::fs::write(file.path(), design.to_json()).unwrap();
+    file
+}

@@ -1,6 +1,24 @@
 //! `glint hw`: the fixed-point model of the specular unit (ROM contents, width sweeps,
 //! stage-by-stage evaluation, exhaustive error check, Verilog, cost, Pareto fronts).
 
+/// `write!` to stdout that returns its error instead of panicking as `print!` does: a
+/// closed pipe (`glint hw check | head`) becomes [`StdoutClosed`], which [`run`] turns
+/// into a quiet, successful exit; any other write error is reported.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*).map_err($crate::cmd::hw::stdout_error)
+    }};
+}
+
+/// [`out!`] with a newline, as `println!`.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*).map_err($crate::cmd::hw::stdout_error)
+    }};
+}
+
 mod pareto;
 mod rtl;
 
@@ -223,15 +241,54 @@ pub struct CheckArgs {
 }
 
 fn parse_coef(s: &str) -> Result<Coefficients, String> {
-    s.parse().map_err(|e: glint_hw::HwError| e.to_string())
+    s.trim()
+        .parse()
+        .map_err(|e: glint_hw::HwError| e.to_string())
 }
 
 fn parse_round(s: &str) -> Result<Rounding, String> {
-    s.parse().map_err(|e: glint_hw::HwError| e.to_string())
+    s.trim()
+        .parse()
+        .map_err(|e: glint_hw::HwError| e.to_string())
+}
+
+/// Standard output was closed by its reader (`glint hw check | head`): the rest of the
+/// output is not wanted, so the command stops and exits as a success, as `head` expects.
+#[derive(Debug)]
+pub(crate) struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("standard output closed")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// `result` of printing, with a closed stdout ([`StdoutClosed`]) taken as success: for
+/// the summaries of long runs, whose work and files matter more than their output.
+pub(crate) fn unless_closed(result: anyhow::Result<()>) -> anyhow::Result<()> {
+    match result {
+        Err(e) if e.is::<StdoutClosed>() => Ok(()),
+        other => other,
+    }
+}
+
+/// The error of a failed write to stdout: [`StdoutClosed`] for a closed pipe.
+pub(crate) fn stdout_error(e: std::io::Error) -> anyhow::Error {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        StdoutClosed.into()
+    } else {
+        anyhow::Error::new(e).context("writing to stdout")
+    }
 }
 
 /// Runs `glint hw`.
 pub fn run(command: Command) -> anyhow::Result<()> {
+    unless_closed(dispatch(command))
+}
+
+fn dispatch(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Rom(args) => rom(args),
         Command::Sweep(args) => sweep(args),
@@ -404,7 +461,7 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
         }
     }
     let points = rows.first().map_or(0, |r| r.points_per_check);
-    println!(
+    outln!(
         "# glint hw sweep: out_bits = {}, coefficients = {}, n_bits = {}, cos Q1.{} ({} bits), rounding {}",
         args.out_bits,
         args.coef,
@@ -412,16 +469,16 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
         args.cos_bits.saturating_sub(2),
         args.cos_bits,
         args.round
-    );
-    println!(
+    )?;
+    outln!(
         "# error = |code - F·L(c,n)| in LSBs, F = k_s·I full scale = {}; exhaustive: every cos code in [-1,1] (lobe) or [0,1] (cos^n) x every n = {} points per check",
         full_scale(args.out_bits),
         points
-    );
-    println!(
+    )?;
+    outln!(
         "# 'n where asked': for cos^n, the n where an ideal unit (exact lobe, correctly rounded) meets the bound"
-    );
-    print!("{}", markdown_table(&rows));
+    )?;
+    out!("{}", markdown_table(&rows))?;
     eprintln!("total {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
@@ -430,7 +487,7 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     let config = load_config(args.config.as_deref())?;
     let unit = build_unit(config, args.config.as_deref())?;
     if args.print_config {
-        println!("{}", unit.config().to_json());
+        outln!("{}", unit.config().to_json())?;
         return Ok(());
     }
     if args.ks_rgb.len() != 3 {
@@ -451,24 +508,31 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     };
     let table = unit.trace_table(&input)?;
     let cfg = unit.config();
-    println!(
+    outln!(
         "# glint hw eval: v = {}, coefficients = {}, latency = {} clocks, one input per clock",
         cfg.v,
         cfg.coefficients,
         unit.latency()
-    );
-    println!(
+    )?;
+    outln!(
         "{:<12} {:<18} {:>22} {:>18}  value",
-        "stage", "format", "code", "hex"
-    );
+        "stage",
+        "format",
+        "code",
+        "hex"
+    )?;
     for r in &table.rows {
-        println!(
+        outln!(
             "{:<12} {:<18} {:>22} {:>18}  {}",
-            r.stage, r.format, r.code, r.hex, r.value
-        );
+            r.stage,
+            r.format,
+            r.code,
+            r.hex,
+            r.value
+        )?;
     }
     let rgb = table.output.rgb;
-    println!("# output R,G,B = {},{},{}", rgb[0], rgb[1], rgb[2]);
+    outln!("# output R,G,B = {},{},{}", rgb[0], rgb[1], rgb[2])?;
     Ok(())
 }
 
@@ -480,13 +544,13 @@ fn print_design_errors(design: &Design) -> anyhow::Result<()> {
         .zip(e.power)
         .map(|(&(a, b), x)| format!("n {a}-{b} {x:.4}"))
         .collect();
-    println!(
+    outln!(
         "pareto figures ({}): lobe {:.4} | cos^n {} | all n {:.4}",
         design.family(),
         e.lobe,
         ranges.join(" | "),
         e.power_all
-    );
+    )?;
     Ok(())
 }
 
@@ -507,7 +571,7 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
                 (d, _) => d,
             };
             in_file(args.config.as_deref(), || other.hdl().map(|_| ()))?;
-            println!("# glint hw check: {}", other.to_json());
+            outln!("# glint hw check: {}", other.to_json())?;
             return print_design_errors(&other);
         }
     };
@@ -523,15 +587,15 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     let secs = started.elapsed().as_secs_f64();
     let cfg = unit.config();
     let last = (1u32 << cfg.n_bits) - 1;
-    println!(
+    outln!(
         "# glint hw check: {} points (every cos code in [-1,1] x every n 0..={last}), k_s·I = {} (full scale), {:.1} s",
         m.points,
         unit.full_scale(),
         secs
-    );
-    println!("# configuration: {}", serde_json_line(cfg));
+    )?;
+    outln!("# configuration: {}", serde_json_line(cfg))?;
     let w = m.worst_lobe(0..=last);
-    println!(
+    outln!(
         "max error vs exact lobe ({}): {:.4} LSB at n = {}, cos = {:.9}",
         if cfg.coefficients == Coefficients::EnergyFit {
             "K_v"
@@ -541,11 +605,14 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
         w.error,
         w.n,
         unit.cos_value(w.cos)
-    );
-    println!(
+    )?;
+    outln!(
         "{:<12} {:>14} {:>22} {:>22}",
-        "n range", "vs lobe", "vs cos^n (unit)", "vs cos^n (ideal)"
-    );
+        "n range",
+        "vs lobe",
+        "vs cos^n (unit)",
+        "vs cos^n (ideal)"
+    )?;
     let mut ranges = vec![(0u32, 15u32), (16, 63), (64, 255), (256, last)];
     ranges.retain(|&(a, _)| a <= last);
     if let Some(r) = ranges.last_mut() {
@@ -553,20 +620,20 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     }
     ranges.push((0, last));
     for (a, b) in ranges {
-        println!(
+        outln!(
             "{:<12} {:>14.4} {:>22.4} {:>22.4}",
             format!("{a}-{b}"),
             m.worst_lobe(a..=b).error,
             m.worst_power(a..=b).error,
             m.worst_ideal_power(a..=b).error
-        );
+        )?;
     }
     let excess = m
         .per_n
         .iter()
         .map(|e| e.power - e.ideal_power)
         .fold(f64::MIN, f64::max);
-    println!("max over n of (unit - ideal) error vs cos^n: {excess:.4} LSB");
+    outln!("max over n of (unit - ideal) error vs cos^n: {excess:.4} LSB")?;
     print_design_errors(&Design::Kv(cfg.clone()))?;
     for bound in [0.5, 1.0] {
         let ok: Vec<bool> = m
@@ -575,10 +642,10 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
             .map(|e| e.power <= bound + glint_hw::BOUND_SLACK_LSB)
             .collect();
         let ranges = mask_ranges(&ok);
-        println!(
+        outln!(
             "n where the unit is within {bound} LSB of cos^n: {}",
             format_ranges(&ranges)
-        );
+        )?;
     }
     Ok(())
 }

@@ -13,7 +13,7 @@ pub struct ParetoArgs {
     /// Output directory: pareto.csv, the plots (PNG and SVG) and front-cosim.csv.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// The CI subset: four fixed designs at 8 bits, no sizing.
+    /// The CI subset: three fixed designs at 8 bits (one a family), no sizing.
     #[arg(long)]
     pub quick: bool,
     /// Designs synthesised at once.
@@ -86,16 +86,39 @@ pub fn run(args: ParetoArgs) -> anyhow::Result<()> {
         .filter(|r| !r.measured.verified.lint_clean || r.measured.verified.mismatches > 0)
         .map(|r| r.candidate.id.as_str())
         .collect();
-    println!(
+    // The files are written: a closed stdout does not stop the failure check or the
+    // front co-simulation below.
+    super::unless_closed(print_summary(&rows, &csv, &files, started))?;
+    if !bad.is_empty() {
+        bail!(
+            "co-simulation mismatches or lint warnings: {}",
+            bad.join(", ")
+        );
+    }
+    if args.front_vectors > 0 {
+        let rows = pareto::read_csv(&csv)?;
+        fronts(&args, &rows, args.front_vectors, &progress)?;
+    }
+    Ok(())
+}
+
+/// The summary of an exploration: designs, fronts, files, and designs per family.
+fn print_summary(
+    rows: &[pareto::Row],
+    csv: &std::path::Path,
+    files: &[String],
+    started: Instant,
+) -> anyhow::Result<()> {
+    outln!(
         "# glint hw pareto: {} designs, {} on a front; wrote {} and {} in {:.0} s",
         rows.len(),
         rows.iter().filter(|r| r.fronts.any()).count(),
         csv.display(),
         files.join(", "),
         started.elapsed().as_secs_f64()
-    );
+    )?;
     let mut fams: Vec<(String, u32, usize)> = Vec::new();
-    for r in &rows {
+    for r in rows {
         let k = (
             r.candidate.design.family().to_string(),
             r.candidate.design.out_bits(),
@@ -106,17 +129,7 @@ pub fn run(args: ParetoArgs) -> anyhow::Result<()> {
         }
     }
     for (f, o, n) in fams {
-        println!("{f} {o}-bit: {n} designs");
-    }
-    if !bad.is_empty() {
-        bail!(
-            "co-simulation mismatches or lint warnings: {}",
-            bad.join(", ")
-        );
-    }
-    if args.front_vectors > 0 {
-        let rows = pareto::read_csv(&csv)?;
-        fronts(&args, &rows, args.front_vectors, &progress)?;
+        outln!("{f} {o}-bit: {n} designs")?;
     }
     Ok(())
 }
@@ -160,7 +173,7 @@ fn fronts(
         })
         .map(|r| r.id.as_str())
         .collect();
-    println!(
+    let printed = outln!(
         "# {} front designs co-simulated with {vectors} vectors each in {:.0} s: {} failed; wrote {}",
         results.len(),
         started.elapsed().as_secs_f64(),
@@ -170,5 +183,5 @@ fn fronts(
     if !bad.is_empty() {
         bail!("front co-simulation failed for {}", bad.join(", "));
     }
-    Ok(())
+    super::unless_closed(printed)
 }

@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use glint_hw::hdl::{self, HdlUnit, KvUnit, PowerUnit, SchlickUnit};
 
-use super::{build_unit, load_config, CosimArgs, HdlChoice, SynthArgs, VerilogArgs};
+use super::{build_unit, load_config, unless_closed, CosimArgs, HdlChoice, SynthArgs, VerilogArgs};
 
 /// Largest number of test vectors a command writes (~40 bytes a line: 4 GB of text).
 const MAX_VECTORS: usize = 100_000_000;
@@ -85,7 +85,8 @@ pub(super) fn cosim(args: CosimArgs) -> anyhow::Result<()> {
     let mut failed = Vec::new();
     for u in &units {
         let r = hdl::cosim(u.as_ref(), args.vectors, args.seed, v, &dir)?;
-        println!(
+        // A closed stdout does not stop the checks: a failure still fails the command.
+        unless_closed(outln!(
             "{}: {} of {} vectors passed, {} mismatches, {} clocks (latency {}, valid checked on every clock); model {:.1} s, iverilog {:.1} s",
             r.module,
             r.passed,
@@ -95,17 +96,17 @@ pub(super) fn cosim(args: CosimArgs) -> anyhow::Result<()> {
             u.latency(),
             r.model_secs,
             r.sim_secs
-        );
+        ))?;
         for line in &r.first_mismatches {
-            println!("  {line}");
+            unless_closed(outln!("  {line}"))?;
         }
         if !r.ok() {
             failed.push(r.module);
         }
         match hdl::lint(u.as_ref(), &dir) {
-            Ok(()) => println!("{}: verilator --lint-only -Wall: clean", u.module()),
+            Ok(()) => unless_closed(outln!("{}: verilator --lint-only -Wall: clean", u.module()))?,
             Err(e) => {
-                println!("{}: {e}", u.module());
+                unless_closed(outln!("{}: {e}", u.module()))?;
                 failed.push(u.module());
             }
         }
@@ -136,12 +137,12 @@ pub(super) fn synth(args: SynthArgs) -> anyhow::Result<()> {
             error_vs_power: u.max_error_vs_power(),
         });
     }
-    println!(
+    outln!(
         "# glint hw synth: yosys synth + stat -tech cmos (generic), synth_ice40 + nextpnr-ice40 --{} --package {} (no DSPs on this part: multipliers are LUTs); one result per clock",
         hdl::ICE40_DEVICE,
         hdl::ICE40_PACKAGE
-    );
-    println!("# max err vs cos^n: exhaustive over every cos code in [0,1] x every n, k_s·I at full scale, from the Rust models");
-    print!("{}", hdl::cost_table(&rows));
+    )?;
+    outln!("# max err vs cos^n: exhaustive over every cos code in [0,1] x every n, k_s·I at full scale, from the Rust models")?;
+    out!("{}", hdl::cost_table(&rows))?;
     Ok(())
 }
