@@ -354,8 +354,18 @@ pub struct FrontCosim {
     pub seconds: f64,
 }
 
+/// Whether `d` is among the slowest to simulate: K_v units with generated squarer
+/// arrays (dozens of 64-bit partial-product rows a stage, which Icarus evaluates 3-10
+/// times slower than a unit with generic multipliers: `docs/pareto/front-cosim-1e5.csv`).
+/// [`cosim_fronts`] starts these first, so the last design to finish is a short one
+/// and the `jobs` threads end together.
+fn slow_to_simulate(d: &Design) -> bool {
+    matches!(d, Design::Kv(c) if c.squarer != crate::Squarer::Generic)
+}
+
 /// Co-simulates every row on a front with `vectors` vectors and lints it, `jobs` at a
-/// time, in temporary directories under `work`.
+/// time (the slowest first, see [`slow_to_simulate`]), in temporary directories under
+/// `work`. The results are in the order of `rows`.
 pub fn cosim_fronts(
     rows: &[(String, Design)],
     vectors: usize,
@@ -367,10 +377,14 @@ pub fn cosim_fronts(
         .num_threads(jobs.max(1))
         .build()
         .map_err(|e| ParetoError::file(work, e))?;
-    pool.install(|| {
-        rows.par_iter()
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.sort_by_key(|&i| !slow_to_simulate(&rows[i].1));
+    let mut done: Vec<(usize, FrontCosim)> = pool.install(|| {
+        order
+            .par_iter()
             .with_max_len(1)
-            .map(|(id, d)| {
+            .map(|&i| {
+                let (id, d) = &rows[i];
                 let started = Instant::now();
                 let tool = |source| ParetoError::Tool {
                     id: id.clone(),
@@ -405,8 +419,10 @@ pub fn cosim_fronts(
                     if lint_clean { "clean" } else { "WARNINGS" },
                     f.seconds
                 ));
-                Ok(f)
+                Ok((i, f))
             })
-            .collect()
-    })
+            .collect::<Result<Vec<_>, ParetoError>>()
+    })?;
+    done.sort_by_key(|&(i, _)| i);
+    Ok(done.into_iter().map(|(_, f)| f).collect())
 }
