@@ -364,8 +364,8 @@ fn slow_to_simulate(d: &Design) -> bool {
 }
 
 /// Co-simulates every row on a front with `vectors` vectors and lints it, `jobs` at a
-/// time (the slowest first, see [`slow_to_simulate`]), in temporary directories under
-/// `work`. The results are in the order of `rows`.
+/// time (the slowest first: K_v units with generated squarer arrays), in temporary
+/// directories under `work`. The results are in the order of `rows`.
 pub fn cosim_fronts(
     rows: &[(String, Design)],
     vectors: usize,
