@@ -2,7 +2,8 @@
 //! and its validation.
 
 use std::fmt;
-use std::str::FromStr;
+
+use glint_lobe::names::Named;
 
 use serde::de::value::MapAccessDeserializer;
 use serde::de::{MapAccess, Visitor};
@@ -28,51 +29,86 @@ pub const MAX_REGISTER_BITS: u32 = 64;
 /// [`MAX_REGISTER_BITS`] register.
 pub const MAX_COS_BITS: u32 = MAX_REGISTER_BITS - 1;
 
-/// How a stage drops fraction bits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// The error for `name`, which is none of `T`'s names (the message of
+/// [`glint_lobe::names::unknown`], as the other crates' named enums give).
+fn unknown<T: Named>(name: &str) -> HwError {
+    HwError::Parse(glint_lobe::names::unknown::<T>(name))
+}
+
+// The named enums derive their names, parser and lists with strum, as the other crates'
+// (see `glint_lobe::names`); serde keeps the JSON spellings of configuration files.
+
+/// How a stage drops fraction bits: `truncate` (also `trunc`, `floor`) or `nearest`
+/// (also `round`); case-insensitive.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<Rounding>
+)]
 pub enum Rounding {
     /// Drop the low bits (round toward zero; every rounded value here is >= 0).
+    #[strum(to_string = "truncate", serialize = "trunc", serialize = "floor")]
     Truncate,
     /// Round to nearest, ties up: add half an output LSB, then drop the low bits.
+    #[strum(to_string = "nearest", serialize = "round")]
     Nearest,
 }
 
 impl Rounding {
-    /// The name used in configuration files and on the command line.
+    /// The name used in configuration files, on the command line and in tables.
     pub fn name(self) -> &'static str {
-        match self {
-            Rounding::Truncate => "truncate",
-            Rounding::Nearest => "nearest",
-        }
+        self.into()
     }
 }
 
-impl fmt::Display for Rounding {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
+impl Named for Rounding {
+    const WHAT: &'static str = "rounding";
 }
 
-impl FromStr for Rounding {
-    type Err = HwError;
-
-    fn from_str(s: &str) -> Result<Self, HwError> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "truncate" | "trunc" | "floor" => Ok(Rounding::Truncate),
-            "nearest" | "round" => Ok(Rounding::Nearest),
-            _ => Err(HwError::Parse(format!(
-                "unknown rounding '{s}': expected truncate or nearest"
-            ))),
-        }
-    }
-}
-
-/// Which coefficient `a(n)` ROM1 holds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// Which coefficient `a(n)` ROM1 holds: `k` (also `energy`, `energy-fit`) or `minimax`;
+/// case-insensitive.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<Coefficients>
+)]
 pub enum Coefficients {
     /// The paper's energy fit `a = (n+1)/(2^v+1)` (K_v).
     #[serde(rename = "k")]
+    #[strum(to_string = "k", serialize = "energy", serialize = "energy-fit")]
     EnergyFit,
     /// The `a` minimising the maximum absolute error against `cos^n`
     /// ([`glint_lobe::minimax_coefficient`]); same hardware, other ROM contents.
@@ -81,33 +117,106 @@ pub enum Coefficients {
 }
 
 impl Coefficients {
-    /// The name used in configuration files and on the command line (`k`, `minimax`).
+    /// The name used in configuration files, on the command line and in tables.
     pub fn name(self) -> &'static str {
-        match self {
-            Coefficients::EnergyFit => "k",
-            Coefficients::Minimax => "minimax",
-        }
+        self.into()
     }
 }
 
-impl fmt::Display for Coefficients {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+impl Named for Coefficients {
+    const WHAT: &'static str = "coefficients";
+}
+
+/// How the unit forms `a(n)`: `rom`, `const` or `table`. Every source gives the same
+/// words as ROM1 (checked when the unit is built, see [`crate::CoefCircuit`]); only the
+/// hardware differs.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[serde(rename_all = "lowercase")]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<CoefSource>
+)]
+pub enum CoefSource {
+    /// ROM1: one word per `n` (the paper's Fig. 4).
+    Rom,
+    /// `a(n) = (n+1)·K` rounded, `K ≈ 1/(2^v+1)`: a shift-and-add constant multiplier,
+    /// no ROM (energy-fit coefficients only).
+    Const,
+    /// `a(n) = T_hi[n_hi] + T_lo[n_lo]` rounded: two small tables and an adder
+    /// (energy-fit coefficients only).
+    Table,
+}
+
+impl CoefSource {
+    /// The name used in configuration files, on the command line and in tables.
+    pub fn name(self) -> &'static str {
+        self.into()
     }
 }
 
-impl FromStr for Coefficients {
-    type Err = HwError;
+impl Named for CoefSource {
+    const WHAT: &'static str = "coefficient source";
+}
 
-    fn from_str(s: &str) -> Result<Self, HwError> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "k" | "energy" | "energy-fit" => Ok(Coefficients::EnergyFit),
-            "minimax" => Ok(Coefficients::Minimax),
-            _ => Err(HwError::Parse(format!(
-                "unknown coefficients '{s}': expected k or minimax"
-            ))),
-        }
+/// How a BMUL stage squares: `generic`, `symmetric` or `truncated`.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[serde(rename_all = "lowercase")]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = HwError,
+    parse_err_fn = unknown::<Squarer>
+)]
+pub enum Squarer {
+    /// A generic multiplier with both operands the same register (Fig. 4 as drawn).
+    Generic,
+    /// A squarer: the partial-product array folded by symmetry (`x_i x_j = x_j x_i`),
+    /// about half the partial products. Same result as `Generic`.
+    Symmetric,
+    /// The symmetric array with the partial-product columns below
+    /// `2f_in - f_out - square_guard` dropped and a constant (their mean) added.
+    Truncated,
+}
+
+impl Squarer {
+    /// The name used in configuration files, on the command line and in tables.
+    pub fn name(self) -> &'static str {
+        self.into()
     }
+}
+
+impl Named for Squarer {
+    const WHAT: &'static str = "squarer";
 }
 
 /// Every parameter of the unit. Formats (see `docs/hardware.md`):
@@ -153,6 +262,14 @@ pub struct Config {
     pub out_bits: u32,
     /// How the RGB multipliers round to the output code.
     pub out_round: Rounding,
+    /// How `a(n)` is formed (ROM1, constant multiplier, or two small tables).
+    pub coef_source: CoefSource,
+    /// How each BMUL stage squares.
+    pub squarer: Squarer,
+    /// For [`Squarer::Truncated`]: partial-product columns kept below each stage's
+    /// output LSB (1..=16; the truncation error is about `(drop/2 + 1)·2^-guard` of
+    /// the stage's output LSB, see [`crate::TruncatedSquare`]).
+    pub square_guard: u32,
 }
 
 impl Default for Config {
@@ -174,6 +291,9 @@ impl Default for Config {
             square_round: Rounding::Nearest,
             out_bits: 8,
             out_round: Rounding::Nearest,
+            coef_source: CoefSource::Rom,
+            squarer: Squarer::Generic,
+            square_guard: 2,
         }
     }
 }
@@ -293,6 +413,19 @@ impl Config {
             )?;
         }
         check_register("RGB output = out_bits", self.out_bits.into())?;
+        if self.coef_source != CoefSource::Rom && self.coefficients != Coefficients::EnergyFit {
+            return Err(HwError::Parse(format!(
+                "coef_source = {} computes the energy fit (n+1)/(2^v+1); minimax coefficients need coef_source = rom",
+                self.coef_source.name()
+            )));
+        }
+        if self.squarer == Squarer::Truncated && !(1..=16).contains(&self.square_guard) {
+            return Err(HwError::TooNarrow {
+                field: "square_guard",
+                bits: self.square_guard,
+                reason: "a truncated squarer keeps 1..=16 columns below its output LSB",
+            });
+        }
         Ok(())
     }
 }

@@ -38,9 +38,12 @@
 #![forbid(unsafe_code)]
 
 mod accuracy;
+mod arith;
 mod config;
+mod design;
 mod fixed;
 pub mod hdl;
+pub mod pareto;
 mod pipeline;
 mod report;
 mod rom;
@@ -49,9 +52,12 @@ mod table;
 mod unit;
 
 pub use accuracy::{measure, within, ErrorsAtN, Measurement, Reference, Worst, BOUND_SLACK_LSB};
+pub use arith::{csd_digits, CoefCircuit, TruncatedSquare, MAX_TRUNCATED_COLUMNS};
 pub use config::{
-    Coefficients, Config, Rounding, MAX_COS_BITS, MAX_N_BITS, MAX_REGISTER_BITS, MAX_V,
+    CoefSource, Coefficients, Config, Rounding, Squarer, MAX_COS_BITS, MAX_N_BITS,
+    MAX_REGISTER_BITS, MAX_V,
 };
+pub use design::{Design, DesignErrors, DESIGN_COS_BITS, DESIGN_N_BITS, N_RANGES};
 pub use fixed::requantize;
 pub use pipeline::{BaseReg, MulReg, Pipeline, Registers, RomSm1Reg, SquareReg, Trace};
 pub use report::{TraceRow, TraceTable};

@@ -148,12 +148,7 @@ impl<'u> Pipeline<'u> {
                 )
             };
             squares.push(prev.map(|(s, ks)| SquareReg {
-                s: requantize(
-                    s as u128 * s as u128,
-                    2 * prev_frac,
-                    f.square_frac[k],
-                    cfg.square_round,
-                ) as u64,
+                s: unit.square_stage(k, s, prev_frac),
                 ks,
             }));
         }

@@ -1,8 +1,9 @@
 //! The validated unit and its functional (untimed) model.
 
+use crate::arith::{CoefCircuit, TruncatedSquare};
 use crate::config::check_register;
 use crate::fixed::requantize;
-use crate::{Config, HwError, Rom};
+use crate::{Config, HwError, Rom, Squarer};
 
 /// The fixed-point format of every stage, derived from a [`Config`] and its ROM.
 /// `*_frac` are fraction bits; all values except `cos` and the Sm2 difference are
@@ -70,6 +71,8 @@ pub struct Unit {
     config: Config,
     rom: Rom,
     formats: Formats,
+    coef: CoefCircuit,
+    truncated: Vec<Option<TruncatedSquare>>,
 }
 
 impl Unit {
@@ -104,11 +107,51 @@ impl Unit {
             lobe_frac: *config.square_frac.last().unwrap_or(&config.mul_frac),
             out_bits: config.out_bits,
         };
+        // Every a(n) source gives ROM1's words (checked here), so the models below
+        // read the words; the circuit's constants are for the Verilog.
+        let coef = CoefCircuit::new(config.coef_source, &rom)?;
+        let mut truncated = Vec::with_capacity(config.square_frac.len());
+        let mut prev = config.mul_frac;
+        for &next in &config.square_frac {
+            truncated.push(match config.squarer {
+                Squarer::Truncated => TruncatedSquare::new(prev, next, config.square_guard),
+                _ => None,
+            });
+            prev = next;
+        }
         Ok(Unit {
             config,
             rom,
             formats,
+            coef,
+            truncated,
         })
+    }
+
+    /// The circuit that forms `a(n)` (its words equal ROM1's).
+    pub fn coef_circuit(&self) -> &CoefCircuit {
+        &self.coef
+    }
+
+    /// BMUL stage `k`'s truncated squarer (`None`: the full square).
+    pub fn truncated_square(&self, k: usize) -> Option<&TruncatedSquare> {
+        self.truncated.get(k).and_then(Option::as_ref)
+    }
+
+    /// BMUL stage `k` (0-based): the square of `s` (UQ1.`in_frac`) rounded to the
+    /// stage's fraction bits.
+    #[inline]
+    pub fn square_stage(&self, k: usize, s: u64, in_frac: u32) -> u64 {
+        let sq = match &self.truncated[k] {
+            None => u128::from(s) * u128::from(s),
+            Some(t) => t.square(s),
+        };
+        requantize(
+            sq,
+            2 * in_frac,
+            self.formats.square_frac[k],
+            self.config.square_round,
+        ) as u64
     }
 
     /// The configuration.
@@ -247,13 +290,8 @@ impl Unit {
         let mut s = (one - p) as u64;
         let mut frac = f.mul_frac;
         // BMUL: v squarings, each rounded to its stage's width.
-        for &next in &f.square_frac {
-            s = requantize(
-                s as u128 * s as u128,
-                2 * frac,
-                next,
-                self.config.square_round,
-            ) as u64;
+        for (k, &next) in f.square_frac.iter().enumerate() {
+            s = self.square_stage(k, s, frac);
             frac = next;
         }
         s

@@ -2,7 +2,9 @@
 //! floating-point restatement of the stage definitions, exhaustively for small
 //! configurations.
 
-use glint_hw::{Coefficients, Config, Input, Output, Pipeline, Rounding, Unit};
+use glint_hw::{
+    CoefSource, Coefficients, Config, Input, Output, Pipeline, Rounding, Squarer, Unit,
+};
 
 fn small(v: u32, round: Rounding) -> Config {
     Config {
@@ -18,6 +20,9 @@ fn small(v: u32, round: Rounding) -> Config {
         square_round: round,
         out_bits: 4,
         out_round: round,
+        coef_source: CoefSource::Rom,
+        squarer: Squarer::Generic,
+        square_guard: 2,
     }
 }
 
@@ -86,6 +91,26 @@ fn pipeline_agrees_with_functional_model_exhaustively() {
     for v in [0, 1, 2, 4] {
         for round in [Rounding::Nearest, Rounding::Truncate] {
             stream_and_compare(small(v, round));
+        }
+    }
+}
+
+#[test]
+fn pipeline_agrees_with_functional_model_for_the_new_circuits() {
+    // The constant / table a(n) and the truncated squarers go through the same
+    // pipeline registers (only the truncated squarer changes the arithmetic).
+    for (source, squarer, guard) in [
+        (CoefSource::Const, Squarer::Truncated, 1),
+        (CoefSource::Table, Squarer::Truncated, 2),
+        (CoefSource::Const, Squarer::Symmetric, 2),
+    ] {
+        for v in [1, 2, 4] {
+            stream_and_compare(Config {
+                coef_source: source,
+                squarer,
+                square_guard: guard,
+                ..small(v, Rounding::Nearest)
+            });
         }
     }
 }

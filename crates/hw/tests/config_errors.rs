@@ -340,7 +340,7 @@ fn configuration_files_must_be_json_objects() {
 
 mod any_config {
     use super::*;
-    use glint_hw::{Coefficients, Rounding};
+    use glint_hw::{CoefSource, Coefficients, Rounding, Squarer};
     use proptest::prelude::*;
 
     /// Mostly plausible widths, so that many cases get past validation, plus the
@@ -366,6 +366,9 @@ mod any_config {
             extra in prop_oneof![8 => Just(0usize), 1 => Just(1usize)],
             square in proptest::collection::vec(width(), 0..=12),
             nearest in any::<bool>(),
+            source in prop_oneof![6 => Just(CoefSource::Rom), 1 => Just(CoefSource::Const), 1 => Just(CoefSource::Table)],
+            squarer in prop_oneof![6 => Just(Squarer::Generic), 1 => Just(Squarer::Symmetric), 1 => Just(Squarer::Truncated)],
+            square_guard in prop_oneof![8 => 1u32..=16, 1 => any::<u32>()],
         ) -> Config {
             // Mostly the right number of square_frac entries, so later checks run.
             let want = (v.min(12) as usize + extra).min(square.len());
@@ -374,7 +377,7 @@ mod any_config {
                 v, n_bits, cos_bits, coefficients: Coefficients::EnergyFit, coef_bits,
                 coef_round: round, mul_frac, mul_round: round,
                 square_frac: square[..want].to_vec(), square_round: round,
-                out_bits, out_round: round,
+                out_bits, out_round: round, coef_source: source, squarer, square_guard,
             }
         }
     }
@@ -406,4 +409,69 @@ mod any_config {
             }
         }
     }
+}
+
+/// The spellings the hand-written parsers accepted before the strum derives, written
+/// out here (not taken from the derives), and the names printed in tables and files.
+#[test]
+fn named_enums_keep_their_spellings() {
+    use glint_hw::{CoefSource, Coefficients, Rounding, Squarer};
+    for (s, want) in [
+        ("truncate", Rounding::Truncate),
+        ("trunc", Rounding::Truncate),
+        ("FLOOR", Rounding::Truncate),
+        ("nearest", Rounding::Nearest),
+        ("Round", Rounding::Nearest),
+    ] {
+        assert_eq!(s.parse::<Rounding>().unwrap(), want, "{s}");
+    }
+    for (s, want) in [
+        ("k", Coefficients::EnergyFit),
+        ("energy", Coefficients::EnergyFit),
+        ("Energy-Fit", Coefficients::EnergyFit),
+        ("minimax", Coefficients::Minimax),
+    ] {
+        assert_eq!(s.parse::<Coefficients>().unwrap(), want, "{s}");
+    }
+    let names = |v: &[&str]| v.join(",");
+    assert_eq!(
+        names(&[Rounding::Truncate.name(), Rounding::Nearest.name()]),
+        "truncate,nearest"
+    );
+    assert_eq!(Coefficients::EnergyFit.to_string(), "k");
+    assert_eq!(Coefficients::Minimax.name(), "minimax");
+    assert_eq!(
+        names(&[
+            CoefSource::Rom.name(),
+            CoefSource::Const.name(),
+            CoefSource::Table.name()
+        ]),
+        "rom,const,table"
+    );
+    assert_eq!(
+        names(&[
+            Squarer::Generic.name(),
+            Squarer::Symmetric.name(),
+            Squarer::Truncated.name()
+        ]),
+        "generic,symmetric,truncated"
+    );
+    // The JSON spellings of configuration files are serde's, unchanged.
+    let json = Config::default().to_json();
+    assert!(json.contains(r#""coefficients": "k""#), "{json}");
+    assert!(json.contains(r#""coef_round": "nearest""#), "{json}");
+    assert!(json.contains(r#""coef_source": "rom""#), "{json}");
+    assert!(json.contains(r#""squarer": "generic""#), "{json}");
+    // A wrong name is a typed error with one line naming the accepted ones.
+    let e = "half".parse::<Rounding>().unwrap_err();
+    assert!(matches!(e, HwError::Parse(_)));
+    assert_eq!(
+        e.to_string(),
+        "invalid configuration: unknown rounding 'half': expected one of truncate, nearest"
+    );
+    let e = "phong".parse::<Coefficients>().unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "invalid configuration: unknown coefficients 'phong': expected one of k, minimax"
+    );
 }

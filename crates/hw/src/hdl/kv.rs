@@ -2,9 +2,10 @@
 
 use std::fmt::Write as _;
 
+use super::arrays::{const_multiply, square_array};
 use super::vlog::{header, product, requantize, rgb_stage, unused_ok, valid_and_ks};
 use super::{HdlFile, HdlUnit, Ports};
-use crate::{Input, Output, Pipeline, Unit};
+use crate::{CoefCircuit, Input, Output, Pipeline, Squarer, Unit};
 
 /// The paper's K_v pipeline (see [`crate::Pipeline`] for its stages), as Verilog.
 #[derive(Clone, Debug)]
@@ -28,6 +29,87 @@ impl KvUnit {
 
     fn rom_file(&self) -> String {
         format!("{}_rom1.hex", Self::MODULE)
+    }
+
+    fn coef_how(&self) -> String {
+        match self.unit.coef_circuit() {
+            CoefCircuit::Rom => {
+                format!("ROM1 (synchronous read; contents from {})", self.rom_file())
+            }
+            CoefCircuit::Const { guard, csd, .. } => format!(
+                "(n+1) times a constant ({} signed digits, {guard} guard bits), no ROM",
+                csd.len()
+            ),
+            CoefCircuit::Table { lo_bits, guard, .. } => format!(
+                "two tables (n >> {lo_bits}, n mod 2^{lo_bits}; {guard} guard bits) and an adder"
+            ),
+        }
+    }
+
+    /// The logic of stage 1 that forms `a_next` (or the ROM1 array).
+    fn coef_text(&self) -> String {
+        let u = &self.unit;
+        let cfg = u.config();
+        let f = u.formats();
+        let nb = cfg.n_bits;
+        let a_w = cfg.coef_bits;
+        match u.coef_circuit() {
+            CoefCircuit::Rom => format!(
+                "    reg [{}:0] rom1 [0:{}];\n    initial $readmemh(\"{}\", rom1);\n",
+                a_w - 1,
+                u.rom().words().len() - 1,
+                self.rom_file()
+            ),
+            CoefCircuit::Const { k, guard, csd } => {
+                let mut body = format!("    wire [{nb}:0] np1 = {{1'b0, n0}} + {}'d1;\n", nb + 1);
+                let (text, w) = const_multiply("a_prod", "np1", nb + 1, *k, csd);
+                body += &text;
+                body += &requantize(
+                    "a_next",
+                    a_w,
+                    "a_prod",
+                    w,
+                    f.coef_frac + guard,
+                    f.coef_frac,
+                    cfg.coef_round,
+                );
+                unused_ok(&body)
+            }
+            CoefCircuit::Table {
+                lo_bits,
+                guard,
+                hi,
+                lo,
+            } => {
+                let (hw, lw) = (bits_of(hi), bits_of(lo));
+                let sw = hw.max(lw) + 1;
+                let m = Self::MODULE;
+                let mut body = format!(
+                    "    reg [{}:0] thi [0:{}];\n    initial $readmemh(\"{m}_thi.hex\", thi);\n\
+    reg [{}:0] tlo [0:{}];\n    initial $readmemh(\"{m}_tlo.hex\", tlo);\n\
+    wire [{}:0] t_sum = {{{}'b0, thi[n0[{}:{lo_bits}]]}} + {{{}'b0, tlo[n0[{}:0]]}};\n",
+                    hw - 1,
+                    hi.len() - 1,
+                    lw - 1,
+                    lo.len() - 1,
+                    sw - 1,
+                    sw - hw,
+                    nb - 1,
+                    sw - lw,
+                    lo_bits - 1,
+                );
+                body += &requantize(
+                    "a_next",
+                    a_w,
+                    "t_sum",
+                    sw,
+                    f.coef_frac + guard,
+                    f.coef_frac,
+                    cfg.coef_round,
+                );
+                unused_ok(&body)
+            }
+        }
     }
 
     fn module_text(&self) -> String {
@@ -69,15 +151,13 @@ impl KvUnit {
         cos0 <= cos_in;\n\
         n0 <= n_in;\n\
     end\n\n\
-    // Stage 1: ROM1 a(n), UQ{ci}.{cfr} (synchronous read; contents from {rom}),\n\
-    // and Sm1 t = 1 - cos, UQ2.{cf}, 0 where negative (cos > 1).\n\
-    reg [{a1}:0] rom1 [0:{words}];\n\
-    initial $readmemh(\"{rom}\", rom1);\n\
+    // Stage 1: a(n), UQ{ci}.{cfr}, {how},\n\
+    // and Sm1 t = 1 - cos, UQ2.{cf}, 0 where negative (cos > 1).\n{coef}\
     wire [{c}:0] sm1 = {c2}'d{one} - {{cos0[{c1}], cos0}};\n\
     reg [{a1}:0] a1;\n\
     reg [{c1}:0] t1;\n\
     always @(posedge clk) begin\n\
-        a1 <= rom1[n0];\n\
+        a1 <= {a_src};\n\
         t1 <= sm1[{c}] ? {c}'d0 : sm1[{c1}:0];\n\
     end\n",
             c1 = c - 1,
@@ -85,9 +165,14 @@ impl KvUnit {
             n1 = cfg.n_bits - 1,
             ci = f.coef_int,
             cfr = f.coef_frac,
-            rom = self.rom_file(),
+            how = self.coef_how(),
+            coef = self.coef_text(),
+            a_src = if matches!(u.coef_circuit(), CoefCircuit::Rom) {
+                "rom1[n0]"
+            } else {
+                "a_next"
+            },
             a1 = a_w - 1,
-            words = u.rom().words().len() - 1,
             one = 1u64 << cf,
         );
         // Stage 2: MUL.
@@ -118,11 +203,19 @@ impl KvUnit {
     /* verilator lint_off UNUSEDSIGNAL */\n\
     wire [{mb}:0] sm2 = {sw}'d{one} - {{1'b0, p2}};\n\
     /* verilator lint_on UNUSEDSIGNAL */\n\
-    reg [{m}:0] b3;\n\
+{b3}\
     always @(posedge clk) b3 <= sm2[{mb}] ? {m1}'d0 : sm2[{m}:0];\n",
             sw = mb + 1,
             m1 = m + 1,
             one = 1u64 << m,
+            b3 = {
+                let reg = format!("    reg [{m}:0] b3;\n");
+                if cfg.squarer == Squarer::Truncated {
+                    unused_ok(&reg)
+                } else {
+                    reg
+                }
+            },
         );
         // BMUL squarings.
         let mut prev = ("b3".to_string(), m);
@@ -130,13 +223,12 @@ impl KvUnit {
             let to = f.square_frac[k as usize];
             let stage = 4 + k;
             let name = format!("s{stage}");
-            let mut body = product(
-                &format!("sq{stage}_full"),
-                &prev.0,
-                prev.1 + 1,
-                &prev.0,
-                prev.1 + 1,
-            );
+            let full = format!("sq{stage}_full");
+            let mut body = match (cfg.squarer, u.truncated_square(k as usize)) {
+                (Squarer::Generic, _) => product(&full, &prev.0, prev.1 + 1, &prev.0, prev.1 + 1),
+                (_, None) => square_array(&full, &prev.0, prev.1 + 1, 0, 0),
+                (_, Some(t)) => square_array(&full, &prev.0, prev.1 + 1, t.drop, t.comp),
+            };
             body += &requantize(
                 &format!("sq{stage}_next"),
                 to + 1,
@@ -146,15 +238,18 @@ impl KvUnit {
                 to,
                 cfg.square_round,
             );
+            let reg = format!("    reg [{to}:0] {name};\n");
             let _ = writeln!(
                 s,
-                "    // Stage {stage}: BMUL squaring {} (lobe^{}), round ({}) to UQ1.{to}.\n{}\
-    reg [{to}:0] {name};\n\
+                "    // Stage {stage}: BMUL squaring {} (lobe^{}, {} squarer), round ({}) to UQ1.{to}.\n{}{}\
     always @(posedge clk) {name} <= sq{stage}_next;\n",
                 k + 1,
                 1u64 << (k + 1),
+                cfg.squarer.name(),
                 cfg.square_round,
                 unused_ok(&body),
+                // A truncated next stage may not read every bit of this register.
+                if cfg.squarer == Squarer::Truncated { unused_ok(&reg) } else { reg },
             );
             prev = (name, to);
         }
@@ -195,20 +290,39 @@ impl HdlUnit for KvUnit {
     }
 
     fn rom_bits(&self) -> u64 {
-        self.unit.rom().words().len() as u64 * u64::from(self.unit.config().coef_bits)
+        match self.unit.coef_circuit() {
+            CoefCircuit::Rom => {
+                self.unit.rom().words().len() as u64 * u64::from(self.unit.config().coef_bits)
+            }
+            CoefCircuit::Const { .. } => 0,
+            CoefCircuit::Table { hi, lo, .. } => {
+                (hi.len() as u64) * u64::from(bits_of(hi))
+                    + (lo.len() as u64) * u64::from(bits_of(lo))
+            }
+        }
     }
 
     fn files(&self) -> Vec<HdlFile> {
-        vec![
-            HdlFile {
-                name: format!("{}.v", Self::MODULE),
-                text: self.module_text(),
-            },
-            HdlFile {
+        let mut files = vec![HdlFile {
+            name: format!("{}.v", Self::MODULE),
+            text: self.module_text(),
+        }];
+        match self.unit.coef_circuit() {
+            CoefCircuit::Rom => files.push(HdlFile {
                 name: self.rom_file(),
                 text: self.unit.rom().to_readmemh(),
-            },
-        ]
+            }),
+            CoefCircuit::Const { .. } => {}
+            CoefCircuit::Table { hi, lo, .. } => {
+                for (stem, t) in [("thi", hi), ("tlo", lo)] {
+                    files.push(HdlFile {
+                        name: format!("{}_{stem}.hex", Self::MODULE),
+                        text: table_hex(t),
+                    });
+                }
+            }
+        }
+        files
     }
 
     /// The cycle-accurate [`Pipeline`] itself, one [`Pipeline::clock`] per line.
@@ -228,4 +342,19 @@ impl HdlUnit for KvUnit {
         m.worst_power(0..=super::mask(self.unit.config().n_bits) as u32)
             .error
     }
+}
+
+/// Bits of the largest entry (at least 1).
+fn bits_of(t: &[u64]) -> u32 {
+    (64 - t.iter().copied().max().unwrap_or(0).leading_zeros()).max(1)
+}
+
+/// A table in `$readmemh` format, one word per line.
+fn table_hex(t: &[u64]) -> String {
+    let digits = bits_of(t).div_ceil(4) as usize;
+    let mut s = format!("// glint_kv a(n) table: {} words\n", t.len());
+    for w in t {
+        let _ = writeln!(s, "{w:0digits$x}");
+    }
+    s
 }

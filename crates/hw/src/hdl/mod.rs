@@ -23,6 +23,8 @@
 //! one line per clock (the input, and the output the Rust model expects after that
 //! clock edge) and compares `out_valid` on every clock and R, G, B whenever it is high.
 
+mod arrays;
+mod flows;
 mod kv;
 mod power;
 mod schlick;
@@ -33,9 +35,10 @@ mod vlog;
 
 use std::path::{Path, PathBuf};
 
+pub use flows::{cost_flows, Costs, GATE_SET, NAND2_TRANSISTORS};
 pub use kv::KvUnit;
-pub use power::PowerUnit;
-pub use schlick::SchlickUnit;
+pub use power::{PowParams, PowerUnit, MAX_POW_INDEX};
+pub use schlick::{SchlickParams, SchlickUnit};
 pub use stimulus::{expected_stream, stimulus, write_vectors, Stimulus};
 pub use synth::{cost_table, synth, CostRow, SynthReport, ICE40_DEVICE, ICE40_PACKAGE};
 pub use tools::{cosim, lint, testbench, CosimReport};

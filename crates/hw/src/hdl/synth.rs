@@ -46,7 +46,7 @@ pub struct SynthReport {
 
 /// Counts of cells whose type starts with `prefix` in a yosys `stat` listing (the last
 /// listing in `log` is used).
-fn count_cells(log: &str, prefix: &str) -> u64 {
+pub(crate) fn count_cells(log: &str, prefix: &str) -> u64 {
     let last = log.rfind("Number of cells:").map_or(log, |i| &log[i..]);
     last.lines()
         .filter_map(|l| {
@@ -59,7 +59,7 @@ fn count_cells(log: &str, prefix: &str) -> u64 {
 }
 
 /// The number after `key` on the last line of `log` containing it.
-fn number_after(log: &str, key: &str) -> Option<u64> {
+pub(crate) fn number_after(log: &str, key: &str) -> Option<u64> {
     let line = log.lines().rev().find(|l| l.contains(key))?;
     line[line.find(key)? + key.len()..]
         .trim()

@@ -1,15 +1,35 @@
 //! `glint hw`: the fixed-point model of the specular unit (ROM contents, width sweeps,
-//! stage-by-stage evaluation, exhaustive error check).
+//! stage-by-stage evaluation, exhaustive error check, Verilog, cost, Pareto fronts).
+
+/// `write!` to stdout that returns its error instead of panicking as `print!` does: a
+/// closed pipe (`glint hw check | head`) becomes [`StdoutClosed`], which [`run`] turns
+/// into a quiet, successful exit; any other write error is reported.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*).map_err($crate::cmd::hw::stdout_error)
+    }};
+}
+
+/// [`out!`] with a newline, as `println!`.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*).map_err($crate::cmd::hw::stdout_error)
+    }};
+}
+
+mod pareto;
+mod rtl;
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use glint_hw::hdl::{self, HdlUnit, KvUnit, PowerUnit, SchlickUnit};
 use glint_hw::{
-    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, HwError,
-    Input, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
+    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, Design,
+    HwError, Input, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
 };
 
 /// Subcommands of `glint hw`.
@@ -56,6 +76,14 @@ pub enum Command {
         after_help = "Examples:\n  glint hw synth\n  glint hw synth --config unit.json --keep synth"
     )]
     Synth(SynthArgs),
+    /// Explore cost against error for K_v, exact cos^n and Schlick units on three
+    /// targets; write pareto.csv and the plots with each family's front.
+    #[command(
+        after_help = "Examples:\n  nice -n 15 glint hw pareto -o docs/pareto --cache /tmp/pareto-cache --jobs 2\n  \
+                      glint hw pareto --quick -o /tmp/quick\n  \
+                      glint hw pareto -o /tmp/f --cosim-fronts docs/pareto/pareto.csv --front-vectors 100000"
+    )]
+    Pareto(pareto::ParetoArgs),
 }
 
 /// Which Verilog unit.
@@ -213,23 +241,63 @@ pub struct CheckArgs {
 }
 
 fn parse_coef(s: &str) -> Result<Coefficients, String> {
-    s.parse().map_err(|e: glint_hw::HwError| e.to_string())
+    s.trim()
+        .parse()
+        .map_err(|e: glint_hw::HwError| e.to_string())
 }
 
 fn parse_round(s: &str) -> Result<Rounding, String> {
-    s.parse().map_err(|e: glint_hw::HwError| e.to_string())
+    s.trim()
+        .parse()
+        .map_err(|e: glint_hw::HwError| e.to_string())
+}
+
+/// Standard output was closed by its reader (`glint hw check | head`): the rest of the
+/// output is not wanted, so the command stops and exits as a success, as `head` expects.
+#[derive(Debug)]
+pub(crate) struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("standard output closed")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// `result` of printing, with a closed stdout ([`StdoutClosed`]) taken as success: for
+/// the summaries of long runs, whose work and files matter more than their output.
+pub(crate) fn unless_closed(result: anyhow::Result<()>) -> anyhow::Result<()> {
+    match result {
+        Err(e) if e.is::<StdoutClosed>() => Ok(()),
+        other => other,
+    }
+}
+
+/// The error of a failed write to stdout: [`StdoutClosed`] for a closed pipe.
+pub(crate) fn stdout_error(e: std::io::Error) -> anyhow::Error {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        StdoutClosed.into()
+    } else {
+        anyhow::Error::new(e).context("writing to stdout")
+    }
 }
 
 /// Runs `glint hw`.
 pub fn run(command: Command) -> anyhow::Result<()> {
+    unless_closed(dispatch(command))
+}
+
+fn dispatch(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Rom(args) => rom(args),
         Command::Sweep(args) => sweep(args),
         Command::Eval(args) => eval(args),
         Command::Check(args) => check(args),
-        Command::Verilog(args) => verilog(args),
-        Command::Cosim(args) => cosim(args),
-        Command::Synth(args) => synth(args),
+        Command::Verilog(args) => rtl::verilog(args),
+        Command::Cosim(args) => rtl::cosim(args),
+        Command::Synth(args) => rtl::synth(args),
+        Command::Pareto(args) => pareto::run(args),
     }
 }
 
@@ -242,20 +310,38 @@ pub(crate) fn load_config(path: Option<&Path>) -> anyhow::Result<Config> {
     match path {
         None => Ok(Config::default()),
         Some(p) => {
-            let reading = || format!("reading configuration {}", p.display());
-            let mut text = String::new();
-            std::fs::File::open(p)
-                .with_context(reading)?
-                .take(MAX_CONFIG_BYTES + 1)
-                .read_to_string(&mut text)
-                .with_context(reading)?;
-            if text.len() as u64 > MAX_CONFIG_BYTES {
-                bail!(
-                    "configuration {} is larger than {MAX_CONFIG_BYTES} bytes; it is not a glint hw configuration",
-                    p.display()
-                );
-            }
+            let text = read_bounded(p)?;
             Config::from_json(&text).with_context(|| format!("in {}", p.display()))
+        }
+    }
+}
+
+/// A configuration file's text, read up to [`MAX_CONFIG_BYTES`].
+fn read_bounded(p: &Path) -> anyhow::Result<String> {
+    let reading = || format!("reading configuration {}", p.display());
+    let mut text = String::new();
+    std::fs::File::open(p)
+        .with_context(reading)?
+        .take(MAX_CONFIG_BYTES + 1)
+        .read_to_string(&mut text)
+        .with_context(reading)?;
+    if text.len() as u64 > MAX_CONFIG_BYTES {
+        bail!(
+            "configuration {} is larger than {MAX_CONFIG_BYTES} bytes; it is not a glint hw configuration",
+            p.display()
+        );
+    }
+    Ok(text)
+}
+
+/// The design in `path` (a K_v configuration, or any family with `"family"`), or the
+/// default K_v unit; bounded read as [`load_config`].
+fn load_design(path: Option<&Path>) -> anyhow::Result<Design> {
+    match path {
+        None => Ok(Design::Kv(Config::default())),
+        Some(p) => {
+            let text = read_bounded(p)?;
+            Design::from_json(&text).with_context(|| format!("in {}", p.display()))
         }
     }
 }
@@ -375,7 +461,7 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
         }
     }
     let points = rows.first().map_or(0, |r| r.points_per_check);
-    println!(
+    outln!(
         "# glint hw sweep: out_bits = {}, coefficients = {}, n_bits = {}, cos Q1.{} ({} bits), rounding {}",
         args.out_bits,
         args.coef,
@@ -383,16 +469,16 @@ fn sweep(args: SweepArgs) -> anyhow::Result<()> {
         args.cos_bits.saturating_sub(2),
         args.cos_bits,
         args.round
-    );
-    println!(
+    )?;
+    outln!(
         "# error = |code - F·L(c,n)| in LSBs, F = k_s·I full scale = {}; exhaustive: every cos code in [-1,1] (lobe) or [0,1] (cos^n) x every n = {} points per check",
         full_scale(args.out_bits),
         points
-    );
-    println!(
+    )?;
+    outln!(
         "# 'n where asked': for cos^n, the n where an ideal unit (exact lobe, correctly rounded) meets the bound"
-    );
-    print!("{}", markdown_table(&rows));
+    )?;
+    out!("{}", markdown_table(&rows))?;
     eprintln!("total {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
@@ -401,7 +487,7 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     let config = load_config(args.config.as_deref())?;
     let unit = build_unit(config, args.config.as_deref())?;
     if args.print_config {
-        println!("{}", unit.config().to_json());
+        outln!("{}", unit.config().to_json())?;
         return Ok(());
     }
     if args.ks_rgb.len() != 3 {
@@ -422,29 +508,73 @@ fn eval(args: EvalArgs) -> anyhow::Result<()> {
     };
     let table = unit.trace_table(&input)?;
     let cfg = unit.config();
-    println!(
+    outln!(
         "# glint hw eval: v = {}, coefficients = {}, latency = {} clocks, one input per clock",
         cfg.v,
         cfg.coefficients,
         unit.latency()
-    );
-    println!(
+    )?;
+    outln!(
         "{:<12} {:<18} {:>22} {:>18}  value",
-        "stage", "format", "code", "hex"
-    );
+        "stage",
+        "format",
+        "code",
+        "hex"
+    )?;
     for r in &table.rows {
-        println!(
+        outln!(
             "{:<12} {:<18} {:>22} {:>18}  {}",
-            r.stage, r.format, r.code, r.hex, r.value
-        );
+            r.stage,
+            r.format,
+            r.code,
+            r.hex,
+            r.value
+        )?;
     }
     let rgb = table.output.rgb;
-    println!("# output R,G,B = {},{},{}", rgb[0], rgb[1], rgb[2]);
+    outln!("# output R,G,B = {},{},{}", rgb[0], rgb[1], rgb[2])?;
+    Ok(())
+}
+
+/// Prints the figures `glint hw pareto` gives for `design` (same function, same format).
+fn print_design_errors(design: &Design) -> anyhow::Result<()> {
+    let e = design.errors()?;
+    let ranges: Vec<String> = glint_hw::N_RANGES
+        .iter()
+        .zip(e.power)
+        .map(|(&(a, b), x)| format!("n {a}-{b} {x:.4}"))
+        .collect();
+    outln!(
+        "pareto figures ({}): lobe {:.4} | cos^n {} | all n {:.4}",
+        design.family(),
+        e.lobe,
+        ranges.join(" | "),
+        e.power_all
+    )?;
     Ok(())
 }
 
 fn check(args: CheckArgs) -> anyhow::Result<()> {
-    let mut config = load_config(args.config.as_deref())?;
+    let design = load_design(args.config.as_deref())?;
+    let mut config = match design {
+        Design::Kv(c) => c,
+        other => {
+            let other = match (other, args.out_bits) {
+                (Design::Pow { params, .. }, Some(o)) => Design::Pow {
+                    out_bits: o,
+                    params,
+                },
+                (Design::Schlick { params, .. }, Some(o)) => Design::Schlick {
+                    out_bits: o,
+                    params,
+                },
+                (d, _) => d,
+            };
+            in_file(args.config.as_deref(), || other.hdl().map(|_| ()))?;
+            outln!("# glint hw check: {}", other.to_json())?;
+            return print_design_errors(&other);
+        }
+    };
     if let Some(b) = args.out_bits {
         config.out_bits = b;
     }
@@ -457,15 +587,15 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     let secs = started.elapsed().as_secs_f64();
     let cfg = unit.config();
     let last = (1u32 << cfg.n_bits) - 1;
-    println!(
+    outln!(
         "# glint hw check: {} points (every cos code in [-1,1] x every n 0..={last}), k_s·I = {} (full scale), {:.1} s",
         m.points,
         unit.full_scale(),
         secs
-    );
-    println!("# configuration: {}", serde_json_line(cfg));
+    )?;
+    outln!("# configuration: {}", serde_json_line(cfg))?;
     let w = m.worst_lobe(0..=last);
-    println!(
+    outln!(
         "max error vs exact lobe ({}): {:.4} LSB at n = {}, cos = {:.9}",
         if cfg.coefficients == Coefficients::EnergyFit {
             "K_v"
@@ -475,11 +605,14 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
         w.error,
         w.n,
         unit.cos_value(w.cos)
-    );
-    println!(
+    )?;
+    outln!(
         "{:<12} {:>14} {:>22} {:>22}",
-        "n range", "vs lobe", "vs cos^n (unit)", "vs cos^n (ideal)"
-    );
+        "n range",
+        "vs lobe",
+        "vs cos^n (unit)",
+        "vs cos^n (ideal)"
+    )?;
     let mut ranges = vec![(0u32, 15u32), (16, 63), (64, 255), (256, last)];
     ranges.retain(|&(a, _)| a <= last);
     if let Some(r) = ranges.last_mut() {
@@ -487,20 +620,21 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     }
     ranges.push((0, last));
     for (a, b) in ranges {
-        println!(
+        outln!(
             "{:<12} {:>14.4} {:>22.4} {:>22.4}",
             format!("{a}-{b}"),
             m.worst_lobe(a..=b).error,
             m.worst_power(a..=b).error,
             m.worst_ideal_power(a..=b).error
-        );
+        )?;
     }
     let excess = m
         .per_n
         .iter()
         .map(|e| e.power - e.ideal_power)
         .fold(f64::MIN, f64::max);
-    println!("max over n of (unit - ideal) error vs cos^n: {excess:.4} LSB");
+    outln!("max over n of (unit - ideal) error vs cos^n: {excess:.4} LSB")?;
+    print_design_errors(&Design::Kv(cfg.clone()))?;
     for bound in [0.5, 1.0] {
         let ok: Vec<bool> = m
             .per_n
@@ -508,148 +642,11 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
             .map(|e| e.power <= bound + glint_hw::BOUND_SLACK_LSB)
             .collect();
         let ranges = mask_ranges(&ok);
-        println!(
+        outln!(
             "n where the unit is within {bound} LSB of cos^n: {}",
             format_ranges(&ranges)
-        );
+        )?;
     }
-    Ok(())
-}
-
-/// Largest number of test vectors a command writes (~40 bytes a line: 4 GB of text).
-const MAX_VECTORS: usize = 100_000_000;
-
-/// The chosen units: the K_v unit of the configuration, and the comparison units at
-/// its interface widths.
-fn hdl_units(
-    choice: HdlChoice,
-    config: Option<&Path>,
-) -> anyhow::Result<(Vec<Box<dyn HdlUnit>>, u32)> {
-    let cfg = load_config(config)?;
-    let kv = KvUnit::new(build_unit(cfg, config)?);
-    let ports = kv.ports();
-    let v = kv.unit().config().v;
-    let mut units: Vec<Box<dyn HdlUnit>> = Vec::new();
-    if matches!(choice, HdlChoice::Kv | HdlChoice::All) {
-        units.push(Box::new(kv));
-    }
-    if matches!(choice, HdlChoice::Pow | HdlChoice::All) {
-        units.push(Box::new(PowerUnit::new(ports)?));
-    }
-    if matches!(choice, HdlChoice::Schlick | HdlChoice::All) {
-        units.push(Box::new(SchlickUnit::new(ports)?));
-    }
-    Ok((units, v))
-}
-
-fn check_vectors(n: usize) -> anyhow::Result<()> {
-    if n == 0 || n > MAX_VECTORS {
-        bail!("invalid --vectors {n}: expected 1..={MAX_VECTORS}");
-    }
-    Ok(())
-}
-
-/// A working directory: `keep` (created), or a temporary one removed on drop.
-fn work_dir(keep: Option<&Path>) -> anyhow::Result<(PathBuf, Option<tempfile::TempDir>)> {
-    match keep {
-        Some(d) => {
-            std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
-            Ok((d.to_path_buf(), None))
-        }
-        None => {
-            let t = tempfile::tempdir().context("creating a temporary directory")?;
-            Ok((t.path().to_path_buf(), Some(t)))
-        }
-    }
-}
-
-fn verilog(args: VerilogArgs) -> anyhow::Result<()> {
-    check_vectors(args.vectors)?;
-    let (units, v) = hdl_units(args.unit, args.config.as_deref())?;
-    for u in &units {
-        let mut files = u.files();
-        files.push(hdl::testbench(u.as_ref()));
-        hdl::write_files(&args.output, &files)?;
-        let stim = hdl::stimulus(u.ports(), v, args.vectors, args.seed);
-        let name = format!("{}_vectors.txt", u.module());
-        let clocks = hdl::write_vectors(u.as_ref(), &stim, &args.output.join(&name))?;
-        let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
-        eprintln!(
-            "{}: wrote {} and {name} ({} vectors, {clocks} clocks) to {}",
-            u.module(),
-            names.join(", "),
-            stim.vectors(),
-            args.output.display()
-        );
-    }
-    Ok(())
-}
-
-fn cosim(args: CosimArgs) -> anyhow::Result<()> {
-    check_vectors(args.vectors)?;
-    let (units, v) = hdl_units(args.unit, args.config.as_deref())?;
-    let (dir, _tmp) = work_dir(args.keep.as_deref())?;
-    let mut failed = Vec::new();
-    for u in &units {
-        let r = hdl::cosim(u.as_ref(), args.vectors, args.seed, v, &dir)?;
-        println!(
-            "{}: {} of {} vectors passed, {} mismatches, {} clocks (latency {}, valid checked on every clock); model {:.1} s, iverilog {:.1} s",
-            r.module,
-            r.passed,
-            r.vectors,
-            r.mismatches,
-            r.clocks,
-            u.latency(),
-            r.model_secs,
-            r.sim_secs
-        );
-        for line in &r.first_mismatches {
-            println!("  {line}");
-        }
-        if !r.ok() {
-            failed.push(r.module);
-        }
-        match hdl::lint(u.as_ref(), &dir) {
-            Ok(()) => println!("{}: verilator --lint-only -Wall: clean", u.module()),
-            Err(e) => {
-                println!("{}: {e}", u.module());
-                failed.push(u.module());
-            }
-        }
-    }
-    if !failed.is_empty() {
-        bail!("co-simulation or lint failed for {}", failed.join(", "));
-    }
-    Ok(())
-}
-
-fn synth(args: SynthArgs) -> anyhow::Result<()> {
-    let (units, _) = hdl_units(args.unit, args.config.as_deref())?;
-    let (dir, _tmp) = work_dir(args.keep.as_deref())?;
-    let mut rows = Vec::new();
-    for u in &units {
-        let started = Instant::now();
-        let synth = hdl::synth(u.as_ref(), &dir)?;
-        eprintln!(
-            "{}: synthesised, placed and routed in {:.0} s",
-            u.module(),
-            started.elapsed().as_secs_f64()
-        );
-        rows.push(hdl::CostRow {
-            unit: format!("{} ({})", u.module(), u.describe()),
-            synth,
-            rom_bits: u.rom_bits(),
-            latency: u.latency(),
-            error_vs_power: u.max_error_vs_power(),
-        });
-    }
-    println!(
-        "# glint hw synth: yosys synth + stat -tech cmos (generic), synth_ice40 + nextpnr-ice40 --{} --package {} (no DSPs on this part: multipliers are LUTs); one result per clock",
-        hdl::ICE40_DEVICE,
-        hdl::ICE40_PACKAGE
-    );
-    println!("# max err vs cos^n: exhaustive over every cos code in [0,1] x every n, k_s·I at full scale, from the Rust models");
-    print!("{}", hdl::cost_table(&rows));
     Ok(())
 }
 

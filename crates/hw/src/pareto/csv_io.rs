@@ -1,0 +1,216 @@
+//! `pareto.csv`: one row per design (see [`CSV_HEADER`] for the columns).
+
+use std::path::Path;
+
+use super::{ParetoError, Row, TARGETS};
+use crate::{Config, Design};
+
+/// The columns, in order. Errors are in output LSBs; `err_pow_*` are against `cos^n`
+/// for the `n` range named; `front_<target>` is the front of error against `cos^n`
+/// (n 16-1023) and `front_<target>_lobe` that of error against the own lobe, each within
+/// the family and output width. `design` is the JSON `glint hw check --config` reads.
+pub const CSV_HEADER: [&str; 46] = [
+    "id",
+    "family",
+    "out_bits",
+    "target",
+    "v",
+    "coefficients",
+    "coef_source",
+    "squarer",
+    "square_guard",
+    "widths",
+    "err_lobe",
+    "err_pow_n1_15",
+    "err_pow_n16_63",
+    "err_pow_n64_255",
+    "err_pow_n256_1023",
+    "err_pow_all",
+    "rom_bits",
+    "latency",
+    "results_per_clock",
+    "nand2_eq",
+    "transistors",
+    "gate_cells",
+    "ice40_luts",
+    "ice40_carries",
+    "ice40_ffs",
+    "ice40_brams",
+    "ice40_fmax_mhz",
+    "ice40_lut_ns_per_result",
+    "ecp5_luts",
+    "ecp5_ccu2",
+    "ecp5_ffs",
+    "ecp5_mult18",
+    "ecp5_brams",
+    "ecp5_lutram",
+    "ecp5_lut_equiv",
+    "lint_clean",
+    "cosim_vectors",
+    "cosim_mismatches",
+    "front_gates",
+    "front_ice40",
+    "front_ecp5",
+    "front_gates_lobe",
+    "front_ice40_lobe",
+    "front_ecp5_lobe",
+    "seconds",
+    "design",
+];
+
+/// A design's widths in one field.
+pub fn widths(d: &Design) -> String {
+    match d {
+        Design::Kv(c) => kv_widths(c),
+        Design::Pow { params: p, .. } => format!(
+            "log {}{} UQ1.{} / exp {}{} UQ1.{}",
+            1u32 << p.log_index,
+            if p.log_interp { "i" } else { "" },
+            p.log_frac,
+            1u32 << p.exp_index,
+            if p.exp_interp { "i" } else { "" },
+            p.exp_frac
+        ),
+        Design::Schlick { params: p, .. } => {
+            format!("quotient UQ1.{} / x UQ1.{}", p.quot_frac, p.x_frac)
+        }
+    }
+}
+
+fn kv_widths(c: &Config) -> String {
+    let sq: Vec<String> = c.square_frac.iter().map(|w| w.to_string()).collect();
+    format!(
+        "coef {} / mul {} / sq {}",
+        c.coef_bits,
+        c.mul_frac,
+        sq.join(",")
+    )
+}
+
+fn b(x: bool) -> String {
+    u8::from(x).to_string()
+}
+
+/// The CSV text of `rows`.
+pub fn csv_text(rows: &[Row]) -> Result<String, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(CSV_HEADER)?;
+    for r in rows {
+        let d = &r.candidate.design;
+        let m = &r.measured;
+        let c = &m.costs;
+        let e = &m.errors;
+        let (v, coef, src, sq, guard) = match d {
+            Design::Kv(k) => (
+                k.v.to_string(),
+                k.coefficients.name().to_string(),
+                k.coef_source.name().to_string(),
+                k.squarer.name().to_string(),
+                if k.squarer == crate::Squarer::Truncated {
+                    k.square_guard.to_string()
+                } else {
+                    String::new()
+                },
+            ),
+            _ => Default::default(),
+        };
+        let f = |x: f64| format!("{x:.4}");
+        let mut rec = vec![
+            r.candidate.id.clone(),
+            d.family().to_string(),
+            d.out_bits().to_string(),
+            r.candidate.target.clone(),
+            v,
+            coef,
+            src,
+            sq,
+            guard,
+            widths(d),
+            f(e.lobe),
+        ];
+        rec.extend(e.power.iter().map(|&x| f(x)));
+        rec.extend([
+            f(e.power_all),
+            m.rom_bits.to_string(),
+            m.latency.to_string(),
+            "1".to_string(),
+            format!("{:.1}", c.nand2()),
+            c.transistors.to_string(),
+            c.gate_cells.to_string(),
+            c.ice40_luts.to_string(),
+            c.ice40_carries.to_string(),
+            c.ice40_ffs.to_string(),
+            c.ice40_brams.to_string(),
+            format!("{:.2}", c.ice40_fmax),
+            format!("{:.0}", c.ice40_lut_ns()),
+            c.ecp5_luts.to_string(),
+            c.ecp5_ccu2.to_string(),
+            c.ecp5_ffs.to_string(),
+            c.ecp5_mult18.to_string(),
+            c.ecp5_brams.to_string(),
+            c.ecp5_lutram.to_string(),
+            c.ecp5_lut_equiv().to_string(),
+            b(m.verified.lint_clean),
+            m.verified.vectors.to_string(),
+            m.verified.mismatches.to_string(),
+        ]);
+        rec.extend(r.fronts.power.iter().map(|&x| b(x)));
+        rec.extend(r.fronts.lobe.iter().map(|&x| b(x)));
+        rec.push(format!("{:.0}", m.seconds));
+        rec.push(d.to_json());
+        debug_assert_eq!(rec.len(), CSV_HEADER.len());
+        w.write_record(&rec)?;
+    }
+    let bytes = w.into_inner().map_err(|e| e.into_error())?;
+    Ok(String::from_utf8(bytes).expect("the CSV is built from UTF-8 strings"))
+}
+
+/// Writes `rows` to `path` atomically.
+pub fn write_csv(path: &Path, rows: &[Row]) -> Result<(), ParetoError> {
+    let text = csv_text(rows).map_err(|e| ParetoError::file(path, e))?;
+    glint_io::write_atomic(path, |w| w.write_all(text.as_bytes()))
+        .map_err(|e| ParetoError::file(path, e))
+}
+
+/// One row read back: id, design, on any front, and the text of every column.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CsvRow {
+    /// `id`.
+    pub id: String,
+    /// `design`, parsed.
+    pub design: Design,
+    /// Any `front_*` column is 1.
+    pub on_front: bool,
+    /// Every field, by [`CSV_HEADER`] position.
+    pub fields: Vec<String>,
+}
+
+/// Reads a `pareto.csv` (as [`write_csv`] writes it; the header must match).
+pub fn read_csv(path: &Path) -> Result<Vec<CsvRow>, ParetoError> {
+    let mut r = csv::Reader::from_path(path).map_err(|e| ParetoError::file(path, e))?;
+    let header = r.headers().map_err(|e| ParetoError::file(path, e))?.clone();
+    if header.iter().ne(CSV_HEADER.iter().copied()) {
+        return Err(ParetoError::file(
+            path,
+            "not a glint hw pareto CSV (its header differs)",
+        ));
+    }
+    let front_cols: Vec<usize> = (0..CSV_HEADER.len())
+        .filter(|&i| CSV_HEADER[i].starts_with("front_"))
+        .collect();
+    debug_assert_eq!(front_cols.len(), 2 * TARGETS.len());
+    let mut out = Vec::new();
+    for rec in r.records() {
+        let rec = rec.map_err(|e| ParetoError::file(path, e))?;
+        let fields: Vec<String> = rec.iter().map(str::to_string).collect();
+        let design = Design::from_json(&fields[CSV_HEADER.len() - 1])
+            .map_err(|e| ParetoError::file(path, e))?;
+        out.push(CsvRow {
+            id: fields[0].clone(),
+            design,
+            on_front: front_cols.iter().any(|&i| fields[i] == "1"),
+            fields,
+        });
+    }
+    Ok(out)
+}

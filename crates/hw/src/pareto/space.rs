@@ -1,0 +1,316 @@
+//! The design space: which designs are explored, and how each is sized for its error
+//! target before it is synthesised.
+//!
+//! - **K_v** (energy fit; v = 4 at 0.5, 1, 2 LSB, v = 3 and 5 at 1 LSB): the widths of `glint hw sweep` for a bound
+//!   against the unit's own lobe (`sweep_row`, exhaustive), then the same widths with
+//!   ROM1 and generic multipliers (Fig. 4 as drawn), with a constant multiplier and
+//!   squarers, and with a constant multiplier and truncated squarers (the fewest guard
+//!   columns that still meet the bound); at v = 4 also the constant multiplier with
+//!   generic multipliers (what suits hard multipliers), at v = 4, 1 LSB the two-table
+//!   source and ROM1 with squarers; at v = 4 the minimax ROM; and the paper's unit as
+//!   `Config::default()` (the reference point).
+//! - **exact `cos^n`**: tables (interpolated or not) sized by a greedy search for a
+//!   bound against `cos^n` over every `n` (0.5, 1, 2, 4, 8 LSB).
+//! - **Schlick**: quotient and input widths sized for a bound against Schlick's own
+//!   form (0.5, 1, 2 LSB); against `cos^n` Schlick is 50+ LSB away at any width.
+
+use serde::{Deserialize, Serialize};
+
+use crate::hdl::{HdlUnit, Ports, PowParams, PowerUnit, SchlickParams};
+use crate::{
+    sweep_row, within, CoefSource, Coefficients, Config, Design, HwError, Reference, Squarer,
+    Target, Unit, BOUND_SLACK_LSB, DESIGN_COS_BITS, DESIGN_N_BITS,
+};
+
+/// One design to cost, with what it was sized for.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// A short unique name, e.g. `kv4-const-sym-o8-lobe1`.
+    pub id: String,
+    /// The target it was sized for, e.g. `lobe <= 1`, `cos^n <= 2`, `reference`.
+    pub target: String,
+    /// The design.
+    pub design: Design,
+}
+
+/// The greedy search of `sweep.rs` over any integer parameters: start from `start`
+/// (which must pass, else `None`), then, parameter by parameter, binary-search the
+/// smallest value in `lo[i]..=current` that still passes with the others fixed.
+pub fn shrink(
+    start: &[u32],
+    lo: &[u32],
+    ok: &mut dyn FnMut(&[u32]) -> Result<bool, HwError>,
+) -> Result<Option<Vec<u32>>, HwError> {
+    if !ok(start)? {
+        return Ok(None);
+    }
+    let mut cur = start.to_vec();
+    for i in 0..cur.len() {
+        let (mut a, mut b) = (lo[i], cur[i]);
+        while a < b {
+            let mid = (a + b) / 2;
+            let mut t = cur.clone();
+            t[i] = mid;
+            if ok(&t)? {
+                b = mid;
+            } else {
+                a = mid + 1;
+            }
+        }
+        cur[i] = b;
+    }
+    Ok(Some(cur))
+}
+
+fn kv_base(v: u32, out_bits: u32, coefficients: Coefficients) -> Config {
+    Config {
+        v,
+        n_bits: DESIGN_N_BITS,
+        cos_bits: DESIGN_COS_BITS,
+        coefficients,
+        square_frac: vec![1; v as usize],
+        out_bits,
+        ..Config::default()
+    }
+}
+
+fn fmt_bound(b: f64) -> String {
+    format!("{b}")
+}
+
+/// The K_v designs of one sweep row.
+fn kv_row(
+    v: u32,
+    out: u32,
+    bound: f64,
+    coefficients: Coefficients,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let target = Target {
+        reference: Reference::Lobe,
+        bound,
+    };
+    let row = sweep_row(&kv_base(v, out, coefficients), target, &mut |_| {})?;
+    let Some(cfg) = row.config else {
+        progress(&format!("kv v={v} out={out} lobe<={bound}: not reached"));
+        return Ok(Vec::new());
+    };
+    let tag = format!("o{out}-lobe{}", fmt_bound(bound));
+    let t = format!("lobe <= {}", fmt_bound(bound));
+    let mk = |name: &str, c: Config| Candidate {
+        id: format!("kv{v}-{name}-{tag}"),
+        target: t.clone(),
+        design: Design::Kv(c),
+    };
+    let with = |source: CoefSource, squarer: Squarer, guard: u32| Config {
+        coef_source: source,
+        squarer,
+        square_guard: guard,
+        ..cfg.clone()
+    };
+    if coefficients == Coefficients::Minimax {
+        return Ok(vec![mk("minimax-rom-gen", cfg.clone())]);
+    }
+    let mut out_rows = vec![
+        mk("rom-gen", cfg.clone()),
+        mk("const-sym", with(CoefSource::Const, Squarer::Symmetric, 2)),
+    ];
+    // The fewest guard columns for which the truncated squarers still meet the bound.
+    for guard in 1..=12 {
+        let c = with(CoefSource::Const, Squarer::Truncated, guard);
+        if within(&Unit::new(c.clone())?, Reference::Lobe, bound, None) {
+            out_rows.push(mk("const-trunc", c));
+            break;
+        }
+    }
+    if v == 4 {
+        // Hard multipliers (ECP5) favour generic multipliers over LUT squarers.
+        out_rows.push(mk(
+            "const-gen",
+            with(CoefSource::Const, Squarer::Generic, 2),
+        ));
+    }
+    if v == 4 && bound == 1.0 {
+        out_rows.push(mk(
+            "table-sym",
+            with(CoefSource::Table, Squarer::Symmetric, 2),
+        ));
+        out_rows.push(mk("rom-sym", with(CoefSource::Rom, Squarer::Symmetric, 2)));
+    }
+    progress(&format!(
+        "kv v={v} out={out} lobe<={bound}: {} designs (widths {}/{}/{:?})",
+        out_rows.len(),
+        cfg.coef_bits,
+        cfg.mul_frac,
+        cfg.square_frac
+    ));
+    Ok(out_rows)
+}
+
+fn ports(out: u32) -> Ports {
+    Ports {
+        cos_bits: DESIGN_COS_BITS,
+        n_bits: DESIGN_N_BITS,
+        out_bits: out,
+    }
+}
+
+/// The smallest cos^n tables (greedy) within `budget` LSB of `cos^n` for every `n`.
+fn pow_sized(out: u32, budget: f64, interp: bool) -> Result<Option<PowParams>, HwError> {
+    let params = |p: &[u32]| PowParams {
+        log_index: p[0],
+        exp_index: p[1],
+        log_frac: p[2],
+        exp_frac: p[3],
+        log_interp: interp,
+        exp_interp: interp,
+    };
+    let mut ok = |p: &[u32]| -> Result<bool, HwError> {
+        let q = params(p);
+        if q.validate().is_err() {
+            return Ok(false);
+        }
+        let u = PowerUnit::with_params(ports(out), q)?;
+        Ok(u.max_error_vs_power() <= budget + BOUND_SLACK_LSB)
+    };
+    let start: [u32; 4] = if interp {
+        [10, 10, 26, 22]
+    } else {
+        [12, 12, 26, 22]
+    };
+    Ok(shrink(&start, &[1, 1, 8, 4], &mut ok)?.map(|p| params(&p)))
+}
+
+/// The narrowest Schlick divider within `budget` LSB of Schlick's own form.
+fn schlick_sized(out: u32, budget: f64) -> Result<Option<SchlickParams>, HwError> {
+    let params = |p: &[u32]| SchlickParams {
+        quot_frac: p[0],
+        x_frac: p[1],
+    };
+    let mut ok = |p: &[u32]| -> Result<bool, HwError> {
+        let d = Design::Schlick {
+            out_bits: out,
+            params: params(p),
+        };
+        Ok(d.errors()?.lobe <= budget + BOUND_SLACK_LSB)
+    };
+    Ok(shrink(&[20, 14], &[2, 4], &mut ok)?.map(|p| params(&p)))
+}
+
+/// Every candidate of the exploration (`quick`: three fixed designs at 8 bits, one a
+/// family, no sizing, for CI). Sizing runs exhaustive checks: minutes for the full space.
+pub fn candidates(
+    quick: bool,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let mut out = Vec::new();
+    let reference = |o: u32| Candidate {
+        id: format!("kv4-fig4-ref-o{o}"),
+        target: "reference (Fig. 4, Config::default())".into(),
+        design: Design::Kv(Config {
+            out_bits: o,
+            ..Config::default()
+        }),
+    };
+    if quick {
+        // Three designs, one a family, each through every step of the full run: the
+        // K_v unit with the new circuits (constant multiplier, symmetric squarers),
+        // the exact unit with its two tables, the Schlick divider. The Fig. 4 unit
+        // (ROM1, the slowest to synthesise) is left to the full run; CI co-simulates it
+        // with the other front designs.
+        out.push(Candidate {
+            id: "kv4-const-sym-o8-default".into(),
+            target: "default widths".into(),
+            design: Design::Kv(Config {
+                coef_source: CoefSource::Const,
+                squarer: Squarer::Symmetric,
+                ..Config::default()
+            }),
+        });
+        out.push(Candidate {
+            id: "pow-interp-o8-default".into(),
+            target: "default tables".into(),
+            design: Design::Pow {
+                out_bits: 8,
+                params: PowParams::default(),
+            },
+        });
+        out.push(Candidate {
+            id: "schlick-o8-default".into(),
+            target: "default widths".into(),
+            design: Design::Schlick {
+                out_bits: 8,
+                params: SchlickParams::default(),
+            },
+        });
+        return Ok(out);
+    }
+    for o in [8u32, 10] {
+        out.push(reference(o));
+        for (v, bound) in [(4, 0.5), (4, 1.0), (4, 2.0), (3, 1.0), (5, 1.0)] {
+            out.extend(kv_row(v, o, bound, Coefficients::EnergyFit, progress)?);
+        }
+        out.extend(kv_row(4, o, 1.0, Coefficients::Minimax, progress)?);
+        for budget in [0.5, 1.0, 2.0, 4.0, 8.0] {
+            for interp in [true, false] {
+                let name = if interp { "interp" } else { "plain" };
+                match pow_sized(o, budget, interp)? {
+                    Some(params) => {
+                        progress(&format!("pow {name} out={o} cos^n<={budget}: {params:?}"));
+                        out.push(Candidate {
+                            id: format!("pow-{name}-o{o}-pow{}", fmt_bound(budget)),
+                            target: format!("cos^n <= {}", fmt_bound(budget)),
+                            design: Design::Pow {
+                                out_bits: o,
+                                params,
+                            },
+                        });
+                    }
+                    None => progress(&format!(
+                        "pow {name} out={o} cos^n<={budget}: not reached with the largest tables"
+                    )),
+                }
+            }
+        }
+        for budget in [0.5, 1.0, 2.0] {
+            match schlick_sized(o, budget)? {
+                Some(params) => {
+                    progress(&format!("schlick out={o} lobe<={budget}: {params:?}"));
+                    out.push(Candidate {
+                        id: format!("schlick-o{o}-lobe{}", fmt_bound(budget)),
+                        target: format!("lobe <= {}", fmt_bound(budget)),
+                        design: Design::Schlick {
+                            out_bits: o,
+                            params,
+                        },
+                    });
+                }
+                None => progress(&format!("schlick out={o} lobe<={budget}: not reached")),
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shrink_finds_the_corner_of_a_monotone_region() {
+        // Passes iff a + 2b >= 10 and b >= 2: from (10, 10) the greedy order gives
+        // a = 0 (b = 10 still), then b = 5.
+        let mut calls = 0;
+        let mut ok = |p: &[u32]| {
+            calls += 1;
+            Ok(p[0] + 2 * p[1] >= 10 && p[1] >= 2)
+        };
+        assert_eq!(
+            shrink(&[10, 10], &[0, 0], &mut ok).unwrap(),
+            Some(vec![0, 5])
+        );
+        assert!(calls > 2);
+        let mut never = |_: &[u32]| Ok(false);
+        assert_eq!(shrink(&[3], &[0], &mut never).unwrap(), None);
+    }
+}
