@@ -45,7 +45,10 @@ pub mod presets;
 mod raycast;
 mod tf;
 
-pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
+pub use field::{
+    memory_limit, set_memory_limit, Field, Prefilter, Source, MACRO_CELL, MAX_FIELD_VOXELS,
+    MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
+};
 pub use lut::{Lut, LUT_SIZE};
 pub use phantom::Phantom;
 pub use preint::Sampling;
