@@ -31,6 +31,8 @@ pub(super) struct Lanes {
     /// A brick could not be built (the cache is full of bricks in use): the tile is
     /// given up and rendered by the reference loop.
     pub(super) failed: bool,
+    /// The lanes' last bricks.
+    pub(super) memo: Memo,
 }
 
 impl Lanes {
@@ -135,14 +137,15 @@ impl Lanes {
                 let last = _mm256_cmpgt_epi32(k_plus, k1);
                 let second = samples & !(_mm256_movemask_ps(_mm256_castsi256_ps(last)) as u8);
                 stats.samples += u64::from(samples.count_ones() + second.count_ones());
-                let Some(first) = probe(c, inv, (p, ijk), samples, guard) else {
+                let Some(first) = probe(c, inv, (p, ijk), (samples, &mut self.memo), guard) else {
                     self.failed = true;
                     return 0;
                 };
                 ended |= self.keep_hits(c.lut, kept, samples & first.opaque, &first, stats);
                 if second != 0 {
                     let (p2, ijk2) = positions(inv, ray, k_plus);
-                    let Some(next) = probe(c, inv, (p2, ijk2), second, guard) else {
+                    let Some(next) = probe(c, inv, (p2, ijk2), (second, &mut self.memo), guard)
+                    else {
                         self.failed = true;
                         return 0;
                     };
@@ -206,12 +209,20 @@ impl Lanes {
             }
             let mut ended = 0u8;
             if reads != 0 {
-                let Some(first) = reads_at(c, inv, (p0, ijk0, first_k), reads, guard) else {
+                let Some(first) =
+                    reads_at(c, inv, (p0, ijk0, first_k), (reads, &mut self.memo), guard)
+                else {
                     self.failed = true;
                     return 0;
                 };
                 let second = if seconds != 0 {
-                    match reads_at(c, inv, (p1, ijk1, second_k), seconds, guard) {
+                    match reads_at(
+                        c,
+                        inv,
+                        (p1, ijk1, second_k),
+                        (seconds, &mut self.memo),
+                        guard,
+                    ) {
                         Some(r) => r,
                         None => {
                             self.failed = true;

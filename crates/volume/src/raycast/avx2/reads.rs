@@ -34,13 +34,13 @@ pub(super) unsafe fn reads_at(
     c: &Caster,
     inv: &Invariants,
     (p, ijk, k): ([__m256; 3], [__m256i; 3], __m256i),
-    mask: u8,
+    (mask, memo): (u8, &mut Memo),
     guard: &Guard,
 ) -> Option<Reads> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let base = bases(c, inv, ijk, mask, guard)?;
+        let base = bases(c, inv, ijk, (mask, memo), guard)?;
         let (fr, uv) = values_at(inv, p, ijk, &base);
         let mut r = Reads {
             t: [[0.0; LANES]; 3],
@@ -57,20 +57,39 @@ pub(super) unsafe fn reads_at(
     }
 }
 
-/// Each lane's corner-000 voxel in the brick pool: its brick's slot (the brick built
-/// now if absent) plus the voxel's place in the brick, for the lanes `mask`; the other
-/// lanes get their place in the dummy slot 0, so every lane's loads stay inside the
-/// pool. `None` when a brick could not be built (the cache is full of bricks in use).
+/// Each lane's last brick and its slot's offset: a ray stays in a brick for many
+/// samples, so the page table is read only when a lane enters another brick.
+pub(super) struct Memo {
+    index: [i32; LANES],
+    off: [i32; LANES],
+}
+
+impl Default for Memo {
+    /// No brick; offset 0, the dummy slot.
+    fn default() -> Memo {
+        Memo {
+            index: [-1; LANES],
+            off: [0; LANES],
+        }
+    }
+}
+
+/// Each lane's corner-000 voxel in the brick pool: its brick's slot (from `memo`, or
+/// the page table, the brick built now if absent) plus the voxel's place in the brick,
+/// for the lanes `mask`. Every other lane gets its place in the last slot it used (or
+/// the dummy slot 0), so all loads stay inside the pool. `None` when a brick could not
+/// be built (the cache is full of bricks in use).
 ///
 /// # Safety
 /// The CPU must support AVX2; `ijk` must be clamped to the field's cells; `guard` must
-/// stay alive while the returned voxels are read.
+/// stay alive while the returned voxels are read, and `memo` must have been filled
+/// under the same guard.
 #[inline(always)]
 pub(super) unsafe fn bases(
     c: &Caster,
     inv: &Invariants,
     ijk: [__m256i; 3],
-    mask: u8,
+    (mask, memo): (u8, &mut Memo),
     guard: &Guard,
 ) -> Option<[i32; LANES]> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
@@ -93,26 +112,29 @@ pub(super) unsafe fn bases(
                 _mm256_mullo_epi32(l[2], inv.brick_slice),
             ),
         );
-        let mut bi = [0i32; LANES];
-        _mm256_storeu_si256(bi.as_mut_ptr().cast(), index);
-        let mut off = [0i32; LANES];
-        for (l, (o, &b)) in off.iter_mut().zip(&bi).enumerate() {
-            if mask & (1 << l) == 0 {
-                continue;
+        let known = _mm256_cmpeq_epi32(index, _mm256_loadu_si256(memo.index.as_ptr().cast()));
+        let mut enter = mask & !(_mm256_movemask_ps(_mm256_castsi256_ps(known)) as u8);
+        if enter != 0 {
+            let mut bi = [0i32; LANES];
+            _mm256_storeu_si256(bi.as_mut_ptr().cast(), index);
+            while enter != 0 {
+                let l = enter.trailing_zeros() as usize;
+                enter &= enter - 1;
+                let b = bi[l] as usize;
+                // SAFETY: the cells are clamped, so the brick index is below the count.
+                let entry = (*inv.page.add(b)).load(Ordering::Acquire);
+                memo.off[l] = if entry != ABSENT {
+                    entry
+                } else {
+                    let f = c.field;
+                    let bd = f.brick_dims;
+                    let coords = [b % bd[0], b / bd[0] % bd[1], b / (bd[0] * bd[1])];
+                    f.cache.build(b, coords, &f.recipe, guard)?
+                };
+                memo.index[l] = bi[l];
             }
-            // SAFETY: the cells are clamped, so the brick index is below the count.
-            let entry = (*inv.page.add(b as usize)).load(Ordering::Acquire);
-            *o = if entry != ABSENT {
-                entry
-            } else {
-                let f = c.field;
-                let bd = f.brick_dims;
-                let b = b as usize;
-                let coords = [b % bd[0], b / bd[0] % bd[1], b / (bd[0] * bd[1])];
-                f.cache.build(b, coords, &f.recipe, guard)?
-            };
         }
-        let base = _mm256_add_epi32(_mm256_loadu_si256(off.as_ptr().cast()), local);
+        let base = _mm256_add_epi32(_mm256_loadu_si256(memo.off.as_ptr().cast()), local);
         let mut out = [0i32; LANES];
         _mm256_storeu_si256(out.as_mut_ptr().cast(), base);
         Some(out)
@@ -261,13 +283,13 @@ pub(super) unsafe fn probe(
     c: &Caster,
     inv: &Invariants,
     (p, ijk): ([__m256; 3], [__m256i; 3]),
-    mask: u8,
+    (mask, memo): (u8, &mut Memo),
     guard: &Guard,
 ) -> Option<Probe> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let base = bases(c, inv, ijk, mask, guard)?;
+        let base = bases(c, inv, ijk, (mask, memo), guard)?;
         let (fr, uv) = values_at(inv, p, ijk, &base);
         let mut li = [0i32; LANES];
         _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
