@@ -143,7 +143,7 @@ def write(path, ds, codestreams, how):
 FIXTURES = [
     ("baseline8", JPEGBaseline8Bit, 8, False, 0, "bot", False, None),
     ("extended8", JPEGExtended12Bit, 8, False, 0, "two-fragments", False, None),
-    ("extended12", JPEGExtended12Bit, 12, False, 0, "bot", False, "12-bit lossy JPEG"),
+    ("extended12", JPEGExtended12Bit, 12, False, 0, "bot", False, None),
     ("lossless-sv1-16", JPEGLosslessSV1, 16, False, 1, "extended", False, None),
     ("lossless-sv1-12-signed", JPEGLosslessSV1, 12, True, 1, "bot", False, None),
     ("lossless-sv1-series", JPEGLosslessSV1, 16, True, 1, "bot", True, None),

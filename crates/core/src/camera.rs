@@ -1,54 +1,61 @@
 //! Cameras: named anatomical views in the volume's world frame (RAS+), orbit angles,
 //! zoom, perspective or orthographic projection.
 
-use std::fmt;
-use std::str::FromStr;
-
 use serde::{Deserialize, Serialize};
 
 use crate::error::RenderError;
 use crate::math::Vec3;
 
 /// A named view: where the camera stands relative to the patient, in RAS+.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(serialize_all = "lowercase", ascii_case_insensitive, parse_err_ty = RenderError, parse_err_fn = crate::error::unknown_name::<Self>)]
 pub enum View {
     /// In front of the face, looking towards posterior; superior up.
     #[default]
+    #[strum(serialize = "a")]
     Anterior,
     /// Behind the head, looking towards anterior; superior up.
+    #[strum(serialize = "p")]
     Posterior,
     /// At the patient's left, looking towards the right; superior up.
+    #[strum(serialize = "l")]
     Left,
     /// At the patient's right, looking towards the left; superior up.
+    #[strum(serialize = "r")]
     Right,
     /// Above, looking down towards inferior; anterior up.
+    #[strum(serialize = "s")]
     Superior,
     /// Below, looking up towards superior; anterior up.
+    #[strum(serialize = "i")]
     Inferior,
 }
 
 impl View {
     /// All views.
-    pub const ALL: [View; 6] = [
-        View::Anterior,
-        View::Posterior,
-        View::Left,
-        View::Right,
-        View::Superior,
-        View::Inferior,
-    ];
+    pub const ALL: &'static [View] = <View as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`View::ALL`].
+    pub const NAMES: &'static [&'static str] = <View as strum::VariantNames>::VARIANTS;
 
     /// The name users type.
     pub fn name(self) -> &'static str {
-        match self {
-            View::Anterior => "anterior",
-            View::Posterior => "posterior",
-            View::Left => "left",
-            View::Right => "right",
-            View::Superior => "superior",
-            View::Inferior => "inferior",
-        }
+        self.into()
     }
 
     /// Unit vector from the focal point to the eye, and the up vector (RAS+).
@@ -66,65 +73,53 @@ impl View {
     }
 }
 
-impl fmt::Display for View {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for View {
-    type Err = RenderError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let key = s.trim().to_ascii_lowercase();
-        View::ALL
-            .into_iter()
-            .find(|v| v.name() == key || (key.len() == 1 && v.name().starts_with(&key)))
-            .ok_or_else(|| {
-                RenderError::Parameter(format!(
-                    "unknown view '{s}': expected anterior, posterior, left, right, superior or inferior"
-                ))
-            })
-    }
+impl glint_lobe::names::Named for View {
+    const WHAT: &'static str = "view";
 }
 
 /// Perspective or orthographic projection.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(serialize_all = "lowercase", ascii_case_insensitive, parse_err_ty = RenderError, parse_err_fn = crate::error::unknown_name::<Self>)]
 pub enum Projection {
     /// Pinhole camera with a 30° vertical field of view (VTK's default).
     #[default]
+    #[strum(serialize = "persp")]
     Perspective,
     /// Parallel rays.
+    #[strum(serialize = "ortho", serialize = "parallel")]
     Orthographic,
 }
 
 impl Projection {
+    /// Both projections, perspective first.
+    pub const ALL: &'static [Projection] = <Projection as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`Projection::ALL`].
+    pub const NAMES: &'static [&'static str] = <Projection as strum::VariantNames>::VARIANTS;
+
     /// The name users type.
     pub fn name(self) -> &'static str {
-        match self {
-            Projection::Perspective => "perspective",
-            Projection::Orthographic => "orthographic",
-        }
+        self.into()
     }
 }
 
-impl fmt::Display for Projection {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Projection {
-    type Err = RenderError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "perspective" | "persp" => Ok(Projection::Perspective),
-            "orthographic" | "ortho" | "parallel" => Ok(Projection::Orthographic),
-            _ => Err(RenderError::Parameter(format!(
-                "unknown projection '{s}': expected perspective or orthographic"
-            ))),
-        }
-    }
+impl glint_lobe::names::Named for Projection {
+    const WHAT: &'static str = "projection";
 }
 
 /// Vertical field of view of the perspective camera, degrees (VTK's `vtkCamera`

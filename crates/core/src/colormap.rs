@@ -3,9 +3,6 @@
 //! `colorous` crate (viridis and its relatives are matplotlib's, by van der Walt and
 //! Smith); glint only samples them into a linear-light table.
 
-use std::fmt;
-use std::str::FromStr;
-
 use crate::color::srgb_to_linear;
 use crate::error::RenderError;
 use crate::image::Image;
@@ -15,7 +12,20 @@ use crate::image::Image;
 pub const COLORMAP_TABLE: usize = 1024;
 
 /// A colour map for scalars.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(serialize_all = "lowercase", ascii_case_insensitive, parse_err_ty = RenderError, parse_err_fn = crate::error::unknown_name::<Self>)]
 pub enum ColorMap {
     /// Perceptually uniform, blue to yellow (matplotlib's default).
     #[default]
@@ -41,31 +51,14 @@ pub enum ColorMap {
 
 impl ColorMap {
     /// Every map, in the order `--help` lists them.
-    pub const ALL: [ColorMap; 9] = [
-        ColorMap::Viridis,
-        ColorMap::Inferno,
-        ColorMap::Magma,
-        ColorMap::Plasma,
-        ColorMap::Cividis,
-        ColorMap::Turbo,
-        ColorMap::Greys,
-        ColorMap::RdBu,
-        ColorMap::Sulc,
-    ];
+    pub const ALL: &'static [ColorMap] = <ColorMap as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`ColorMap::ALL`].
+    pub const NAMES: &'static [&'static str] = <ColorMap as strum::VariantNames>::VARIANTS;
 
     /// The name users type.
     pub fn name(self) -> &'static str {
-        match self {
-            ColorMap::Viridis => "viridis",
-            ColorMap::Inferno => "inferno",
-            ColorMap::Magma => "magma",
-            ColorMap::Plasma => "plasma",
-            ColorMap::Cividis => "cividis",
-            ColorMap::Turbo => "turbo",
-            ColorMap::Greys => "greys",
-            ColorMap::RdBu => "rdbu",
-            ColorMap::Sulc => "sulc",
-        }
+        self.into()
     }
 
     /// The sRGB colour at `t` in `0..=1` (clamped), as 8-bit samples.
@@ -105,27 +98,8 @@ impl ColorMap {
     }
 }
 
-impl fmt::Display for ColorMap {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for ColorMap {
-    type Err = RenderError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let key = s.trim().to_ascii_lowercase();
-        ColorMap::ALL
-            .into_iter()
-            .find(|m| m.name() == key)
-            .ok_or_else(|| {
-                let names: Vec<_> = ColorMap::ALL.iter().map(|m| m.name()).collect();
-                RenderError::Parameter(format!(
-                    "unknown colour map '{s}': expected one of {}",
-                    names.join(", ")
-                ))
-            })
-    }
+impl glint_lobe::names::Named for ColorMap {
+    const WHAT: &'static str = "colour map";
 }
 
 /// Scenes name maps as users type them (`"viridis"`).
@@ -337,7 +311,7 @@ mod tests {
         assert_eq!(s.color(f32::NAN), s.color(-1.0));
         // Greys runs black to white.
         assert!(s.color(-1.0)[0] < 0.01 && s.color(1.0)[0] > 0.99);
-        for m in ColorMap::ALL {
+        for &m in ColorMap::ALL {
             assert_eq!(m.name().parse::<ColorMap>().unwrap(), m);
         }
         assert!("rainbow".parse::<ColorMap>().is_err());

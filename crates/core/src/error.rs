@@ -91,3 +91,9 @@ pub enum RenderError {
     #[error(transparent)]
     Write(glint_io::IoError),
 }
+
+/// The error for `name`, which is none of the named enum `T`'s names (its parser's
+/// error): `invalid parameter: unknown view 'up': expected one of ...`.
+pub fn unknown_name<T: glint_lobe::names::Named>(name: &str) -> RenderError {
+    RenderError::Parameter(glint_lobe::names::unknown::<T>(name))
+}

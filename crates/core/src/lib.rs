@@ -37,7 +37,7 @@ mod timings;
 pub use camera::{Camera, CameraSpec, Projection, View};
 pub use color::{linear_to_srgb, luminance, luminance_f32, srgb_to_linear, REC709_LUMA};
 pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
-pub use error::{BoxedError, RenderError};
+pub use error::{unknown_name, BoxedError, RenderError};
 pub use image::{
     Depth, Image, RenderStats, MAX_IMAGE_SIDE, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };

@@ -8,8 +8,23 @@ use crate::error::RenderError;
 /// How samples along a ray make a pixel, or whether the scene is rasterised. The iso
 /// value of [`RenderMode::Iso`] and [`RenderMode::Surface`] is kept beside the mode
 /// (a scene's `iso`, the ray caster's `ClassifySettings::iso`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(serialize_all = "lowercase", ascii_case_insensitive, parse_err_ty = RenderError, parse_err_fn = crate::error::unknown_name::<Self>)]
 pub enum RenderMode {
     /// Front-to-back compositing of shaded, classified samples.
     #[default]
@@ -25,35 +40,17 @@ pub enum RenderMode {
 
 impl RenderMode {
     /// Every mode, in the order `--help` lists them.
-    pub const ALL: [RenderMode; 4] = [
-        RenderMode::Composite,
-        RenderMode::Iso,
-        RenderMode::Mip,
-        RenderMode::Surface,
-    ];
+    pub const ALL: &'static [RenderMode] = <RenderMode as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`RenderMode::ALL`].
+    pub const NAMES: &'static [&'static str] = <RenderMode as strum::VariantNames>::VARIANTS;
 
     /// The name users type.
     pub fn name(self) -> &'static str {
-        match self {
-            RenderMode::Composite => "composite",
-            RenderMode::Iso => "iso",
-            RenderMode::Mip => "mip",
-            RenderMode::Surface => "surface",
-        }
+        self.into()
     }
 }
 
-impl std::str::FromStr for RenderMode {
-    type Err = RenderError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let key = s.trim().to_ascii_lowercase();
-        RenderMode::ALL
-            .into_iter()
-            .find(|m| m.name() == key)
-            .ok_or_else(|| {
-                RenderError::Parameter(format!(
-                    "unknown mode '{s}': expected composite, iso, mip or surface"
-                ))
-            })
-    }
+impl glint_lobe::names::Named for RenderMode {
+    const WHAT: &'static str = "mode";
 }

@@ -18,6 +18,7 @@ pub const SINGULAR_RTOL: f64 = 1e-6;
 pub enum AffineError {
     /// An entry is NaN or infinite.
     #[error("the voxel-to-world affine has non-finite entries: {0:?}")]
+    // Boxed: the error stays small on the Ok path (clippy::result_large_err).
     NonFinite(Box<Affine>),
     /// The last row is not `[0, 0, 0, 1]`.
     #[error("the voxel-to-world affine's last row must be [0, 0, 0, 1], got {0:?}")]
@@ -139,10 +140,9 @@ mod tests {
     fn inverse_times_matrix_is_identity() {
         let m = [[0.9, 0.1, 0.0], [-0.2, 1.1, 0.3], [0.05, 0.0, 2.5]];
         let inv = inverse3(&m).unwrap();
-        // m · (column r of the inverse) is the r-th unit vector.
-        let t = transpose3(&inv);
-        for (r, col) in t.iter().enumerate() {
-            let e = mul3(&m, *col);
+        // Column r of the inverse is row r of its transpose.
+        for (r, col) in transpose3(&inv).into_iter().enumerate() {
+            let e = mul3(&m, col);
             for (c, x) in e.iter().enumerate() {
                 assert!((x - f64::from(u8::from(c == r))).abs() < 1e-12, "{e:?}");
             }

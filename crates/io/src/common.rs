@@ -1,46 +1,65 @@
 //! Pieces every reader shares: sample types, byte order, size checks before allocation,
 //! affine geometry, and atomic writes.
 
-use std::fmt;
-use std::io::{Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
 
+use flate2::read::MultiGzDecoder;
+
+use crate::clock::Clock;
 use crate::{IoError, Samples};
 
-/// The stored type of a volume's samples.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// The stored type of a volume's samples, by name `u8`, `i8`, `u16`, `i16`, `u32`, `i32`,
+/// `f32`, `f64` (also the NIfTI/NRRD-style long names: `uint16`, `float`, ...).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = ParseScalarTypeError,
+    parse_err_fn = ParseScalarTypeError::new
+)]
 pub enum ScalarType {
     /// Unsigned 8-bit.
+    #[strum(serialize = "u8", serialize = "uint8", serialize = "uchar")]
     U8,
     /// Signed 8-bit.
+    #[strum(serialize = "i8", serialize = "int8", serialize = "char")]
     I8,
     /// Unsigned 16-bit.
+    #[strum(serialize = "u16", serialize = "uint16", serialize = "ushort")]
     U16,
     /// Signed 16-bit.
+    #[strum(serialize = "i16", serialize = "int16", serialize = "short")]
     I16,
     /// Unsigned 32-bit.
+    #[strum(serialize = "u32", serialize = "uint32", serialize = "uint")]
     U32,
     /// Signed 32-bit.
+    #[strum(serialize = "i32", serialize = "int32", serialize = "int")]
     I32,
     /// 32-bit IEEE float.
+    #[strum(serialize = "f32", serialize = "float32", serialize = "float")]
     F32,
     /// 64-bit IEEE float.
+    #[strum(serialize = "f64", serialize = "float64", serialize = "double")]
     F64,
 }
 
 impl ScalarType {
     /// Every supported type.
-    pub const ALL: [ScalarType; 8] = [
-        ScalarType::U8,
-        ScalarType::I8,
-        ScalarType::U16,
-        ScalarType::I16,
-        ScalarType::U32,
-        ScalarType::I32,
-        ScalarType::F32,
-        ScalarType::F64,
-    ];
+    pub const ALL: &'static [ScalarType] = <ScalarType as strum::VariantArray>::VARIANTS;
 
     /// Bytes per sample.
     pub fn size(self) -> usize {
@@ -54,16 +73,7 @@ impl ScalarType {
 
     /// The short name used on the command line (`u8`, `i16`, `f32`, ...).
     pub fn short_name(self) -> &'static str {
-        match self {
-            ScalarType::U8 => "u8",
-            ScalarType::I8 => "i8",
-            ScalarType::U16 => "u16",
-            ScalarType::I16 => "i16",
-            ScalarType::U32 => "u32",
-            ScalarType::I32 => "i32",
-            ScalarType::F32 => "f32",
-            ScalarType::F64 => "f64",
-        }
+        self.into()
     }
 
     /// The type of stored samples.
@@ -81,54 +91,40 @@ impl ScalarType {
     }
 }
 
-impl fmt::Display for ScalarType {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.short_name())
-    }
-}
-
-/// Error of [`ScalarType::from_str`].
+/// Error of parsing a [`ScalarType`] name.
 #[derive(Debug, thiserror::Error)]
 #[error("unknown sample type '{0}' (expected u8, i8, u16, i16, u32, i32, f32 or f64)")]
 pub struct ParseScalarTypeError(String);
 
-impl FromStr for ScalarType {
-    type Err = ParseScalarTypeError;
-    /// Accepts the short names and the NIfTI/NRRD-style long ones (`uint16`, `float`).
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Ok(match s.trim().to_ascii_lowercase().as_str() {
-            "u8" | "uint8" | "uchar" => ScalarType::U8,
-            "i8" | "int8" | "char" => ScalarType::I8,
-            "u16" | "uint16" | "ushort" => ScalarType::U16,
-            "i16" | "int16" | "short" => ScalarType::I16,
-            "u32" | "uint32" | "uint" => ScalarType::U32,
-            "i32" | "int32" | "int" => ScalarType::I32,
-            "f32" | "float32" | "float" => ScalarType::F32,
-            "f64" | "float64" | "double" => ScalarType::F64,
-            _ => return Err(ParseScalarTypeError(s.to_string())),
-        })
+impl ParseScalarTypeError {
+    fn new(name: &str) -> ParseScalarTypeError {
+        ParseScalarTypeError(name.to_string())
     }
 }
 
-/// Byte order of multi-byte samples.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+/// Byte order of multi-byte samples (`little` or `le`, `big` or `be`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+)]
+#[strum(serialize_all = "lowercase", ascii_case_insensitive)]
 pub enum Endian {
     /// Least significant byte first (x86, ARM, most files).
     #[default]
+    #[strum(to_string = "little", serialize = "le")]
     Little,
     /// Most significant byte first.
+    #[strum(to_string = "big", serialize = "be")]
     Big,
-}
-
-impl FromStr for Endian {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "little" | "le" => Ok(Endian::Little),
-            "big" | "be" => Ok(Endian::Big),
-            _ => Err(format!("unknown byte order '{s}' (expected little or big)")),
-        }
-    }
 }
 
 /// Decodes `bytes` (exactly `n * ty.size()` long) into samples.
@@ -272,6 +268,23 @@ pub(crate) fn open(path: &Path) -> Result<std::fs::File, IoError> {
     std::fs::File::open(path).map_err(|e| IoError::Os {
         path: path.into(),
         source: e,
+    })
+}
+
+/// Opens a file, gunzipping it when it starts with the gzip signature (the time spent
+/// inflating goes to `clock`); the length is known only for an uncompressed file.
+pub(crate) fn open_maybe_gz(
+    path: &Path,
+    clock: &Clock,
+) -> Result<(Box<dyn Read>, Option<u64>), IoError> {
+    let gz = is_gzip(path)?;
+    let file = open(path)?;
+    let len = file.metadata().map(|m| m.len()).ok();
+    Ok(if gz {
+        let inflater = MultiGzDecoder::new(BufReader::new(file));
+        (Box::new(BufReader::new(clock.timed(inflater))), None)
+    } else {
+        (Box::new(BufReader::new(file)), len)
     })
 }
 

@@ -1,4 +1,4 @@
-//! Readers for biomedical volumes (NIfTI, NRRD, DICOM, raw) and surfaces (STL, OBJ,
+//! Readers for biomedical volumes (NIfTI, NRRD, MGH, DICOM, raw) and surfaces (STL, OBJ,
 //! PLY, GIFTI) into one [`Volume`] and one [`Mesh`] type, with writers for round trips.
 //!
 //! ```
@@ -18,6 +18,9 @@
 //! assert_eq!(back.affine, vol.affine);
 //! ```
 //!
+//! A colour volume (DICOM RGB and YBR images) carries its RGB planes in
+//! [`Volume::colour`] beside a grey [`Volume::samples`] ([`ReadOptions::grey`]).
+//!
 //! World coordinates are millimetres in RAS+ (x towards the patient's Right, y Anterior,
 //! z Superior), NIfTI's convention; readers of LPS formats (DICOM, NRRD in LPS space)
 //! convert. Every reader checks the announced size against [`ReadOptions::max_voxels`]
@@ -28,7 +31,8 @@
 //! | --- | --- | --- | --- |
 //! | NIfTI-1, NIfTI-2 `.nii`, `.nii.gz`; `.hdr`/`.img` (also ANALYZE 7.5) | [`nifti`] | yes | `.nii` |
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
-//! | DICOM file or directory | [`dicom`] | native, deflate, JPEG, JPEG 2000, RLE | no |
+//! | FreeSurfer MGH `.mgh`, `.mgz` | [`mgh`] | uchar, short, ushort, int, float | no |
+//! | DICOM file or directory | [`dicom`] | native, deflate, JPEG (8, 12-bit, lossless), JPEG-LS, JPEG 2000, RLE; grey, 1-bit and colour | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
 //! | OBJ | [`mesh`] | yes | yes |
@@ -36,7 +40,6 @@
 //! | GIFTI `.gii`, `.gii.gz` (+ per-vertex data: [`read_surface_data`]) | [`gifti`] | ASCII, Base64, GZipBase64, external file | ASCII, Base64, GZipBase64 |
 
 #![warn(missing_docs)]
-#![forbid(unsafe_code)]
 
 pub mod affine;
 mod clock;
@@ -45,6 +48,7 @@ pub mod dicom;
 pub mod gifti;
 pub mod mesh;
 mod message;
+pub mod mgh;
 pub mod nifti;
 pub mod nrrd;
 pub mod raw;
@@ -55,45 +59,47 @@ pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
 pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
 pub use message::one_line;
 pub use robust::{robust_range, ROBUST_PERCENTILES, ROBUST_SAMPLES};
-pub use types::{IoError, Mesh, Samples, Volume};
+pub use types::{IoError, Mesh, Rgb, Samples, Volume};
 
 use std::path::Path;
 
 /// The file formats glint reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::Display)]
 #[non_exhaustive]
 pub enum Format {
     /// NIfTI-1 or NIfTI-2 (`.nii`, `.nii.gz`), or a `.hdr`/`.img` pair (NIfTI or ANALYZE 7.5).
+    #[strum(to_string = "NIfTI")]
     Nifti,
     /// NRRD (`.nrrd`, `.nhdr` + data file).
+    #[strum(to_string = "NRRD")]
     Nrrd,
+    /// FreeSurfer MGH (`.mgh`; `.mgz`, `.mgh.gz` gzip-compressed).
+    #[strum(to_string = "MGH")]
+    Mgh,
     /// DICOM (a file or a directory of slices).
+    #[strum(to_string = "DICOM")]
     Dicom,
     /// Headerless samples described by the caller.
+    #[strum(to_string = "raw")]
     Raw,
     /// STL, binary or ASCII.
+    #[strum(to_string = "STL")]
     Stl,
     /// Wavefront OBJ.
+    #[strum(to_string = "OBJ")]
     Obj,
     /// Stanford PLY, ASCII or binary.
+    #[strum(to_string = "PLY")]
     Ply,
     /// GIFTI surface (`.gii`, `.gii.gz`).
+    #[strum(to_string = "GIFTI")]
     Gifti,
 }
 
 impl Format {
     /// The format's usual name.
     pub fn name(self) -> &'static str {
-        match self {
-            Format::Nifti => "NIfTI",
-            Format::Nrrd => "NRRD",
-            Format::Dicom => "DICOM",
-            Format::Raw => "raw",
-            Format::Stl => "STL",
-            Format::Obj => "OBJ",
-            Format::Ply => "PLY",
-            Format::Gifti => "GIFTI",
-        }
+        self.into()
     }
 
     /// Whether the format holds surfaces (else volumes).
@@ -116,6 +122,7 @@ impl Format {
         Some(match ext {
             "nii" | "hdr" => Format::Nifti,
             "nrrd" | "nhdr" => Format::Nrrd,
+            "mgh" | "mgz" => Format::Mgh,
             "dcm" | "dicom" | "ima" => Format::Dicom,
             "raw" | "bin" | "img" => Format::Raw,
             "stl" => Format::Stl,
@@ -150,8 +157,65 @@ pub struct ReadOptions {
     /// Read the file as raw samples with these parameters, whatever its extension.
     pub raw: Option<RawParams>,
     /// Refuse what lenient readers accept with a note: DICOM files without the 128-byte
-    /// preamble or the file meta group, multi-frame DICOM without frame positions.
+    /// preamble or the file meta group, multi-frame DICOM without frame positions,
+    /// DICOM PixelSpacing of zero.
     pub strict: bool,
+    /// What a colour volume's [`Volume::samples`] hold: its luminance (the default) or
+    /// one of its channels. The colour itself is in [`Volume::colour`] either way.
+    pub grey: Grey,
+    /// The DICOM series to read from a directory that holds several, by its
+    /// SeriesInstanceUID; `None` reads the only image series, or the largest (with a
+    /// note naming the others).
+    pub series: Option<String>,
+}
+
+/// The grey a colour volume's [`Volume::samples`] hold ([`ReadOptions::grey`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Grey {
+    /// The luma `0.299 R + 0.587 G + 0.114 B` (ITU-R BT.601, the Y of DICOM's YBR_FULL,
+    /// PS3.3 C.7.6.3.1.2), rounded to the channels' type.
+    #[default]
+    Luminance,
+    /// The red channel.
+    Red,
+    /// The green channel.
+    Green,
+    /// The blue channel.
+    Blue,
+}
+
+impl Grey {
+    /// Every choice, in the order of [`Grey::name`]s users type.
+    pub const ALL: [Grey; 4] = [Grey::Luminance, Grey::Red, Grey::Green, Grey::Blue];
+
+    /// The name on the command line: `luminance`, `red`, `green`, `blue`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Grey::Luminance => "luminance",
+            Grey::Red => "red",
+            Grey::Green => "green",
+            Grey::Blue => "blue",
+        }
+    }
+}
+
+impl std::str::FromStr for Grey {
+    type Err = String;
+    /// Parses a [`Grey::name`] (also `r`, `g`, `b`, `luma`), case-insensitive.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s.trim().to_ascii_lowercase().as_str() {
+            "luminance" | "luma" | "y" => Grey::Luminance,
+            "red" | "r" => Grey::Red,
+            "green" | "g" => Grey::Green,
+            "blue" | "b" => Grey::Blue,
+            _ => {
+                return Err(format!(
+                    "unknown channel '{s}' (expected luminance, red, green or blue)"
+                ))
+            }
+        })
+    }
 }
 
 impl Default for ReadOptions {
@@ -161,6 +225,8 @@ impl Default for ReadOptions {
             max_voxels: 1 << 31,
             raw: None,
             strict: false,
+            grey: Grey::Luminance,
+            series: None,
         }
     }
 }
@@ -215,6 +281,7 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
     match Format::guess(path) {
         Some(Format::Nifti) => nifti::read(path, options),
         Some(Format::Nrrd) => nrrd::read(path, options),
+        Some(Format::Mgh) => mgh::read(path, options),
         Some(Format::Dicom) => dicom::read(path, options),
         Some(Format::Raw) => unsupported(
             path,
@@ -228,8 +295,8 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
         None if common::has_dicom_magic(path) => dicom::read(path, options),
         None => unsupported(
             path,
-            "unknown volume extension (expected .nii, .nii.gz, .nrrd, .nhdr, .dcm, a DICOM \
-             directory, or raw parameters)",
+            "unknown volume extension (expected .nii, .nii.gz, .nrrd, .nhdr, .mgh, .mgz, .dcm, \
+             a DICOM directory, or raw parameters)",
         ),
     }
 }

@@ -43,6 +43,7 @@ pub fn read(path: &Path, params: &RawParams, options: &ReadOptions) -> Result<Vo
             slope: 1.0,
             intercept: 0.0,
             units: None,
+            colour: None,
         },
         format: Format::Raw,
         notes: vec!["raw samples: geometry from the caller, origin at voxel 0".into()],

@@ -208,6 +208,55 @@ pub struct Volume {
     pub intercept: f64,
     /// Units of the physical values where known (e.g. "HU").
     pub units: Option<String>,
+    /// The colour of each voxel, for a colour volume (DICOM RGB and YBR images:
+    /// ultrasound, cryosection photographs, secondary captures); `None` for the usual
+    /// scalar volume. [`samples`](Self::samples) then holds the grey the caller chose
+    /// with [`ReadOptions::grey`](crate::ReadOptions::grey) (the luminance by default),
+    /// so every scalar use (transfer functions, isosurfaces, statistics) works on a
+    /// colour volume unchanged, and a colour classification takes the colour from here
+    /// and the opacity from a transfer function of `samples`.
+    pub colour: Option<Rgb>,
+}
+
+/// The colour channels of a colour [`Volume`]: red, green and blue as three planar
+/// arrays in the layout of [`Volume::samples`] (sample `(i, j, k)` of each at
+/// `i + dims[0] * (j + dims[1] * k)`), all of one type: the stored type (`U8`, `U16`
+/// or `U32` for DICOM's 8, 16 and 32 bits allocated), unscaled (colour images have no
+/// rescale). The full scale of the type is full intensity: 255 for `U8`, 65535 for
+/// `U16`; DICOM colour data uses the whole range (PS3.3 C.7.6.3.1.2).
+///
+/// Whatever the file stored (RGB interleaved or planar, YBR_FULL, YBR_FULL_422, JPEG's
+/// YCbCr, JPEG 2000's YBR_ICT/YBR_RCT), the channels are RGB, converted as pydicom
+/// converts them (see `docs/formats.md`, "Colour").
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rgb {
+    /// The red channel.
+    pub red: Samples,
+    /// The green channel.
+    pub green: Samples,
+    /// The blue channel.
+    pub blue: Samples,
+}
+
+impl Rgb {
+    /// The channels in the order red, green, blue.
+    pub fn channels(&self) -> [&Samples; 3] {
+        [&self.red, &self.green, &self.blue]
+    }
+
+    /// The colour of sample `i` as (r, g, b) in 0..1 of the type's full scale.
+    ///
+    /// # Panics
+    /// If `i` is out of range.
+    pub fn rgb(&self, i: usize) -> [f32; 3] {
+        let scale = |s: &Samples| match s {
+            Samples::U8(_) => 1.0 / 255.0,
+            Samples::U16(_) => 1.0 / 65535.0,
+            Samples::U32(_) => 1.0 / 4294967295.0,
+            _ => 1.0,
+        };
+        self.channels().map(|s| (s.get(i) * scale(s)) as f32)
+    }
 }
 
 impl Volume {
@@ -241,7 +290,13 @@ impl Volume {
             slope: 1.0,
             intercept: 0.0,
             units: None,
+            colour: None,
         })
+    }
+
+    /// Whether the volume holds colour ([`Volume::colour`]).
+    pub fn is_colour(&self) -> bool {
+        self.colour.is_some()
     }
 
     /// Number of voxels.

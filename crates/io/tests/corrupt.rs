@@ -60,6 +60,9 @@ fn originals(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
             Box::new(|p| gifti::write(p, &tri, gifti::Encoding::GzipBase64).unwrap()),
         ),
         ("k.dcm", Box::new(write_dicom)),
+        // MGH has no writer: nibabel's fixtures, plain and gzip-compressed.
+        ("l.mgh", Box::new(|p| copy_fixture("mgh/i16.mgh", p))),
+        ("m.mgz", Box::new(|p| copy_fixture("mgh/frames.mgz", p))),
     ];
     files
         .into_iter()
@@ -70,6 +73,13 @@ fn originals(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
             (p, bytes)
         })
         .collect()
+}
+
+fn copy_fixture(name: &str, to: &Path) {
+    let from = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name);
+    std::fs::copy(from, to).unwrap();
 }
 
 /// A 3x2 CT slice, explicit VR little endian.
@@ -154,7 +164,7 @@ proptest! {
 
     #[test]
     fn truncated_or_mutated_files_do_not_panic(
-        which in 0usize..11,
+        which in 0usize..13,
         cut in 0.0f64..1.0,
         edits in proptest::collection::vec((0.0f64..1.0, any::<u8>()), 0..8),
     ) {

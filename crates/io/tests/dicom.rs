@@ -1,6 +1,8 @@
 //! DICOM: series directories and multi-frame files written with dicom-object in every
 //! uncompressed transfer syntax, and the bad-input cases.
 
+mod common;
+
 use std::path::Path;
 
 use dicom_core::value::{DataSetSequence, PixelFragmentSequence, PrimitiveValue, Value};
@@ -220,8 +222,10 @@ fn gap_and_duplicate_slices_are_errors() {
     );
 }
 
+/// A directory with two series reads the larger with a note naming the other, or the
+/// one `series` names; an unknown UID is an error listing the series there.
 #[test]
-fn mixed_series_are_errors() {
+fn mixed_series_read_the_largest_or_the_one_named() {
     let dir = tempfile::tempdir().unwrap();
     ct_series(dir.path(), &[0.0, 2.0], EXPLICIT_LE);
     let mut o = image(2, 3, "1.2.3.100", 50, true);
@@ -238,9 +242,29 @@ fn mixed_series_are_errors() {
         PrimitiveValue::U16(vec![0; 6].into()),
     );
     write(&dir.path().join("other.dcm"), o, EXPLICIT_LE);
-    let err = glint_io::read_volume(dir.path(), &ReadOptions::default()).unwrap_err();
-    assert!(matches!(err, IoError::MixedSeries { .. }), "{err}");
-    assert!(err.to_string().contains("1.2.3.100"), "{err}");
+    let f = glint_io::open_volume(dir.path(), &ReadOptions::default()).unwrap();
+    assert_eq!(f.volume.dims[2], 2);
+    let note = f.notes.iter().find(|n| n.contains("image series here"));
+    let note = note.unwrap_or_else(|| panic!("{:?}", f.notes));
+    assert!(
+        note.contains("the largest") && note.contains("1.2.3.100"),
+        "{note}"
+    );
+    let other = ReadOptions {
+        series: Some("1.2.3.100".into()),
+        ..ReadOptions::default()
+    };
+    let v = glint_io::read_volume(dir.path(), &other).unwrap();
+    assert_eq!(v.dims, [3, 2, 1]);
+    let none = ReadOptions {
+        series: Some("9.9".into()),
+        ..ReadOptions::default()
+    };
+    let err = glint_io::read_volume(dir.path(), &none).unwrap_err();
+    assert!(
+        err.to_string().contains("no series 9.9") && err.to_string().contains("1.2.3.100"),
+        "{err}"
+    );
 }
 
 fn functional_item(tag: Tag, inner: InMemDicomObject) -> DataElement<InMemDicomObject> {
@@ -624,7 +648,7 @@ fn undecodable_compressed_data_names_the_transfer_syntax() {
         matches!(err, IoError::Invalid { .. }) && err.to_string().contains("JPEG Baseline"),
         "{err}"
     );
-    // JPEG-LS: no CharLS in this build, refused before decoding, by name.
+    // JPEG-LS without a frame header: refused before CharLS sees it, by name.
     let p = dir.path().join("jpegls.dcm");
     write(
         &p,
@@ -633,8 +657,10 @@ fn undecodable_compressed_data_names_the_transfer_syntax() {
     );
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
-        matches!(err, IoError::Unsupported { .. })
-            && err.to_string().contains("JPEG-LS not supported"),
+        matches!(err, IoError::Invalid { .. })
+            && err
+                .to_string()
+                .contains("JPEG-LS pixel data without a frame header"),
         "{err}"
     );
     // A transfer syntax dicom-rs knows but cannot decode (MPEG2).
@@ -672,8 +698,9 @@ fn jpeg2000_codestream_larger_than_the_image_is_refused() {
     );
     let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
     assert!(
-        err.to_string()
-            .contains("declares 60000 x 60000 x 1 samples, more than Rows x Columns = 4"),
+        err.to_string().contains(
+            "declares 60000 x 60000 x 1 samples, more than Rows x Columns x SamplesPerPixel = 4"
+        ),
         "{err}"
     );
 }
@@ -1055,5 +1082,192 @@ fn pixel_spacing_must_agree_across_slices() {
     assert!(
         matches!(err, IoError::MixedSeries { .. }) && err.to_string().contains("PixelSpacing"),
         "{err}"
+    );
+}
+
+/// A radiotherapy export: 16 CT slices beside pydicom's RT structure set, plan and a
+/// one-frame dose grid, and a README. The CT series is read, with notes naming what was
+/// skipped; `dicom::list` names every series and object; the dose grid is read when
+/// asked for, scaled by its DoseGridScaling.
+#[test]
+fn an_export_directory_reads_its_image_series_and_lists_the_rest() {
+    let (Some(rtstruct), Some(rtplan), Some(rtdose)) = (
+        common::sample("pydicom/rtstruct.dcm"),
+        common::sample("pydicom/rtplan.dcm"),
+        common::sample("pydicom/rtdose_1frame.dcm"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let zs: Vec<f64> = (0..16).map(|k| 2.5 * k as f64).collect();
+    ct_series(dir.path(), &zs, EXPLICIT_LE);
+    for p in [&rtstruct, &rtplan, &rtdose] {
+        std::fs::copy(p, dir.path().join(p.file_name().unwrap())).unwrap();
+    }
+    std::fs::write(dir.path().join("README.txt"), "export notes").unwrap();
+
+    let f = glint_io::open_volume(dir.path(), &ReadOptions::default()).unwrap();
+    assert_eq!(f.volume.dims, [3, 2, 16]);
+    let notes = f.notes.join("\n");
+    assert!(
+        notes.contains("skipped 2 object(s): rtplan.dcm (not an image: RT Plan Storage); rtstruct.dcm (not an image: RT Structure Set Storage)"),
+        "{notes}"
+    );
+    assert!(
+        notes.contains("2 image series here: read 1.2.3.99"),
+        "{notes}"
+    );
+    assert!(notes.contains("RTDOSE"), "{notes}");
+    assert!(notes.contains("skipped 1 non-DICOM file(s)"), "{notes}");
+
+    let listing = glint_io::dicom::list(dir.path(), &ReadOptions::default()).unwrap();
+    assert_eq!(listing.series.len(), 2);
+    assert_eq!(
+        (listing.series[0].uid.as_str(), listing.series[0].slices),
+        ("1.2.3.99", 16)
+    );
+    let dose = &listing.series[1];
+    assert_eq!(dose.modality.as_deref(), Some("RTDOSE"));
+    let names: Vec<String> = listing
+        .skipped
+        .iter()
+        .map(|s| {
+            format!(
+                "{} {}",
+                s.path.file_name().unwrap().to_string_lossy(),
+                s.reason
+            )
+        })
+        .collect();
+    assert_eq!(names.len(), 3, "{names:?}");
+    assert!(
+        names[0].starts_with("README.txt not a DICOM file"),
+        "{names:?}"
+    );
+    assert!(names[1].starts_with("rtplan.dcm no PixelData"), "{names:?}");
+    assert_eq!(
+        listing.skipped[2].class.as_deref(),
+        Some("RT Structure Set Storage")
+    );
+
+    // The dose grid, by its series UID: stored values times DoseGridScaling, in its
+    // DoseUnits (RELATIVE in pydicom's file).
+    let obj = dicom_object::open_file(&rtdose).unwrap();
+    let scaling = obj
+        .element(tags::DOSE_GRID_SCALING)
+        .unwrap()
+        .to_float64()
+        .unwrap();
+    let units = obj.element(tags::DOSE_UNITS).unwrap().to_str().unwrap();
+    let o = ReadOptions {
+        series: Some(dose.uid.clone()),
+        ..ReadOptions::default()
+    };
+    let v = glint_io::read_volume(dir.path(), &o).unwrap();
+    assert_eq!(v.dims, [10, 10, 1]);
+    assert_eq!(v.slope, scaling);
+    assert_eq!(v.units.as_deref(), Some(units.trim()));
+}
+
+/// A slice of the chosen series that cannot be read is an error, not a skip.
+#[test]
+fn a_broken_slice_of_the_read_series_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    ct_series(dir.path(), &[0.0, 2.0, 4.0], EXPLICIT_LE);
+    let p = dir.path().join("slice02.dcm");
+    let bytes = std::fs::read(&p).unwrap();
+    std::fs::write(&p, &bytes[..bytes.len() - 4]).unwrap();
+    let e = glint_io::read_volume(dir.path(), &ReadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("slice02.dcm"), "{e}");
+}
+
+/// Colour photometric interpretations glint does not convert are refused by name.
+#[test]
+fn unsupported_colour_models_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut o = image(2, 2, "1.2.3.7", 1, false);
+    put(
+        &mut o,
+        tags::SAMPLES_PER_PIXEL,
+        VR::US,
+        dicom_value!(U16, [3]),
+    );
+    put(
+        &mut o,
+        tags::PHOTOMETRIC_INTERPRETATION,
+        VR::CS,
+        dicom_value!(Str, "YBR_PARTIAL_420"),
+    );
+    put(&mut o, tags::BITS_ALLOCATED, VR::US, dicom_value!(U16, [8]));
+    put(&mut o, tags::BITS_STORED, VR::US, dicom_value!(U16, [8]));
+    put(
+        &mut o,
+        tags::PIXEL_DATA,
+        VR::OB,
+        PrimitiveValue::U8(vec![0; 12].into()),
+    );
+    let p = dir.path().join("partial.dcm");
+    write(&p, o, EXPLICIT_LE);
+    let e = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, IoError::Unsupported { .. }) && e.to_string().contains("YBR_PARTIAL_420"),
+        "{e}"
+    );
+}
+
+/// A JPEG-LS frame header declaring more samples than Rows x Columns is refused before
+/// CharLS allocates for it.
+#[test]
+fn jpeg_ls_frame_larger_than_the_image_is_refused() {
+    // SOI, SOF55: Lf 11, P 8, Y 60000, X 60000, Nf 1, component 1 (1x1, Tq 0), EOI.
+    let mut cs = vec![0xFF, 0xD8, 0xFF, 0xF7, 0x00, 0x0B, 0x08];
+    cs.extend(60000u16.to_be_bytes());
+    cs.extend(60000u16.to_be_bytes());
+    cs.extend([0x01, 0x01, 0x11, 0x00, 0xFF, 0xD9]);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("jls.dcm");
+    write(
+        &p,
+        compressed_slice(2, 2, 0.0, cs),
+        "1.2.840.10008.1.2.4.80",
+    );
+    let err = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("JPEG-LS codestream declares 60000 x 60000 x 1 samples"),
+        "{err}"
+    );
+}
+
+/// Found by fuzzing (2026-11-25, `fuzz/artifacts/dicom/oom-db40bb26...`): an item tag
+/// with a defined length inside an item. dicom-rs reads it as an element and skips its
+/// 13 bytes; the walk took it for a nested item, so the two parted ways and dicom-rs
+/// then allocated 4 GB for an element length the walk never saw. The walk now follows
+/// dicom-parser's state machine and refuses the length before dicom-rs parses the file.
+#[test]
+fn fuzz_crash_an_item_tag_inside_an_item_is_walked_as_dicom_rs_reads_it() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/dicom-oom-db40bb26.dcm");
+    let e = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, IoError::Truncated { .. })
+            && e.to_string()
+                .contains("element (0051,FF00) declares 4292870399 bytes, only 33852 are left"),
+        "{e}"
+    );
+}
+
+/// Found by fuzzing (2026-11-25, `oom-90e8df68...`): a bare data set with a 38-byte UL
+/// value. dicom-rs reads 9 whole values (36 bytes) and the next header 2 bytes early,
+/// where it found a length of 0xFFFF0000 and allocated 4 GB; the walk skipped all 38
+/// bytes and never saw it. The walk now consumes what dicom-rs consumes.
+#[test]
+fn fuzz_crash_a_binary_value_of_odd_length_is_walked_as_dicom_rs_reads_it() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/dicom-oom-90e8df68.dcm");
+    let e = glint_io::read_volume(&p, &ReadOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, IoError::Truncated { .. })
+            && e.to_string()
+                .contains("element (0000,0000) declares 4294901760 bytes, only 46 are left"),
+        "{e}"
     );
 }

@@ -1,23 +1,49 @@
-//! Conformance: every file of pydicom's test suite data (pydicom 3.0.2, fetched by
-//! scripts/fetch-samples into samples/pydicom) through the DICOM reader, checked against
-//! tests/data/pydicom-corpus.tsv, which scripts/pydicom-table.py recorded with pydicom
-//! (and its pylibjpeg/openjpeg/rle decoders): read with pydicom's dims, spacing and
-//! stored values (min, max, sum, a position-weighted checksum), or refused with the
-//! expected reason. Fails in CI when the corpus is missing.
+//! Conformance: every file of pydicom's test suite data (pydicom 3.0.2) and of the
+//! pydicom-data 1.0.0 wheel (both fetched by scripts/fetch-samples into samples/pydicom
+//! and samples/pydicom-data) through the DICOM reader, checked against
+//! tests/data/pydicom-corpus.tsv and pydicom-data-corpus.tsv, which
+//! scripts/pydicom-table.py recorded with pydicom (and its pylibjpeg, openjpeg, rle and
+//! pyjpegls decoders): read with pydicom's dims, spacing and stored values (min, max,
+//! sum, a position-weighted checksum; colour over the RGB channels; within a stated
+//! tolerance for lossy DCT JPEG), or refused with the expected reason. Fails in CI when
+//! a corpus is missing.
 
 mod common;
+
+use std::path::Path;
 
 use common::table::{self, Row};
 
 #[test]
 fn pydicom_test_files_match_the_table() {
-    let dir = common::samples_dir().join("pydicom");
     // The README is always in the wheel's test_files; its absence means no corpus.
     if common::sample("pydicom/README.txt").is_none() {
         return;
     }
-    let rows: Vec<Row> = table::rows(include_str!("data/pydicom-corpus.tsv"));
-    assert!(rows.len() > 150, "the table lists {} files", rows.len());
+    let dir = common::samples_dir().join("pydicom");
+    conform(&dir, include_str!("data/pydicom-corpus.tsv"), 150);
+}
+
+#[test]
+fn pydicom_data_files_match_the_table() {
+    // One of the wheel's files stands for the whole set (fetched together).
+    if common::sample("pydicom-data/liver.dcm").is_none() {
+        return;
+    }
+    let dir = common::samples_dir().join("pydicom-data");
+    conform(&dir, include_str!("data/pydicom-data-corpus.tsv"), 60);
+}
+
+/// Checks every row of `table` against the files of `dir`, and that every file of `dir`
+/// is in the table.
+fn conform(dir: &Path, table: &str, at_least: usize) {
+    let dir = dir.to_path_buf();
+    let rows: Vec<Row> = table::rows(table);
+    assert!(
+        rows.len() > at_least,
+        "the table lists {} files",
+        rows.len()
+    );
     let mut failures = Vec::new();
     for row in &rows {
         if let Some(why) = table::check(row, &dir) {
@@ -45,8 +71,10 @@ fn pydicom_test_files_match_the_table() {
         }
     }
     let read = rows.iter().filter(|r| r.expect == "read").count();
+    let lossy = rows.iter().filter(|r| table::tolerance(r) > 0).count();
     eprintln!(
-        "{} files, {read} read, {} refused",
+        "{}: {} files, {read} read ({lossy} of them lossy JPEG within a tolerance), {} refused",
+        dir.display(),
         rows.len(),
         rows.len() - read
     );

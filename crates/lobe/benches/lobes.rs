@@ -103,7 +103,11 @@ fn ratio_table() {
             Workload::LobeScalar(lobe(LobeKind::EnergyFit)),
         ),
     ];
-    for kind in LobeKind::ALL.into_iter().filter(|&k| k != LobeKind::Exact) {
+    for kind in LobeKind::ALL
+        .iter()
+        .copied()
+        .filter(|&k| k != LobeKind::Exact)
+    {
         rows.push((kind.name().into(), Workload::Lobe(lobe(kind))));
     }
     for path in KernelPath::supported() {

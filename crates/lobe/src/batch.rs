@@ -45,8 +45,21 @@ use crate::{Lobe, LobeKind};
 mod avx512;
 pub mod measure;
 
-/// One compiled version of the batch kernels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// One compiled version of the batch kernels (`scalar`, `avx2`, `avx512`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(serialize_all = "lowercase", ascii_case_insensitive)]
 pub enum KernelPath {
     /// The baseline target (x86-64: SSE2); no runtime requirement.
     Scalar,
@@ -58,15 +71,14 @@ pub enum KernelPath {
 
 impl KernelPath {
     /// Every path, narrowest first.
-    pub const ALL: [KernelPath; 3] = [KernelPath::Scalar, KernelPath::Avx2, KernelPath::Avx512];
+    pub const ALL: &'static [KernelPath] = <KernelPath as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`KernelPath::ALL`].
+    pub const NAMES: &'static [&'static str] = <KernelPath as strum::VariantNames>::VARIANTS;
 
     /// A short name: `scalar`, `avx2`, `avx512`.
     pub fn name(self) -> &'static str {
-        match self {
-            KernelPath::Scalar => "scalar",
-            KernelPath::Avx2 => "avx2",
-            KernelPath::Avx512 => "avx512",
-        }
+        self.into()
     }
 
     /// f32 lanes per vector on this path (1 for the fallback, which is written for
@@ -104,7 +116,11 @@ impl KernelPath {
 
     /// The paths this CPU supports, narrowest first.
     pub fn supported() -> Vec<KernelPath> {
-        Self::ALL.into_iter().filter(|p| p.is_supported()).collect()
+        Self::ALL
+            .iter()
+            .copied()
+            .filter(|p| p.is_supported())
+            .collect()
     }
 
     /// The widest path this CPU supports; [`Lobe::eval_slice`](crate::Lobe::eval_slice)
@@ -123,12 +139,6 @@ impl KernelPath {
         } else {
             KernelPath::Scalar
         }
-    }
-}
-
-impl std::fmt::Display for KernelPath {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
     }
 }
 
@@ -658,7 +668,7 @@ mod tests {
 
     fn lobes() -> Vec<Lobe<f32>> {
         let mut lobes = Vec::new();
-        for kind in LobeKind::ALL {
+        for &kind in LobeKind::ALL {
             for &n in &[0.0, 0.5, 1.0, 7.0, 16.0, 100.0, 1000.0, 10_000.0] {
                 let vs: &[u32] = if kind.uses_v() { &[0, 1, 4, 10] } else { &[4] };
                 for &v in vs {
@@ -785,7 +795,7 @@ mod tests {
                 output: 2
             })
         );
-        for path in KernelPath::ALL {
+        for &path in KernelPath::ALL {
             let r = eval_slice_with(&k, path, &[1.0, 0.0], &mut out);
             assert_eq!(r.is_ok(), path.is_supported());
         }

@@ -4,13 +4,29 @@
 //! `view` towards the eye). Inputs need not be normalised; zero, NaN or infinite
 //! vectors give a cosine of 0 (no highlight) instead of NaN.
 
-use std::fmt;
-use std::str::FromStr;
+use crate::lobe::{LobeError, Real};
 
-use crate::lobe::Real;
-
-/// Which angle γ the specular lobe is a function of.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+/// Which angle γ the specular lobe is a function of (`phong` or `blinn`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Default,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = LobeError,
+    parse_err_fn = unknown_geometry
+)]
 pub enum Geometry {
     /// Phong: γ between the view vector V and R, the reflection of L about N.
     #[default]
@@ -20,6 +36,12 @@ pub enum Geometry {
 }
 
 impl Geometry {
+    /// Both geometries, Phong first.
+    pub const ALL: &'static [Geometry] = <Geometry as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`Geometry::ALL`].
+    pub const NAMES: &'static [&'static str] = <Geometry as strum::VariantNames>::VARIANTS;
+
     /// `cos γ` for this convention; see [`phong_cos`] and [`blinn_cos`].
     #[inline]
     pub fn cos<T: Real>(self, normal: [T; 3], light: [T; 3], view: [T; 3]) -> T {
@@ -31,29 +53,17 @@ impl Geometry {
 
     /// The name users type: `phong` or `blinn`.
     pub fn name(self) -> &'static str {
-        match self {
-            Geometry::Phong => "phong",
-            Geometry::Blinn => "blinn",
-        }
+        self.into()
     }
 }
 
-impl fmt::Display for Geometry {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
+impl crate::names::Named for Geometry {
+    const WHAT: &'static str = "geometry";
 }
 
-impl FromStr for Geometry {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "phong" => Ok(Geometry::Phong),
-            "blinn" => Ok(Geometry::Blinn),
-            _ => Err(format!("unknown geometry '{s}': expected phong or blinn")),
-        }
-    }
+/// The error for a name that is not a geometry's.
+fn unknown_geometry(name: &str) -> LobeError {
+    LobeError::UnknownName(crate::names::unknown::<Geometry>(name))
 }
 
 fn dot<T: Real>(a: [T; 3], b: [T; 3]) -> T {

@@ -62,6 +62,7 @@ mod batch;
 mod coefficient;
 mod geometry;
 mod lobe;
+pub mod names;
 mod sampling;
 mod table;
 

@@ -1,7 +1,6 @@
 //! The closed set of lobes behind one `eval`.
 
 use std::fmt;
-use std::str::FromStr;
 
 use crate::coefficient::{
     energy_fit_coefficient, minimax_coefficient, power_sphere_integral,
@@ -33,19 +32,49 @@ impl Real for f64 {
     }
 }
 
-/// Which lobe: the names users type are `exact`, `k`, `g`, `schlick`, `gauss`, `minimax`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+/// Which lobe: the names users type are `exact`, `k`, `g`, `schlick`, `gauss`, `minimax`
+/// (case-insensitive; a few aliases such as `phong`, `energy`, `slope`, `gaussian`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(
+    serialize_all = "lowercase",
+    ascii_case_insensitive,
+    parse_err_ty = LobeError,
+    parse_err_fn = LobeError::unknown_kind
+)]
 pub enum LobeKind {
     /// `max(c, 0)^n`, the Phong/Blinn reference.
+    #[strum(
+        to_string = "exact",
+        serialize = "phong",
+        serialize = "blinn",
+        serialize = "pow"
+    )]
     Exact,
     /// The paper's energy fit K_v: `a = (n+1)/(2^v+1)`.
+    #[strum(to_string = "k", serialize = "energy", serialize = "energy-fit")]
     EnergyFit,
     /// The slope fit G_v (Lyon 1993): `a = n/2^v`.
+    #[strum(to_string = "g", serialize = "slope", serialize = "slope-fit")]
     SlopeFit,
     /// Schlick's rational form `c / (n - n·c + c)` for `c > 0`, else 0 (evaluated as
     /// `c / (n(1 - c) + c)`, which does not cancel).
     Schlick,
     /// The spherical-Gaussian form `exp(n·(c - 1))`.
+    #[strum(to_string = "gauss", serialize = "gaussian", serialize = "sg")]
     Gauss,
     /// The power form with `a` minimising the maximum absolute error against `cos^n`.
     Minimax,
@@ -53,25 +82,14 @@ pub enum LobeKind {
 
 impl LobeKind {
     /// Every kind, in the order tables and plots list them.
-    pub const ALL: [LobeKind; 6] = [
-        LobeKind::Exact,
-        LobeKind::EnergyFit,
-        LobeKind::SlopeFit,
-        LobeKind::Schlick,
-        LobeKind::Gauss,
-        LobeKind::Minimax,
-    ];
+    pub const ALL: &'static [LobeKind] = <LobeKind as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`LobeKind::ALL`].
+    pub const NAMES: &'static [&'static str] = <LobeKind as strum::VariantNames>::VARIANTS;
 
     /// The short name users type (`exact`, `k`, `g`, `schlick`, `gauss`, `minimax`).
     pub fn name(self) -> &'static str {
-        match self {
-            LobeKind::Exact => "exact",
-            LobeKind::EnergyFit => "k",
-            LobeKind::SlopeFit => "g",
-            LobeKind::Schlick => "schlick",
-            LobeKind::Gauss => "gauss",
-            LobeKind::Minimax => "minimax",
-        }
+        self.into()
     }
 
     /// Whether the lobe is a power fit `max(0, 1 - a(1-c))^(2^v)` and so depends on `v`.
@@ -83,27 +101,8 @@ impl LobeKind {
     }
 }
 
-impl fmt::Display for LobeKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for LobeKind {
-    type Err = LobeError;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let lower = s.trim().to_ascii_lowercase();
-        Ok(match lower.as_str() {
-            "exact" | "phong" | "blinn" | "pow" => LobeKind::Exact,
-            "k" | "energy" | "energy-fit" => LobeKind::EnergyFit,
-            "g" | "slope" | "slope-fit" => LobeKind::SlopeFit,
-            "schlick" => LobeKind::Schlick,
-            "gauss" | "gaussian" | "sg" => LobeKind::Gauss,
-            "minimax" => LobeKind::Minimax,
-            _ => return Err(LobeError::UnknownKind(s.to_string())),
-        })
-    }
+impl crate::names::Named for LobeKind {
+    const WHAT: &'static str = "lobe";
 }
 
 /// Why a lobe could not be built.
@@ -118,12 +117,22 @@ pub enum LobeError {
     /// The lobe name is not one of the known kinds.
     #[error("unknown lobe '{0}': expected one of exact, k, g, schlick, gauss, minimax")]
     UnknownKind(String),
+    /// A name that is none of a named enum's ([`crate::names::unknown`] words it).
+    #[error("{0}")]
+    UnknownName(String),
     /// A [`CosTable`](crate::CosTable) was to be sampled but does not say which
     /// shininess it was made for ([`CosTable::with_shininess`](crate::CosTable::with_shininess)).
     #[error(
         "a cosine table without its shininess n and v cannot be sampled (CosTable::with_shininess)"
     )]
     TableWithoutShininess,
+}
+
+impl LobeError {
+    /// The error for a lobe name that is none of [`LobeKind`]'s.
+    fn unknown_kind(name: &str) -> LobeError {
+        LobeError::UnknownKind(name.to_string())
+    }
 }
 
 /// The evaluation form, with its parameters already converted to `T`.

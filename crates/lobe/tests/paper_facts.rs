@@ -20,7 +20,7 @@ fn some_n() -> Vec<f64> {
 
 #[test]
 fn every_lobe_is_one_at_the_mirror_direction() {
-    for kind in LobeKind::ALL {
+    for &kind in LobeKind::ALL {
         for n in some_n() {
             for v in [0, 1, 4, 8, MAX_V] {
                 let l64 = lobe(kind, n, v);
@@ -34,7 +34,7 @@ fn every_lobe_is_one_at_the_mirror_direction() {
 
 #[test]
 fn every_lobe_is_non_increasing_and_bounded_on_zero_to_one() {
-    for kind in LobeKind::ALL {
+    for &kind in LobeKind::ALL {
         for n in some_n() {
             for v in [0, 2, 4, 7, MAX_V] {
                 let l = lobe(kind, n, v);
@@ -212,7 +212,7 @@ fn invalid_parameters_are_typed_errors_naming_the_value() {
     assert!(err.to_string().contains("11"));
     let err = "phongish".parse::<LobeKind>().unwrap_err();
     assert!(err.to_string().contains("phongish"));
-    for kind in LobeKind::ALL {
+    for &kind in LobeKind::ALL {
         assert_eq!(kind.name().parse::<LobeKind>().unwrap(), kind);
     }
 }

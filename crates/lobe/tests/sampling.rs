@@ -197,7 +197,7 @@ fn chi2_rejects_a_wrong_pdf() {
 #[test]
 fn every_pdf_integrates_to_one() {
     let mut worst: f64 = 0.0;
-    for kind in LobeKind::ALL {
+    for &kind in LobeKind::ALL {
         for n in [0.0, 1e-3, 0.5, 1.0, 3.0, 10.0, 100.0, 1000.0, MAX_N] {
             for v in [0, 1, 4, 10] {
                 let s = f64_sampler(kind, n, v);
@@ -222,7 +222,7 @@ fn every_pdf_integrates_to_one() {
 /// The lobes, parameters and precisions of the consistency sweeps.
 fn sweep() -> Vec<(LobeKind, f64, u32)> {
     let mut out = Vec::new();
-    for kind in LobeKind::ALL {
+    for &kind in LobeKind::ALL {
         for n in [0.0, 1e-3, 0.5, 1.0, 3.0, 7.0, 16.0, 100.0, 1000.0, MAX_N] {
             for v in [0, 1, 4, 10] {
                 out.push((kind, n, v));
@@ -628,7 +628,7 @@ fn chi2_phong_world_space() {
 #[test]
 fn scatter_agrees_with_the_shading_cosines() {
     let mut rng = Pcg64Mcg::seed_from_u64(5000);
-    for kind in LobeKind::ALL {
+    for &kind in LobeKind::ALL {
         let s = f64_sampler(kind, 40.0, 4);
         for geometry in [Geometry::Phong, Geometry::Blinn] {
             for _ in 0..2000 {

@@ -356,7 +356,7 @@ fn no_lobe_gives_nan_pixels() {
                 intensity: 1.0,
             },
         ];
-        for kind in LobeKind::ALL {
+        for &kind in LobeKind::ALL {
             for n in [0.0, 1.0, 100.0, 10_000.0] {
                 for geometry in [Geometry::Phong, Geometry::Blinn] {
                     let scene = Scene {
@@ -490,7 +490,7 @@ fn simd_loop_gives_the_scalar_loops_image() {
                 intensity: 0.7,
             },
         ];
-        for kind in LobeKind::ALL {
+        for &kind in LobeKind::ALL {
             for geometry in [Geometry::Phong, Geometry::Blinn] {
                 // A gate of 0.5 value/mm (the phantom's range is 1) blends
                 // weak-gradient samples towards flat.

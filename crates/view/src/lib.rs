@@ -269,7 +269,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         scene: serde_json::to_value(&viewer.scene).expect("scenes serialise"),
         presets: PRESETS.iter().map(|p| p.name).collect(),
         lobes: SceneLobe::ALL.map(|k| k.name()).to_vec(),
-        views: View::ALL.map(|v| v.name()).to_vec(),
+        views: View::NAMES.to_vec(),
         range: viewer.range,
     };
     if !send_json(&mut socket, &hello).await {

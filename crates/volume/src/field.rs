@@ -100,9 +100,23 @@ pub struct Field {
 /// How the samples are filtered before trilinear reconstruction (a scene's
 /// `prefilter`).
 #[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    serde::Serialize,
+    serde::Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
 )]
 #[serde(rename_all = "lowercase")]
+#[strum(serialize_all = "lowercase", ascii_case_insensitive, parse_err_ty = glint_core::RenderError, parse_err_fn = glint_core::unknown_name::<Self>)]
 pub enum Prefilter {
     /// The values as stored: trilinear interpolation of the data itself.
     None,
@@ -121,29 +135,19 @@ pub enum Prefilter {
 
 impl Prefilter {
     /// Every prefilter, the default first.
-    pub const ALL: [Prefilter; 2] = [Prefilter::Binomial, Prefilter::None];
+    pub const ALL: &'static [Prefilter] = <Prefilter as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`Prefilter::ALL`].
+    pub const NAMES: &'static [&'static str] = <Prefilter as strum::VariantNames>::VARIANTS;
 
     /// The name scenes and the command line use.
     pub fn name(self) -> &'static str {
-        match self {
-            Prefilter::None => "none",
-            Prefilter::Binomial => "binomial",
-        }
+        self.into()
     }
 }
 
-impl std::str::FromStr for Prefilter {
-    type Err = RenderError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Prefilter::ALL
-            .into_iter()
-            .find(|p| p.name() == s)
-            .ok_or_else(|| {
-                RenderError::Parameter(format!(
-                    "unknown prefilter '{s}': expected binomial or none"
-                ))
-            })
-    }
+impl glint_lobe::names::Named for Prefilter {
+    const WHAT: &'static str = "prefilter";
 }
 
 impl Field {

@@ -9,8 +9,6 @@
 //! angles phi theta psi in degrees. Phantom coordinates span [-1, 1]; glint maps x to
 //! the patient's right, y to anterior and z to superior (RAS+) at 100 mm per unit.
 
-use std::str::FromStr;
-
 use glint_io::{Samples, Volume};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -18,8 +16,24 @@ use serde::{Deserialize, Serialize};
 use glint_core::RenderError;
 
 /// A built-in phantom, by name (`head`, `shepp-logan`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
 #[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", ascii_case_insensitive, parse_err_ty = RenderError, parse_err_fn = glint_core::unknown_name::<Self>)]
 pub enum Phantom {
     /// glint's head ([`head`]): scalp, a skull shell, two folded hemispheres and
     /// ventricles, all with smooth edges; shown by the `head` preset as shaded anatomy
@@ -27,22 +41,23 @@ pub enum Phantom {
     #[default]
     Head,
     /// The 3D modified Shepp-Logan head ([`shepp_logan`]), with the `phantom` preset.
+    #[strum(serialize = "shepp_logan")]
     SheppLogan,
 }
 
 impl Phantom {
     /// Every phantom, the default first.
-    pub const ALL: [Phantom; 2] = [Phantom::Head, Phantom::SheppLogan];
+    pub const ALL: &'static [Phantom] = <Phantom as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`Phantom::ALL`].
+    pub const NAMES: &'static [&'static str] = <Phantom as strum::VariantNames>::VARIANTS;
 
     /// Grid edge the CLI uses unless told otherwise.
     pub const DEFAULT_SIZE: usize = 128;
 
     /// The name users type.
     pub fn name(self) -> &'static str {
-        match self {
-            Phantom::Head => "head",
-            Phantom::SheppLogan => "shepp-logan",
-        }
+        self.into()
     }
 
     /// The name of the preset made for it ([`crate::preset`]).
@@ -63,28 +78,8 @@ impl Phantom {
     }
 }
 
-impl std::fmt::Display for Phantom {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Phantom {
-    type Err = RenderError;
-    /// A name of [`Phantom::ALL`] (case-insensitive; `_` for `-` accepted).
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let want = s.trim().to_ascii_lowercase().replace('_', "-");
-        Phantom::ALL
-            .into_iter()
-            .find(|p| p.name() == want)
-            .ok_or_else(|| {
-                let known: Vec<&str> = Phantom::ALL.iter().map(|p| p.name()).collect();
-                RenderError::Parameter(format!(
-                    "unknown phantom '{s}': expected one of {}",
-                    known.join(", ")
-                ))
-            })
-    }
+impl glint_lobe::names::Named for Phantom {
+    const WHAT: &'static str = "phantom";
 }
 
 /// `[A, a, b, c, x0, y0, z0, phi, theta, psi]` per ellipsoid.
@@ -370,7 +365,7 @@ mod tests {
 
     #[test]
     fn phantoms_by_name() {
-        for p in Phantom::ALL {
+        for &p in Phantom::ALL {
             assert_eq!(p.name().parse::<Phantom>().unwrap(), p);
             assert_eq!(p.to_string(), p.name());
             let json = serde_json::to_string(&p).unwrap();

@@ -21,8 +21,6 @@
 //! nearest-entry bins of [`crate::Lut::index`], so empty-space skipping, decided
 //! per bin, stays exact.
 
-use glint_core::RenderError;
-
 /// Entries in the lookup table a render samples the transfer function from (the
 /// point table [`crate::Lut`] and its integrals here share the bins).
 pub const LUT_SIZE: usize = 4096;
@@ -30,9 +28,23 @@ pub const LUT_SIZE: usize = 4096;
 /// How a composite render classifies its samples: the transfer function read at each
 /// sample, or integrated over the segment between samples.
 #[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    serde::Serialize,
+    serde::Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::Display,
+    strum::VariantNames,
+    strum::VariantArray,
 )]
 #[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", ascii_case_insensitive, parse_err_ty = glint_core::RenderError, parse_err_fn = glint_core::unknown_name::<Self>)]
 pub enum Sampling {
     /// The transfer function at each sample (opacity corrected for the step): the
     /// fastest; a shell of opacity thinner than the step is hit or missed.
@@ -46,29 +58,19 @@ pub enum Sampling {
 
 impl Sampling {
     /// Every choice, the default first.
-    pub const ALL: [Sampling; 2] = [Sampling::Point, Sampling::PreIntegrated];
+    pub const ALL: &'static [Sampling] = <Sampling as strum::VariantArray>::VARIANTS;
+
+    /// The names users type, in the order of [`Sampling::ALL`].
+    pub const NAMES: &'static [&'static str] = <Sampling as strum::VariantNames>::VARIANTS;
 
     /// The name scenes and the command line use.
     pub fn name(self) -> &'static str {
-        match self {
-            Sampling::Point => "point",
-            Sampling::PreIntegrated => "pre-integrated",
-        }
+        self.into()
     }
 }
 
-impl std::str::FromStr for Sampling {
-    type Err = RenderError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Sampling::ALL
-            .into_iter()
-            .find(|p| p.name() == s)
-            .ok_or_else(|| {
-                RenderError::Parameter(format!(
-                    "unknown sampling '{s}': expected point or pre-integrated"
-                ))
-            })
-    }
+impl glint_lobe::names::Named for Sampling {
+    const WHAT: &'static str = "sampling";
 }
 
 /// Largest opacity per voxel the extinction is taken from (`alpha = 1` would give an

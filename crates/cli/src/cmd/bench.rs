@@ -84,7 +84,7 @@ fn lobes(args: LobesArgs) -> anyhow::Result<()> {
             Workload::LobeScalar(lobe(LobeKind::EnergyFit)?),
         ),
     ];
-    for kind in LobeKind::ALL {
+    for &kind in LobeKind::ALL {
         workloads.push((kind.name().into(), Workload::Lobe(lobe(kind)?)));
     }
     let budget = Duration::from_millis(args.budget_ms);

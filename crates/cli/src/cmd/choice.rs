@@ -24,7 +24,7 @@ mod tests {
 
     #[derive(Parser)]
     struct Cli {
-        #[arg(long, value_parser = choice::<LobeKind>(LobeKind::ALL.map(|k| k.name())))]
+        #[arg(long, value_parser = choice::<LobeKind>(LobeKind::NAMES.iter().copied()))]
         lobe: LobeKind,
     }
 

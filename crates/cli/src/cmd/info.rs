@@ -52,6 +52,10 @@ pub struct Args {
     /// preamble or the file meta group, multi-frame DICOM without frame positions.
     #[arg(long)]
     strict: bool,
+    /// The DICOM series to read from a directory that holds several (its
+    /// SeriesInstanceUID, as listed); default: the only or the largest.
+    #[arg(long)]
+    series: Option<String>,
 }
 
 /// Runs `glint info`.
@@ -65,6 +69,7 @@ fn report(args: &Args) -> anyhow::Result<String> {
     let mut options = ReadOptions {
         max_voxels: args.max_voxels,
         strict: args.strict,
+        series: args.series.clone(),
         ..ReadOptions::default()
     };
     if !args.raw_dims.is_empty() {
@@ -145,10 +150,22 @@ fn report(args: &Args) -> anyhow::Result<String> {
         {
             eprintln!("glint: {}: {n}", args.file.display());
         }
+        // A DICOM directory: every series and every object not read, too.
+        let listing = match args.file.is_dir() {
+            true => Some(glint_io::dicom::list(&args.file, &options)?),
+            false => None,
+        };
         if args.json {
-            out = serde_json::to_string_pretty(&volume_json(args, &file))? + "\n";
+            let mut v = volume_json(args, &file);
+            if let Some(l) = &listing {
+                listing_json(&mut v, l);
+            }
+            out = serde_json::to_string_pretty(&v)? + "\n";
         } else {
             print_volume(&mut out, args, &file)?;
+            if let Some(l) = &listing {
+                print_listing(&mut out, l)?;
+            }
         }
     }
     Ok(out)
@@ -169,9 +186,57 @@ fn volume_json(args: &Args, f: &VolumeFile) -> Value {
         "intercept": v.intercept,
         "range": [finite_or_null(lo), finite_or_null(hi)],
         "units": v.units,
+        "colour": v.is_colour(),
         "affine_voxel_to_ras_mm": v.affine,
         "notes": f.notes,
     })
+}
+
+/// The series and skipped objects of a DICOM directory, into `glint info --json`.
+fn listing_json(v: &mut Value, l: &glint_io::dicom::Listing) {
+    v["series"] = l
+        .series
+        .iter()
+        .map(|s| {
+            json!({
+                "uid": s.uid, "modality": s.modality, "description": s.description,
+                "files": s.files, "slices": s.slices, "dims": [s.columns, s.rows, s.slices],
+                "photometric": s.photometric,
+            })
+        })
+        .collect();
+    v["skipped"] = l
+        .skipped
+        .iter()
+        .map(|k| {
+            json!({
+                "file": k.path.display().to_string(), "reason": k.reason,
+                "class": k.class, "modality": k.modality, "series": k.series,
+            })
+        })
+        .collect();
+}
+
+/// One line per series and per skipped object of a DICOM directory.
+fn print_listing(out: &mut String, l: &glint_io::dicom::Listing) -> std::fmt::Result {
+    for s in &l.series {
+        let m = s.modality.as_deref().unwrap_or("?");
+        let d = s
+            .description
+            .as_deref()
+            .map(|d| format!(" '{d}'"))
+            .unwrap_or_default();
+        let (c, r, n) = (s.columns, s.rows, s.slices);
+        writeln!(
+            out,
+            "series:   {} {m}{d}: {c} x {r} x {n} ({} files)",
+            s.uid, s.files
+        )?;
+    }
+    for k in &l.skipped {
+        writeln!(out, "skipped:  {}: {}", k.path.display(), k.reason)?;
+    }
+    Ok(())
 }
 
 fn finite_or_null(x: f64) -> Value {
@@ -203,6 +268,12 @@ fn print_volume(out: &mut String, args: &Args, f: &VolumeFile) -> std::fmt::Resu
         num(v.spacing[2])
     )?;
     writeln!(out, "type:     {}", v.samples.type_name())?;
+    if v.is_colour() {
+        writeln!(
+            out,
+            "colour:   RGB (the range below is of the grey samples)"
+        )?;
+    }
     if v.slope != 1.0 || v.intercept != 0.0 {
         writeln!(
             out,
@@ -367,7 +438,7 @@ fn num(x: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{num, report, Args};
+    use super::{listing_json, num, print_listing, report, Args};
     use clap::Parser;
     use glint_io::{Endian, Mesh, Samples, Volume};
     use serde_json::Value;
@@ -581,5 +652,42 @@ mod tests {
             err.contains("broken.nii") && err.contains("truncated"),
             "{err}"
         );
+    }
+
+    /// A DICOM directory's listing: one line per series and per skipped object, and
+    /// the same in JSON.
+    #[test]
+    fn dicom_listing_lines_and_json() {
+        use glint_io::dicom::{Listing, Series, Skipped};
+        let l = Listing {
+            series: vec![Series {
+                uid: "1.2.3".into(),
+                modality: Some("CT".into()),
+                description: Some("chest".into()),
+                files: 64,
+                slices: 64,
+                columns: 512,
+                rows: 512,
+                photometric: "MONOCHROME2".into(),
+            }],
+            skipped: vec![Skipped {
+                path: "x/rs.dcm".into(),
+                reason: "no PixelData: not an image (RT Structure Set Storage)".into(),
+                class: Some("RT Structure Set Storage".into()),
+                modality: Some("RTSTRUCT".into()),
+                series: Some("1.2.4".into()),
+            }],
+        };
+        let mut out = String::new();
+        print_listing(&mut out, &l).unwrap();
+        assert_eq!(
+            out,
+            "series:   1.2.3 CT 'chest': 512 x 512 x 64 (64 files)\n\
+             skipped:  x/rs.dcm: no PixelData: not an image (RT Structure Set Storage)\n"
+        );
+        let mut v = serde_json::json!({});
+        listing_json(&mut v, &l);
+        assert_eq!(v["series"][0]["dims"], serde_json::json!([512, 512, 64]));
+        assert_eq!(v["skipped"][0]["class"], "RT Structure Set Storage");
     }
 }

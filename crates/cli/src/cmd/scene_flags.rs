@@ -34,7 +34,7 @@ pub struct SceneFlags {
     #[arg(long, value_name = "INDEX")]
     pub overlay_array: Vec<usize>,
     /// Colour map of the scalar overlays [default: viridis].
-    #[arg(long, value_parser = choice::<ColorMap>(ColorMap::ALL.map(|m| m.name())))]
+    #[arg(long, value_parser = choice::<ColorMap>(ColorMap::NAMES.iter().copied()))]
     pub colormap: Option<ColorMap>,
     /// Overlay values at the colour map's ends [default: the overlays' 2nd and 98th
     /// percentiles].
@@ -47,7 +47,7 @@ pub struct SceneFlags {
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
     /// Built-in phantom when no input is given [default: head].
-    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::ALL.map(|p| p.name())))]
+    #[arg(long, conflicts_with = "input", value_parser = choice::<Phantom>(Phantom::NAMES.iter().copied()))]
     pub phantom: Option<Phantom>,
     /// Grid edge of the built-in phantom [default: 128].
     #[arg(long, conflicts_with = "input")]
@@ -61,14 +61,14 @@ pub struct SceneFlags {
     pub tf: Option<PathBuf>,
     /// How a volume becomes a picture; surface: its isosurface at --iso, rasterised with
     /// the meshes [default: composite; surface for meshes].
-    #[arg(long, value_parser = choice::<RenderMode>(RenderMode::ALL.map(|m| m.name())))]
+    #[arg(long, value_parser = choice::<RenderMode>(RenderMode::NAMES.iter().copied()))]
     pub mode: Option<RenderMode>,
     /// Iso value for --mode iso and --mode surface [default: the middle of the volume's
     /// robust range].
     #[arg(long, allow_negative_numbers = true)]
     pub iso: Option<f32>,
     /// Named view in the volume's world frame (RAS+) [default: anterior].
-    #[arg(long, value_parser = choice::<View>(View::ALL.map(|v| v.name())))]
+    #[arg(long, value_parser = choice::<View>(View::NAMES.iter().copied()))]
     pub view: Option<View>,
     /// Orbit the camera this many degrees about the view's up axis (towards the image's
     /// right) [default: 0].
@@ -131,13 +131,13 @@ pub struct SceneFlags {
     /// Filter applied to the volume before trilinear reconstruction: binomial (a
     /// [1 2 1]/4 low-pass per axis; no "wood grain" rings on surfaces) or none (the
     /// samples as stored) [default: binomial].
-    #[arg(long, value_parser = choice::<Prefilter>(Prefilter::ALL.map(|p| p.name())))]
+    #[arg(long, value_parser = choice::<Prefilter>(Prefilter::NAMES.iter().copied()))]
     pub prefilter: Option<Prefilter>,
     /// Composite mode: point (the transfer function at each sample) or pre-integrated
     /// (integrated between samples, Engel et al. 2001: shells of opacity thinner than
     /// the step show without slicing rings, for about a third more frame time on the
     /// MNI152 scene) [default: point].
-    #[arg(long, value_parser = choice::<Sampling>(Sampling::ALL.map(|p| p.name())))]
+    #[arg(long, value_parser = choice::<Sampling>(Sampling::NAMES.iter().copied()))]
     pub sampling: Option<Sampling>,
     /// The length of matter, in mm, whose opacity the transfer function gives (VTK's
     /// scalar opacity unit distance) [default: one voxel of the smallest spacing].

@@ -1,49 +1,57 @@
 //! The lighting model's batch form: many samples lit at once, as columns (structure of
-//! arrays), so every step is a loop the compiler vectorises and the lobe is evaluated
-//! by one call of its SIMD kernel ([`glint_lobe::Specular::eval_slice`]) for every
-//! sample and light. Each step performs the scalar form's operations in the same order
-//! (no FMA contraction), so a batch gives [`Shader::shade`] and [`Shader::shade_normal`]
-//! bit for bit (tested below); on x86-64 the loops are compiled a second time for AVX2
-//! and chosen at run time.
+//! arrays). On x86-64 with AVX2 ([`avx2`](super::avx2)) eight samples go through
+//! each step at once and the lobe is evaluated by one call of its SIMD kernel
+//! ([`glint_lobe::Specular::eval_slice`]) for every sample and light; every step is
+//! the scalar form's operation in the same order (no FMA contraction), so a batch gives
+//! [`Shader::shade`] and [`Shader::shade_normal`] bit for bit (tested below). Elsewhere
+//! the batch is lit one sample at a time by the scalar form itself.
 
-use glint_lobe::Geometry;
-
-use super::{flat, Material, Shader};
+use super::Shader;
 use crate::math::Vec3;
+
+/// Lanes of a chunk: the AVX2 kernel takes this many samples at a time.
+pub(super) const LANES: usize = 8;
 
 /// Samples to light together, as columns. Fill the first [`ShadeBatch::len`] entries
 /// of `normal`, `view` and `color`, then call [`Shader::shade_gradients`] (volume
 /// samples: `normal` holds world gradients) or [`Shader::shade_normals`] (surface
 /// samples: unit normals); `color` then holds the lit colours. The buffers are kept
-/// between batches, so lighting allocates nothing once they have grown.
+/// between batches, so lighting allocates nothing once they have grown; the columns
+/// hold whole chunks of eight samples (entries past the length are computed and
+/// ignored).
 #[derive(Clone, Debug, Default)]
 pub struct ShadeBatch {
-    len: usize,
-    /// Per sample: the gradient or unit normal (x, y, z columns); replaced by the unit
-    /// normal turned towards the viewer.
+    pub(super) len: usize,
+    /// Per sample: the gradient or the unit normal (x, y, z columns).
     pub normal: [Vec<f32>; 3],
     /// Per sample: the unit vector towards the eye.
     pub view: [Vec<f32>; 3],
     /// Per sample: the unlit linear colour, replaced by the lit one.
     pub color: [Vec<f32>; 3],
-    /// Per sample: gradient magnitude, whether it passes the gate, `N·V`, and the
-    /// diffuse and specular sums.
-    magnitude: Vec<f32>,
-    usable: Vec<bool>,
-    n_dot_v: Vec<f32>,
-    diffuse: Vec<f32>,
-    specular: Vec<f32>,
-    /// Per light and sample (light-major): `N·L`, the lobe's cosine, the lobe's value.
-    n_dot_l: Vec<f32>,
-    cos: Vec<f32>,
-    lobe: Vec<f32>,
+    /// The AVX2 kernel's intermediate values.
+    pub(super) scratch: Scratch,
 }
 
-/// The first `n` elements of `v`, grown with zeros if it is shorter (every element
-/// below `n` is written before it is read, so stale values need no clearing).
-fn first(v: &mut Vec<f32>, n: usize) -> &mut [f32] {
+/// Intermediate values of the AVX2 kernel, kept between batches.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Scratch {
+    /// Per sample: the gradient magnitude and the diffuse sum.
+    pub(super) magnitude: Vec<f32>,
+    pub(super) diffuse: Vec<f32>,
+    /// Per chunk: the lanes with a usable gradient.
+    pub(super) valid: Vec<u8>,
+    /// Per light and sample (light-major): the lobe's cosine, then its value.
+    pub(super) cos: Vec<f32>,
+    pub(super) lobe: Vec<f32>,
+    /// Per light and chunk: the lanes the light faces.
+    pub(super) facing: Vec<u8>,
+}
+
+/// The first `n` elements of `v`, grown with `x` if it is shorter (every element below
+/// `n` is written before it is read, so stale values need no clearing).
+pub(super) fn first<T: Copy>(v: &mut Vec<T>, n: usize, x: T) -> &mut [T] {
     if v.len() < n {
-        v.resize(n, 0.0);
+        v.resize(n, x);
     }
     &mut v[..n]
 }
@@ -59,18 +67,38 @@ impl ShadeBatch {
         self.len == 0
     }
 
-    /// Sets the number of samples to `n`, growing the columns to at least `n` entries
-    /// (the entries keep whatever they held: the caller writes the inputs).
+    /// Sets the number of samples to `n`, growing the columns to at least `n` entries,
+    /// rounded up to whole chunks (the entries keep whatever they held: the caller
+    /// writes the inputs).
     pub fn set_len(&mut self, n: usize) {
+        let padded = n.next_multiple_of(LANES);
         for col in self
             .normal
             .iter_mut()
             .chain(&mut self.view)
             .chain(&mut self.color)
         {
-            first(col, n);
+            first(col, padded, 0.0);
         }
         self.len = n;
+    }
+
+    /// The samples rounded up to whole chunks.
+    pub(super) fn padded(&self) -> usize {
+        self.len.next_multiple_of(LANES)
+    }
+
+    /// Sample `k`'s normal (or gradient), view and colour.
+    fn sample(&self, k: usize) -> (Vec3, Vec3, [f32; 3]) {
+        let v3 = |c: &[Vec<f32>; 3]| Vec3::new(c[0][k], c[1][k], c[2][k]);
+        let color = [self.color[0][k], self.color[1][k], self.color[2][k]];
+        (v3(&self.normal), v3(&self.view), color)
+    }
+
+    fn set_color(&mut self, k: usize, rgb: [f32; 3]) {
+        for (col, x) in self.color.iter_mut().zip(rgb) {
+            col[k] = x;
+        }
     }
 }
 
@@ -78,178 +106,39 @@ impl Shader {
     /// Lights the volume samples of `batch`, whose `normal` columns hold world
     /// gradients: [`Shader::shade`] for each, bit for bit.
     pub fn shade_gradients(&self, batch: &mut ShadeBatch) {
-        #[cfg(target_arch = "x86_64")]
-        if avx2() {
-            // SAFETY: the CPU supports AVX2 (checked at run time just above).
-            return unsafe { self.shade_gradients_avx2(batch) };
-        }
-        self.shade_gradients_body(batch)
+        self.shade_batch(batch, true)
     }
 
     /// Lights the surface samples of `batch`, whose `normal` columns hold unit
     /// normals: [`Shader::shade_normal`] for each, bit for bit.
     pub fn shade_normals(&self, batch: &mut ShadeBatch) {
+        self.shade_batch(batch, false)
+    }
+
+    fn shade_batch(&self, batch: &mut ShadeBatch, gradients: bool) {
+        if !self.material().shade || batch.is_empty() {
+            return;
+        }
         #[cfg(target_arch = "x86_64")]
-        if avx2() {
+        if super::avx2::supported() {
             // SAFETY: the CPU supports AVX2 (checked at run time just above).
-            return unsafe { self.shade_normals_avx2(batch) };
+            return unsafe { super::avx2::shade(self, batch, gradients) };
         }
-        self.shade_normals_body(batch)
+        self.shade_scalar(batch, gradients)
     }
 
-    /// [`Shader::shade_gradients`] compiled for AVX2.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn shade_gradients_avx2(&self, batch: &mut ShadeBatch) {
-        self.shade_gradients_body(batch)
-    }
-
-    /// [`Shader::shade_normals`] compiled for AVX2.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn shade_normals_avx2(&self, batch: &mut ShadeBatch) {
-        self.shade_normals_body(batch)
-    }
-
-    #[inline(always)]
-    fn shade_gradients_body(&self, b: &mut ShadeBatch) {
-        if !self.material().shade || b.len == 0 {
-            return;
-        }
-        self.gradient_normals(b);
-        self.light_columns(b);
-        let n = b.len;
-        let m = self.material();
-        let (diffuse, specular) = (&b.diffuse[..n], &b.specular[..n]);
-        let (magnitude, usable) = (&b.magnitude[..n], &b.usable[..n]);
-        for col in &mut b.color {
-            for k in 0..n {
-                let c = col[k];
-                let unshaded = c * flat(m);
-                let lit = m.ambient + m.diffuse * diffuse[k];
-                let shaded = c * lit + m.specular * specular[k];
-                let w = self.gate_weight(magnitude[k]);
-                let mixed = unshaded + w * (shaded - unshaded);
-                col[k] = if usable[k] { mixed } else { unshaded };
-            }
+    /// The batch lit one sample at a time by the scalar form.
+    pub(super) fn shade_scalar(&self, batch: &mut ShadeBatch, gradients: bool) {
+        for k in 0..batch.len {
+            let (n, v, c) = batch.sample(k);
+            let rgb = if gradients {
+                self.shade(c, n, &self.for_ray(v))
+            } else {
+                self.shade_normal(c, n, v)
+            };
+            batch.set_color(k, rgb);
         }
     }
-
-    #[inline(always)]
-    fn shade_normals_body(&self, b: &mut ShadeBatch) {
-        if !self.material().shade || b.len == 0 {
-            return;
-        }
-        self.light_columns(b);
-        let n = b.len;
-        let m: &Material = self.material();
-        let (diffuse, specular) = (&b.diffuse[..n], &b.specular[..n]);
-        for col in &mut b.color {
-            for (c, (d, s)) in col[..n].iter_mut().zip(diffuse.iter().zip(specular)) {
-                *c = *c * (m.ambient + m.diffuse * *d) + m.specular * *s;
-            }
-        }
-    }
-
-    /// Gradients to unit normals (down the gradient), with each sample's magnitude and
-    /// whether it passes the gate ([`Shader::shade`]'s test).
-    #[inline(always)]
-    fn gradient_normals(&self, b: &mut ShadeBatch) {
-        let n = b.len;
-        let g0 = self.gate;
-        let magnitude = first(&mut b.magnitude, n);
-        if b.usable.len() < n {
-            b.usable.resize(n, false);
-        }
-        let usable = &mut b.usable[..n];
-        let [gx, gy, gz] = &mut b.normal;
-        let (gx, gy, gz) = (&mut gx[..n], &mut gy[..n], &mut gz[..n]);
-        for k in 0..n {
-            let (x, y, z) = (gx[k], gy[k], gz[k]);
-            let gm2 = x * x + y * y + z * z;
-            usable[k] = gm2 > g0 * g0 && gm2 < f32::INFINITY;
-            let gm = gm2.sqrt();
-            magnitude[k] = gm;
-            let inv = -1.0 / gm;
-            (gx[k], gy[k], gz[k]) = (x * inv, y * inv, z * inv);
-        }
-    }
-
-    /// Turns the unit normals towards the viewer and sums each sample's diffuse and
-    /// specular terms over the lights (the scalar form's `sums`).
-    #[inline(always)]
-    fn light_columns(&self, b: &mut ShadeBatch) {
-        let n = b.len;
-        let lights = self.world_lights();
-        let [nx, ny, nz] = &mut b.normal;
-        let (nx, ny, nz) = (&mut nx[..n], &mut ny[..n], &mut nz[..n]);
-        let [vx, vy, vz] = &b.view;
-        let (vx, vy, vz) = (&vx[..n], &vy[..n], &vz[..n]);
-        let n_dot_v = first(&mut b.n_dot_v, n);
-        for k in 0..n {
-            let d = nx[k] * vx[k] + ny[k] * vy[k] + nz[k] * vz[k];
-            let flip = d < 0.0;
-            nx[k] = if flip { -nx[k] } else { nx[k] };
-            ny[k] = if flip { -ny[k] } else { ny[k] };
-            nz[k] = if flip { -nz[k] } else { nz[k] };
-            n_dot_v[k] = if flip { -d } else { d };
-        }
-        let n_dot_l = first(&mut b.n_dot_l, n * lights.len());
-        let cos = first(&mut b.cos, n * lights.len());
-        for (i, &(l, _)) in lights.iter().enumerate() {
-            let (ndl, cos) = (&mut n_dot_l[i * n..][..n], &mut cos[i * n..][..n]);
-            for k in 0..n {
-                let d = nx[k] * l.x + ny[k] * l.y + nz[k] * l.z;
-                ndl[k] = d;
-                cos[k] = match self.geometry() {
-                    // Phong R·V = 2(N·L)(N·V) - L·V.
-                    Geometry::Phong => {
-                        2.0 * d * n_dot_v[k] - (l.x * vx[k] + l.y * vy[k] + l.z * vz[k])
-                    }
-                    // Blinn N·H, H = normalize_or_zero(L + V).
-                    Geometry::Blinn => {
-                        let h = (l + Vec3::new(vx[k], vy[k], vz[k])).normalize_or_zero();
-                        nx[k] * h.x + ny[k] * h.y + nz[k] * h.z
-                    }
-                };
-            }
-        }
-        let lobe = first(&mut b.lobe, n * lights.len());
-        self.specular().eval_slice(cos, lobe);
-        let diffuse = first(&mut b.diffuse, n);
-        let specular = first(&mut b.specular, n);
-        diffuse.fill(0.0);
-        specular.fill(0.0);
-        for (i, &(_, intensity)) in lights.iter().enumerate() {
-            let (ndl, lobe) = (&n_dot_l[i * n..][..n], &lobe[i * n..][..n]);
-            for k in 0..n {
-                let lit = ndl[k] > 0.0;
-                diffuse[k] = if lit {
-                    diffuse[k] + intensity * ndl[k]
-                } else {
-                    diffuse[k]
-                };
-                specular[k] = if lit {
-                    specular[k] + intensity * lobe[k]
-                } else {
-                    specular[k]
-                };
-            }
-        }
-    }
-}
-
-/// Whether the CPU runs the AVX2 form of the batch loops (cached by the standard
-/// library after the first call).
-#[cfg(target_arch = "x86_64")]
-fn avx2() -> bool {
-    is_x86_feature_detected!("avx2")
 }
 
 #[cfg(test)]
@@ -259,6 +148,8 @@ mod tests {
     use super::*;
     use crate::camera::{Camera, CameraSpec};
     use crate::lighting::Light;
+    use crate::lighting::Material;
+    use glint_lobe::Geometry;
 
     /// A deterministic spread of values in [-1, 1) (a Weyl sequence).
     fn spread(k: usize, salt: f32) -> f32 {
@@ -348,13 +239,13 @@ mod tests {
                     shader.shade(c, g, &shader.for_ray(v))
                 };
                 let mut b = input.clone();
-                shader.shade_gradients_body(&mut b);
+                shader.shade_scalar(&mut b, true);
                 check(&b, want, n, "portable");
                 #[cfg(target_arch = "x86_64")]
-                if avx2() {
+                if super::super::avx2::supported() {
                     let mut b = input.clone();
                     // SAFETY: AVX2 is supported (checked above).
-                    unsafe { shader.shade_gradients_avx2(&mut b) };
+                    unsafe { super::super::avx2::shade(&shader, &mut b, true) };
                     check(&b, want, n, "avx2");
                 }
                 let mut b = input.clone();
@@ -384,13 +275,13 @@ mod tests {
                 shader.shade_normal(c, u, v)
             };
             let mut b = input.clone();
-            shader.shade_normals_body(&mut b);
+            shader.shade_scalar(&mut b, false);
             check(&b, want, n, "portable");
             #[cfg(target_arch = "x86_64")]
-            if avx2() {
+            if super::super::avx2::supported() {
                 let mut b = input.clone();
                 // SAFETY: AVX2 is supported (checked above).
-                unsafe { shader.shade_normals_avx2(&mut b) };
+                unsafe { super::super::avx2::shade(&shader, &mut b, false) };
                 check(&b, want, n, "avx2");
             }
         }

@@ -23,6 +23,8 @@ use crate::camera::Camera;
 use crate::error::RenderError;
 use crate::math::Vec3;
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
 mod batch;
 mod material;
 

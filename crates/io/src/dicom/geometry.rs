@@ -52,6 +52,7 @@ pub(super) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 pub(super) fn plane(
     path: &Path,
     first: &Header,
+    strict: bool,
     notes: &mut Vec<String>,
 ) -> Result<Plane, IoError> {
     let orientation = first.orientation.unwrap_or_else(|| {
@@ -82,10 +83,25 @@ pub(super) fn plane(
     let normal = cross(row_dir, col_dir);
     let nn = dot(normal, normal).sqrt();
     let normal = normal.map(|x| x / nn);
-    let pixel_spacing = first.pixel_spacing.unwrap_or_else(|| {
-        notes.push("geometry assumed: no PixelSpacing, 1 mm pixels".into());
-        [1.0, 1.0]
-    });
+    let pixel_spacing = match first.pixel_spacing {
+        // Secondary captures and some CR/DX write 0\0 for "unknown" (pydicom reads it
+        // as given); taken as missing, like no PixelSpacing at all.
+        Some([0.0, 0.0]) if strict => {
+            return Err(IoError::Geometry {
+                path: path.into(),
+                what: "PixelSpacing is 0\\0 (--strict)".into(),
+            })
+        }
+        Some([0.0, 0.0]) => {
+            notes.push("geometry assumed: PixelSpacing 0\\0, 1 mm pixels".into());
+            [1.0, 1.0]
+        }
+        Some(s) => s,
+        None => {
+            notes.push("geometry assumed: no PixelSpacing, 1 mm pixels".into());
+            [1.0, 1.0]
+        }
+    };
     if pixel_spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
         return Err(IoError::Geometry {
             path: path.into(),

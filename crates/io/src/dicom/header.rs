@@ -15,9 +15,9 @@ use super::{invalid, one_line};
 use crate::common::checked_voxels;
 use crate::IoError;
 
-/// JPEG-LS transfer syntaxes (PS3.5 A.4.3): their decoder, CharLS, is a C++ library
-/// whose Rust build (charls-sys) needs CMake, so glint is built without it.
-const JPEG_LS: [&str; 2] = ["1.2.840.10008.1.2.4.80", "1.2.840.10008.1.2.4.81"];
+/// The colour photometric interpretations read (PS3.3 C.7.6.3.1.2); YBR_PARTIAL_420
+/// and YBR_PARTIAL_422 (MPEG, retired JPEG use) are not.
+const COLOUR_PIS: [&str; 5] = ["RGB", "YBR_FULL", "YBR_FULL_422", "YBR_ICT", "YBR_RCT"];
 
 /// What one file says about its pixels and geometry (read without the pixel data).
 #[derive(Clone, Debug)]
@@ -29,6 +29,12 @@ pub(super) struct Header {
     pub bits_allocated: u16,
     pub bits_stored: u16,
     pub signed: bool,
+    /// 1 (grey) or 3 (colour).
+    pub samples_per_pixel: u16,
+    /// PhotometricInterpretation (MONOCHROME2 when absent).
+    pub photometric: String,
+    /// PlanarConfiguration 1: a colour frame is all red, then all green, then all blue.
+    pub planar: bool,
     /// The transfer syntax UID; `encapsulated` when its pixel data is compressed.
     pub ts: String,
     pub encapsulated: bool,
@@ -48,6 +54,10 @@ pub(super) struct Header {
     pub frame_offsets: Option<Vec<f64>>,
     pub modality: Option<String>,
     pub rescale_type: Option<String>,
+    /// SeriesDescription.
+    pub description: Option<String>,
+    /// DoseGridScaling and DoseUnits of an RT Dose (PS3.3 C.8.8.3).
+    pub dose: Option<(f64, Option<String>)>,
     /// What was assumed to open the file (no preamble, no meta group).
     pub notes: Vec<String>,
 }
@@ -157,13 +167,48 @@ fn fixed<const N: usize>(
         .transpose()
 }
 
-/// Image size and sample format: (rows, columns, frames, bits allocated, bits stored,
-/// signed), checked against the voxel limit before anything is sized by them.
+/// The image size and sample format a file declares.
+pub(super) struct ImageFormat {
+    pub rows: usize,
+    pub cols: usize,
+    pub frames: usize,
+    pub bits_allocated: u16,
+    pub bits_stored: u16,
+    pub signed: bool,
+    pub samples_per_pixel: u16,
+    pub photometric: String,
+    pub planar: bool,
+}
+
+impl ImageFormat {
+    /// Bytes of native (uncompressed) pixel data: bit-packed across frames for 1 bit
+    /// allocated (PS3.5 8.1.1), two samples a pixel for YBR_FULL_422 (PS3.3 C.7.6.3.1.2).
+    pub fn native_bytes(&self) -> Option<u64> {
+        let pixels = (self.rows as u64)
+            .checked_mul(self.cols as u64)?
+            .checked_mul(self.frames as u64)?;
+        if self.bits_allocated == 1 {
+            return Some(pixels.div_ceil(8));
+        }
+        let per_pixel = match (self.samples_per_pixel, self.photometric.as_str()) {
+            (1, _) => 1,
+            (_, "YBR_FULL_422") => 2,
+            _ => 3,
+        };
+        pixels
+            .checked_mul(per_pixel)?
+            .checked_mul(u64::from(self.bits_allocated / 8))
+    }
+}
+
+/// Image size and sample format, checked against the voxel limit before anything is
+/// sized by them: grey (1 sample per pixel, 1, 8, 16 or 32 bits allocated) or colour
+/// (3 samples per pixel in one of [`COLOUR_PIS`]).
 fn image_size(
     path: &Path,
     obj: &InMemDicomObject,
     max_voxels: u64,
-) -> Result<(usize, usize, usize, u16, u16, bool), IoError> {
+) -> Result<ImageFormat, IoError> {
     let need = |tag, name: &str| {
         int(obj, tag).ok_or_else(|| invalid(path, format!("missing or bad {name}")))
     };
@@ -173,6 +218,9 @@ fn image_size(
     let bits_stored = int(obj, tags::BITS_STORED).unwrap_or(bits_allocated);
     let signed = int(obj, tags::PIXEL_REPRESENTATION).unwrap_or(0) == 1;
     let spp = int(obj, tags::SAMPLES_PER_PIXEL).unwrap_or(1);
+    let photometric = string(obj, tags::PHOTOMETRIC_INTERPRETATION)
+        .unwrap_or_else(|| "MONOCHROME2".into())
+        .to_ascii_uppercase();
     let frames = match string(obj, tags::NUMBER_OF_FRAMES) {
         None => 1,
         Some(_) => need(tags::NUMBER_OF_FRAMES, "NumberOfFrames")?,
@@ -191,29 +239,55 @@ fn image_size(
         1,
         max_voxels,
     )?;
-    if spp != 1 {
-        return Err(IoError::Unsupported {
-            path: path.into(),
-            what: format!(
-                "{spp} samples per pixel ({}); only grayscale volumes are read",
-                one_line(&string(obj, tags::PHOTOMETRIC_INTERPRETATION).unwrap_or_default())
-            ),
-        });
+    let unsupported = |what: String| IoError::Unsupported {
+        path: path.into(),
+        what,
+    };
+    match spp {
+        1 => {}
+        3 if COLOUR_PIS.contains(&photometric.as_str()) => {}
+        3 => {
+            return Err(unsupported(format!(
+                "colour photometric interpretation {}; read: {}",
+                one_line(&photometric),
+                COLOUR_PIS.join(", ")
+            )))
+        }
+        _ => {
+            return Err(unsupported(format!(
+                "{spp} samples per pixel ({}); grey (1) and colour (3) are read",
+                one_line(&photometric)
+            )))
+        }
     }
-    if !matches!(bits_allocated, 8 | 16 | 32) || bits_stored < 1 || bits_stored > bits_allocated {
-        return Err(IoError::Unsupported {
-            path: path.into(),
-            what: format!("{bits_allocated} bits allocated, {bits_stored} stored"),
-        });
+    let bits_ok = match spp {
+        1 => matches!(bits_allocated, 1 | 8 | 16 | 32),
+        _ => matches!(bits_allocated, 8 | 16 | 32),
+    };
+    if !bits_ok || bits_stored < 1 || bits_stored > bits_allocated {
+        return Err(unsupported(format!(
+            "{bits_allocated} bits allocated, {bits_stored} stored{}",
+            if spp == 3 { " (colour)" } else { "" }
+        )));
     }
-    Ok((
-        rows as usize,
-        cols as usize,
-        frames as usize,
-        bits_allocated as u16,
-        bits_stored as u16,
+    if spp == 3 && bits_allocated > 8 && photometric.starts_with("YBR_FULL") {
+        // pydicom's YBR conversion, the reference, is defined for 8 bits only.
+        return Err(unsupported(format!(
+            "{photometric} with {bits_allocated} bits allocated: YBR is converted to RGB for \
+             8-bit samples only"
+        )));
+    }
+    Ok(ImageFormat {
+        rows: rows as usize,
+        cols: cols as usize,
+        frames: frames as usize,
+        bits_allocated: bits_allocated as u16,
+        bits_stored: bits_stored as u16,
         signed,
-    ))
+        samples_per_pixel: spp as u16,
+        photometric,
+        planar: spp == 3 && int(obj, tags::PLANAR_CONFIGURATION) == Some(1),
+    })
 }
 
 /// Refuses a transfer syntax whose pixel data this build cannot decode, naming it;
@@ -229,13 +303,6 @@ fn check_transfer_syntax(path: &Path, ts: &str) -> Result<bool, IoError> {
             one_line(ts)
         )));
     };
-    if JPEG_LS.contains(&ts) {
-        return Err(unsupported(format!(
-            "JPEG-LS not supported: transfer syntax {} needs CharLS, which this build does \
-             not include; convert with e.g. dcmdjpls or gdcmconv --raw",
-            ts_name(ts)
-        )));
-    }
     if !syntax.can_decode_all() {
         return Err(unsupported(format!(
             "transfer syntax {} has no pixel data decoder in this build; convert to an \
@@ -322,19 +389,33 @@ fn header_of(
     data_len: u64,
     max_voxels: u64,
 ) -> Result<Header, IoError> {
-    let (rows, cols, frames, bits_allocated, bits_stored, signed) =
-        image_size(path, obj, max_voxels)?;
+    let format = image_size(path, obj, max_voxels)?;
+    let ImageFormat {
+        rows,
+        cols,
+        frames,
+        bits_allocated,
+        ..
+    } = format;
     let encapsulated = check_transfer_syntax(path, ts)?;
+    if encapsulated && bits_allocated == 1 {
+        return Err(IoError::Unsupported {
+            path: path.into(),
+            what: format!(
+                "1-bit pixel data in the compressed transfer syntax {}",
+                ts_name(ts)
+            ),
+        });
+    }
     // The pixels of every frame must fit in the data set before anything (per-frame
     // positions, rescales, the pixel buffer) is sized by the frame count: native pixels
     // take their full size; compressed ones are bounded by the voxel limit above, and
     // each frame takes at least one 8-byte fragment header (PS3.5 A.4).
-    let per_frame = if encapsulated {
-        8
+    let need = if encapsulated {
+        8u64.checked_mul(frames as u64)
     } else {
-        (rows as u64) * (cols as u64) * u64::from(bits_allocated) / 8
+        format.native_bytes()
     };
-    let need = per_frame.checked_mul(frames as u64);
     if need.is_none_or(|need| need > data_len) {
         let what = if encapsulated {
             format!("{frames} compressed frames need more than the data set's {data_len} bytes")
@@ -376,14 +457,18 @@ fn header_of(
             .and_then(|o| float(o, tags::SLICE_THICKNESS))
     });
     let (positions, rescale) = frame_table(path, obj, frames)?;
+    let dose = float(obj, tags::DOSE_GRID_SCALING).map(|s| (s, string(obj, tags::DOSE_UNITS)));
     Ok(Header {
         path: path.into(),
         rows,
         cols,
         frames,
         bits_allocated,
-        bits_stored,
-        signed,
+        bits_stored: format.bits_stored,
+        signed: format.signed,
+        samples_per_pixel: format.samples_per_pixel,
+        photometric: format.photometric,
+        planar: format.planar,
         ts: ts.to_string(),
         encapsulated,
         series: string(obj, tags::SERIES_INSTANCE_UID),
@@ -396,12 +481,57 @@ fn header_of(
         frame_offsets: floats(obj, tags::GRID_FRAME_OFFSET_VECTOR).filter(|v| v.len() == frames),
         modality: string(obj, tags::MODALITY),
         rescale_type: string(obj, tags::RESCALE_TYPE),
+        description: string(obj, tags::SERIES_DESCRIPTION),
+        dose,
         notes: Vec::new(),
     })
 }
 
-/// Opens a file and reads its header (everything before the pixel data).
-pub(super) fn open_header(path: &Path, max_voxels: u64, strict: bool) -> Result<Header, IoError> {
+/// A file opened as DICOM but not read as an image, with what it says about itself.
+pub(super) struct Refused {
+    /// Why it is not read.
+    pub error: IoError,
+    /// Its SeriesInstanceUID, Modality and SOP class name, when the data set parsed.
+    pub series: Option<String>,
+    pub modality: Option<String>,
+    pub class: Option<String>,
+    /// Whether it parsed and has no PixelData (an RT structure set, a report, ...).
+    pub not_image: bool,
+}
+
+impl From<IoError> for Box<Refused> {
+    fn from(error: IoError) -> Box<Refused> {
+        Box::new(Refused {
+            error,
+            series: None,
+            modality: None,
+            class: None,
+            not_image: false,
+        })
+    }
+}
+
+/// The name of a data set's SOPClassUID (its UID when the dictionary has no name).
+fn class_name(obj: &InMemDicomObject) -> Option<String> {
+    let class = obj
+        .get(tags::SOP_CLASS_UID)
+        .and_then(|e| e.to_str().ok())
+        .map(|s| s.trim_end_matches(['\0', ' ']).to_string());
+    class
+        .as_deref()
+        .and_then(|uid| StandardSopClassDictionary.by_uid(uid))
+        .map(|u| u.name.to_string())
+        .or(class)
+        .map(|n| one_line(&n))
+}
+
+/// Opens a file and reads its header (everything before the pixel data); a file that
+/// parses but is not read as an image comes back with its series, modality and class.
+pub(super) fn open_header(
+    path: &Path,
+    max_voxels: u64,
+    strict: bool,
+) -> Result<Header, Box<Refused>> {
     let loaded = scan::load(path, false, strict)?;
     let ts = loaded
         .obj
@@ -409,24 +539,26 @@ pub(super) fn open_header(path: &Path, max_voxels: u64, strict: bool) -> Result<
         .transfer_syntax()
         .trim_end_matches(['\0', ' '])
         .to_string();
+    let obj = &loaded.obj;
+    let refused = |error: IoError| Refused {
+        error,
+        series: string(obj, tags::SERIES_INSTANCE_UID),
+        modality: string(obj, tags::MODALITY),
+        class: class_name(obj),
+        not_image: false,
+    };
     if !loaded.has_pixels {
-        let class = loaded
-            .obj
-            .get(tags::SOP_CLASS_UID)
-            .and_then(|e| e.to_str().ok())
-            .map(|s| s.trim_end_matches(['\0', ' ']).to_string());
-        let name = class
-            .as_deref()
-            .and_then(|uid| StandardSopClassDictionary.by_uid(uid))
-            .map(|u| u.name.to_string())
-            .or(class)
-            .unwrap_or_else(|| "no SOPClassUID".into());
-        return Err(IoError::Unsupported {
-            path: path.into(),
-            what: format!("no PixelData: not an image ({})", one_line(&name)),
-        });
+        let name = class_name(obj).unwrap_or_else(|| "no SOPClassUID".into());
+        return Err(Box::new(Refused {
+            not_image: true,
+            ..refused(IoError::Unsupported {
+                path: path.into(),
+                what: format!("no PixelData: not an image ({name})"),
+            })
+        }));
     }
-    let mut h = header_of(path, &loaded.obj, &ts, loaded.data_len, max_voxels)?;
+    let mut h =
+        header_of(path, obj, &ts, loaded.data_len, max_voxels).map_err(|e| Box::new(refused(e)))?;
     h.notes = loaded.notes;
     Ok(h)
 }

@@ -1,8 +1,10 @@
 //! DICOM volumes through dicom-rs (`dicom-object`, `dicom-pixeldata`): a directory of
 //! single-frame slices or one multi-frame file (classic or enhanced), with native pixel
-//! data (implicit or explicit VR, little or big endian, deflated) or compressed pixel
-//! data (JPEG baseline, extended and lossless, JPEG 2000, RLE). JPEG-LS is refused:
-//! its decoder (CharLS) needs CMake to build.
+//! data (implicit or explicit VR, little or big endian, deflated; 1 to 32 bits, grey or
+//! colour) or compressed pixel data (JPEG baseline, extended 8 and 12-bit and lossless,
+//! JPEG-LS, JPEG 2000, RLE). Colour images (RGB, YBR_FULL, YBR_FULL_422, YBR_ICT,
+//! YBR_RCT) become colour volumes ([`Volume::colour`]). A directory may hold several
+//! series and non-image objects: one image series is read ([`list`], `series`).
 //!
 //! Slices are sorted by their position along the slice normal (row x column direction
 //! cosines), the slice step comes from the positions (not SliceThickness), and uneven
@@ -21,20 +23,26 @@
 //! nesting is bounded before dicom-rs parses the file (see `scan`), and compressed
 //! frames are checked against Rows x Columns before decoding (see `pixels`).
 
+mod checks;
+mod colour;
 mod geometry;
 mod header;
+mod jpeg;
 mod pixels;
 mod scan;
+mod series;
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use header::{open_header, Header};
+use pixels::Frame;
 
 use crate::common::checked_voxels;
-use crate::{Format, IoError, ReadOptions, Samples, Volume, VolumeFile};
+use crate::{Format, IoError, ReadOptions, Rgb, Samples, Volume, VolumeFile};
 
 pub use scan::MAX_NESTING;
+pub use series::{list, Listing, Series, Skipped};
 
 /// Tolerance on direction cosines when checking that slices share an orientation.
 const ORIENTATION_TOLERANCE: f64 = 1e-4;
@@ -110,29 +118,61 @@ fn open_error(path: &Path, e: dicom_object::ReadError) -> IoError {
     }
 }
 
-/// Reads a DICOM file (single- or multi-frame) or a directory of single-frame slices of
-/// one series.
+/// Reads a DICOM file (single- or multi-frame) or the image series of a directory (the
+/// only one, the one [`ReadOptions::series`] names, or the largest; see [`list`]).
+///
+/// A colour image (3 samples per pixel) gives a colour volume: RGB in
+/// [`Volume::colour`], and in [`Volume::samples`] the grey [`ReadOptions::grey`] asks
+/// for. An RT Dose grid is scaled by its DoseGridScaling (slope), in its DoseUnits.
 pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     let mut notes = Vec::new();
-    let headers = headers(path, options, &mut notes)?;
+    let headers = if path.is_dir() {
+        series::select(path, options, &mut notes)?
+    } else {
+        let h = open_header(path, options.max_voxels, options.strict).map_err(|r| r.error)?;
+        if let Some(uid) = options
+            .series
+            .as_ref()
+            .filter(|u| h.series.as_ref() != Some(u))
+        {
+            return Err(invalid(
+                path,
+                format!(
+                    "the file is series {}, not {}",
+                    one_line(h.series.as_deref().unwrap_or("(none)")),
+                    one_line(uid)
+                ),
+            ));
+        }
+        notes.extend(h.notes.iter().cloned());
+        vec![h]
+    };
     check_series(path, &headers)?;
     let first = &headers[0];
-    let plane = geometry::plane(path, first, &mut notes)?;
+    let plane = geometry::plane(path, first, options.strict, &mut notes)?;
     let mut frames = geometry::frames(&headers, plane.normal, options.strict, &mut notes)?;
     let dims = [first.cols, first.rows, frames.len()];
     checked_voxels(
         path,
         dims,
-        usize::from(first.bits_allocated / 8),
+        usize::from(first.bits_allocated.div_ceil(8)) * usize::from(first.samples_per_pixel),
         options.max_voxels,
     )?;
     let slice_vec = geometry::sort_and_step(path, &mut frames, first, plane.normal, &mut notes)?;
     let (affine, spacing) = geometry::affine(path, &plane, slice_vec, frames[0].position)?;
-    let (samples, slope, intercept) = assemble(&headers, &frames, options.strict, &mut notes)?;
-    let units = first
+    let (samples, colour, mut slope, intercept) = assemble(&headers, &frames, options, &mut notes)?;
+    let mut units = first
         .rescale_type
         .clone()
         .or_else(|| (first.modality.as_deref() == Some("CT")).then(|| "HU".to_string()));
+    if let Some((scaling, dose_units)) = &first.dose {
+        // PS3.3 C.8.8.3.4.2: dose = DoseGridScaling x stored value.
+        slope *= scaling;
+        units = dose_units.clone().or(units);
+        notes.push(format!(
+            "RT Dose: stored values x DoseGridScaling {scaling}"
+        ));
+    }
     notes.push(format!(
         "{} slice(s) from {} file(s), modality {}",
         frames.len(),
@@ -155,59 +195,12 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             slope,
             intercept,
             units,
+            colour,
         },
         format: Format::Dicom,
         notes,
         inflate: None,
     })
-}
-
-/// The headers of a file, or of every DICOM file in a directory (others skipped).
-fn headers(
-    path: &Path,
-    options: &ReadOptions,
-    notes: &mut Vec<String>,
-) -> Result<Vec<Header>, IoError> {
-    if !path.is_dir() {
-        let h = open_header(path, options.max_voxels, options.strict)?;
-        notes.extend(h.notes.iter().cloned());
-        return Ok(vec![h]);
-    }
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(path)
-        .map_err(|e| IoError::Os {
-            path: path.into(),
-            source: e,
-        })?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.is_file()
-                && p.file_name().is_some_and(|n| {
-                    let n = n.to_string_lossy();
-                    !n.starts_with('.') && !n.eq_ignore_ascii_case("DICOMDIR")
-                })
-        })
-        .collect();
-    entries.sort();
-    let mut headers = Vec::new();
-    let mut skipped = 0;
-    for p in &entries {
-        match open_header(p, options.max_voxels, options.strict) {
-            Ok(h) => headers.push(h),
-            // Not DICOM at all (a README, a thumbnail): skip it, but say so.
-            Err(IoError::BadMagic { .. }) => skipped += 1,
-            Err(e) => return Err(e),
-        }
-    }
-    if skipped > 0 {
-        notes.push(format!("skipped {skipped} non-DICOM file(s)"));
-    }
-    let Some(first) = headers.first() else {
-        return Err(invalid(path, "the directory holds no DICOM files"));
-    };
-    if let Some(n) = first.notes.first() {
-        notes.push(format!("{n} (first file)"));
-    }
-    Ok(headers)
 }
 
 /// One series, one image size and pixel format, one orientation and pixel spacing.
@@ -234,9 +227,19 @@ fn check_series(path: &Path, headers: &[Header]) -> Result<(), IoError> {
     }
     let first = &headers[0];
     for h in &headers[1..] {
-        if (h.rows, h.cols, h.bits_allocated, h.signed)
-            != (first.rows, first.cols, first.bits_allocated, first.signed)
-        {
+        if (
+            h.rows,
+            h.cols,
+            h.bits_allocated,
+            h.signed,
+            h.samples_per_pixel,
+        ) != (
+            first.rows,
+            first.cols,
+            first.bits_allocated,
+            first.signed,
+            first.samples_per_pixel,
+        ) {
             return Err(IoError::MixedSeries {
                 path: path.into(),
                 what: format!(
@@ -294,27 +297,58 @@ fn check_series(path: &Path, headers: &[Header]) -> Result<(), IoError> {
     Ok(())
 }
 
+/// The samples, colour, slope and intercept of a volume.
+type Assembled = (Samples, Option<Rgb>, f64, f64);
+
 /// Reads every file's pixels once and places the frames in sorted order; per-slice
-/// rescales that differ are applied (float32), else kept as slope and intercept.
+/// rescales that differ are applied (float32), else kept as slope and intercept. A
+/// colour series gives its RGB planes and the grey `options.grey` asks for.
 fn assemble(
     headers: &[Header],
     frames: &[geometry::Frame],
-    strict: bool,
+    options: &ReadOptions,
     notes: &mut Vec<String>,
-) -> Result<(Samples, f64, f64), IoError> {
+) -> Result<Assembled, IoError> {
     let first = &headers[0];
     let frame_len = first.rows * first.cols;
     let mut per_file = Vec::with_capacity(headers.len());
     for h in headers {
-        per_file.push(pixels::read_pixels(h, frame_len, strict)?);
+        per_file.push(pixels::read_pixels(h, frame_len, options.strict)?);
     }
-    let parts: Vec<Samples> = frames
-        .iter()
-        .map(|f| std::mem::replace(&mut per_file[f.file][f.frame], Samples::U8(Vec::new())))
-        .collect();
+    let mut take = |f: &geometry::Frame| {
+        std::mem::replace(
+            &mut per_file[f.file][f.frame],
+            Frame::Grey(Samples::U8(Vec::new())),
+        )
+    };
+    if first.samples_per_pixel == 3 {
+        let mut planes: [Vec<Samples>; 3] = Default::default();
+        for f in frames {
+            if let Frame::Rgb(rgb) = take(f) {
+                for (plane, s) in planes.iter_mut().zip(rgb) {
+                    plane.push(s);
+                }
+            }
+        }
+        let rgb = planes.map(concat);
+        let grey = colour::grey(&rgb, options.grey);
+        notes.push(format!(
+            "colour ({}) read as RGB; grey samples: {}",
+            one_line(&first.photometric),
+            options.grey.name()
+        ));
+        let [red, green, blue] = rgb;
+        return Ok((grey, Some(Rgb { red, green, blue }), 1.0, 0.0));
+    }
+    let mut parts = Vec::with_capacity(frames.len());
+    for f in frames {
+        if let Frame::Grey(s) = take(f) {
+            parts.push(s);
+        }
+    }
     let rescales: Vec<(f64, f64)> = frames.iter().map(|f| f.rescale).collect();
     if rescales.iter().all(|r| *r == rescales[0]) {
-        return Ok((concat(parts), rescales[0].0, rescales[0].1));
+        return Ok((concat(parts), None, rescales[0].0, rescales[0].1));
     }
     // Per-slice rescale (common in PET): apply it, store float32.
     notes.push("per-slice rescale slopes differ: values rescaled to float32".into());
@@ -322,7 +356,7 @@ fn assemble(
     for (p, (s, b)) in parts.iter().zip(&rescales) {
         out.extend((0..p.len()).map(|i| (s * p.get(i) + b) as f32));
     }
-    Ok((Samples::F32(out), 1.0, 0.0))
+    Ok((Samples::F32(out), None, 1.0, 0.0))
 }
 
 fn concat(parts: Vec<Samples>) -> Samples {

@@ -1,42 +1,68 @@
-//! Pixel data: native (uncompressed, any byte order and VR) read directly; encapsulated
-//! (JPEG baseline, extended and lossless, JPEG 2000, RLE) decoded by dicom-pixeldata
-//! after the codestream headers are checked against Rows and Columns.
-
-use std::path::Path;
+//! Pixel data: native (uncompressed, any byte order and VR, 1-bit packed, colour
+//! interleaved or planar, YBR_FULL and YBR_FULL_422) read directly; encapsulated (JPEG
+//! baseline, extended and lossless, JPEG-LS, JPEG 2000, RLE) decoded by dicom-pixeldata
+//! after the codestream headers are checked against Rows and Columns, except the JPEG
+//! frames `jpeg` decodes.
 
 use dicom_core::value::{PrimitiveValue, Value};
 use dicom_dictionary_std::tags;
 use dicom_object::{FileDicomObject, InMemDicomObject};
 use dicom_pixeldata::PixelDecoder;
 
+use super::checks::{check_codestream, check_rle};
 use super::header::Header;
+use super::jpeg;
 use super::scan::{self, ts_name};
-use super::{invalid, one_line};
+use super::{colour, invalid, one_line};
 use crate::{IoError, Samples};
 
 const EXPLICIT_BE: &str = "1.2.840.10008.1.2.2";
 const RLE_LOSSLESS: &str = "1.2.840.10008.1.2.5";
 
-/// Reads a file's pixel data and splits it into frames of `frame_len` samples.
+/// One frame's pixels.
+pub(super) enum Frame {
+    /// Grey samples, Rows x Columns.
+    Grey(Samples),
+    /// Red, green and blue planes, Rows x Columns each.
+    Rgb([Samples; 3]),
+}
+
+/// How decoded colour words are laid out.
+struct Layout {
+    /// The photometric interpretation of the words (after any decoder conversion).
+    photometric: String,
+    /// Planar configuration 1.
+    planar: bool,
+}
+
+/// Reads a file's pixel data and splits it into frames of `frame_len` pixels.
 pub(super) fn read_pixels(
     h: &Header,
     frame_len: usize,
     strict: bool,
-) -> Result<Vec<Samples>, IoError> {
+) -> Result<Vec<Frame>, IoError> {
     let path = h.path.as_path();
     let obj = scan::load(path, true, strict)?.obj;
-    let total = frame_len * h.frames;
-    let words = if h.encapsulated {
+    if h.bits_allocated == 1 {
+        let bits = unpack_bits(h, &obj, frame_len * h.frames)?;
+        return Ok(split_frames(h, &bits, frame_len)
+            .into_iter()
+            .map(Frame::Grey)
+            .collect());
+    }
+    let spp = usize::from(h.samples_per_pixel);
+    let total = frame_len * h.frames * spp;
+    let (words, layout) = if h.encapsulated {
         decode(h, &obj, total)?
     } else {
-        native_words(h, &obj, total)?
+        native(h, &obj, frame_len)?
     };
     if words.len() < total {
         return Err(IoError::SizeMismatch {
             path: path.into(),
             what: format!(
-                "{} rows x {} columns x {} frames of {}-bit pixels need {total} samples, \
-                 PixelData holds {}",
+                "{} rows x {} columns x {} frames of {spp} x {}-bit samples need {total} \
+                 samples, PixelData holds {}",
                 h.rows,
                 h.cols,
                 h.frames,
@@ -45,7 +71,90 @@ pub(super) fn read_pixels(
             ),
         });
     }
-    Ok(split_frames(h, &words, frame_len))
+    if spp == 1 {
+        return Ok(split_frames(h, &words, frame_len)
+            .into_iter()
+            .map(Frame::Grey)
+            .collect());
+    }
+    let ybr = layout.photometric == "YBR_FULL";
+    Ok(words
+        .chunks_exact(3 * frame_len)
+        .take(h.frames)
+        .map(|f| {
+            let planes = colour::planes(f, frame_len, layout.planar, ybr);
+            Frame::Rgb(planes.map(|p| colour::samples(p, h.bits_allocated)))
+        })
+        .collect())
+}
+
+/// Native pixel data as words; colour data is returned interleaved or planar as
+/// stored, YBR_FULL_422 expanded to YBR_FULL.
+fn native(
+    h: &Header,
+    obj: &FileDicomObject<InMemDicomObject>,
+    frame_len: usize,
+) -> Result<(Vec<u32>, Layout), IoError> {
+    let subsampled = h.photometric == "YBR_FULL_422";
+    let per_pixel = match h.samples_per_pixel {
+        1 => 1,
+        _ if subsampled => 2,
+        _ => 3,
+    };
+    let words = native_words(h, obj, frame_len * h.frames * per_pixel)?;
+    if subsampled {
+        let layout = Layout {
+            photometric: "YBR_FULL".into(),
+            planar: false,
+        };
+        return Ok((colour::expand_422(&words), layout));
+    }
+    let layout = Layout {
+        photometric: h.photometric.clone(),
+        planar: h.planar,
+    };
+    Ok((words, layout))
+}
+
+/// 1-bit pixel data (BitsAllocated 1, native only): bit-packed across frames, the
+/// first pixel in the least significant bit of the first byte (PS3.5 8.1.1, D.2), as
+/// pydicom's `unpack_bits`. Returns one word (0 or 1) per pixel of every frame.
+fn unpack_bits(
+    h: &Header,
+    obj: &FileDicomObject<InMemDicomObject>,
+    total: usize,
+) -> Result<Vec<u32>, IoError> {
+    let path = h.path.as_path();
+    let elem = obj
+        .element(tags::PIXEL_DATA)
+        .map_err(|_| invalid(path, "no PixelData"))?;
+    let bytes: Vec<u8> = match elem.value() {
+        Value::Primitive(PrimitiveValue::U8(b)) => b.to_vec(),
+        // OW: the bytes of little-endian words in file order (dicom-rs has already
+        // swapped a big-endian file's words to native order).
+        Value::Primitive(PrimitiveValue::U16(w)) => {
+            w.iter().flat_map(|x| x.to_le_bytes()).collect()
+        }
+        _ => {
+            return Err(invalid(
+                path,
+                "1-bit PixelData has an unexpected value type",
+            ))
+        }
+    };
+    if bytes.len() * 8 < total {
+        return Err(IoError::SizeMismatch {
+            path: path.into(),
+            what: format!(
+                "{total} 1-bit pixels need {} bytes, PixelData holds {}",
+                total.div_ceil(8),
+                bytes.len()
+            ),
+        });
+    }
+    Ok((0..total)
+        .map(|i| u32::from((bytes[i / 8] >> (i % 8)) & 1))
+        .collect())
 }
 
 /// The stored words of native pixel data as u32, whatever VR the file used.
@@ -117,7 +226,7 @@ fn bytes_to_words(bytes: &[u8], per: usize, big_endian: bool, total: usize) -> V
 /// Keeps the stored bits of each word, sign-extended for signed pixels (PS3.5 8.1.1),
 /// and splits them into frames.
 fn split_frames(h: &Header, words: &[u32], frame_len: usize) -> Vec<Samples> {
-    let stored = u32::from(h.bits_stored);
+    let stored = u32::from(h.bits_stored.max(1));
     let mask = if stored >= 32 {
         u32::MAX
     } else {
@@ -131,6 +240,7 @@ fn split_frames(h: &Header, words: &[u32], frame_len: usize) -> Vec<Samples> {
         .chunks_exact(frame_len)
         .take(h.frames)
         .map(|f| match (h.bits_allocated, h.signed) {
+            (1, _) => Samples::U8(f.iter().map(|&x| x as u8).collect()),
             (8, false) => Samples::U8(f.iter().map(|&x| (x & mask) as u8).collect()),
             (8, true) => Samples::I8(f.iter().map(|&x| signed(x) as i8).collect()),
             (16, false) => Samples::U16(f.iter().map(|&x| (x & mask) as u16).collect()),
@@ -141,15 +251,21 @@ fn split_frames(h: &Header, words: &[u32], frame_len: usize) -> Vec<Samples> {
         .collect()
 }
 
-/// Decodes encapsulated pixel data with dicom-pixeldata. The decoders allocate by the
-/// image size their codestream declares and copy into a buffer sized by Rows and
-/// Columns (a larger codestream panics in dicom-transfer-syntax-registry 0.10), so each
-/// codestream header is checked first.
+/// Whether a transfer syntax is one of JPEG's (baseline, extended, lossless).
+fn is_jpeg(ts: &str) -> bool {
+    ts.starts_with("1.2.840.10008.1.2.4.5") || ts.starts_with("1.2.840.10008.1.2.4.7")
+}
+
+/// Decodes encapsulated pixel data with dicom-pixeldata, or the JPEG frames it does
+/// not decode as pydicom does with [`jpeg`]. The decoders allocate by the image size
+/// their codestream declares and copy into a buffer sized by Rows and Columns (a larger
+/// codestream panics in dicom-transfer-syntax-registry 0.10), so each codestream header
+/// is checked first.
 fn decode(
     h: &Header,
     obj: &FileDicomObject<InMemDicomObject>,
     total: usize,
-) -> Result<Vec<u32>, IoError> {
+) -> Result<(Vec<u32>, Layout), IoError> {
     let path = h.path.as_path();
     let elem = obj
         .element(tags::PIXEL_DATA)
@@ -163,169 +279,68 @@ fn decode(
             ),
         ));
     };
-    let limit = h.rows * h.cols;
-    for fragment in seq.fragments() {
-        if h.ts == RLE_LOSSLESS {
-            check_rle(path, fragment, usize::from(h.bits_allocated / 8), limit)?;
-        } else {
-            check_codestream(path, &h.ts, fragment, limit)?;
+    let spp = usize::from(h.samples_per_pixel);
+    let pixels = h.rows * h.cols;
+    if h.ts == RLE_LOSSLESS {
+        for fragment in seq.fragments() {
+            check_rle(
+                path,
+                fragment,
+                usize::from(h.bits_allocated / 8) * spp,
+                pixels,
+            )?;
         }
+    } else if is_jpeg(&h.ts) {
+        for fragment in seq.fragments() {
+            check_codestream(path, &h.ts, fragment, pixels * spp, h.samples_per_pixel)?;
+        }
+        let frames = jpeg::frames(path, seq.fragments(), seq.offset_table(), h.frames)?;
+        if let Some(own) = frames
+            .first()
+            .and_then(|f| jpeg::own_decoder(f, &h.photometric))
+        {
+            let mut words = Vec::with_capacity(total);
+            for f in &frames {
+                words.extend(jpeg::decode_frame(path, own, f, pixels, spp)?);
+            }
+            let layout = Layout {
+                photometric: if spp == 3 { "RGB" } else { "MONOCHROME2" }.into(),
+                planar: false,
+            };
+            return Ok((words, layout));
+        }
+    } else {
+        // JPEG 2000 and JPEG-LS: a frame's codestream may span fragments (and follow
+        // empty ones), so the headers are looked for in all of them together.
+        let all: Vec<u8> = seq.fragments().iter().flatten().copied().collect();
+        check_codestream(path, &h.ts, &all, pixels * spp, h.samples_per_pixel)?;
     }
     // Backstop for decoder panics the checks above do not foresee (found by fuzzing or
     // not): a malformed file is an error, not an abort. The buffers are dropped on
     // unwind, nothing shared is left half-updated.
-    let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        obj.decode_pixel_data().map(|d| d.into_data())
-    }))
-    .map_err(|_| {
-        invalid(
-            path,
-            format!("the {} decoder failed on this pixel data", ts_name(&h.ts)),
-        )
-    })?
-    .map_err(|e| {
-        invalid(
-            path,
-            format!(
-                "cannot decode {} pixel data: {}",
-                ts_name(&h.ts),
-                one_line(&super::chain(&e))
-            ),
-        )
-    })?;
-    Ok(bytes_to_words(
-        &decoded,
-        usize::from(h.bits_allocated / 8),
-        false,
-        total,
-    ))
-}
-
-/// Checks that an RLE Lossless frame (PS3.5 Annex G) has a segment for every byte of a
-/// sample and that each decodes to at least `pixels` bytes: dicom-rs 0.10 indexes the
-/// decoded segment up to Rows x Columns and unwraps read errors, so a short or cut
-/// segment panics there (found by fuzzing). The PackBits walk (G.3.1) only counts.
-fn check_rle(path: &Path, frame: &[u8], bytes: usize, pixels: usize) -> Result<(), IoError> {
-    let bad = |what: String| invalid(path, format!("RLE Lossless: {what}"));
-    let le32 = |i: usize| u32::from_le_bytes([frame[i], frame[i + 1], frame[i + 2], frame[i + 3]]);
-    if frame.len() < 64 {
-        return Err(bad(format!(
-            "a {}-byte frame has no 64-byte header",
-            frame.len()
-        )));
-    }
-    let n = le32(0) as usize;
-    if !(bytes..=15).contains(&n) {
-        return Err(bad(format!("{n} segments for {bytes}-byte samples")));
-    }
-    for seg in 0..bytes {
-        let start = le32(4 + 4 * seg) as usize;
-        let end = if seg + 1 < n {
-            le32(8 + 4 * seg) as usize
-        } else {
-            frame.len()
-        };
-        let Some(data) = frame.get(start..end) else {
-            return Err(bad(format!(
-                "segment {seg} spans bytes {start}..{end} of {}",
-                frame.len()
-            )));
-        };
-        let (mut i, mut out) = (0usize, 0usize);
-        while out < pixels {
-            let Some(&c) = data.get(i) else {
-                return Err(bad(format!(
-                    "segment {seg} decodes to {out} bytes, Rows x Columns is {pixels}"
-                )));
-            };
-            let c = c as i8;
-            let (take, produce) = match c {
-                0..=127 => (1 + c as usize, 1 + c as usize),
-                -128 => (0, 0),
-                _ => (1, 1 + c.unsigned_abs() as usize),
-            };
-            if i + 1 + take > data.len() {
-                return Err(bad(format!("segment {seg} ends inside a run")));
-            }
-            i += 1 + take;
-            out += produce;
-        }
-    }
-    Ok(())
-}
-
-/// Checks the image size a JPEG (SOF marker) or JPEG 2000 (SIZ marker) codestream
-/// declares against the `limit` of Rows x Columns samples.
-fn check_codestream(path: &Path, ts: &str, data: &[u8], limit: usize) -> Result<(), IoError> {
-    let too_big = |kind: &str, w: u64, h: u64, c: u64| {
-        invalid(
-            path,
-            format!(
-                "the {kind} codestream declares {w} x {h} x {c} samples, more than Rows x \
-                 Columns = {limit}"
-            ),
-        )
+    let decoded =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| obj.decode_pixel_data()))
+            .map_err(|_| {
+                invalid(
+                    path,
+                    format!("the {} decoder failed on this pixel data", ts_name(&h.ts)),
+                )
+            })?
+            .map_err(|e| {
+                invalid(
+                    path,
+                    format!(
+                        "cannot decode {} pixel data: {}",
+                        ts_name(&h.ts),
+                        one_line(&super::chain(&e))
+                    ),
+                )
+            })?;
+    let layout = Layout {
+        photometric: decoded.photometric_interpretation().as_str().to_string(),
+        planar: decoded.planar_configuration() as u16 == 1,
     };
-    let be16 = |b: &[u8]| u64::from(u16::from_be_bytes([b[0], b[1]]));
-    let be32 = |b: &[u8]| u64::from(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
-    if ts.starts_with("1.2.840.10008.1.2.4.5") || ts.starts_with("1.2.840.10008.1.2.4.7") {
-        // JPEG: start-of-frame markers FFC0-FFCF except DHT (C4), JPG (C8), DAC (CC);
-        // entropy-coded data never holds FF followed by these (PS3.5 A.4.1, ITU T.81
-        // B.1.1.2), so a byte scan finds every frame header.
-        for (i, w) in data.windows(2).enumerate() {
-            if w[0] == 0xFF && (0xC0..=0xCF).contains(&w[1]) && ![0xC4, 0xC8, 0xCC].contains(&w[1])
-            {
-                let Some(sof) = data.get(i + 4..i + 10) else {
-                    continue;
-                };
-                let (height, width, comps) = (be16(&sof[1..]), be16(&sof[3..]), u64::from(sof[5]));
-                if height * width * comps > limit as u64 {
-                    return Err(too_big("JPEG", width, height, comps));
-                }
-                // jpeg-decoder 0.3 decodes 8-bit DCT and 2-16-bit lossless (SOF3) frames
-                // only; extended 12-bit DCT (process 4) is refused by name.
-                if sof[0] != 8 && w[1] != 0xC3 {
-                    return Err(IoError::Unsupported {
-                        path: path.into(),
-                        what: format!(
-                            "{}-bit lossy JPEG (transfer syntax {}): the JPEG decoder reads \
-                             8-bit lossy and lossless JPEG only",
-                            sof[0],
-                            ts_name(ts)
-                        ),
-                    });
-                }
-            }
-        }
-    } else if ts.starts_with("1.2.840.10008.1.2.4.9") || ts.starts_with("1.2.840.10008.1.2.4.20") {
-        // JPEG 2000: SOC (FF4F) then SIZ (FF51): Lsiz, Rsiz, Xsiz, Ysiz, XOsiz, YOsiz,
-        // XTsiz, YTsiz, XTOsiz, YTOsiz, Csiz (ISO 15444-1 A.5.1).
-        let Some(at) = data.windows(4).position(|w| w == [0xFF, 0x4F, 0xFF, 0x51]) else {
-            return Err(invalid(
-                path,
-                "a JPEG 2000 fragment without a codestream header (SOC, SIZ)",
-            ));
-        };
-        let Some(siz) = data.get(at + 4..at + 4 + 38) else {
-            return Err(invalid(path, "a JPEG 2000 codestream header cut short"));
-        };
-        let (x, y, x0, y0) = (
-            be32(&siz[4..]),
-            be32(&siz[8..]),
-            be32(&siz[12..]),
-            be32(&siz[16..]),
-        );
-        let comps = be16(&siz[36..]);
-        let (w, h) = (x.saturating_sub(x0), y.saturating_sub(y0));
-        if comps != 1 {
-            return Err(invalid(
-                path,
-                format!("the JPEG 2000 codestream has {comps} components, SamplesPerPixel is 1"),
-            ));
-        }
-        if w * h > limit as u64 {
-            return Err(too_big("JPEG 2000", w, h, comps));
-        }
-    }
-    Ok(())
+    let bytes = usize::from(decoded.bits_allocated().div_ceil(8)).max(1);
+    let data = decoded.into_data();
+    Ok((bytes_to_words(&data, bytes, false, total), layout))
 }

@@ -409,60 +409,131 @@ fn element_header(bytes: &[u8], pos: usize, enc: Encoding) -> Option<(Tag, VR, u
     Some((tag, vr, enc.u32(l), 12))
 }
 
+/// An open sequence or item of the walk, and where it ends (`None`: undefined length,
+/// closed by a delimiter).
+#[derive(Clone, Copy, Debug)]
+struct Open {
+    item: bool,
+    end: Option<usize>,
+}
+
 /// Walks every element header of a data set, entering sequences and items, and refuses
 /// a length beyond the end of the bytes or a nesting deeper than [`MAX_NESTING`].
-/// Iterative: open sequences and items live on an explicit stack (their end offset, or
-/// `None` for an undefined length closed by a delimiter). Returns whether the data set
-/// has PixelData at its top level.
+/// Iterative: open sequences and items live on an explicit stack. Returns whether the
+/// data set has PixelData at its top level.
+///
+/// The walk is dicom-parser 0.10's state machine (`DataSetReader::next`), so that it
+/// sees the same elements dicom-rs will: right inside a sequence it reads item headers
+/// (item, item delimiter, sequence delimiter); elsewhere element headers, where a
+/// sequence VR or an undefined length opens a sequence, an item delimiter closes the
+/// open item (and is ignored outside any), and any other tag, an item tag with a
+/// defined length included, is an element whose value is skipped. Where dicom-parser
+/// would stop with an error (an unexpected tag for an item header, a defined length
+/// that ends before the bytes read), the walk stops too: dicom-rs reads nothing further.
+/// (Two fuzzed files were read one way here and another by dicom-rs, which then
+/// allocated 4 GB for a length the walk never saw: an item tag inside an item, and a
+/// 38-byte UL value of which dicom-rs reads 36 bytes.)
 fn walk(path: &Path, data: &[u8], enc: Encoding) -> Result<bool, IoError> {
-    let mut open: Vec<Option<usize>> = Vec::new();
+    let mut open: Vec<Open> = Vec::new();
+    let mut in_sequence = false;
+    // `pos` is where dicom-parser's reader is in the bytes; `logical` is the position it
+    // counts, which runs ahead where a binary value's length is not a multiple of its
+    // sample size (see `consumed`). Ends of defined-length containers are counted in the
+    // latter, as dicom-parser does.
     let mut pos = 0usize;
+    let mut logical = 0usize;
     let mut has_pixels = false;
+    let push = |open: &mut Vec<Open>, o: Open, tag: Tag| {
+        open.push(o);
+        if open.len() > MAX_NESTING {
+            return Err(invalid(
+                path,
+                format!("sequences nested more than {MAX_NESTING} levels deep (at element {tag})"),
+            ));
+        }
+        Ok(())
+    };
     loop {
-        while let Some(Some(end)) = open.last() {
-            if pos < *end {
+        // Containers of defined length end where their bytes do.
+        while let Some(Open {
+            item,
+            end: Some(end),
+        }) = open.last().copied()
+        {
+            if logical < end {
                 break;
             }
+            if logical > end {
+                // dicom-parser: "inconsistent sequence end"; it reads no further.
+                return Ok(has_pixels);
+            }
             open.pop();
+            in_sequence = item;
         }
         // dicom-rs ends the data set where no further tag can be read.
         let Some((tag, vr, len, header)) = element_header(data, pos, enc) else {
             return Ok(has_pixels);
         };
         pos += header;
-        has_pixels |= tag == tags::PIXEL_DATA && open.is_empty();
+        logical += header;
         let left = data.len() - pos;
         let defined = len != UNDEFINED;
         if defined && len as usize > left {
             return Err(too_long(path, tag, len.into(), left));
         }
-        let container = match (tag.0, tag.1) {
-            (0xFFFE, 0xE000) => true,
-            (0xFFFE, 0xE00D) | (0xFFFE, 0xE0DD) => {
-                if let Some(None) = open.last() {
-                    open.pop();
+        let end = defined.then_some(logical + len as usize);
+        if in_sequence {
+            match (tag.0, tag.1) {
+                (0xFFFE, 0xE000) => {
+                    in_sequence = false;
+                    push(&mut open, Open { item: true, end }, tag)?;
                 }
-                continue;
-            }
-            _ if tag == tags::PIXEL_DATA && !defined => {
-                pos = walk_fragments(path, data, pos, enc)?;
-                continue;
-            }
-            _ => vr == VR::SQ || !defined,
-        };
-        if container {
-            open.push(defined.then_some(pos + len as usize));
-            if open.len() > MAX_NESTING {
-                return Err(invalid(
-                    path,
-                    format!(
-                        "sequences nested more than {MAX_NESTING} levels deep (at element {tag})"
-                    ),
-                ));
+                (0xFFFE, 0xE00D) => {
+                    open.pop();
+                    in_sequence = true;
+                }
+                (0xFFFE, 0xE0DD) => {
+                    open.pop();
+                    in_sequence = false;
+                }
+                _ => return Ok(has_pixels),
             }
             continue;
         }
-        pos += len as usize;
+        has_pixels |= tag == tags::PIXEL_DATA && open.is_empty();
+        match (tag.0, tag.1) {
+            (0xFFFE, 0xE00D) => {
+                if open.pop().is_some() {
+                    in_sequence = true;
+                }
+            }
+            _ if tag == tags::PIXEL_DATA && !defined => {
+                let after = walk_fragments(path, data, pos, enc)?;
+                logical += after - pos;
+                pos = after;
+            }
+            _ if vr == VR::SQ || !defined => {
+                in_sequence = true;
+                push(&mut open, Open { item: false, end }, tag)?;
+            }
+            _ => {
+                pos += consumed(vr, len as usize);
+                logical += len as usize;
+            }
+        }
+    }
+}
+
+/// The bytes dicom-parser 0.10 reads for a value of `len` bytes: binary numbers are read
+/// as `len / size` whole values (stateful/decode.rs `read_value_ul` and the like), so a
+/// length that is not a multiple of the size leaves the rest unread, and the next
+/// header is read from there.
+fn consumed(vr: VR, len: usize) -> usize {
+    match vr {
+        VR::US | VR::OW | VR::SS => len & !1,
+        VR::AT | VR::UL | VR::OL | VR::SL | VR::FL | VR::OF => len & !3,
+        VR::FD | VR::OD | VR::SV | VR::UV | VR::OV => len & !7,
+        _ => len,
     }
 }
 

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use glint_io::{dicom, ReadOptions, Samples, VolumeFile};
+use glint_io::{dicom, ReadOptions, Rgb, Samples, VolumeFile};
 
 /// One line of a table: file (relative), expect (`read` or `refuse`), dims (columns x
 /// rows x frames), spacing (mm, 6 significant digits), stored values' min, max, sum and
@@ -61,6 +61,40 @@ pub fn stats(s: &Samples, frame_len: usize) -> (i128, i128, i128, i128) {
     (lo, hi, sum, check)
 }
 
+/// (min, max, sum, checksum) over the three channels of a colour volume: the checksum
+/// weights channel c by c + 1 on top of [`stats`]' in-plane weight.
+pub fn colour_stats(rgb: &Rgb, frame_len: usize) -> (i128, i128, i128, i128) {
+    let (mut lo, mut hi, mut sum, mut check) = (i128::MAX, i128::MIN, 0i128, 0i128);
+    for (c, s) in rgb.channels().into_iter().enumerate() {
+        for i in 0..s.len() {
+            let v = s.get(i) as i128;
+            lo = lo.min(v);
+            hi = hi.max(v);
+            sum += v;
+            check += ((i % frame_len) % 65521 + 1) as i128 * (c as i128 + 1) * v;
+        }
+    }
+    (lo, hi, sum, check)
+}
+
+/// The largest per-sample difference a row allows: 0, or N for `tolerance N` (lossy
+/// DCT JPEG).
+pub fn tolerance(row: &Row) -> i128 {
+    row.reason
+        .strip_prefix("tolerance ")
+        .map_or(0, |t| t.parse().expect("tolerance N"))
+}
+
+/// Whether stats agree within `t` per sample: min and max within t, sum within t per
+/// sample, checksum within t times the sum of the weights (a necessary condition for
+/// every sample to be within t).
+fn stats_agree(got: [i128; 4], want: [i128; 4], t: i128, n: i128, weights: i128) -> bool {
+    (got[0] - want[0]).abs() <= t
+        && (got[1] - want[1]).abs() <= t
+        && (got[2] - want[2]).abs() <= t * n
+        && (got[3] - want[3]).abs() <= t * weights
+}
+
 /// Dims and spacing of a volume against its row; a description of the disagreement.
 pub fn check_geometry(row: &Row, f: &VolumeFile) -> Option<String> {
     let v = &f.volume;
@@ -90,10 +124,21 @@ pub fn check(row: &Row, dir: &Path) -> Option<String> {
                 return Some(why);
             }
             let v = &f.volume;
-            let (lo, hi, sum, check) = stats(&v.samples, v.dims[0] * v.dims[1]);
-            let got = [lo, hi, sum, check].map(|x| x.to_string());
-            let want = [row.min, row.max, row.sum, row.checksum];
-            (got != want).then(|| format!("min/max/sum/checksum {got:?}, pydicom {want:?}"))
+            let frame_len = v.dims[0] * v.dims[1];
+            let (lo, hi, sum, check) = match &v.colour {
+                Some(rgb) => colour_stats(rgb, frame_len),
+                None => stats(&v.samples, frame_len),
+            };
+            let got = [lo, hi, sum, check];
+            let want = [row.min, row.max, row.sum, row.checksum].map(|x| x.parse().unwrap());
+            let channels: i128 = if v.colour.is_some() { 3 } else { 1 };
+            let n = v.len() as i128 * channels;
+            // Sum of the checksum's weights over every sample.
+            let frames = (v.len() / frame_len) as i128;
+            let per_frame: i128 = (0..frame_len).map(|p| (p % 65521 + 1) as i128).sum();
+            let weights = per_frame * frames * if v.colour.is_some() { 6 } else { 1 };
+            (!stats_agree(got, want, tolerance(row), n, weights))
+                .then(|| format!("min/max/sum/checksum {got:?}, pydicom {want:?}"))
         }
         ("read", Err(e)) => Some(format!("refused: {e}")),
         ("refuse", Ok(f)) => Some(format!(

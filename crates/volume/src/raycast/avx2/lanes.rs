@@ -37,6 +37,7 @@ pub(super) struct Lanes {
 
 impl Lanes {
     /// Starts `ray` (the tile's ray `id`) in lane `l`.
+    #[inline(always)]
     pub(super) fn set(&mut self, l: usize, ray: &Ray, id: u32) {
         for a in 0..3 {
             self.o[a][l] = ray.o.get(a);

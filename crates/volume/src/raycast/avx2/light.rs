@@ -105,28 +105,63 @@ pub(super) unsafe fn light(
     batch.set_len(padded);
     for r0 in (0..padded).step_by(LANES) {
         // SAFETY: this function's contract (AVX2; clamped sample positions); the
-        // columns hold `padded` entries, so each store of eight at r0 stays inside.
-        unsafe {
-            let g = gradients(c, kept, r0);
-            for (col, g) in batch.normal.iter_mut().zip(g) {
-                _mm256_storeu_ps(col.as_mut_ptr().add(r0), g);
-            }
-        }
-    }
-    for (k, s) in kept.0.iter().enumerate() {
-        let v = views[s.ray as usize];
-        for a in 0..3 {
-            batch.view[a][k] = v.get(a);
-            batch.color[a][k] = s.rgba[a];
-        }
+        // columns hold `padded` entries, so each store of eight at r0 stays inside,
+        // and `kept` holds `padded` samples.
+        unsafe { gather(c, kept, views, batch, r0) };
     }
     c.shader.shade_gradients(batch);
     // In sample order, as the reference loop adds them.
     let [r, g, b] = &batch.color;
-    for (k, s) in kept.0[..n].iter().enumerate() {
+    for (s, ((r, g), b)) in kept.0[..n].iter().zip(r.iter().zip(g).zip(b)) {
         let col = &mut colors[s.ray as usize];
-        col[0] += s.weight * r[k];
-        col[1] += s.weight * g[k];
-        col[2] += s.weight * b[k];
+        col[0] += s.weight * r;
+        col[1] += s.weight * g;
+        col[2] += s.weight * b;
+    }
+}
+
+/// Stores the gradients, view vectors and colours of the kept samples `r0 .. r0 + 8`
+/// into the batch's columns.
+///
+/// # Safety
+/// AVX2 and FMA must be available; `kept` holds at least `r0 + 8` samples from clamped
+/// positions; the batch's columns hold at least `r0 + 8` entries.
+#[inline(always)]
+unsafe fn gather(c: &Caster, kept: &Kept, views: &[Vec3], batch: &mut ShadeBatch, r0: usize) {
+    // SAFETY: this function's contract covers the reads of `kept` and the stores into
+    // the columns, and the CPU features.
+    unsafe {
+        let g = gradients(c, kept, r0);
+        let samples = kept.0.get_unchecked(r0..r0 + LANES);
+        let v: [Vec3; LANES] = std::array::from_fn(|j| views[samples[j].ray as usize]);
+        let view = [
+            _mm256_setr_ps(
+                v[0].x, v[1].x, v[2].x, v[3].x, v[4].x, v[5].x, v[6].x, v[7].x,
+            ),
+            _mm256_setr_ps(
+                v[0].y, v[1].y, v[2].y, v[3].y, v[4].y, v[5].y, v[6].y, v[7].y,
+            ),
+            _mm256_setr_ps(
+                v[0].z, v[1].z, v[2].z, v[3].z, v[4].z, v[5].z, v[6].z, v[7].z,
+            ),
+        ];
+        // The eight samples' [r, g, b, alpha], transposed to r, g, b.
+        let e = |j: usize| _mm_loadu_ps(samples[j].rgba.as_ptr());
+        let q = |a: usize, b: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(e(a)), e(b));
+        let (q0, q1, q2, q3) = (q(0, 4), q(1, 5), q(2, 6), q(3, 7));
+        let t0 = _mm256_unpacklo_ps(q0, q1); // r0 r1 g0 g1 | r4 r5 g4 g5
+        let t1 = _mm256_unpackhi_ps(q0, q1); // b0 b1 a0 a1 | ...
+        let t2 = _mm256_unpacklo_ps(q2, q3);
+        let t3 = _mm256_unpackhi_ps(q2, q3);
+        let base = [
+            _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2),
+            _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3),
+        ];
+        for a in 0..3 {
+            _mm256_storeu_ps(batch.normal[a].as_mut_ptr().add(r0), g[a]);
+            _mm256_storeu_ps(batch.view[a].as_mut_ptr().add(r0), view[a]);
+            _mm256_storeu_ps(batch.color[a].as_mut_ptr().add(r0), base[a]);
+        }
     }
 }

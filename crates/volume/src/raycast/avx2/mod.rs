@@ -159,16 +159,19 @@ pub(super) struct Sample {
 pub(super) struct Kept(Vec<Sample>);
 
 impl Kept {
+    #[inline(always)]
     pub(super) fn len(&self) -> usize {
         self.0.len()
     }
 
+    #[inline(always)]
     pub(super) fn clear(&mut self) {
         self.0.clear();
     }
 
     /// Pads to a whole number of vectors with copies of the first sample (lit, then
     /// ignored).
+    #[inline(always)]
     pub(super) fn pad(&mut self) {
         while !self.len().is_multiple_of(LANES) {
             self.0.push(self.0[0]);
@@ -187,6 +190,7 @@ pub(super) struct Scratch {
 }
 
 /// Resizes `v` to `n` copies of `x` without giving back its capacity.
+#[inline(always)]
 pub(super) fn refill<T: Copy>(v: &mut Vec<T>, n: usize, x: T) {
     v.clear();
     v.resize(n, x);
@@ -220,6 +224,7 @@ pub(super) unsafe fn lane_mask(m: u8) -> __m256i {
 impl Scratch {
     /// Starts a tile of `n` rays: no kept samples, zero colours, and `n` zero
     /// opacities appended to `alpha`. Returns where the tile's opacities start.
+    #[inline(always)]
     pub(super) fn begin(&mut self, n: usize, alpha: &mut Vec<f32>) -> usize {
         refill(&mut self.views, n, Vec3::ZERO);
         refill(&mut self.colors, n, [0.0; 3]);
