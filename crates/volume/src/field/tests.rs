@@ -211,7 +211,7 @@ fn blob(dims: [usize; 3]) -> Vec<i16> {
 #[test]
 fn bricks_equal_the_whole_volume_computation() {
     let dims = [37, 19, 34];
-    for prefilter in Prefilter::ALL {
+    for &prefilter in Prefilter::ALL {
         let mut vol = Volume::new(dims, [0.9, 1.1, 1.3], Samples::I16(blob(dims))).unwrap();
         // A sheared affine with an origin, and a rescale.
         vol.affine[0][1] = 0.2;
@@ -230,7 +230,7 @@ fn nan_samples_and_small_volumes_equal_the_whole_volume_computation() {
     v[5] = f32::NAN;
     v[700] = f32::INFINITY;
     let vol = Volume::new(dims, [1.0; 3], Samples::F32(v)).unwrap();
-    for prefilter in Prefilter::ALL {
+    for &prefilter in Prefilter::ALL {
         check_against_oracle(&vol, prefilter);
     }
     let tiny = Volume::new(
@@ -383,4 +383,57 @@ fn robust_range_ignores_outlier_voxels() {
     let f = Field::new(&vol).unwrap();
     assert_eq!(f.range(), (-1.5e37, 4095.0));
     assert_eq!(f.robust_range(), (20.0, 4075.0));
+}
+
+/// A frame rendered with a brick cache far too small for it (tiles that cannot get a
+/// brick fall back to the reference loop and its spare bricks) is the frame rendered
+/// with room for every brick, bit for bit, in both samplings.
+#[test]
+fn a_frame_under_memory_pressure_is_the_same_frame() {
+    use crate::{Classification, ClassifySettings, FrameSettings, Sampling, TransferFunction};
+    use glint_core::{Light, Material, Shader};
+    use glint_lobe::{Geometry, LobeKind};
+    let dims = [70, 40, 50];
+    let vol = Volume::new(dims, [1.0; 3], Samples::I16(blob(dims))).unwrap();
+    let roomy = Arc::new(Field::with_prefilter(&vol, Prefilter::Binomial).unwrap());
+    let f = Field::with_prefilter(&vol, Prefilter::Binomial).unwrap();
+    let tight = Arc::new(Field {
+        cache: BrickCache::new(f.brick_dims.iter().product(), 4).unwrap(),
+        ..f
+    });
+    let tf =
+        TransferFunction::from_flat(&[0.0, 0.0, 400.0, 0.02, 1000.0, 0.3], &[0.0, 0.9, 0.7, 0.5])
+            .unwrap();
+    let shader = Shader::new(
+        LobeKind::EnergyFit,
+        20.0,
+        4,
+        Geometry::Phong,
+        Material::default(),
+        vec![Light::HEADLIGHT],
+        0.0,
+    )
+    .unwrap();
+    let frame = FrameSettings {
+        width: 64,
+        height: 48,
+        ..Default::default()
+    };
+    for sampling in [Sampling::Point, Sampling::PreIntegrated] {
+        let settings = ClassifySettings {
+            sampling,
+            ..Default::default()
+        };
+        let render = |field: &Arc<Field>| {
+            Classification::new(field.clone(), &tf, &settings)
+                .unwrap()
+                .render(&shader, &frame, &|_| {})
+                .unwrap()
+        };
+        let (a, b) = (render(&roomy), render(&tight));
+        assert!(a.alpha.iter().any(|&x| x > 0.5), "the blob is visible");
+        assert_eq!(a.rgb, b.rgb, "{sampling:?}");
+        assert_eq!(a.alpha, b.alpha, "{sampling:?}");
+    }
+    assert!(tight.brick_counts().1 > 0, "the tight cache evicted bricks");
 }
