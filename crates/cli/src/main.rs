@@ -18,8 +18,23 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 #[derive(Parser)]
 #[command(name = "glint", version, about, long_about = None)]
 struct Cli {
+    /// Memory the volumes may take, e.g. 8GiB or 600MiB (bricks of derived data are
+    /// evicted to stay within it; a volume that cannot fit is refused, naming it)
+    /// [default: three quarters of the machine's memory, with each volume's bricks
+    /// held to the size of its samples (at least 256 MiB)].
+    #[arg(long, global = true, value_name = "SIZE", value_parser = parse_size)]
+    memory_limit: Option<u64>,
     #[command(subcommand)]
     command: Command,
+}
+
+/// A byte count with an optional unit (`8GiB`, `600 MiB`, `2.5GB`, `1000000`).
+fn parse_size(s: &str) -> Result<u64, String> {
+    let size: bytesize::ByteSize = s.trim().parse()?;
+    match size.as_u64() {
+        0 => Err("the memory limit must be above zero".into()),
+        n => Ok(n),
+    }
 }
 
 #[derive(Subcommand)]
@@ -54,6 +69,7 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(err) => return usage_error(err),
     };
+    glint_render::set_memory_limit(cli.memory_limit);
     let result = match cli.command {
         Command::Render(args) => cmd::render::run(args),
         Command::Compare(args) => cmd::compare::run(args),

@@ -33,6 +33,7 @@
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
 //! | FreeSurfer MGH `.mgh`, `.mgz` | [`mgh`] | uchar, short, ushort, int, float | no |
 //! | DICOM file or directory | [`dicom`] | native, deflate, JPEG (8, 12-bit, lossless), JPEG-LS, JPEG 2000, RLE; grey, 1-bit and colour | no |
+//! | OME-Zarr directory (NGFF 0.4, 0.5; Zarr v2, v3) | [`zarr`] | one pyramid level; blosc, gzip, zstd, sharding | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
 //! | OBJ | [`mesh`] | yes | yes |
@@ -54,6 +55,7 @@ pub mod nrrd;
 pub mod raw;
 mod robust;
 mod types;
+pub mod zarr;
 
 pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
 pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
@@ -94,6 +96,9 @@ pub enum Format {
     /// GIFTI surface (`.gii`, `.gii.gz`).
     #[strum(to_string = "GIFTI")]
     Gifti,
+    /// OME-Zarr multiscale image (a directory: NGFF 0.4 on Zarr v2, 0.5 on Zarr v3).
+    #[strum(to_string = "OME-Zarr")]
+    Zarr,
 }
 
 impl Format {
@@ -113,6 +118,9 @@ impl Format {
     /// Guesses the format from a path: a directory is DICOM; otherwise the extension
     /// (case-insensitive, `.gz` looked through). `None` if unknown.
     pub fn guess(path: &Path) -> Option<Format> {
+        if zarr::is_store(path) {
+            return Some(Format::Zarr);
+        }
         if path.is_dir() {
             return Some(Format::Dicom);
         }
@@ -167,6 +175,8 @@ pub struct ReadOptions {
     /// SeriesInstanceUID; `None` reads the only image series, or the largest (with a
     /// note naming the others).
     pub series: Option<String>,
+    /// The level of an OME-Zarr pyramid to read (default: the finest).
+    pub level: zarr::Level,
 }
 
 /// The grey a colour volume's [`Volume::samples`] hold ([`ReadOptions::grey`]).
@@ -227,6 +237,7 @@ impl Default for ReadOptions {
             strict: false,
             grey: Grey::Luminance,
             series: None,
+            level: zarr::Level::Finest,
         }
     }
 }
@@ -283,6 +294,7 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
         Some(Format::Nrrd) => nrrd::read(path, options),
         Some(Format::Mgh) => mgh::read(path, options),
         Some(Format::Dicom) => dicom::read(path, options),
+        Some(Format::Zarr) => zarr::read(path, options),
         Some(Format::Raw) => unsupported(
             path,
             "a raw file needs its dimensions, type and spacing (ReadOptions::raw)",

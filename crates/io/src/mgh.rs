@@ -37,7 +37,7 @@ use std::path::Path;
 
 use crate::clock::Clock;
 use crate::common::{
-    check_affine, checked_voxels, decode_samples, open_maybe_gz, os_or_invalid, read_exact_growing,
+    check_affine, checked_voxels, open_maybe_gz, os_or_invalid, read_decoded, read_exact_growing,
     Endian, ScalarType,
 };
 use crate::{Format, IoError, ReadOptions, Volume, VolumeFile};
@@ -220,9 +220,16 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             });
         }
     }
-    let bytes = read_exact_growing(path, &mut reader, count * ty.size(), "voxel data")?;
-    let samples = decode_samples(&bytes, ty, Endian::Big);
-    drop(bytes);
+    let checked = file_len.is_some();
+    let samples = read_decoded(
+        path,
+        &mut reader,
+        count,
+        ty,
+        Endian::Big,
+        "voxel data",
+        checked,
+    )?;
     let rest = all_bytes - frame_bytes;
     let skipped = std::io::copy(&mut (&mut reader).take(rest), &mut std::io::sink())
         .map_err(|e| os_or_invalid(path, e))?;

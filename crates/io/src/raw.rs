@@ -4,8 +4,8 @@ use std::io::{BufReader, Seek, SeekFrom};
 use std::path::Path;
 
 use crate::common::{
-    check_affine, check_spacing, checked_voxels, decode_samples, diagonal_affine, encode_samples,
-    open, os_or_invalid, read_exact_growing, write_atomic, Endian,
+    check_affine, check_spacing, checked_voxels, diagonal_affine, encode_samples, open,
+    os_or_invalid, read_decoded, write_atomic, Endian,
 };
 use crate::{Format, IoError, RawParams, ReadOptions, Volume, VolumeFile};
 
@@ -32,8 +32,15 @@ pub fn read(path: &Path, params: &RawParams, options: &ReadOptions) -> Result<Vo
     }
     file.seek(SeekFrom::Start(params.offset))
         .map_err(|e| os_or_invalid(path, e))?;
-    let bytes = read_exact_growing(path, BufReader::new(file), count * size, "samples")?;
-    let samples = decode_samples(&bytes, params.scalar, params.endian);
+    let samples = read_decoded(
+        path,
+        BufReader::new(file),
+        count,
+        params.scalar,
+        params.endian,
+        "samples",
+        true,
+    )?;
     Ok(VolumeFile {
         volume: Volume {
             dims: params.dims,

@@ -71,6 +71,7 @@ pub use glint_labels as label_maps;
 pub use glint_mesh as mesh;
 pub use glint_mesh::vertex_normals;
 pub use glint_raster::{SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
+pub use glint_volume::{memory_limit, set_memory_limit};
 pub use glint_volume::{phantom, presets};
 pub use glint_volume::{
     preset, Classification, ClassifySettings, Field, FrameSettings, Kernel, Phantom, Prefilter,

@@ -160,7 +160,7 @@ impl Renderer {
         volume: Arc<Volume>,
         prefilter: Prefilter,
     ) -> Result<Renderer, RenderError> {
-        let field = Field::with_prefilter(&volume, prefilter)?;
+        let field = Field::shared(volume.clone(), prefilter)?;
         let mut renderer = Renderer::from_field(Arc::new(field));
         renderer.volume = Some(volume);
         Ok(renderer)
@@ -182,7 +182,7 @@ impl Renderer {
                 field.prefilter().name()
             )));
         };
-        let field = Field::with_prefilter(volume, prefilter)?;
+        let field = Field::shared(volume.clone(), prefilter)?;
         self.opened.extend(field.timings());
         self.field = Some(Arc::new(field));
         self.classification = None;

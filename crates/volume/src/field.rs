@@ -1,51 +1,73 @@
-//! The volume prepared for ray casting: values and world-space gradients interleaved
-//! per voxel, the voxel-to-world transform and its inverse, and a macro-cell grid of
-//! value ranges for empty-space skipping.
+//! The volume prepared for ray casting: its samples (kept in their stored type by the
+//! [`Source`]), the voxel-to-world transform and its inverse, a macro-cell grid of
+//! value ranges for empty-space skipping, and the reconstruction values and world
+//! gradients in bricks built on first use ([`brick`]) and kept in a bounded cache
+//! ([`cache`]).
+//!
+//! Building a field makes one streaming pass over the volume ([`prepare`]: value range,
+//! macro cells, the gradients' quantisation step, robust range); a brick's values and
+//! gradients are computed only when a ray, a classification or a caller reads a sample
+//! in it, with the same arithmetic as a whole-volume pass, so images are bit for bit
+//! those of a field that computed everything up front.
 
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, OnceLock};
+
+use crossbeam_epoch::Guard;
 use glint_io::Volume;
-use rayon::prelude::*;
 
 use glint_core::RenderError;
 use glint_core::Timings;
 use glint_core::Vec3;
 use glint_io::affine::{inverse3, linear_part, mul3, transpose3, Mat3};
 
-/// Largest voxel count the caster accepts: it keeps 12 bytes per voxel, so this is
-/// 3 GiB, far above clinical CT (512 x 512 x 2000 = 2^29 would need 6 GiB).
-pub const MAX_FIELD_VOXELS: usize = 1 << 28;
+pub(crate) mod brick;
+mod budget;
+pub(crate) mod cache;
+mod filter;
+mod prepare;
+mod source;
+#[cfg(test)]
+mod tests;
+
+use brick::{brick_dims, Recipe, BRICK, BRICK_ROW, BRICK_SHIFT, BRICK_SLICE, BRICK_VOXELS};
+pub use budget::{memory_limit, set_memory_limit, MIN_BRICK_SLOTS, PROCESS_OVERHEAD};
+use cache::BrickCache;
+pub use source::Source;
+
+/// Largest voxel count the caster accepts: 2^33 (a 2048 x 2048 x 2048 volume). Memory,
+/// not this, bounds what renders: the samples stay in their stored type and bricks are
+/// built where rays go ([`memory_limit`]).
+pub const MAX_FIELD_VOXELS: usize = 1 << 33;
 
 /// Edge of a macro cell in voxels (Levoy 1990, "Efficient ray tracing of volume data",
 /// skips empty space with a pyramid of such blocks; here two levels: cells of 4 voxels
 /// and blocks of 4^3 cells).
 pub const MACRO_CELL: usize = 4;
 
-/// Where a sample falls: the trilinear cell's lower corner, its linear index, and the
-/// fractions inside the cell.
+/// Where a sample falls: the trilinear cell's lower corner and the fractions inside the
+/// cell.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Loc {
     pub ijk: [usize; 3],
-    pub base: usize,
     pub t: [f32; 3],
 }
 
-/// A scalar field on a regular grid with precomputed gradients.
+/// Fields built so far, to tell their bricks apart in the per-thread fallback cache.
+static FIELDS: AtomicU64 = AtomicU64::new(0);
+
+/// A scalar field on a regular grid with gradients, built lazily in bricks.
 ///
-/// Voxel `(i, j, k)` holds its physical value and its gradient in world units (value
-/// per mm, RAS+), by central differences on the grid (one-sided at the faces) mapped
-/// through the inverse transpose of the affine's linear part. Gradients are stored as
-/// 16-bit integers times one scale for the volume (the largest component maps to
-/// 32767): half the memory of f32 gradients (MNI152 template: peak RSS 195 -> 127 MB;
-/// frame time unchanged), with an error below 1e-4 of the largest gradient (VTK's
-/// ray casters keep 16 bits for the whole direction and 8 for the magnitude).
+/// Voxel `(i, j, k)` has its physical value (prefiltered, [`Prefilter`]) and its
+/// gradient in world units (value per mm, RAS+), by central differences on the grid
+/// (one-sided at the faces) mapped through the inverse transpose of the affine's linear
+/// part. Gradients are stored as 16-bit integers times one scale for the volume (the
+/// largest component maps to 32767), with an error below 1e-4 of the largest gradient
+/// (VTK's ray casters keep 16 bits for the whole direction and 8 for the magnitude).
 pub struct Field {
     pub(crate) dims: [usize; 3],
-    /// Values alone, for the classification test every sample makes (a quarter of the
-    /// memory traffic of the interleaved array).
-    pub(crate) values: Vec<f32>,
-    /// Per voxel `[gx, gy, gz, 0]` in units of `gradient_scale`; a voxel and its +i
-    /// neighbour are one 16-byte load.
-    pub(crate) gradients: Vec<[i16; 4]>,
-    /// World gradient per integer step of `gradients`.
+    /// World gradient per integer step of the stored gradients.
     pub(crate) gradient_scale: f32,
     /// Voxel index to world (3x3 part and translation).
     pub(crate) to_world: Mat3,
@@ -60,10 +82,19 @@ pub struct Field {
     /// the cell can interpolate.
     pub(crate) cell_dims: [usize; 3],
     pub(crate) cells: Vec<(f32, f32)>,
-    /// How long each step of [`Field::new`] took.
+    /// Bricks along each axis.
+    pub(crate) brick_dims: [usize; 3],
+    /// How bricks are built, and where they are kept.
+    pub(crate) recipe: Recipe,
+    pub(crate) cache: BrickCache,
+    /// How long each step of building took.
     timings: Timings,
     /// The filter applied to the values.
     prefilter: Prefilter,
+    /// [`Field::values`], made on first call.
+    whole: OnceLock<Vec<f32>>,
+    id: u64,
+    _reservation: budget::Reservation,
 }
 
 /// How the samples are filtered before trilinear reconstruction (a scene's
@@ -121,51 +152,101 @@ impl glint_lobe::names::Named for Prefilter {
 
 impl Field {
     /// Prepares `volume` for rendering, its values as stored ([`Prefilter::None`]; a
-    /// scene's default is [`Prefilter::Binomial`]).
+    /// scene's default is [`Prefilter::Binomial`]). The samples are copied; see
+    /// [`Field::shared`] to share them.
     pub fn new(volume: &Volume) -> Result<Field, RenderError> {
         Field::with_prefilter(volume, Prefilter::None)
     }
 
-    /// Prepares `volume` for rendering.
+    /// Prepares `volume` for rendering (a copy of its samples; [`Field::shared`] keeps
+    /// the caller's).
     ///
     /// Errors when a dimension is below 2 (nothing to interpolate between), the volume
-    /// exceeds [`MAX_FIELD_VOXELS`], or the affine is singular or not finite. NaN
-    /// samples are replaced by the volume's minimum.
+    /// exceeds [`MAX_FIELD_VOXELS`] or the memory limit ([`memory_limit`]), or the affine
+    /// is singular or not finite. NaN samples are replaced by the volume's minimum.
     pub fn with_prefilter(volume: &Volume, prefilter: Prefilter) -> Result<Field, RenderError> {
-        let dims = volume.dims;
-        let count = checked_count(volume)?;
-        let (to_world, origin, to_index, min_spacing) = placement(&volume.affine)?;
+        Field::shared(Arc::new(volume.clone()), prefilter)
+    }
+
+    /// [`Field::with_prefilter`] of a shared volume: the field reads its samples, in
+    /// their stored type, when it builds bricks; no copy is made.
+    pub fn shared(volume: Arc<Volume>, prefilter: Prefilter) -> Result<Field, RenderError> {
+        checked_count(volume.dims, volume.samples.len())?;
+        Field::from_source(volume, prefilter, &|_, _| {})
+    }
+
+    /// A field of any [`Source`]. `progress` is called with the slices done and the
+    /// slices in all during the pass over the volume (from worker threads).
+    pub fn from_source(
+        source: Arc<dyn Source>,
+        prefilter: Prefilter,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<Field, RenderError> {
+        let dims = source.dims();
+        checked_count(dims, None)?;
+        let (to_world, origin, to_index, min_spacing) = placement(&source.affine())?;
+        let brick_dims = brick_dims(dims);
+        let bricks: usize = brick_dims.iter().product();
+        let cell_count: usize = dims.iter().map(|d| (d - 1).div_ceil(MACRO_CELL)).product();
+        // Samples, macro cells (8 bytes each), the page table (4 per brick) and the
+        // classification's distance map (1 per cell).
+        let fixed = source.resident_bytes() + 9 * cell_count as u64 + 4 * bricks as u64;
+        let (reservation, slots) = budget::reserve(fixed, bricks)?;
+        // Gradient in index space g_idx; world gradient = A^-T g_idx (chain rule on
+        // f(x) = f_idx(A^-1 (x - o))).
+        let grad_to_world = transpose3(&to_index).map(|row| row.map(|x| x as f32));
+        let mut recipe = Recipe {
+            source: source.clone(),
+            dims,
+            prefilter,
+            fill: None,
+            to_world_gradient: grad_to_world,
+            inv_scale: 1.0,
+        };
         let mut timings = Timings::default();
-        let (values, (lo, hi)) = finite_values(volume, prefilter, &mut timings)?;
-        let robust = timings.time("field: robust range", || {
-            glint_io::robust_range(values.len(), |i| values[i] as f64)
-                .map(|(a, b)| (a as f32, b as f32))
-                .unwrap_or((lo, hi))
-        });
-        let (gradients, gradient_scale) = timings.time("field: gradients", || {
-            quantised_gradients(&values, dims, &to_index, count)
-        });
-        let (cell_dims, cells) = timings.time("field: macro cells", || macro_cells(&values, dims));
+        let range = if source.may_be_non_finite() {
+            let r = timings.time("field: range", || prepare::finite_range(&recipe))?;
+            recipe.fill = Some(r.0);
+            Some(r)
+        } else {
+            None
+        };
+        let total = dims[2] as u64;
+        let done = AtomicU64::new(0);
+        let tick = |n: u64| progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
+        let p = timings.time("field: prepare", || prepare::prepare(&recipe, range, &tick))?;
+        let gradient_scale = filter::gradient_scale(p.largest);
+        recipe.inv_scale = 1.0 / gradient_scale;
+        let cache = BrickCache::new(bricks, slots).ok_or_else(|| {
+            RenderError::Volume(format!("cannot allocate a pool of {slots} bricks"))
+        })?;
+        if let Some(problem) = source.problem() {
+            return Err(RenderError::Volume(problem));
+        }
         Ok(Field {
             timings,
             prefilter,
             dims,
-            values,
-            gradients,
             gradient_scale,
             to_world,
             origin,
             to_index,
             min_spacing,
-            range: (lo, hi),
-            robust,
-            cell_dims,
-            cells,
+            range: p.range,
+            robust: p.robust,
+            cell_dims: p.cell_dims,
+            cells: p.cells,
+            brick_dims,
+            recipe,
+            cache,
+            whole: OnceLock::new(),
+            id: FIELDS.fetch_add(1, Ordering::Relaxed),
+            _reservation: reservation,
         })
     }
 
-    /// How long the steps of [`Field::new`] took (values, robust range, gradients,
-    /// macro cells), for `--timings` reports.
+    /// How long the steps of building took (the range when the source may hold NaN, the
+    /// pass over the volume), for `--timings` reports.
     pub fn timings(&self) -> &Timings {
         &self.timings
     }
@@ -177,8 +258,39 @@ impl Field {
 
     /// The reconstruction values (the samples after the prefilter, NaN replaced by the
     /// minimum), i fastest: e.g. for extracting the isosurface the renderer shows.
+    /// Computed on the first call and kept (4 bytes per voxel).
     pub fn values(&self) -> &[f32] {
-        &self.values
+        self.whole.get_or_init(|| {
+            let [nx, ny, nz] = self.dims;
+            let mut out = Vec::with_capacity(nx * ny * nz);
+            for z0 in (0..nz).step_by(16) {
+                let z1 = (z0 + 16).min(nz) - 1;
+                out.extend(self.recipe.values([0, 0, z0], [nx - 1, ny - 1, z1]));
+            }
+            out
+        })
+    }
+
+    /// Bricks built so far and bricks evicted from the cache to make room, for reports.
+    pub fn brick_counts(&self) -> (u64, u64) {
+        self.cache.counts()
+    }
+
+    /// Bricks of the volume, and how many the cache holds now.
+    pub fn bricks(&self) -> (usize, usize) {
+        (self.brick_dims.iter().product(), self.cache.used())
+    }
+
+    /// The first problem the source met while bricks were built (a chunk that could
+    /// not be read), if any.
+    pub fn problem(&self) -> Option<String> {
+        self.recipe.source.problem()
+    }
+
+    /// Makes room in the brick cache before a frame (evicts the oldest bricks when it
+    /// is nearly full). Call it from a thread that is not rendering.
+    pub(crate) fn make_room(&self) {
+        self.cache.make_room();
     }
 
     /// The voxel-to-world affine, 4x4 row-major.
@@ -214,6 +326,14 @@ impl Field {
         self.robust
     }
 
+    /// The macro-cell grid: its dimensions and, per cell (i fastest), the (min, max)
+    /// of the values a trilinear sample inside the cell's box can take. Cell `c` spans
+    /// voxels `c·MACRO_CELL ..= (c+1)·MACRO_CELL` along each axis (clipped to the
+    /// volume). Light transport bounds its extinction per cell by these ranges.
+    pub fn macro_cells(&self) -> ([usize; 3], &[(f32, f32)]) {
+        (self.cell_dims, &self.cells)
+    }
+
     /// World position (mm) of a continuous voxel index.
     pub fn index_to_world(&self, p: [f64; 3]) -> [f64; 3] {
         let w = mul3(&self.to_world, p);
@@ -234,14 +354,6 @@ impl Field {
                 w[2] - self.origin[2],
             ],
         )
-    }
-
-    /// The macro-cell grid: its dimensions and, per cell (i fastest), the (min, max)
-    /// of the values a trilinear sample inside the cell's box can take. Cell `c` spans
-    /// voxels `c·MACRO_CELL ..= (c+1)·MACRO_CELL` along each axis (clipped to the
-    /// volume). Light transport bounds its extinction per cell by these ranges.
-    pub fn macro_cells(&self) -> ([usize; 3], &[(f32, f32)]) {
-        (self.cell_dims, &self.cells)
     }
 
     /// A world direction expressed in voxel index units.
@@ -270,7 +382,6 @@ impl Field {
         };
         Loc {
             ijk: [i, j, k],
-            base: i + nx * (j + ny * k),
             t: [
                 (p.x - i as f32).clamp(0.0, 1.0),
                 (p.y - j as f32).clamp(0.0, 1.0),
@@ -288,79 +399,175 @@ impl Field {
         i + cd[0] * (j + cd[1] * k)
     }
 
+    /// The brick of a located sample (index and coordinates) and the sample's corner
+    /// voxel inside it.
+    #[inline(always)]
+    pub(crate) fn brick_of(&self, loc: &Loc) -> (usize, [usize; 3], usize) {
+        let bd = self.brick_dims;
+        let b = loc.ijk.map(|x| x >> BRICK_SHIFT);
+        let l = loc.ijk.map(|x| x & (BRICK - 1));
+        (
+            b[0] + bd[0] * (b[1] + bd[1] * b[2]),
+            b,
+            l[0] + BRICK_ROW * l[1] + BRICK_SLICE * l[2],
+        )
+    }
+
     /// Trilinear value at `p` (index units).
     #[inline(always)]
     pub fn value(&self, p: Vec3) -> f32 {
-        self.value_at(&self.locate(p))
-    }
-
-    /// Trilinear value at a located sample.
-    #[inline(always)]
-    pub(crate) fn value_at(&self, loc: &Loc) -> f32 {
-        let (base, [tx, ty, tz]) = (loc.base, loc.t);
-        let [nx, ny, _] = self.dims;
-        let sx = nx * ny;
-        let d = &self.values;
-        assert!(base + sx + nx + 1 < d.len());
-        // SAFETY: `locate` clamps i <= nx-2, j <= ny-2, k <= nz-2, so every offset
-        // below is at most base + sx + nx + 1, checked above.
-        let at = |o: usize| unsafe { *d.get_unchecked(base + o) };
-        let c000 = at(0);
-        let c100 = at(1);
-        let c010 = at(nx);
-        let c110 = at(nx + 1);
-        let c001 = at(sx);
-        let c101 = at(sx + 1);
-        let c011 = at(sx + nx);
-        let c111 = at(sx + nx + 1);
-        let x00 = c000 + tx * (c100 - c000);
-        let x10 = c010 + tx * (c110 - c010);
-        let x01 = c001 + tx * (c101 - c001);
-        let x11 = c011 + tx * (c111 - c011);
-        let y0 = x00 + ty * (x10 - x00);
-        let y1 = x01 + ty * (x11 - x01);
-        y0 + tz * (y1 - y0)
+        self.value_at(&self.locate(p), &crossbeam_epoch::pin())
     }
 
     /// Trilinear world gradient at `p` (index units).
     #[inline(always)]
     pub fn gradient(&self, p: Vec3) -> Vec3 {
-        self.gradient_at(&self.locate(p))
+        self.gradient_at(&self.locate(p), &crossbeam_epoch::pin())
+    }
+
+    /// [`Field::value`] for a caller that holds a guard across many samples (a tile).
+    #[inline(always)]
+    pub(crate) fn value_in(&self, p: Vec3, guard: &Guard) -> f32 {
+        self.value_at(&self.locate(p), guard)
+    }
+
+    /// [`Field::gradient`] for a caller that holds a guard across many samples.
+    #[inline(always)]
+    pub(crate) fn gradient_in(&self, p: Vec3, guard: &Guard) -> Vec3 {
+        self.gradient_at(&self.locate(p), guard)
+    }
+
+    /// Trilinear value at a located sample.
+    #[inline(always)]
+    pub(crate) fn value_at(&self, loc: &Loc, guard: &Guard) -> f32 {
+        let (b, coords, local) = self.brick_of(loc);
+        match self.cache.offset(b, coords, &self.recipe, guard) {
+            // SAFETY: the offset is a built slot's, valid while `guard` lives; local
+            // plus the far corner's offset stays inside the slot.
+            Some(o) => unsafe { trilinear(self.cache.values().add(o as usize + local), loc.t) },
+            None => self.with_spare(b, coords, |v, _| {
+                // SAFETY: as above, in the spare brick.
+                unsafe { trilinear(v.as_ptr().add(local), loc.t) }
+            }),
+        }
     }
 
     /// Trilinear world gradient at a located sample: the stored integers interpolated
     /// in f32 (exact conversions), then scaled.
     #[inline(always)]
-    pub(crate) fn gradient_at(&self, loc: &Loc) -> Vec3 {
-        let (base, [tx, ty, tz]) = (loc.base, loc.t);
-        let [nx, ny, _] = self.dims;
-        let sx = nx * ny;
-        let d = &self.gradients;
-        let f = |i: usize| d[i].map(f32::from);
-        let lerp = |a: [f32; 4], b: [f32; 4], t: f32| {
-            [
-                a[0] + t * (b[0] - a[0]),
-                a[1] + t * (b[1] - a[1]),
-                a[2] + t * (b[2] - a[2]),
-                0.0,
-            ]
+    pub(crate) fn gradient_at(&self, loc: &Loc, guard: &Guard) -> Vec3 {
+        let (b, coords, local) = self.brick_of(loc);
+        let g = match self.cache.offset(b, coords, &self.recipe, guard) {
+            // SAFETY: as in `value_at`.
+            Some(o) => unsafe {
+                trilinear_gradient(self.cache.gradients().add(o as usize + local), loc.t)
+            },
+            None => self.with_spare(b, coords, |_, g| {
+                // SAFETY: as in `value_at`.
+                unsafe { trilinear_gradient(g.as_ptr().add(local), loc.t) }
+            }),
         };
-        let x00 = lerp(f(base), f(base + 1), tx);
-        let x10 = lerp(f(base + nx), f(base + nx + 1), tx);
-        let x01 = lerp(f(base + sx), f(base + sx + 1), tx);
-        let x11 = lerp(f(base + sx + nx), f(base + sx + nx + 1), tx);
-        let y0 = lerp(x00, x10, ty);
-        let y1 = lerp(x01, x11, ty);
-        let g = lerp(y0, y1, tz);
         let s = self.gradient_scale;
         Vec3::new(g[0] * s, g[1] * s, g[2] * s)
     }
+
+    /// Calls `f` with brick `b` built outside the cache (when the cache is full of
+    /// bricks in use): a few per thread are kept, most recent first.
+    #[cold]
+    #[inline(never)]
+    fn with_spare<R>(
+        &self,
+        b: usize,
+        coords: [usize; 3],
+        f: impl FnOnce(&[f32], &[[i16; 4]]) -> R,
+    ) -> R {
+        /// Spare bricks kept per thread.
+        const SPARES: usize = 8;
+        type Spare = (u64, usize, Vec<f32>, Vec<[i16; 4]>);
+        thread_local! {
+            static SPARE: RefCell<Vec<Spare>> = const { RefCell::new(Vec::new()) };
+        }
+        SPARE.with(|s| {
+            let mut s = s.borrow_mut();
+            let hit = s.iter().position(|e| e.0 == self.id && e.1 == b);
+            let entry = match hit {
+                Some(i) => s.remove(i),
+                None => {
+                    let mut v = vec![0.0; BRICK_VOXELS];
+                    let mut g = vec![[0i16; 4]; BRICK_VOXELS];
+                    self.recipe.build(coords, &mut v, &mut g);
+                    (self.id, b, v, g)
+                }
+            };
+            let r = f(&entry.2, &entry.3);
+            s.insert(0, entry);
+            s.truncate(SPARES);
+            r
+        })
+    }
 }
 
-/// The voxel count of `volume`, checked: at least 2 samples per axis, at most
-/// [`MAX_FIELD_VOXELS`], and as many samples as the dimensions say.
-fn checked_count(volume: &Volume) -> Result<usize, RenderError> {
-    let dims = volume.dims;
+/// The trilinear interpolation of the eight values of the cell whose corner 000 is at
+/// `d` (brick layout), fractions `t`.
+///
+/// # Safety
+/// `d + BRICK_SLICE + BRICK_ROW + 1` must be readable.
+#[inline(always)]
+unsafe fn trilinear(d: *const f32, [tx, ty, tz]: [f32; 3]) -> f32 {
+    // SAFETY: the caller's contract covers every offset below.
+    let at = |o: usize| unsafe { *d.add(o) };
+    let (sy, sz) = (BRICK_ROW, BRICK_SLICE);
+    let c000 = at(0);
+    let c100 = at(1);
+    let c010 = at(sy);
+    let c110 = at(sy + 1);
+    let c001 = at(sz);
+    let c101 = at(sz + 1);
+    let c011 = at(sz + sy);
+    let c111 = at(sz + sy + 1);
+    let x00 = c000 + tx * (c100 - c000);
+    let x10 = c010 + tx * (c110 - c010);
+    let x01 = c001 + tx * (c101 - c001);
+    let x11 = c011 + tx * (c111 - c011);
+    let y0 = x00 + ty * (x10 - x00);
+    let y1 = x01 + ty * (x11 - x01);
+    y0 + tz * (y1 - y0)
+}
+
+/// [`trilinear`] of the stored gradients, component by component, unscaled.
+///
+/// # Safety
+/// As for [`trilinear`].
+#[inline(always)]
+unsafe fn trilinear_gradient(d: *const [i16; 4], [tx, ty, tz]: [f32; 3]) -> [f32; 3] {
+    // SAFETY: the caller's contract covers every offset below.
+    let f = |o: usize| unsafe { *d.add(o) }.map(f32::from);
+    let lerp = |a: [f32; 4], b: [f32; 4], t: f32| {
+        [
+            a[0] + t * (b[0] - a[0]),
+            a[1] + t * (b[1] - a[1]),
+            a[2] + t * (b[2] - a[2]),
+            0.0,
+        ]
+    };
+    let (sy, sz) = (BRICK_ROW, BRICK_SLICE);
+    let x00 = lerp(f(0), f(1), tx);
+    let x10 = lerp(f(sy), f(sy + 1), tx);
+    let x01 = lerp(f(sz), f(sz + 1), tx);
+    let x11 = lerp(f(sz + sy), f(sz + sy + 1), tx);
+    let y0 = lerp(x00, x10, ty);
+    let y1 = lerp(x01, x11, ty);
+    let g = lerp(y0, y1, tz);
+    [g[0], g[1], g[2]]
+}
+
+/// The voxel count of a volume of `dims`, checked: at least 2 samples per axis, at
+/// most [`MAX_FIELD_VOXELS`], and as many samples as the dimensions say (`samples`,
+/// when known).
+fn checked_count(
+    dims: [usize; 3],
+    samples: impl Into<Option<usize>>,
+) -> Result<usize, RenderError> {
     if dims.iter().any(|&d| d < 2) {
         return Err(RenderError::Volume(format!(
             "dimensions {}x{}x{}: need at least 2 samples along each axis",
@@ -377,16 +584,13 @@ fn checked_count(volume: &Volume) -> Result<usize, RenderError> {
                 dims[0], dims[1], dims[2]
             ))
         })?;
-    if volume.samples.len() != count {
-        return Err(RenderError::Volume(format!(
-            "{} samples for dimensions {}x{}x{}",
-            volume.samples.len(),
-            dims[0],
-            dims[1],
-            dims[2]
-        )));
+    match samples.into() {
+        Some(n) if n != count => Err(RenderError::Volume(format!(
+            "{n} samples for dimensions {}x{}x{}",
+            dims[0], dims[1], dims[2]
+        ))),
+        _ => Ok(count),
     }
-    Ok(count)
 }
 
 /// The affine's 3x3 part, origin, inverse 3x3 part and smallest spacing.
@@ -403,396 +607,4 @@ fn placement(affine: &[[f64; 4]; 4]) -> Result<(Mat3, [f64; 3], Mat3, f64), Rend
         .collect();
     let min_spacing = spacing.iter().cloned().fold(f64::INFINITY, f64::min);
     Ok((to_world, origin, to_index, min_spacing))
-}
-
-/// The physical values with NaN and infinite samples replaced by the smallest finite
-/// one, then prefiltered; and the finite range before the prefilter.
-fn finite_values(
-    volume: &Volume,
-    prefilter: Prefilter,
-    timings: &mut Timings,
-) -> Result<(Vec<f32>, (f32, f32)), RenderError> {
-    let mut values = timings.time("field: values", || physical_values(volume));
-    let mut lo = f32::INFINITY;
-    let mut hi = f32::NEG_INFINITY;
-    for &v in &values {
-        if v.is_finite() {
-            lo = lo.min(v);
-            hi = hi.max(v);
-        }
-    }
-    if !lo.is_finite() {
-        return Err(RenderError::Volume(
-            "no finite sample (all NaN or infinite)".into(),
-        ));
-    }
-    values.par_iter_mut().for_each(|v| {
-        if !v.is_finite() {
-            *v = lo;
-        }
-    });
-    if prefilter == Prefilter::Binomial {
-        timings.time("field: prefilter", || binomial(&mut values, volume.dims));
-    }
-    Ok((values, (lo, hi)))
-}
-
-/// World gradients of `values` (central differences, one-sided at the faces) as 16-bit
-/// integers times one scale for the volume (the largest component maps to 32767), and
-/// that scale.
-fn quantised_gradients(
-    values: &[f32],
-    dims: [usize; 3],
-    to_index: &Mat3,
-    count: usize,
-) -> (Vec<[i16; 4]>, f32) {
-    // Gradient in index space g_idx; world gradient = A^-T g_idx (chain rule on
-    // f(x) = f_idx(A^-1 (x - o))).
-    let grad_to_world = transpose3(to_index);
-    let g: [[f32; 3]; 3] = grad_to_world.map(|row| row.map(|x| x as f32));
-    let [nx, ny, nz] = dims;
-    // Two passes over the central differences (cheap next to the memory a stored
-    // f32 copy would take at the size limit): the largest component, then the
-    // quantised gradients; a row at a time, interior rows without bounds checks.
-    let largest = (0..nz)
-        .into_par_iter()
-        .map_init(
-            || vec![[0.0f32; 3]; nx],
-            |row, k| {
-                let mut m = 0.0f32;
-                for j in 0..ny {
-                    row_gradients(values, dims, &g, j, k, row);
-                    m = row.iter().flatten().fold(m, |m, x| m.max(x.abs()));
-                }
-                m
-            },
-        )
-        .reduce(|| 0.0, f32::max);
-    let gradient_scale = if largest > 0.0 && largest.is_finite() {
-        largest / 32767.0
-    } else {
-        1.0
-    };
-    let inv_scale = 1.0 / gradient_scale;
-    let mut gradients = vec![[0i16; 4]; count];
-    gradients.par_chunks_mut(nx * ny).enumerate().for_each_init(
-        || vec![[0.0f32; 3]; nx],
-        |row, (k, slab)| {
-            for j in 0..ny {
-                row_gradients(values, dims, &g, j, k, row);
-                // Rounded half away from zero (without libm's roundf, a call
-                // per component on baseline x86-64); |x| * inv_scale <= 32767
-                // up to rounding, and `as` saturates.
-                let q = |x: f32| {
-                    let y = x * inv_scale;
-                    (y + 0.5f32.copysign(y)) as i16
-                };
-                for (o, w) in slab[nx * j..][..nx].iter_mut().zip(row.iter()) {
-                    *o = [q(w[0]), q(w[1]), q(w[2]), 0];
-                }
-            }
-        },
-    );
-    (gradients, gradient_scale)
-}
-
-/// Macro cells: cell c covers voxels c*B ..= c*B + B (one voxel of overlap, so every
-/// trilinear sample inside the cell's box reads only voxels it covers); per cell the
-/// (min, max) of its values.
-fn macro_cells(values: &[f32], dims: [usize; 3]) -> ([usize; 3], Vec<(f32, f32)>) {
-    let [nx, ny, nz] = dims;
-    let cell_dims = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
-    let [cx, cy, cz] = cell_dims;
-    let mut cells = vec![(0.0f32, 0.0f32); cx * cy * cz];
-    cells
-        .par_chunks_mut(cx * cy)
-        .enumerate()
-        .for_each(|(ck, row)| {
-            for cj in 0..cy {
-                for ci in 0..cx {
-                    let mut lo_c = f32::INFINITY;
-                    let mut hi_c = f32::NEG_INFINITY;
-                    for k in ck * MACRO_CELL..=((ck + 1) * MACRO_CELL).min(nz - 1) {
-                        for j in cj * MACRO_CELL..=((cj + 1) * MACRO_CELL).min(ny - 1) {
-                            let base = nx * (j + ny * k);
-                            for i in ci * MACRO_CELL..=((ci + 1) * MACRO_CELL).min(nx - 1) {
-                                let v = values[base + i];
-                                lo_c = lo_c.min(v);
-                                hi_c = hi_c.max(v);
-                            }
-                        }
-                    }
-                    row[ci + cx * cj] = (lo_c, hi_c);
-                }
-            }
-        });
-    (cell_dims, cells)
-}
-
-/// The volume's physical values as f32 (slope and intercept applied), converted in
-/// parallel: [`Volume::to_f32`] on one thread took 4% of a one-shot MNI152 render.
-fn physical_values(volume: &Volume) -> Vec<f32> {
-    use glint_io::Samples;
-    fn convert<T: Copy + Into<f64> + Sync>(v: &[T], s: f64, b: f64) -> Vec<f32> {
-        let mut out = Vec::new();
-        v.par_iter()
-            .with_min_len(1 << 16)
-            .map(|&x| (s * x.into() + b) as f32)
-            .collect_into_vec(&mut out);
-        out
-    }
-    let (s, b) = (volume.slope, volume.intercept);
-    match &volume.samples {
-        Samples::U8(v) => convert(v, s, b),
-        Samples::I8(v) => convert(v, s, b),
-        Samples::U16(v) => convert(v, s, b),
-        Samples::I16(v) => convert(v, s, b),
-        Samples::U32(v) => convert(v, s, b),
-        Samples::I32(v) => convert(v, s, b),
-        Samples::F32(v) => convert(v, s, b),
-        Samples::F64(v) => convert(v, s, b),
-    }
-}
-
-/// [`world_gradient`] for every voxel of row `(j, k)` into `out` (length `nx`):
-/// interior rows take their neighbours from five row slices, with no clamping, in the
-/// same operations (so the same results) as [`world_gradient`].
-fn row_gradients(
-    values: &[f32],
-    dims: [usize; 3],
-    g: &[[f32; 3]; 3],
-    j: usize,
-    k: usize,
-    out: &mut [[f32; 3]],
-) {
-    let [nx, ny, nz] = dims;
-    if nx < 3 || j == 0 || k == 0 || j + 1 >= ny || k + 1 >= nz {
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = world_gradient(values, dims, g, [i, j, k]);
-        }
-        return;
-    }
-    let row = |jj: usize, kk: usize| &values[nx * (jj + ny * kk)..][..nx];
-    let (c, jm, jp, km, kp) = (
-        row(j, k),
-        row(j - 1, k),
-        row(j + 1, k),
-        row(j, k - 1),
-        row(j, k + 1),
-    );
-    out[0] = world_gradient(values, dims, g, [0, j, k]);
-    out[nx - 1] = world_gradient(values, dims, g, [nx - 1, j, k]);
-    for i in 1..nx - 1 {
-        let gi = (c[i + 1] - c[i - 1]) / 2.0;
-        let gj = (jp[i] - jm[i]) / 2.0;
-        let gk = (kp[i] - km[i]) / 2.0;
-        out[i] = [
-            g[0][0] * gi + g[0][1] * gj + g[0][2] * gk,
-            g[1][0] * gi + g[1][1] * gj + g[1][2] * gk,
-            g[2][0] * gi + g[2][1] * gj + g[2][2] * gk,
-        ];
-    }
-}
-
-/// World gradient at voxel `ijk` of `values` (dimensions `dims`): central differences
-/// (one-sided at the faces) in index space, mapped by `to_world_gradient` (the inverse
-/// transpose of the affine's linear part).
-#[inline(always)]
-fn world_gradient(
-    values: &[f32],
-    dims: [usize; 3],
-    to_world_gradient: &[[f32; 3]; 3],
-    [i, j, k]: [usize; 3],
-) -> [f32; 3] {
-    let [nx, ny, nz] = dims;
-    let at = |i: usize, j: usize, k: usize| values[i + nx * (j + ny * k)];
-    let diff = |lo_v: f32, hi_v: f32, span: usize| (hi_v - lo_v) / span as f32;
-    let (i0, i1) = (i.saturating_sub(1), (i + 1).min(nx - 1));
-    let (j0, j1) = (j.saturating_sub(1), (j + 1).min(ny - 1));
-    let (k0, k1) = (k.saturating_sub(1), (k + 1).min(nz - 1));
-    let gi = diff(at(i0, j, k), at(i1, j, k), i1 - i0);
-    let gj = diff(at(i, j0, k), at(i, j1, k), j1 - j0);
-    let gk = diff(at(i, j, k0), at(i, j, k1), k1 - k0);
-    let g = to_world_gradient;
-    [
-        g[0][0] * gi + g[0][1] * gj + g[0][2] * gk,
-        g[1][0] * gi + g[1][1] * gj + g[1][2] * gk,
-        g[2][0] * gi + g[2][1] * gj + g[2][2] * gk,
-    ]
-}
-
-/// The `[1 2 1] / 4` binomial along x, y and z in turn ([`Prefilter::Binomial`]), the
-/// faces clamped (a face voxel counts its missing neighbour as itself). Each pass
-/// reads one buffer and writes the other, a z slab per task; along y and z it
-/// combines whole rows (`0.25 prev + 0.5 row + 0.25 next`), which vectorises.
-fn binomial(values: &mut Vec<f32>, dims: [usize; 3]) {
-    let [nx, ny, nz] = dims;
-    let slab = nx * ny;
-    let mut other = vec![0.0f32; values.len()];
-    let mix = |out: &mut [f32], a: &[f32], b: &[f32], c: &[f32]| {
-        for (((o, &a), &b), &c) in out.iter_mut().zip(a).zip(b).zip(c) {
-            *o = 0.25 * a + 0.5 * b + 0.25 * c;
-        }
-    };
-    for axis in 0..3 {
-        let src: &[f32] = values;
-        other.par_chunks_mut(slab).enumerate().for_each(|(k, out)| {
-            let here = &src[slab * k..][..slab];
-            match axis {
-                0 => {
-                    for (o, r) in out.chunks_exact_mut(nx).zip(here.chunks_exact(nx)) {
-                        for i in 0..nx {
-                            let (lo, hi) = (i.saturating_sub(1), (i + 1).min(nx - 1));
-                            o[i] = 0.25 * r[lo] + 0.5 * r[i] + 0.25 * r[hi];
-                        }
-                    }
-                }
-                1 => {
-                    for j in 0..ny {
-                        let row = |j: usize| &here[nx * j..][..nx];
-                        let (lo, hi) = (j.saturating_sub(1), (j + 1).min(ny - 1));
-                        mix(&mut out[nx * j..][..nx], row(lo), row(j), row(hi));
-                    }
-                }
-                _ => {
-                    let plane = |k: usize| &src[slab * k..][..slab];
-                    let (lo, hi) = (k.saturating_sub(1), (k + 1).min(nz - 1));
-                    mix(out, plane(lo), here, plane(hi));
-                }
-            }
-        });
-        std::mem::swap(values, &mut other);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use glint_io::Samples;
-
-    fn linear_volume() -> Volume {
-        // f(i, j, k) = 2i + 3j - k on a 4x5x6 grid with spacing (2, 1, 0.5) mm.
-        let dims = [4, 5, 6];
-        let mut v = Vec::new();
-        for k in 0..6 {
-            for j in 0..5 {
-                for i in 0..4 {
-                    v.push((2 * i + 3 * j) as f32 - k as f32);
-                }
-            }
-        }
-        Volume::new(dims, [2.0, 1.0, 0.5], Samples::F32(v)).unwrap()
-    }
-
-    /// The binomial keeps linear functions away from the faces (its weights are
-    /// symmetric and sum to 1) and spreads an impulse as the outer product of
-    /// (1, 2, 1) / 4 along the three axes.
-    #[test]
-    fn binomial_prefilter_keeps_linear_fields_and_spreads_an_impulse() {
-        let vol = linear_volume();
-        let f = Field::with_prefilter(&vol, Prefilter::Binomial).unwrap();
-        assert_eq!(f.prefilter(), Prefilter::Binomial);
-        let [nx, ny, nz] = f.dims;
-        for k in 1..nz - 1 {
-            for j in 1..ny - 1 {
-                for i in 1..nx - 1 {
-                    let want = (2 * i + 3 * j) as f32 - k as f32;
-                    assert_eq!(f.values[i + nx * (j + ny * k)], want, "({i}, {j}, {k})");
-                }
-            }
-        }
-        let mut v = vec![0.0f32; 125];
-        v[2 + 5 * (2 + 5 * 2)] = 64.0;
-        let impulse = Volume::new([5; 3], [1.0; 3], Samples::F32(v)).unwrap();
-        let f = Field::with_prefilter(&impulse, Prefilter::Binomial).unwrap();
-        let w = [0.0, 1.0, 2.0, 1.0, 0.0];
-        for k in 0..5 {
-            for j in 0..5 {
-                for i in 0..5 {
-                    let want = w[i] * w[j] * w[k];
-                    assert_eq!(f.values[i + 5 * (j + 5 * k)], want, "({i}, {j}, {k})");
-                }
-            }
-        }
-        assert_eq!(Field::new(&impulse).unwrap().prefilter(), Prefilter::None);
-        assert_eq!(
-            "binomial".parse::<Prefilter>().unwrap(),
-            Prefilter::Binomial
-        );
-        assert!("gauss".parse::<Prefilter>().is_err());
-    }
-
-    #[test]
-    fn trilinear_reproduces_a_linear_field() {
-        let f = Field::new(&linear_volume()).unwrap();
-        let p = Vec3::new(1.25, 2.5, 3.75);
-        let expect = 2.0 * 1.25 + 3.0 * 2.5 - 3.75;
-        assert!((f.value(p) - expect).abs() < 1e-5);
-    }
-
-    #[test]
-    fn gradient_is_in_world_units() {
-        // df/dx_world = (df/di) / spacing_x: 2/2, 3/1, -1/0.5.
-        let f = Field::new(&linear_volume()).unwrap();
-        let g = f.gradient(Vec3::new(0.3, 4.0, 5.0));
-        // Stored in 16 bits: within half a step of the largest component's 1/32767.
-        let tol = 0.5 * 3.0 / 32767.0 + 1e-6;
-        assert!((g.x - 1.0).abs() < tol, "{g:?}");
-        assert!((g.y - 3.0).abs() < tol, "{g:?}");
-        assert!((g.z + 2.0).abs() < tol, "{g:?}");
-    }
-
-    #[test]
-    fn macro_cells_bound_the_values() {
-        let f = Field::new(&linear_volume()).unwrap();
-        // 4x5x6 voxels: cells cover voxels 0..=4 along each axis, then 4..=5 along z.
-        assert_eq!(f.cell_dims, [1, 1, 2]);
-        assert_eq!(f.cells[0], (-4.0, 6.0 + 12.0));
-        assert_eq!(f.cells[1], (-5.0, 6.0 + 12.0 - 4.0));
-    }
-
-    #[test]
-    fn degenerate_volumes_are_rejected() {
-        let flat = Volume::new([4, 4, 1], [1.0; 3], Samples::U8(vec![0; 16])).unwrap();
-        assert!(matches!(Field::new(&flat), Err(RenderError::Volume(_))));
-        let mut singular = linear_volume();
-        singular.affine[2][2] = 0.0;
-        assert!(Field::new(&singular).is_err());
-        let nan = Volume::new([2, 2, 2], [1.0; 3], Samples::F32(vec![f32::NAN; 8])).unwrap();
-        assert!(Field::new(&nan).is_err());
-    }
-
-    #[test]
-    fn robust_range_ignores_outlier_voxels() {
-        // 4096 voxels 0..=4095, one replaced by -1.5e37 (the corrupt voxel):
-        // the 0.5th and 99.5th percentiles of 4096 values are ranks 20 and 4075 (of
-        // 0..=4095), i.e. the values 20 and 4075 once the outlier takes rank 0 from
-        // the value 0 it replaced.
-        let mut v: Vec<f32> = (0..4096).map(|i| i as f32).collect();
-        v[0] = -1.5e37;
-        let vol = Volume::new([16, 16, 16], [1.0; 3], Samples::F32(v)).unwrap();
-        let f = Field::new(&vol).unwrap();
-        assert_eq!(f.range(), (-1.5e37, 4095.0));
-        assert_eq!(f.robust_range(), (20.0, 4075.0));
-    }
-
-    #[test]
-    fn row_gradients_equal_the_per_voxel_gradients() {
-        // A non-linear field on a sheared grid: the fast interior rows must give
-        // exactly the per-voxel central differences.
-        let dims = [7, 6, 5];
-        let v: Vec<f32> = (0..7 * 6 * 5)
-            .map(|i| ((i * 37 % 11) as f32).sin() * 3.0)
-            .collect();
-        let g = [[0.5, 0.1, 0.0], [0.0, 1.0, -0.2], [0.3, 0.0, 2.0]];
-        let mut row = vec![[0.0f32; 3]; 7];
-        for k in 0..5 {
-            for j in 0..6 {
-                row_gradients(&v, dims, &g, j, k, &mut row);
-                for (i, r) in row.iter().enumerate() {
-                    assert_eq!(*r, world_gradient(&v, dims, &g, [i, j, k]), "{i} {j} {k}");
-                }
-            }
-        }
-    }
 }

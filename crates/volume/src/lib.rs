@@ -46,7 +46,10 @@ mod raycast;
 mod tf;
 pub mod transport;
 
-pub use field::{Field, Prefilter, MACRO_CELL, MAX_FIELD_VOXELS};
+pub use field::{
+    memory_limit, set_memory_limit, Field, Prefilter, Source, MACRO_CELL, MAX_FIELD_VOXELS,
+    MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
+};
 pub use lut::{Lut, LUT_SIZE};
 pub use phantom::Phantom;
 pub use preint::Sampling;

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::builder::TypedValueParser;
+use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
@@ -133,6 +134,11 @@ pub struct SceneFlags {
     /// luma) or one channel [default: luminance].
     #[arg(long, value_parser = choice::<Grey>(Grey::ALL.map(Grey::name)))]
     pub channel: Option<Grey>,
+    /// Level of an OME-Zarr pyramid to render: 0 (the finest), 1, ..., or auto (the
+    /// coarsest with at least as many voxels along its longest edge as the image has
+    /// pixels along its larger side) [default: 0].
+    #[arg(long, value_parser = parse_level)]
+    pub level: Option<LevelArg>,
     /// Filter applied to the volume before trilinear reconstruction: binomial (a
     /// [1 2 1]/4 low-pass per axis; no "wood grain" rings on surfaces) or none (the
     /// samples as stored) [default: binomial].
@@ -204,9 +210,15 @@ impl SceneFlags {
 
     /// How to read the input volume.
     pub fn read_options(&self) -> ReadOptions {
+        let pixels = self.size.map_or(512, |[w, h]| w.max(h) as usize);
         ReadOptions {
             strict: self.strict,
             grey: self.channel.unwrap_or_default(),
+            level: match self.level {
+                None => Level::Finest,
+                Some(LevelArg::Index(i)) => Level::Index(i),
+                Some(LevelArg::Auto) => Level::Auto(pixels),
+            },
             ..ReadOptions::default()
         }
     }
@@ -583,5 +595,25 @@ mod tests {
         assert_eq!((l.azimuth, l.elevation, l.intensity), (-30.0, 15.0, 1.0));
         assert_eq!(parse_light("10,20,0.5").unwrap().intensity, 0.5);
         assert!(parse_light("1,2,3,4").is_err());
+    }
+}
+
+/// `--level`: a pyramid level by number, or `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LevelArg {
+    /// Level n (0 the finest).
+    Index(usize),
+    /// The coarsest level with at least one voxel per pixel.
+    Auto,
+}
+
+/// Parses `--level`: a number or `auto`.
+fn parse_level(s: &str) -> Result<LevelArg, String> {
+    match s.trim() {
+        "auto" => Ok(LevelArg::Auto),
+        n => n
+            .parse()
+            .map(LevelArg::Index)
+            .map_err(|_| format!("'{s}' is not a level (0, 1, ... or auto)")),
     }
 }

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 use crate::clock::Clock;
 use crate::common::{
-    check_affine, checked_voxels, decode_samples, open_maybe_gz, os_or_invalid, read_exact_growing,
+    check_affine, checked_voxels, open_maybe_gz, os_or_invalid, read_decoded, read_exact_growing,
     ScalarType,
 };
 use crate::{IoError, ReadOptions, Samples, Volume, VolumeFile};
@@ -221,8 +221,15 @@ fn read_samples(
             what: format!("the file ends before the data offset {offset}"),
         });
     }
-    let bytes = read_exact_growing(&path, &mut reader, nbytes, "voxel data")?;
-    Ok(decode_samples(&bytes, ty, endian))
+    read_decoded(
+        &path,
+        reader,
+        count,
+        ty,
+        endian,
+        "voxel data",
+        len.is_some(),
+    )
 }
 
 /// The first note: which header the file has.

@@ -10,7 +10,7 @@ use flate2::read::MultiGzDecoder;
 use super::header::{ByteSkip, Codec, Fields, Layout};
 use super::{invalid, MAX_HEADER_BYTES};
 use crate::clock::Clock;
-use crate::common::{decode_samples, open, os_or_invalid, read_exact_growing, ScalarType};
+use crate::common::{open, os_or_invalid, read_decoded, ScalarType};
 use crate::{IoError, Samples};
 
 /// Opens the file holding the samples (the header's own file after its blank line, or
@@ -135,8 +135,15 @@ fn decode_raw(
     // skip <= available <= the file's length, which fits an i64.
     data.seek(SeekFrom::Current(skip as i64))
         .map_err(|e| os_or_invalid(dpath, e))?;
-    let bytes = read_exact_growing(dpath, &mut data, nbytes, "voxel data")?;
-    Ok(decode_samples(&bytes, layout.ty, layout.endian))
+    read_decoded(
+        dpath,
+        data,
+        layout.count,
+        layout.ty,
+        layout.endian,
+        "voxel data",
+        true,
+    )
 }
 
 /// Gzip-compressed samples (concatenated members allowed); `byte skip` counts bytes
@@ -163,8 +170,16 @@ fn decode_gzip(
             what: "data ends within 'byte skip'".into(),
         });
     }
-    let bytes = read_exact_growing(dpath, &mut gz, layout.nbytes, "gzip-compressed voxel data")?;
-    Ok(decode_samples(&bytes, layout.ty, layout.endian))
+    let what = "gzip-compressed voxel data";
+    read_decoded(
+        dpath,
+        gz,
+        layout.count,
+        layout.ty,
+        layout.endian,
+        what,
+        false,
+    )
 }
 
 /// Samples as text numbers separated by white space or commas.

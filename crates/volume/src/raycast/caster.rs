@@ -1,5 +1,6 @@
 //! The rays of a frame and the reference loops that march them, one sample at a time.
 
+use crossbeam_epoch::Guard;
 use glint_core::camera::Camera;
 use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3, MAX_LIGHTS};
 
@@ -49,6 +50,7 @@ impl Caster<'_> {
         rgb: &mut Vec<[f32; 3]>,
         alpha: &mut Vec<f32>,
         stats: &mut RenderStats,
+        guard: &Guard,
     ) {
         let bg = self.frame.background;
         let (xs, ys) = (px.xs, px.ys);
@@ -56,7 +58,7 @@ impl Caster<'_> {
         for y in ys.0..ys.1 {
             for x in xs.0..xs.1 {
                 let i = (y - ys.0) * tw + (x - xs.0);
-                let (c, op) = self.cast(x as f32, y as f32, (px.start[i], px.end[i]), stats);
+                let (c, op) = self.cast(x as f32, y as f32, (px.start[i], px.end[i]), stats, guard);
                 rgb.push([
                     c[0] + (1.0 - op) * bg[0],
                     c[1] + (1.0 - op) * bg[1],
@@ -76,14 +78,15 @@ impl Caster<'_> {
         y: f32,
         range: (f32, f32),
         stats: &mut RenderStats,
+        guard: &Guard,
     ) -> ([f32; 3], f32) {
         let Some((ray, view)) = self.ray(x, y, range) else {
             return ([0.0; 3], 0.0);
         };
         match self.mode {
-            RenderMode::Composite => self.composite(&ray, &self.shader.for_ray(view), stats),
-            RenderMode::Iso => self.iso(&ray, view, self.iso_value),
-            RenderMode::Mip => self.mip(&ray),
+            RenderMode::Composite => self.composite(&ray, &self.shader.for_ray(view), stats, guard),
+            RenderMode::Iso => self.iso(&ray, view, self.iso_value, guard),
+            RenderMode::Mip => self.mip(&ray, guard),
             // Refused by `ClassifySettings::validate`: a surface scene is rasterised.
             RenderMode::Surface => ([0.0; 3], 0.0),
         }
@@ -197,6 +200,7 @@ impl Caster<'_> {
         ray: &Ray,
         lighting: &RayLighting,
         stats: &mut RenderStats,
+        guard: &Guard,
     ) -> ([f32; 3], f32) {
         let pre = &self.lut.pre;
         let mut color = [0.0f32; 3];
@@ -226,18 +230,20 @@ impl Caster<'_> {
             if self.sampling == Sampling::Point {
                 if !leap {
                     stats.samples += 1;
-                    let e = self.lut.get(self.field.value_at(&loc));
-                    if e[3] > 0.0 && self.add(&loc, e, lighting, &mut color, &mut alpha, stats) {
+                    let e = self.lut.get(self.field.value_at(&loc, guard));
+                    let mut acc = (&mut color, &mut alpha);
+                    if e[3] > 0.0 && self.add(&loc, e, lighting, &mut acc, stats, guard) {
                         break;
                     }
                 }
             } else if !leap || front.is_some() {
                 stats.samples += 1;
-                let front = front.unwrap_or_else(|| self.before(ray, k));
-                let back = self.lut.position(self.field.value_at(&loc));
+                let front = front.unwrap_or_else(|| self.before(ray, k, guard));
+                let back = self.lut.position(self.field.value_at(&loc, guard));
                 prev = Some((k, back));
                 if let Some(e) = pre.segment(front, back, &mut last) {
-                    if self.add(&loc, e, lighting, &mut color, &mut alpha, stats) {
+                    let mut acc = (&mut color, &mut alpha);
+                    if self.add(&loc, e, lighting, &mut acc, stats, guard) {
                         break;
                     }
                 }
@@ -253,19 +259,20 @@ impl Caster<'_> {
     }
 
     /// Shades the sample at `loc` with colour and opacity `rgba` and adds it behind
-    /// `color` and `alpha`; returns whether the ray is now opaque enough to stop.
+    /// the ray's colour and opacity `acc`; returns whether the ray is now opaque enough
+    /// to stop.
     #[inline(always)]
     pub(super) fn add(
         &self,
         loc: &Loc,
         rgba: [f32; 4],
         lighting: &RayLighting,
-        color: &mut [f32; 3],
-        alpha: &mut f32,
+        (color, alpha): &mut (&mut [f32; 3], &mut f32),
         stats: &mut RenderStats,
+        guard: &Guard,
     ) -> bool {
         stats.shaded += 1;
-        let grad = self.field.gradient_at(loc);
+        let grad = self.field.gradient_at(loc, guard);
         let base = [rgba[0], rgba[1], rgba[2]];
         let rgb = match self.shadows {
             None => self.shader.shade(base, grad, lighting),
@@ -278,12 +285,12 @@ impl Caster<'_> {
                 self.shade_shadowed(s, p, base, grad, lighting)
             }
         };
-        let w = (1.0 - *alpha) * rgba[3];
+        let w = (1.0 - **alpha) * rgba[3];
         color[0] += w * rgb[0];
         color[1] += w * rgb[1];
         color[2] += w * rgb[2];
-        *alpha += w;
-        *alpha >= TERMINATION_OPACITY
+        **alpha += w;
+        **alpha >= TERMINATION_OPACITY
     }
 
     /// [`Shader::shade_shadowed`] of a sample at index-space point `p`, its lights'
@@ -307,12 +314,19 @@ impl Caster<'_> {
     /// ending at sample `k`, when `k - 1` was not read (a leap or the ray's start just
     /// before `k`). The SIMD loop's lanes read it as their first sample of the step
     /// (`Lanes::segment_step`), with the same arithmetic.
-    pub(super) fn before(&self, ray: &Ray, k: i64) -> f32 {
+    pub(super) fn before(&self, ray: &Ray, k: i64, guard: &Guard) -> f32 {
         let loc = self.field.locate(ray.at(ray.t(k - 1, self.dt)));
-        self.lut.position(self.field.value_at(&loc))
+        self.lut.position(self.field.value_at(&loc, guard))
     }
 
-    pub(super) fn iso(&self, ray: &Ray, view: Vec3, threshold: f32) -> ([f32; 3], f32) {
+    pub(super) fn iso(
+        &self,
+        ray: &Ray,
+        view: Vec3,
+        threshold: f32,
+        guard: &Guard,
+    ) -> ([f32; 3], f32) {
+        let value = |p: Vec3| self.field.value_in(p, guard);
         let mut k = ray.k0;
         let mut cached_cell = usize::MAX;
         let mut dist = 0;
@@ -328,29 +342,29 @@ impl Caster<'_> {
                 k = self.leap(ray, c, dist, k);
                 continue;
             }
-            if self.field.value(p) >= threshold {
+            if value(p) >= threshold {
                 // Bisect between the previous sample point (below the threshold, or the
                 // entry point) and this one.
                 let mut lo = (t - self.dt).max(ray.t_entry);
                 let mut hi = t;
-                if k > ray.k_entry && self.field.value(ray.at(lo)) < threshold {
+                if k > ray.k_entry && value(ray.at(lo)) < threshold {
                     for _ in 0..ISO_REFINE_STEPS {
                         let mid = 0.5 * (lo + hi);
-                        if self.field.value(ray.at(mid)) >= threshold {
+                        if value(ray.at(mid)) >= threshold {
                             hi = mid;
                         } else {
                             lo = mid;
                         }
                     }
                     // Linear interpolation inside the last bracket.
-                    let (vl, vh) = (self.field.value(ray.at(lo)), self.field.value(ray.at(hi)));
+                    let (vl, vh) = (value(ray.at(lo)), value(ray.at(hi)));
                     if vh > vl {
                         hi = lo + (hi - lo) * ((threshold - vl) / (vh - vl)).clamp(0.0, 1.0);
                     }
                 }
                 let p = ray.at(hi);
                 let e = self.lut.get(threshold);
-                let g = self.field.gradient(p);
+                let g = self.field.gradient_in(p, guard);
                 let lighting = self.shader.for_ray(view);
                 let base = [e[0], e[1], e[2]];
                 let rgb = match self.shadows {
@@ -364,7 +378,7 @@ impl Caster<'_> {
         ([0.0; 3], 0.0)
     }
 
-    pub(super) fn mip(&self, ray: &Ray) -> ([f32; 3], f32) {
+    pub(super) fn mip(&self, ray: &Ray, guard: &Guard) -> ([f32; 3], f32) {
         let mut best = f32::NEG_INFINITY;
         let mut k = ray.k0;
         while k <= ray.k1 {
@@ -377,7 +391,7 @@ impl Caster<'_> {
                     continue;
                 }
             }
-            best = best.max(self.field.value(p));
+            best = best.max(self.field.value_in(p, guard));
             k += 1;
         }
         if !best.is_finite() {

@@ -331,6 +331,7 @@ impl Classification {
             s.check_lights(shader)?;
         }
         let field = &*self.field;
+        field.make_room();
         let (w, h) = (settings.width as usize, settings.height as usize);
         let rays = IndexRays::new(&camera, field, settings.width, settings.height);
         let starts =
@@ -359,6 +360,8 @@ impl Classification {
         let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
             .into_par_iter()
             .map_init(Scratch::default, |_scratch, t| {
+                // Bricks this tile reads stay in the cache while it holds the guard.
+                let guard = crossbeam_epoch::pin();
                 let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
                 let n = (x1 - x0) * (y1 - y0);
@@ -385,12 +388,14 @@ impl Classification {
                 #[cfg(target_arch = "x86_64")]
                 if caster.simd {
                     // SAFETY: `simd` is set only when avx2::supported() is true.
-                    unsafe { caster.tile_avx2(&px, _scratch, &mut rgb, &mut alpha, &mut stats) };
+                    unsafe {
+                        caster.tile_avx2(&px, _scratch, &mut rgb, &mut alpha, &mut stats, &guard)
+                    };
                 } else {
-                    caster.tile(&px, &mut rgb, &mut alpha, &mut stats);
+                    caster.tile(&px, &mut rgb, &mut alpha, &mut stats, &guard);
                 }
                 #[cfg(not(target_arch = "x86_64"))]
-                caster.tile(&px, &mut rgb, &mut alpha, &mut stats);
+                caster.tile(&px, &mut rgb, &mut alpha, &mut stats, &guard);
                 progress(n as u64);
                 (rgb, alpha, stats)
             })
@@ -409,6 +414,9 @@ impl Classification {
             stats.samples += tstats.samples;
             stats.shaded += tstats.shaded;
             stats.skips += tstats.skips;
+        }
+        if let Some(problem) = field.problem() {
+            return Err(RenderError::Volume(problem));
         }
         Ok(Image {
             width: settings.width,

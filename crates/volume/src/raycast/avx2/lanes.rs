@@ -2,6 +2,8 @@
 
 use std::arch::x86_64::*;
 
+use crossbeam_epoch::Guard;
+
 use super::*;
 
 /// The state of eight rays marched one per lane ([`composite_lanes`]), by component.
@@ -26,6 +28,11 @@ pub(super) struct Lanes {
     pub(super) prev_k: [i32; LANES],
     pub(super) prev_u: [f32; LANES],
     pub(super) last: [Last; LANES],
+    /// A brick could not be built (the cache is full of bricks in use): the tile is
+    /// given up and rendered by the reference loop.
+    pub(super) failed: bool,
+    /// The lanes' last bricks.
+    pub(super) memo: Memo,
 }
 
 impl Lanes {
@@ -105,6 +112,7 @@ impl Lanes {
         inv: &Invariants,
         kept: &mut Kept,
         stats: &mut RenderStats,
+        guard: &Guard,
     ) -> u8 {
         // SAFETY: this function's `# Safety` contract, which its callers uphold,
         // covers every unsafe operation below (CPU features, pointer ranges).
@@ -130,11 +138,18 @@ impl Lanes {
                 let last = _mm256_cmpgt_epi32(k_plus, k1);
                 let second = samples & !(_mm256_movemask_ps(_mm256_castsi256_ps(last)) as u8);
                 stats.samples += u64::from(samples.count_ones() + second.count_ones());
-                let first = probe(c, inv, p, ijk);
+                let Some(first) = probe(c, inv, (p, ijk), (samples, &mut self.memo), guard) else {
+                    self.failed = true;
+                    return 0;
+                };
                 ended |= self.keep_hits(c.lut, kept, samples & first.opaque, &first, stats);
                 if second != 0 {
                     let (p2, ijk2) = positions(inv, ray, k_plus);
-                    let next = probe(c, inv, p2, ijk2);
+                    let Some(next) = probe(c, inv, (p2, ijk2), (second, &mut self.memo), guard)
+                    else {
+                        self.failed = true;
+                        return 0;
+                    };
                     ended |=
                         self.keep_hits(c.lut, kept, second & next.opaque & !ended, &next, stats);
                     // All ones is -1: subtracting it steps the second-sample lanes once more.
@@ -164,6 +179,7 @@ impl Lanes {
         inv: &Invariants,
         kept: &mut Kept,
         stats: &mut RenderStats,
+        guard: &Guard,
     ) -> u8 {
         // SAFETY: this function's `# Safety` contract, which its callers uphold,
         // covers every unsafe operation below (CPU features, pointer ranges).
@@ -194,9 +210,26 @@ impl Lanes {
             }
             let mut ended = 0u8;
             if reads != 0 {
-                let first = reads_at(inv, p0, ijk0, first_k);
+                let Some(first) =
+                    reads_at(c, inv, (p0, ijk0, first_k), (reads, &mut self.memo), guard)
+                else {
+                    self.failed = true;
+                    return 0;
+                };
                 let second = if seconds != 0 {
-                    reads_at(inv, p1, ijk1, second_k)
+                    match reads_at(
+                        c,
+                        inv,
+                        (p1, ijk1, second_k),
+                        (seconds, &mut self.memo),
+                        guard,
+                    ) {
+                        Some(r) => r,
+                        None => {
+                            self.failed = true;
+                            return 0;
+                        }
+                    }
                 } else {
                     first
                 };

@@ -5,6 +5,7 @@ use std::arch::x86_64::*;
 use glint_core::MAX_LIGHTS;
 
 use super::*;
+use crate::field::brick::{BRICK_ROW, BRICK_SLICE};
 use crate::transport::ShadowField;
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
@@ -18,16 +19,15 @@ pub(super) unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
         let f = c.field;
-        let [nx, ny, _] = f.dims;
-        let sxy = nx * ny;
-        let data = f.gradients.as_ptr();
+        let (nx, sxy) = (BRICK_ROW, BRICK_SLICE);
+        let data = f.cache.gradients();
         let mut g = [_mm_setzero_ps(); LANES];
         for (j, gj) in g.iter_mut().enumerate() {
             let r = r0 + j;
             // One 128-bit load holds voxels (i, i+1) of a row: [gx, gy, gz, 0] twice, as
             // i16, converted exactly to f32.
-            // SAFETY: the base is clamped to [0, dims-2] per axis, so base + sxy + nx + 1
-            // is a voxel.
+            // SAFETY: the base is a voxel of a brick slot whose cell lies in the slot (the
+            // tile's guard keeps the slot), so base + sxy + nx + 1 is in the pool.
             let s = kept.0.get_unchecked(r);
             let p = data.add(s.base as usize);
             let v = |off: usize| {

@@ -34,6 +34,8 @@
 
 use std::arch::x86_64::*;
 
+use crossbeam_epoch::Guard;
+
 use super::caster::{Caster, Pixels, Ray};
 use super::TERMINATION_OPACITY;
 use crate::field::MACRO_CELL;
@@ -145,7 +147,8 @@ pub(super) struct Sample {
     pub(super) t: [f32; 3],
     /// Front-to-back weight `(1 - alpha) alpha_sample`.
     pub(super) weight: f32,
-    /// Linear index of the sample's corner-000 voxel.
+    /// The sample's corner-000 voxel in the brick pool (valid while the tile's guard
+    /// lives).
     pub(super) base: i32,
     /// The ray's index in the tile.
     pub(super) ray: u32,
@@ -265,7 +268,9 @@ pub(super) unsafe fn finish(
 }
 
 /// Composites the rays of the tile `px` front to back: the same pixels as
-/// `Caster::tile`.
+/// `Caster::tile`. When a brick cannot be built (the brick cache is full of bricks in
+/// use), the tile's partial results are dropped and the reference loop renders it
+/// (its reads fall back to bricks built outside the cache).
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA ([`supported`]).
@@ -273,18 +278,24 @@ pub(super) unsafe fn composite_tile(
     c: &Caster,
     px: &Pixels,
     scratch: &mut Scratch,
-    rgb: &mut Vec<[f32; 3]>,
-    alpha: &mut Vec<f32>,
+    (rgb, alpha): (&mut Vec<[f32; 3]>, &mut Vec<f32>),
     stats: &mut RenderStats,
+    guard: &Guard,
 ) {
+    let (start, before) = (alpha.len(), *stats);
     // SAFETY: the caller upholds the same contract. One loop per sampling, so neither
     // carries the other's code.
-    unsafe {
+    let done = unsafe {
         if c.sampling == Sampling::PreIntegrated {
-            composite_lanes::<true>(c, px, scratch, rgb, alpha, stats)
+            composite_lanes::<true>(c, px, scratch, (rgb, alpha), stats, guard)
         } else {
-            composite_lanes::<false>(c, px, scratch, rgb, alpha, stats)
+            composite_lanes::<false>(c, px, scratch, (rgb, alpha), stats, guard)
         }
+    };
+    if !done {
+        alpha.truncate(start);
+        *stats = before;
+        c.tile(px, rgb, alpha, stats, guard);
     }
 }
 
@@ -292,7 +303,8 @@ pub(super) unsafe fn composite_tile(
 /// next step of its own ray (a leap out of an empty macro cell, or samples:
 /// [`Lanes::step`] for point sampling, [`Lanes::segment_step`] pre-integrated when
 /// `PRE`), so a vector's loads belong to eight independent chains. A lane whose ray
-/// ends takes the tile's next ray.
+/// ends takes the tile's next ray. Returns `false`, leaving `rgb` as it was, when a
+/// brick could not be built.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA ([`supported`]).
@@ -301,10 +313,10 @@ pub(super) unsafe fn composite_lanes<const PRE: bool>(
     c: &Caster,
     px: &Pixels,
     scratch: &mut Scratch,
-    rgb: &mut Vec<[f32; 3]>,
-    alpha: &mut Vec<f32>,
+    (rgb, alpha): (&mut Vec<[f32; 3]>, &mut Vec<f32>),
     stats: &mut RenderStats,
-) {
+    guard: &Guard,
+) -> bool {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
@@ -332,15 +344,19 @@ pub(super) unsafe fn composite_lanes<const PRE: bool>(
                 break;
             }
             let ended = if PRE {
-                lanes.segment_step(c, &inv, kept, stats)
+                lanes.segment_step(c, &inv, kept, stats, guard)
             } else {
-                lanes.step(c, &inv, kept, stats)
+                lanes.step(c, &inv, kept, stats, guard)
             };
+            if lanes.failed {
+                return false;
+            }
             for l in (0..LANES).filter(|l| ended & (1 << l) != 0) {
                 alpha[start + lanes.id[l] as usize] = lanes.alpha[l];
             }
         }
         finish(c, scratch, &alpha[start..], rgb);
+        true
     }
 }
 
@@ -385,14 +401,15 @@ impl Caster<'_> {
         rgb: &mut Vec<[f32; 3]>,
         alpha: &mut Vec<f32>,
         stats: &mut RenderStats,
+        guard: &Guard,
     ) {
         // SAFETY: this function's `# Safety` contract, which its callers uphold,
         // covers every unsafe operation below (CPU features, pointer ranges).
         unsafe {
             if self.mode == RenderMode::Composite {
-                composite_tile(self, px, scratch, rgb, alpha, stats)
+                composite_tile(self, px, scratch, (rgb, alpha), stats, guard)
             } else {
-                self.tile(px, rgb, alpha, stats)
+                self.tile(px, rgb, alpha, stats, guard)
             }
         }
     }

@@ -1,8 +1,13 @@
 //! Eight samples read at once: positions, cells, trilinear values, table entries.
 
 use std::arch::x86_64::*;
+use std::sync::atomic::{AtomicI32, Ordering};
+
+use crossbeam_epoch::Guard;
 
 use super::*;
+use crate::field::brick::{BRICK, BRICK_ROW, BRICK_SHIFT, BRICK_SLICE};
+use crate::field::cache::ABSENT;
 
 /// One sample per lane, as [`Lanes::keep_segments`] uses it.
 #[derive(Clone, Copy)]
@@ -17,22 +22,26 @@ pub(super) struct Reads {
     pub(super) k: [i32; LANES],
 }
 
-/// The samples at positions `p` (cells `ijk`, clamped) with sample indices `k`.
+/// The samples at positions `p` (cells `ijk`, clamped) with sample indices `k`, read
+/// for the lanes `mask` (the others read the dummy brick); `None` when a brick could
+/// not be built (the cache is full of bricks in use).
 ///
 /// # Safety
 /// The CPU must support AVX2 (inlined into [`composite_lanes`]); `ijk` must be
 /// clamped to the field's cells.
 #[inline(always)]
 pub(super) unsafe fn reads_at(
+    c: &Caster,
     inv: &Invariants,
-    p: [__m256; 3],
-    ijk: [__m256i; 3],
-    k: __m256i,
-) -> Reads {
+    (p, ijk, k): ([__m256; 3], [__m256i; 3], __m256i),
+    (mask, memo): (u8, &mut Memo),
+    guard: &Guard,
+) -> Option<Reads> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let (fr, base, uv) = values_at(inv, p, ijk);
+        let base = bases(c, inv, ijk, (mask, memo), guard)?;
+        let (fr, uv) = values_at(inv, p, ijk, &base);
         let mut r = Reads {
             t: [[0.0; LANES]; 3],
             base,
@@ -44,7 +53,91 @@ pub(super) unsafe fn reads_at(
         }
         _mm256_storeu_ps(r.u.as_mut_ptr(), uv);
         _mm256_storeu_si256(r.k.as_mut_ptr().cast(), k);
-        r
+        Some(r)
+    }
+}
+
+/// Each lane's last brick and its slot's offset: a ray stays in a brick for many
+/// samples, so the page table is read only when a lane enters another brick.
+pub(super) struct Memo {
+    index: [i32; LANES],
+    off: [i32; LANES],
+}
+
+impl Default for Memo {
+    /// No brick; offset 0, the dummy slot.
+    fn default() -> Memo {
+        Memo {
+            index: [-1; LANES],
+            off: [0; LANES],
+        }
+    }
+}
+
+/// Each lane's corner-000 voxel in the brick pool: its brick's slot (from `memo`, or
+/// the page table, the brick built now if absent) plus the voxel's place in the brick,
+/// for the lanes `mask`. Every other lane gets its place in the last slot it used (or
+/// the dummy slot 0), so all loads stay inside the pool. `None` when a brick could not
+/// be built (the cache is full of bricks in use).
+///
+/// # Safety
+/// The CPU must support AVX2; `ijk` must be clamped to the field's cells; `guard` must
+/// stay alive while the returned voxels are read, and `memo` must have been filled
+/// under the same guard.
+#[inline(always)]
+pub(super) unsafe fn bases(
+    c: &Caster,
+    inv: &Invariants,
+    ijk: [__m256i; 3],
+    (mask, memo): (u8, &mut Memo),
+    guard: &Guard,
+) -> Option<[i32; LANES]> {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        const SHIFT: i32 = BRICK_SHIFT as i32;
+        let b = axes!(|a| _mm256_srli_epi32::<SHIFT>(ijk[a]));
+        let l = axes!(|a| _mm256_and_si256(ijk[a], inv.brick_mask));
+        let index = _mm256_add_epi32(
+            b[0],
+            _mm256_mullo_epi32(
+                inv.bdx,
+                _mm256_add_epi32(b[1], _mm256_mullo_epi32(inv.bdy, b[2])),
+            ),
+        );
+        let local = _mm256_add_epi32(
+            l[0],
+            _mm256_add_epi32(
+                _mm256_mullo_epi32(l[1], inv.brick_row),
+                _mm256_mullo_epi32(l[2], inv.brick_slice),
+            ),
+        );
+        let known = _mm256_cmpeq_epi32(index, _mm256_loadu_si256(memo.index.as_ptr().cast()));
+        let mut enter = mask & !(_mm256_movemask_ps(_mm256_castsi256_ps(known)) as u8);
+        if enter != 0 {
+            let mut bi = [0i32; LANES];
+            _mm256_storeu_si256(bi.as_mut_ptr().cast(), index);
+            while enter != 0 {
+                let l = enter.trailing_zeros() as usize;
+                enter &= enter - 1;
+                let b = bi[l] as usize;
+                // SAFETY: the cells are clamped, so the brick index is below the count.
+                let entry = (*inv.page.add(b)).load(Ordering::Acquire);
+                memo.off[l] = if entry != ABSENT {
+                    entry
+                } else {
+                    let f = c.field;
+                    let bd = f.brick_dims;
+                    let coords = [b % bd[0], b / bd[0] % bd[1], b / (bd[0] * bd[1])];
+                    f.cache.build(b, coords, &f.recipe, guard)?
+                };
+                memo.index[l] = bi[l];
+            }
+        }
+        let base = _mm256_add_epi32(_mm256_loadu_si256(memo.off.as_ptr().cast()), local);
+        let mut out = [0i32; LANES];
+        _mm256_storeu_si256(out.as_mut_ptr().cast(), base);
+        Some(out)
     }
 }
 
@@ -124,29 +217,27 @@ pub(super) struct Probe {
     pub(super) opaque: u8,
 }
 
-/// For eight samples at positions `p` in the cells `ijk` (clamped to `[0, dims-2]`):
-/// their fractions in the cell, their corner voxels' indices, and their table
-/// coordinates (`Lut::position` of the trilinear value), with the reference loop's
-/// arithmetic.
+/// For eight samples at positions `p` in the cells `ijk` (clamped to `[0, dims-2]`)
+/// whose corner voxels are `base` in the brick pool ([`bases`]): their fractions in the
+/// cell and their table coordinates (`Lut::position` of the trilinear value), with the
+/// reference loop's arithmetic.
 ///
 /// # Safety
-/// The CPU must support AVX2; `ijk` must be clamped as said.
+/// The CPU must support AVX2; `ijk` must be clamped as said; `base` from [`bases`]
+/// with its guard alive.
 #[inline(always)]
 pub(super) unsafe fn values_at(
     inv: &Invariants,
     p: [__m256; 3],
     ijk: [__m256i; 3],
-) -> ([__m256; 3], [i32; LANES], __m256) {
+    base: &[i32; LANES],
+) -> ([__m256; 3], __m256) {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
         let Invariants {
-            nx,
-            sxy,
             zero,
             one,
-            nxv,
-            sxyv,
             lut_lo,
             lut_scale,
             half,
@@ -158,22 +249,13 @@ pub(super) unsafe fn values_at(
             let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
             _mm256_min_ps(_mm256_max_ps(t, zero), one)
         });
-        let mut base = [0i32; LANES];
-        _mm256_storeu_si256(
-            base.as_mut_ptr().cast(),
-            _mm256_add_epi32(
-                ijk[0],
-                _mm256_add_epi32(
-                    _mm256_mullo_epi32(ijk[1], nxv),
-                    _mm256_mullo_epi32(ijk[2], sxyv),
-                ),
-            ),
-        );
-        // SAFETY: base + sxy + nx + 1 < nx ny nz, the cells being clamped.
+        // SAFETY: each base is a slot's voxel whose cell lies in the slot, so base +
+        // BRICK_SLICE + BRICK_ROW + 1 is inside the pool.
         let mut ptrs = [values; LANES];
-        for (p, &b) in ptrs.iter_mut().zip(&base) {
+        for (p, &b) in ptrs.iter_mut().zip(base) {
             *p = values.add(b as usize);
         }
+        let (nx, sxy) = (BRICK_ROW, BRICK_SLICE);
         let (c000, c100) = row(ptrs, 0);
         let (c010, c110) = row(ptrs, nx);
         let (c001, c101) = row(ptrs, sxy);
@@ -186,12 +268,13 @@ pub(super) unsafe fn values_at(
         let y1 = lerp(x01, x11, fr[1]);
         let v = lerp(y0, y1, fr[2]);
         let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
-        (fr, base, _mm256_min_ps(_mm256_max_ps(x, zero), lut_max))
+        (fr, _mm256_min_ps(_mm256_max_ps(x, zero), lut_max))
     }
 }
 
-/// Reads the samples at positions `p` (cells `ijk`, clamped) for every lane: the
-/// reference loop's trilinear value and `Lut::index`.
+/// Reads the samples at positions `p` (cells `ijk`, clamped) for the lanes `mask`:
+/// the reference loop's trilinear value and `Lut::index`; `None` when a brick could
+/// not be built.
 ///
 /// # Safety
 /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
@@ -199,13 +282,15 @@ pub(super) unsafe fn values_at(
 pub(super) unsafe fn probe(
     c: &Caster,
     inv: &Invariants,
-    p: [__m256; 3],
-    ijk: [__m256i; 3],
-) -> Probe {
+    (p, ijk): ([__m256; 3], [__m256i; 3]),
+    (mask, memo): (u8, &mut Memo),
+    guard: &Guard,
+) -> Option<Probe> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let (fr, base, uv) = values_at(inv, p, ijk);
+        let base = bases(c, inv, ijk, (mask, memo), guard)?;
+        let (fr, uv) = values_at(inv, p, ijk, &base);
         let mut li = [0i32; LANES];
         _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
         let mut opaque = 0u8;
@@ -213,12 +298,12 @@ pub(super) unsafe fn probe(
             // SAFETY: the index was clamped to the table.
             opaque |= *c.lut.opaque.get_unchecked(i as usize) << l;
         }
-        Probe {
+        Some(Probe {
             li,
             base,
             fr,
             opaque,
-        }
+        })
     }
 }
 
@@ -229,20 +314,25 @@ pub(super) unsafe fn probe(
 /// unchanged).
 #[derive(Clone, Copy)]
 pub(super) struct Invariants {
-    pub(super) nx: usize,
-    pub(super) sxy: usize,
     pub(super) cd: [usize; 3],
     pub(super) dt: __m256,
     /// The last cell's corner per axis, `dims - 2`.
     pub(super) hi: [__m256; 3],
     pub(super) zero: __m256,
     pub(super) one: __m256,
-    pub(super) nxv: __m256i,
-    pub(super) sxyv: __m256i,
+    /// Bricks along i and j; `BRICK - 1`; voxels per brick row and slice.
+    pub(super) bdx: __m256i,
+    pub(super) bdy: __m256i,
+    pub(super) brick_mask: __m256i,
+    pub(super) brick_row: __m256i,
+    pub(super) brick_slice: __m256i,
+    /// The field's page table.
+    pub(super) page: *const AtomicI32,
     pub(super) lut_lo: __m256,
     pub(super) lut_scale: __m256,
     pub(super) half: __m256,
     pub(super) lut_max: __m256,
+    /// The brick pool's values.
     pub(super) values: *const f32,
 }
 
@@ -254,24 +344,26 @@ impl Invariants {
         // SAFETY: the caller runs with AVX2 (this function's contract).
         unsafe {
             let f = c.field;
-            let [nx, ny, _] = f.dims;
-            let sxy = nx * ny;
+            let bd = f.brick_dims;
             Invariants {
-                nx,
-                sxy,
                 cd: f.cell_dims,
                 dt: _mm256_set1_ps(c.dt),
                 hi: axes!(|a| _mm256_set1_ps((f.dims[a] - 2) as f32)),
                 zero: _mm256_setzero_ps(),
                 one: _mm256_set1_ps(1.0),
-                // Every index fits in i32: MAX_FIELD_VOXELS is 2^28.
-                nxv: _mm256_set1_epi32(nx as i32),
-                sxyv: _mm256_set1_epi32(sxy as i32),
+                // Brick indices fit in i32 (at most 2^33 / 16^3 bricks), as do pool
+                // offsets (the pool's size is capped so).
+                bdx: _mm256_set1_epi32(bd[0] as i32),
+                bdy: _mm256_set1_epi32(bd[1] as i32),
+                brick_mask: _mm256_set1_epi32(BRICK as i32 - 1),
+                brick_row: _mm256_set1_epi32(BRICK_ROW as i32),
+                brick_slice: _mm256_set1_epi32(BRICK_SLICE as i32),
+                page: f.cache.page().as_ptr(),
                 lut_lo: _mm256_set1_ps(c.lut.lo),
                 lut_scale: _mm256_set1_ps(c.lut.scale),
                 half: _mm256_set1_ps(0.5),
                 lut_max: _mm256_set1_ps((crate::preint::LUT_SIZE - 1) as f32),
-                values: f.values.as_ptr(),
+                values: f.cache.values(),
             }
         }
     }

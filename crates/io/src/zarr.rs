@@ -1,0 +1,329 @@
+//! OME-Zarr (OME-NGFF 0.4 on Zarr v2, 0.5 on Zarr v3) multiscale images: the pyramid's
+//! levels from the group's `multiscales` metadata, and one level read as a volume.
+//!
+//! The arrays are read with `zarrs` (codecs blosc, gzip, zstd, sharding) and the
+//! metadata parsed and validated by `ome_zarr_metadata`; this module only maps the
+//! image's axes onto glint's grid. The last three spatial axes (x fastest in memory,
+//! then y, then z, NGFF's order "t, c, z, y, x") become i, j, k; a time or channel
+//! axis is read at index 0 with a note. The affine is the level's scale and
+//! translation (NGFF 0.4 "coordinateTransformations"), in the axes' units (mm when
+//! they say millimeter, else as given, with a note).
+
+use std::path::Path;
+use std::sync::Arc;
+
+use ome_zarr_metadata::v0_4::{self, AxisType, CoordinateTransform};
+use ome_zarr_metadata::AnyOmeFields;
+use zarrs::array::{Array, ArraySubset};
+use zarrs::filesystem::FilesystemStore;
+use zarrs::group::Group;
+
+use crate::common::{check_affine, diagonal_affine};
+use crate::{Format, IoError, ReadOptions, Samples, Volume, VolumeFile};
+
+/// Which level of a pyramid to read ([`ReadOptions::level`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Level {
+    /// The finest (level 0).
+    #[default]
+    Finest,
+    /// Level `n` (0 finest).
+    Index(usize),
+    /// The coarsest level whose largest edge, in voxels, is at least this many (the
+    /// image's larger side in pixels: at least one voxel per pixel along the view).
+    Auto(usize),
+}
+
+/// One level of a pyramid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelInfo {
+    /// The array's path inside the group.
+    pub path: String,
+    /// Voxels along x, y, z (i, j, k).
+    pub dims: [usize; 3],
+    /// Voxel size along x, y, z in the axes' units.
+    pub scale: [f64; 3],
+    /// Offset of voxel (0, 0, 0) along x, y, z.
+    pub translation: [f64; 3],
+    /// The data type's name (`uint16`, ...).
+    pub data_type: String,
+}
+
+/// Whether `path` is a Zarr group (a directory with `.zgroup`/`.zattrs` or
+/// `zarr.json`).
+pub fn is_store(path: &Path) -> bool {
+    path.is_dir()
+        && ["zarr.json", ".zattrs", ".zgroup"]
+            .iter()
+            .any(|f| path.join(f).is_file())
+}
+
+fn invalid(path: &Path, what: impl Into<String>) -> IoError {
+    IoError::Invalid {
+        path: path.into(),
+        what: what.into(),
+    }
+}
+
+/// What glint uses of a multiscale image (NGFF 0.4 and 0.5 share these fields).
+struct Image {
+    axes: Vec<v0_4::Axis>,
+    datasets: Vec<v0_4::MultiscaleImageDataset>,
+}
+
+/// The store and its first multiscale image.
+fn multiscale(path: &Path) -> Result<(Arc<FilesystemStore>, Image), IoError> {
+    let store = Arc::new(
+        FilesystemStore::new(path).map_err(|e| invalid(path, format!("not a Zarr store: {e}")))?,
+    );
+    let group = Group::open(store.clone(), "/")
+        .map_err(|e| invalid(path, format!("not a Zarr group: {e}")))?;
+    let attrs = serde_json::Value::Object(group.attributes().clone());
+    let ome: AnyOmeFields = serde_json::from_value(attrs)
+        .map_err(|e| invalid(path, format!("no OME-Zarr metadata: {e}")))?;
+    let first = match ome {
+        AnyOmeFields::V0_4(a) => a.multiscales.and_then(|m| {
+            m.into_iter().next().map(|m| Image {
+                axes: m.axes,
+                datasets: m.datasets,
+            })
+        }),
+        AnyOmeFields::V0_5(o) => o.multiscales.and_then(|m| {
+            m.into_iter().next().map(|m| Image {
+                axes: m.axes,
+                datasets: m.datasets,
+            })
+        }),
+    };
+    let image =
+        first.ok_or_else(|| invalid(path, "the OME-Zarr group holds no multiscale image"))?;
+    Ok((store, image))
+}
+
+/// The spatial axes' positions (x, y, z order: the last three spatial axes reversed).
+fn spatial_axes(path: &Path, axes: &[v0_4::Axis]) -> Result<[usize; 3], IoError> {
+    let spatial: Vec<usize> = (0..axes.len())
+        .filter(|&a| matches!(axes[a].r#type, Some(AxisType::Space)))
+        .collect();
+    match spatial[..] {
+        [z, y, x] => Ok([x, y, z]),
+        _ => Err(IoError::Unsupported {
+            path: path.into(),
+            what: format!(
+                "an image with {} spatial axes (glint renders 3: z, y, x)",
+                spatial.len()
+            ),
+        }),
+    }
+}
+
+/// Scale and translation of a dataset along every axis (transforms stored in a file
+/// of their own are not read: unsupported).
+fn transform(
+    path: &Path,
+    ts: &[CoordinateTransform],
+    n: usize,
+) -> Result<(Vec<f64>, Vec<f64>), IoError> {
+    let (mut scale, mut shift) = (vec![1.0; n], vec![0.0; n]);
+    let wide = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>();
+    for t in ts {
+        match t {
+            CoordinateTransform::Scale(v0_4::CoordinateTransformScale::List { scale: v }) => {
+                scale = wide(v)
+            }
+            CoordinateTransform::Translation(v0_4::CoordinateTransformTranslation::List {
+                translation: v,
+            }) => shift = wide(v),
+            CoordinateTransform::Identity => {}
+            _ => {
+                return Err(IoError::Unsupported {
+                    path: path.into(),
+                    what: "coordinate transforms stored in a separate file".into(),
+                })
+            }
+        }
+    }
+    Ok((scale, shift))
+}
+
+/// The pyramid's levels, finest first.
+pub fn levels(path: &Path) -> Result<Vec<LevelInfo>, IoError> {
+    let (store, image) = multiscale(path)?;
+    let xyz = spatial_axes(path, &image.axes)?;
+    let n = image.axes.len();
+    let mut out = Vec::with_capacity(image.datasets.len().min(64));
+    let mut previous: Option<[usize; 3]> = None;
+    for d in &image.datasets {
+        let array = Array::open(store.clone(), &format!("/{}", d.path))
+            .map_err(|e| invalid(path, format!("level '{}': {e}", d.path)))?;
+        let shape = array.shape();
+        if shape.len() != n {
+            return Err(invalid(
+                path,
+                format!(
+                    "level '{}' has {} dimensions, the multiscale's axes {n}",
+                    d.path,
+                    shape.len()
+                ),
+            ));
+        }
+        let dims = xyz.map(|a| usize::try_from(shape[a]).unwrap_or(usize::MAX));
+        if let Some(p) = previous {
+            if (0..3).any(|a| dims[a] > p[a]) {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "level '{}' ({}x{}x{}) is finer than the level before it",
+                        d.path, dims[0], dims[1], dims[2]
+                    ),
+                ));
+            }
+        }
+        previous = Some(dims);
+        let (scale, shift) = transform(path, &d.coordinate_transformations, n)?;
+        if scale.len() != n || shift.len() != n {
+            return Err(invalid(
+                path,
+                format!(
+                    "level '{}': a transform's length is not the axes' {n}",
+                    d.path
+                ),
+            ));
+        }
+        out.push(LevelInfo {
+            path: d.path.clone(),
+            dims,
+            scale: xyz.map(|a| scale[a]),
+            translation: xyz.map(|a| shift[a]),
+            // zarrs names a Zarr v2 type by both its v3 and v2 names ("uint16 / <u2").
+            data_type: (array.data_type().to_string().split(" / ").next())
+                .unwrap_or_default()
+                .to_string(),
+        });
+    }
+    if out.is_empty() {
+        return Err(invalid(path, "the multiscale image has no datasets"));
+    }
+    Ok(out)
+}
+
+/// Which level `level` picks among `levels` (finest first).
+pub fn pick(levels: &[LevelInfo], level: Level) -> Option<usize> {
+    match level {
+        Level::Finest => Some(0),
+        Level::Index(i) => (i < levels.len()).then_some(i),
+        Level::Auto(pixels) => Some(
+            levels
+                .iter()
+                .rposition(|l| l.dims.iter().max().copied().unwrap_or(0) >= pixels)
+                .unwrap_or(0),
+        ),
+    }
+}
+
+/// Reads one level of an OME-Zarr store ([`ReadOptions::level`]) as a volume; the
+/// notes list every level, the one read marked.
+pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
+    let all = levels(path)?;
+    let chosen = pick(&all, options.level).ok_or_else(|| {
+        invalid(
+            path,
+            format!(
+                "no such level: the pyramid has {} (levels 0 to {})",
+                all.len(),
+                all.len() - 1
+            ),
+        )
+    })?;
+    let l = &all[chosen];
+    let count = crate::common::checked_voxels(path, l.dims, 1, options.max_voxels)?;
+    let (store, image) = multiscale(path)?;
+    let array = Array::open(store, &format!("/{}", l.path))
+        .map_err(|e| invalid(path, format!("level '{}': {e}", l.path)))?;
+    let xyz = spatial_axes(path, &image.axes)?;
+    let shape = array.shape().to_vec();
+    let mut notes = vec![format!(
+        "OME-Zarr {}, {} level(s)",
+        if path.join("zarr.json").is_file() {
+            "0.5 (Zarr v3)"
+        } else {
+            "0.4 (Zarr v2)"
+        },
+        all.len()
+    )];
+    // Index 0 along time and channel axes, the whole extent along the spatial ones.
+    let ranges: Vec<std::ops::Range<u64>> = (0..shape.len())
+        .map(|a| {
+            if xyz.contains(&a) {
+                0..shape[a]
+            } else {
+                0..shape[a].min(1)
+            }
+        })
+        .collect();
+    if shape
+        .iter()
+        .enumerate()
+        .any(|(a, &s)| !xyz.contains(&a) && s > 1)
+    {
+        notes.push("read the first time point and channel".into());
+    }
+    if xyz != [shape.len() - 1, shape.len() - 2, shape.len() - 3] {
+        return Err(IoError::Unsupported {
+            path: path.into(),
+            what: "spatial axes other than the last three in z, y, x order".into(),
+        });
+    }
+    let subset = ArraySubset::new_with_ranges(&ranges);
+    let err = |e: zarrs::array::ArrayError| invalid(path, format!("level '{}': {e}", l.path));
+    let samples = match l.data_type.as_str() {
+        "uint8" => Samples::U8(array.retrieve_array_subset(&subset).map_err(err)?),
+        "int8" => Samples::I8(array.retrieve_array_subset(&subset).map_err(err)?),
+        "uint16" => Samples::U16(array.retrieve_array_subset(&subset).map_err(err)?),
+        "int16" => Samples::I16(array.retrieve_array_subset(&subset).map_err(err)?),
+        "uint32" => Samples::U32(array.retrieve_array_subset(&subset).map_err(err)?),
+        "int32" => Samples::I32(array.retrieve_array_subset(&subset).map_err(err)?),
+        "float32" => Samples::F32(array.retrieve_array_subset(&subset).map_err(err)?),
+        "float64" => Samples::F64(array.retrieve_array_subset(&subset).map_err(err)?),
+        other => {
+            return Err(IoError::Unsupported {
+                path: path.into(),
+                what: format!("Zarr data type {other}"),
+            })
+        }
+    };
+    if samples.len() != count {
+        return Err(invalid(path, "the level's data does not match its shape"));
+    }
+    for (i, lv) in all.iter().enumerate() {
+        notes.push(format!(
+            "level {i} '{}': {}x{}x{} {}, voxel {}x{}x{}{}",
+            lv.path,
+            lv.dims[0],
+            lv.dims[1],
+            lv.dims[2],
+            lv.data_type,
+            lv.scale[0],
+            lv.scale[1],
+            lv.scale[2],
+            if i == chosen { " (read)" } else { "" }
+        ));
+    }
+    let affine = diagonal_affine(l.scale, l.translation);
+    let spacing = check_affine(path, &affine)?;
+    Ok(VolumeFile {
+        volume: Volume {
+            dims: l.dims,
+            spacing,
+            affine,
+            samples,
+            slope: 1.0,
+            intercept: 0.0,
+            units: None,
+            colour: None,
+        },
+        format: Format::Zarr,
+        notes,
+        inflate: None,
+    })
+}

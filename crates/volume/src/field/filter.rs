@@ -1,0 +1,206 @@
+//! The field's arithmetic, written once for the pass over the whole volume
+//! ([`super::prepare`]) and the bricks ([`super::brick`]): the binomial prefilter on a
+//! box, world gradients by central differences, and their 16-bit quantisation. Both
+//! callers do the same float operations in the same order on the same inputs, so a
+//! brick's values and gradients are bit for bit those of a whole-volume pass.
+
+/// The `[1 2 1] / 4` binomial along x, y and z in turn ([`super::Prefilter::Binomial`])
+/// of the box `src` (`size`, i fastest), whose outer layer is padding: the result is
+/// the inner box, `size - 2` per axis. The volume's faces are clamped by the caller
+/// padding with copies of the face (a face voxel then counts its missing neighbour as
+/// itself, as the whole-volume filter did); each output is
+/// `0.25 a + 0.5 b + 0.25 c`, evaluated left to right, x first, then y, then z.
+pub(super) fn binomial_box(src: &[f32], size: [usize; 3]) -> Vec<f32> {
+    let [sx, sy, sz] = size;
+    debug_assert!(sx >= 3 && sy >= 3 && sz >= 3 && src.len() == sx * sy * sz);
+    let (ox, oy, oz) = (sx - 2, sy - 2, sz - 2);
+    // Along x: every row of the box.
+    let mut x = vec![0.0f32; ox * sy * sz];
+    for (out, r) in x.chunks_exact_mut(ox).zip(src.chunks_exact(sx)) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = 0.25 * r[i] + 0.5 * r[i + 1] + 0.25 * r[i + 2];
+        }
+    }
+    // Along y: rows 1..sy-1 of each slice.
+    let mut y = vec![0.0f32; ox * oy * sz];
+    for (out, slice) in y.chunks_exact_mut(ox * oy).zip(x.chunks_exact(ox * sy)) {
+        for (j, o) in out.chunks_exact_mut(ox).enumerate() {
+            let row = |jj: usize| &slice[ox * jj..][..ox];
+            mix(o, row(j), row(j + 1), row(j + 2));
+        }
+    }
+    drop(x);
+    // Along z: slices 1..sz-1.
+    let mut z = vec![0.0f32; ox * oy * oz];
+    let plane = ox * oy;
+    for (k, o) in z.chunks_exact_mut(plane).enumerate() {
+        let sl = |kk: usize| &y[plane * kk..][..plane];
+        mix(o, sl(k), sl(k + 1), sl(k + 2));
+    }
+    z
+}
+
+/// `out = 0.25 a + 0.5 b + 0.25 c` elementwise (vectorises).
+#[inline(always)]
+fn mix(out: &mut [f32], a: &[f32], b: &[f32], c: &[f32]) {
+    for (((o, &a), &b), &c) in out.iter_mut().zip(a).zip(b).zip(c) {
+        *o = 0.25 * a + 0.5 * b + 0.25 * c;
+    }
+}
+
+/// One row's neighbours for [`row_gradients`]: the rows before and after along j and
+/// k, and the divisor of each difference (2 for central differences, 1 for the
+/// one-sided ones at the volume's faces, where the missing row is the row itself).
+pub(super) struct Neighbours<'a> {
+    pub(super) jm: &'a [f32],
+    pub(super) jp: &'a [f32],
+    pub(super) span_j: f32,
+    pub(super) km: &'a [f32],
+    pub(super) kp: &'a [f32],
+    pub(super) span_k: f32,
+}
+
+/// World gradients of the voxels `c[lo..hi]` of a row into `out` (`hi - lo` long):
+/// central differences in index space (one-sided at the volume's faces: `face_lo`
+/// when `c[lo]` is the volume's first voxel along i, `face_hi` when `c[hi - 1]` is
+/// its last), mapped by `g` (the inverse transpose of the affine's 3x3 part). Voxels
+/// away from the faces read `c[i - 1]` and `c[i + 1]`, so `c` must reach one voxel
+/// beyond `lo..hi` on each side that is not a face.
+pub(super) fn row_gradients(
+    c: &[f32],
+    n: &Neighbours,
+    (lo, hi): (usize, usize),
+    (face_lo, face_hi): (bool, bool),
+    g: &[[f32; 3]; 3],
+    out: &mut [[f32; 3]],
+) {
+    let world = |gi: f32, gj: f32, gk: f32| {
+        [
+            g[0][0] * gi + g[0][1] * gj + g[0][2] * gk,
+            g[1][0] * gi + g[1][1] * gj + g[1][2] * gk,
+            g[2][0] * gi + g[2][1] * gj + g[2][2] * gk,
+        ]
+    };
+    let (sj, sk) = (n.span_j, n.span_k);
+    let at = |i: usize| {
+        let gi = if face_lo && i == lo {
+            (c[i + 1] - c[i]) / 1.0
+        } else if face_hi && i + 1 == hi {
+            (c[i] - c[i - 1]) / 1.0
+        } else {
+            (c[i + 1] - c[i - 1]) / 2.0
+        };
+        world(gi, (n.jp[i] - n.jm[i]) / sj, (n.kp[i] - n.km[i]) / sk)
+    };
+    let first = lo + usize::from(face_lo);
+    let last = hi - usize::from(face_hi);
+    if face_lo {
+        out[0] = at(lo);
+    }
+    if face_hi && hi > first {
+        out[hi - 1 - lo] = at(hi - 1);
+    }
+    // The interior without the face tests, in the same operations as `at`.
+    for i in first..last.max(first) {
+        let gi = (c[i + 1] - c[i - 1]) / 2.0;
+        out[i - lo] = world(gi, (n.jp[i] - n.jm[i]) / sj, (n.kp[i] - n.km[i]) / sk);
+    }
+}
+
+/// A world gradient component in units of `1 / inv_scale`, rounded half away from zero
+/// (without libm's roundf, a call per component on baseline x86-64); `|x| * inv_scale
+/// <= 32767` up to rounding, and `as` saturates.
+#[inline(always)]
+pub(super) fn quantise(x: f32, inv_scale: f32) -> i16 {
+    let y = x * inv_scale;
+    (y + 0.5f32.copysign(y)) as i16
+}
+
+/// The quantisation step of the gradients for a volume whose largest gradient component
+/// is `largest`: the largest maps to 32767.
+pub(super) fn gradient_scale(largest: f32) -> f32 {
+    if largest > 0.0 && largest.is_finite() {
+        largest / 32767.0
+    } else {
+        1.0
+    }
+}
+
+/// The divisor of a difference along an axis of `n` voxels at index `i`, and the
+/// indices of the two samples it takes (one-sided at the faces).
+#[inline(always)]
+pub(super) fn span(i: usize, n: usize) -> (usize, usize, f32) {
+    let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
+    (a, b, (b - a) as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reference the whole-volume code used before bricks (kept here as the
+    /// oracle): the binomial with clamped faces on a whole volume.
+    fn binomial_whole(values: &[f32], dims: [usize; 3]) -> Vec<f32> {
+        let [nx, ny, nz] = dims;
+        let at = |v: &[f32], i: usize, j: usize, k: usize| v[i + nx * (j + ny * k)];
+        let mut cur = values.to_vec();
+        for axis in 0..3 {
+            let mut next = vec![0.0f32; cur.len()];
+            for k in 0..nz {
+                for j in 0..ny {
+                    for i in 0..nx {
+                        let p = [i, j, k];
+                        let n = dims[axis];
+                        let mut lo = p;
+                        let mut hi = p;
+                        lo[axis] = p[axis].saturating_sub(1);
+                        hi[axis] = (p[axis] + 1).min(n - 1);
+                        next[i + nx * (j + ny * k)] = 0.25 * at(&cur, lo[0], lo[1], lo[2])
+                            + 0.5 * at(&cur, i, j, k)
+                            + 0.25 * at(&cur, hi[0], hi[1], hi[2]);
+                    }
+                }
+            }
+            cur = next;
+        }
+        cur
+    }
+
+    #[test]
+    fn a_padded_box_filters_as_the_whole_volume() {
+        let dims = [6, 5, 4];
+        let v: Vec<f32> = (0..120).map(|i| ((i * 7919 % 97) as f32).sqrt()).collect();
+        let whole = binomial_whole(&v, dims);
+        // The whole volume padded with copies of its faces.
+        let size = dims.map(|d| d + 2);
+        let mut padded = Vec::new();
+        for k in 0..size[2] {
+            for j in 0..size[1] {
+                for i in 0..size[0] {
+                    let c = |x: usize, n: usize| x.saturating_sub(1).min(n - 1);
+                    let (a, b, d) = (c(i, 6), c(j, 5), c(k, 4));
+                    padded.push(v[a + 6 * (b + 5 * d)]);
+                }
+            }
+        }
+        let boxed = binomial_box(&padded, size);
+        assert_eq!(boxed.len(), whole.len());
+        for (i, (a, b)) in boxed.iter().zip(&whole).enumerate() {
+            assert_eq!(a.to_bits(), b.to_bits(), "voxel {i}");
+        }
+    }
+
+    #[test]
+    fn quantisation_rounds_half_away_from_zero_and_saturates() {
+        assert_eq!(quantise(2.5, 1.0), 3);
+        assert_eq!(quantise(-2.5, 1.0), -3);
+        assert_eq!(quantise(2.49, 1.0), 2);
+        assert_eq!(quantise(1e9, 1.0), i16::MAX);
+        assert_eq!(gradient_scale(32767.0), 1.0);
+        assert_eq!(gradient_scale(0.0), 1.0);
+        assert_eq!(gradient_scale(f32::INFINITY), 1.0);
+        assert_eq!(span(0, 4), (0, 1, 1.0));
+        assert_eq!(span(2, 4), (1, 3, 2.0));
+        assert_eq!(span(3, 4), (2, 3, 1.0));
+    }
+}

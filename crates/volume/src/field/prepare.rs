@@ -1,0 +1,227 @@
+//! The one pass over the whole volume a field needs before its first frame: the value
+//! range, the macro cells' value ranges, the largest gradient component (the gradients'
+//! quantisation step) and the robust range's subsample. It streams slabs of slices,
+//! keeping no copy of the volume; the values and gradients themselves are built later,
+//! per brick, where rays go.
+
+use rayon::prelude::*;
+
+use glint_core::RenderError;
+
+use super::brick::Recipe;
+use super::filter::{row_gradients, span, Neighbours};
+use super::MACRO_CELL;
+
+/// What [`prepare`] found.
+pub(super) struct Prepared {
+    /// Finite physical range before the prefilter.
+    pub(super) range: (f32, f32),
+    /// The robust range of the reconstruction values.
+    pub(super) robust: (f32, f32),
+    pub(super) cell_dims: [usize; 3],
+    /// Per macro cell, the (min, max) of the reconstruction values it covers.
+    pub(super) cells: Vec<(f32, f32)>,
+    /// The largest world gradient component over all voxels.
+    pub(super) largest: f32,
+}
+
+/// One slab's share of [`Prepared`].
+struct Slab {
+    range: (f32, f32),
+    cells: Vec<(f32, f32)>,
+    largest: f32,
+    robust: Vec<f32>,
+}
+
+/// Macro-cell layers per slab: about 16 MiB of f32 slices per slab (more layers for
+/// small slices, at least one), so a slab's halo of filtered slices stays a small
+/// share of its work and its buffers stay small beside the volume.
+fn layers_per_slab(dims: [usize; 3]) -> usize {
+    let slice = (dims[0] * dims[1] * 4).max(1);
+    ((16 << 20) / (slice * MACRO_CELL)).clamp(1, 8)
+}
+
+/// The finite range of the physical values, in a pass of its own, for sources whose
+/// values may be NaN or infinite (those are then replaced by the minimum before
+/// filtering, so the minimum must be known first).
+pub(super) fn finite_range(recipe: &Recipe) -> Result<(f32, f32), RenderError> {
+    let [nx, ny, nz] = recipe.dims;
+    let step = (layers_per_slab(recipe.dims) * MACRO_CELL).max(1);
+    let (lo, hi) = (0..nz.div_ceil(step))
+        .into_par_iter()
+        .map(|s| {
+            let (z0, z1) = (s * step, ((s + 1) * step).min(nz));
+            let mut raw = vec![0.0f32; nx * ny * (z1 - z0)];
+            recipe
+                .source
+                .read([0, 0, z0 as isize], [nx, ny, z1 - z0], &mut raw);
+            finite_min_max(&raw)
+        })
+        .reduce(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    if !lo.is_finite() {
+        return Err(RenderError::Volume(
+            "no finite sample (all NaN or infinite)".into(),
+        ));
+    }
+    Ok((lo, hi))
+}
+
+fn finite_min_max(v: &[f32]) -> (f32, f32) {
+    let mut lo = f32::INFINITY;
+    let mut hi = f32::NEG_INFINITY;
+    for &x in v.iter().filter(|x| x.is_finite()) {
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    (lo, hi)
+}
+
+/// The pass. `recipe.fill` must be set when the source may hold non-finite values
+/// ([`finite_range`] gives it); `range` is that pass's result, or `None` to measure the
+/// range here. `progress` is called with the slices done after each slab.
+pub(super) fn prepare(
+    recipe: &Recipe,
+    range: Option<(f32, f32)>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Prepared, RenderError> {
+    let dims = recipe.dims;
+    let [nx, ny, nz] = dims;
+    let cell_dims = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
+    let layers = layers_per_slab(dims);
+    let slabs = cell_dims[2].div_ceil(layers);
+    let count = nx * ny * nz;
+    let stride = count.div_ceil(glint_io::ROBUST_SAMPLES).max(1);
+    let parts: Vec<Slab> = (0..slabs)
+        .into_par_iter()
+        .map(|s| {
+            let cz = (s * layers, ((s + 1) * layers).min(cell_dims[2]));
+            let slab = slab(recipe, cz, stride, range.is_none());
+            progress((slab_slices(dims, cz, cell_dims[2]).1 - cz.0 * MACRO_CELL) as u64);
+            slab
+        })
+        .collect();
+    let mut out = Prepared {
+        range: range.unwrap_or((f32::INFINITY, f32::NEG_INFINITY)),
+        robust: (0.0, 0.0),
+        cell_dims,
+        cells: Vec::with_capacity(cell_dims.iter().product()),
+        largest: 0.0,
+    };
+    let mut sub = Vec::with_capacity(count.div_ceil(stride));
+    for p in parts {
+        if range.is_none() {
+            out.range = (out.range.0.min(p.range.0), out.range.1.max(p.range.1));
+        }
+        out.cells.extend_from_slice(&p.cells);
+        out.largest = out.largest.max(p.largest);
+        sub.extend_from_slice(&p.robust);
+    }
+    if !out.range.0.is_finite() {
+        return Err(RenderError::Volume(
+            "no finite sample (all NaN or infinite)".into(),
+        ));
+    }
+    out.robust = glint_io::robust_range(count, |i| sub[i / stride] as f64)
+        .map(|(a, b)| (a as f32, b as f32))
+        .unwrap_or(out.range);
+    Ok(out)
+}
+
+/// The voxel slices a slab of cell layers `cz` owns (its gradients, range and robust
+/// samples): from its first cell's first slice to the next slab's, the last slab to
+/// the volume's end.
+fn slab_slices(dims: [usize; 3], cz: (usize, usize), layers: usize) -> (usize, usize) {
+    let z0 = cz.0 * MACRO_CELL;
+    let z1 = if cz.1 == layers {
+        dims[2]
+    } else {
+        cz.1 * MACRO_CELL
+    };
+    (z0, z1)
+}
+
+/// One slab of cell layers `cz.0 .. cz.1`.
+fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool) -> Slab {
+    let dims = recipe.dims;
+    let [nx, ny, nz] = dims;
+    let sxy = nx * ny;
+    let cell_dims = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
+    let (z0, z1) = slab_slices(dims, cz, cell_dims[2]);
+    // Filtered slices fa ..= fb: the cells' and one around the owned slices.
+    let fa = z0.saturating_sub(1);
+    let fb = z1.max(cz.1 * MACRO_CELL).min(nz - 1);
+    // With the range of the physical values read (all finite: the caller measures the
+    // range here only when the source has no others).
+    let (f, range) = recipe.values_ranged([0, 0, fa], [nx - 1, ny - 1, fb], measure_range);
+    let row = |j: usize, k: usize| &f[nx * (j + ny * (k - fa))..][..nx];
+    let mut largest = 0.0f32;
+    let mut out = vec![[0.0f32; 3]; nx];
+    for k in z0..z1 {
+        let (km, kp, sk) = span(k, nz);
+        for j in 0..ny {
+            let (jm, jp, sj) = span(j, ny);
+            let n = Neighbours {
+                jm: row(jm, k),
+                jp: row(jp, k),
+                span_j: sj,
+                km: row(j, km),
+                kp: row(j, kp),
+                span_k: sk,
+            };
+            row_gradients(
+                row(j, k),
+                &n,
+                (0, nx),
+                (true, true),
+                &recipe.to_world_gradient,
+                &mut out,
+            );
+            largest = out.iter().flatten().fold(largest, |m, x| m.max(x.abs()));
+        }
+    }
+    let robust = (z0 * sxy).div_ceil(stride)..(z1 * sxy).div_ceil(stride);
+    let robust = robust
+        .map(|m| {
+            let i = m * stride;
+            f[i - fa * sxy]
+        })
+        .collect();
+    Slab {
+        range,
+        cells: cells(&f, dims, fa, cz),
+        largest,
+        robust,
+    }
+}
+
+/// Per macro cell of layers `cz`, the (min, max) of the filtered values `f` (slices
+/// from `fa`) it covers: cell c covers voxels c*B ..= c*B + B (one voxel of overlap, so
+/// every trilinear sample inside the cell's box reads only voxels it covers).
+fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize)) -> Vec<(f32, f32)> {
+    let [nx, ny, nz] = dims;
+    let [cx, cy, _] = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
+    let mut out = Vec::with_capacity(cx * cy * (cz.1 - cz.0));
+    for ck in cz.0..cz.1 {
+        for cj in 0..cy {
+            for ci in 0..cx {
+                let mut lo_c = f32::INFINITY;
+                let mut hi_c = f32::NEG_INFINITY;
+                for k in ck * MACRO_CELL..=((ck + 1) * MACRO_CELL).min(nz - 1) {
+                    for j in cj * MACRO_CELL..=((cj + 1) * MACRO_CELL).min(ny - 1) {
+                        let base = nx * (j + ny * (k - fa));
+                        for i in ci * MACRO_CELL..=((ci + 1) * MACRO_CELL).min(nx - 1) {
+                            let v = f[base + i];
+                            lo_c = lo_c.min(v);
+                            hi_c = hi_c.max(v);
+                        }
+                    }
+                }
+                out.push((lo_c, hi_c));
+            }
+        }
+    }
+    out
+}
