@@ -506,6 +506,8 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
         let b = render(2, Kernel::Auto);
         let c = render(2, Kernel::Scalar);
         assert_eq!(a.rgb, b.rgb);
+        // Kernel::Auto runs the reference loop for shadows while the bricked field's
+        // AVX2 samples lack their grid position (classify.rs); this pins that both agree.
         assert_eq!(a.rgb, c.rgb, "SIMD against scalar");
         assert_eq!(a.alpha, c.alpha);
         let local = class.render(&shader, &frame, &|_| {}).unwrap();
