@@ -372,7 +372,11 @@ fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
         .unwrap()
         .render(&finer, &|_| {})
         .unwrap();
-    assert_eq!(third.image, fresh.image);
+    // The pixels, not the march's counters: with the bricked field (issue 31) a
+    // renderer whose bricks were built by earlier frames counts a few samples fewer
+    // in skipped space than a fresh one, for the same image.
+    assert_eq!(third.image.rgb, fresh.image.rgb);
+    assert_eq!(third.image.alpha, fresh.image.alpha);
 }
 
 /// A closed octahedron as OBJ in `dir`.
