@@ -426,6 +426,16 @@ impl Config {
                 reason: "a truncated squarer keeps 1..=16 columns below its output LSB",
             });
         }
+        // A truncated squarer's result is exact only to units of its last fraction bit;
+        // an output finer than that has no meaning, and there its model's trace and
+        // evaluation were found to disagree (config_errors' proptest, issue 30).
+        let last = self.square_frac.last().copied().unwrap_or(0);
+        if self.squarer == Squarer::Truncated && self.out_bits > last {
+            return Err(HwError::Parse(format!(
+                "out_bits = {} is finer than the truncated squarer's last square_frac = {last}: use at most {last} output bits or another squarer",
+                self.out_bits
+            )));
+        }
         Ok(())
     }
 }

@@ -261,6 +261,40 @@ enum Wanted {
     Frame(Purpose),
 }
 
+/// A frame being rendered on the blocking pool, with what it is for.
+type FrameJob = tokio::task::JoinHandle<Result<(Frame, Purpose), RenderError>>;
+
+/// The first message a client gets: the scene and the names it may choose from.
+fn hello(viewer: &Viewer) -> ServerMessage {
+    ServerMessage::Hello {
+        scene: serde_json::to_value(&viewer.scene).expect("scenes serialise"),
+        presets: PRESETS.iter().map(|p| p.name).collect(),
+        lobes: SceneLobe::ALL.map(|k| k.name()).to_vec(),
+        views: View::NAMES.to_vec(),
+        range: viewer.range,
+    }
+}
+
+/// Starts rendering `state` for `purpose` on the blocking pool; a full frame of a
+/// progressive (`path`) state takes the next sample count after `reached`.
+fn spawn_frame(
+    renderer: &Arc<Mutex<Renderer>>,
+    state: &ClientState,
+    purpose: Purpose,
+    reached: u32,
+) -> FrameJob {
+    let (r, mut s) = (renderer.clone(), state.clone());
+    if purpose == Purpose::Full {
+        if let Some(goal) = state.progressive() {
+            s.scene.lighting.spp = Some(next_samples(reached, goal));
+        }
+    }
+    tokio::task::spawn_blocking(move || {
+        let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
+        render_frame(&mut r, &s.scene, s.split, purpose, s.seq).map(|f| (f, purpose))
+    })
+}
+
 async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     let Some(_seat) = Seat::take(&viewer) else {
         let message = format!(
@@ -271,14 +305,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         let _ = socket.send(Message::Close(None)).await;
         return;
     };
-    let hello = ServerMessage::Hello {
-        scene: serde_json::to_value(&viewer.scene).expect("scenes serialise"),
-        presets: PRESETS.iter().map(|p| p.name).collect(),
-        lobes: SceneLobe::ALL.map(|k| k.name()).to_vec(),
-        views: View::NAMES.to_vec(),
-        range: viewer.range,
-    };
-    if !send_json(&mut socket, &hello).await {
+    if !send_json(&mut socket, &hello(&viewer)).await {
         return;
     }
     let renderer = Arc::new(Mutex::new(viewer.renderer.clone()));
@@ -289,7 +316,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     };
     let mut wanted = Wanted::Frame(Purpose::Full);
     let mut save = false;
-    let mut inflight: Option<tokio::task::JoinHandle<Result<(Frame, Purpose), RenderError>>> = None;
+    let mut inflight: Option<FrameJob> = None;
     let mut settle: Option<tokio::time::Instant> = None;
     // Samples per pixel the last full frame of the current state held (`path`).
     let mut reached = 0;
@@ -305,16 +332,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 None
             };
             if let Some(purpose) = purpose {
-                let (r, mut s) = (renderer.clone(), state.clone());
-                if purpose == Purpose::Full {
-                    if let Some(goal) = state.progressive() {
-                        s.scene.lighting.spp = Some(next_samples(reached, goal));
-                    }
-                }
-                inflight = Some(tokio::task::spawn_blocking(move || {
-                    let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
-                    render_frame(&mut r, &s.scene, s.split, purpose, s.seq).map(|f| (f, purpose))
-                }));
+                inflight = Some(spawn_frame(&renderer, &state, purpose, reached));
             }
         }
         tokio::select! {

@@ -76,6 +76,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// The text or JSON `glint info` prints.
 fn report(args: &Args) -> anyhow::Result<String> {
+    let options = read_options(args)?;
+    let is_mesh = options.raw.is_none() && Format::guess(&args.file).is_some_and(Format::is_mesh);
+    if options.raw.is_none() && Format::guess(&args.file) == Some(Format::Raw) {
+        bail!(
+            "{}: a raw file needs --raw-dims (and --raw-type, --raw-spacing)",
+            args.file.display()
+        );
+    }
+    if is_mesh && args.labels {
+        bail!(
+            "{}: --labels lists a label volume's labels; this is a mesh",
+            args.file.display()
+        );
+    }
+    if is_mesh {
+        mesh_report(args)
+    } else {
+        volume_report(args, &options)
+    }
+}
+
+/// The read options `args` ask for (raw geometry included).
+fn read_options(args: &Args) -> anyhow::Result<ReadOptions> {
     let mut options = ReadOptions {
         max_voxels: args.max_voxels,
         strict: args.strict,
@@ -102,102 +125,97 @@ fn report(args: &Args) -> anyhow::Result<String> {
             offset: args.raw_offset,
         });
     }
-    let is_mesh = options.raw.is_none() && Format::guess(&args.file).is_some_and(Format::is_mesh);
-    if options.raw.is_none() && Format::guess(&args.file) == Some(Format::Raw) {
-        bail!(
-            "{}: a raw file needs --raw-dims (and --raw-type, --raw-spacing)",
-            args.file.display()
-        );
-    }
-    if is_mesh && args.labels {
-        bail!(
-            "{}: --labels lists a label volume's labels; this is a mesh",
-            args.file.display()
-        );
-    }
+    Ok(options)
+}
+
+/// The report of a mesh or a GIFTI of per-vertex data.
+fn mesh_report(args: &Args) -> anyhow::Result<String> {
     let mut out = String::new();
-    if is_mesh {
-        let overlays = if Format::guess(&args.file) == Some(Format::Gifti) {
-            glint_io::read_surface_data(&args.file)?
-        } else {
-            Vec::new()
-        };
-        let file = match glint_io::open_mesh(&args.file) {
-            Ok(f) => Some(f),
-            // A GIFTI of per-vertex data only (sulcal depth, a parcellation): no surface,
-            // just the overlays.
-            Err(glint_io::IoError::Invalid { what, .. })
-                if !overlays.is_empty() && what.contains("no NIFTI_INTENT_POINTSET") =>
-            {
-                None
-            }
-            Err(e) => return Err(e.into()),
-        };
-        if args.json {
-            let mut v = match &file {
-                Some(f) => mesh_json(args, f),
-                None => json!({
-                    "file": args.file.display().to_string(),
-                    "kind": "vertex data",
-                    "format": "GIFTI",
-                }),
-            };
-            v["overlays"] = overlays.iter().map(overlay_json).collect();
-            out = serde_json::to_string_pretty(&v)? + "\n";
-        } else {
-            match &file {
-                Some(f) => print_mesh(&mut out, args, f)?,
-                None => {
-                    writeln!(out, "file:      {}", args.file.display())?;
-                    writeln!(out, "format:    GIFTI per-vertex data (no surface)")?;
-                }
-            }
-            for o in &overlays {
-                writeln!(out, "overlay:   {}", overlay_line(o))?;
-            }
-        }
+    let overlays = if Format::guess(&args.file) == Some(Format::Gifti) {
+        glint_io::read_surface_data(&args.file)?
     } else {
-        let file = glint_io::open_volume(&args.file, &options)?;
-        // Assumed geometry is worth a warning even when the output goes to a script.
-        for n in file
-            .notes
-            .iter()
-            .filter(|n| n.starts_with("geometry assumed"))
+        Vec::new()
+    };
+    let file = match glint_io::open_mesh(&args.file) {
+        Ok(f) => Some(f),
+        // A GIFTI of per-vertex data only (sulcal depth, a parcellation): no surface,
+        // just the overlays.
+        Err(glint_io::IoError::Invalid { what, .. })
+            if !overlays.is_empty() && what.contains("no NIFTI_INTENT_POINTSET") =>
         {
-            eprintln!("glint: {}: {n}", args.file.display());
+            None
         }
-        // A DICOM directory: every series and every object not read, too.
-        let listing = match args.file.is_dir() {
-            true => Some(glint_io::dicom::list(&args.file, &options)?),
-            false => None,
+        Err(e) => return Err(e.into()),
+    };
+    if args.json {
+        let mut v = match &file {
+            Some(f) => mesh_json(args, f),
+            None => json!({
+                "file": args.file.display().to_string(),
+                "kind": "vertex data",
+                "format": "GIFTI",
+            }),
         };
-        if args.json {
-            let mut v = volume_json(args, &file);
-            if let Some(l) = &listing {
-                listing_json(&mut v, l);
+        v["overlays"] = overlays.iter().map(overlay_json).collect();
+        out = serde_json::to_string_pretty(&v)? + "\n";
+    } else {
+        match &file {
+            Some(f) => print_mesh(&mut out, args, f)?,
+            None => {
+                writeln!(out, "file:      {}", args.file.display())?;
+                writeln!(out, "format:    GIFTI per-vertex data (no surface)")?;
             }
-            if args.labels {
-                super::info_labels::add_json(
-                    &mut v,
-                    &args.file,
-                    &file.volume,
-                    args.label_table.as_deref(),
-                )?;
-            }
-            out = serde_json::to_string_pretty(&v)? + "\n";
-        } else {
-            print_volume(&mut out, args, &file)?;
-            if let Some(l) = &listing {
-                print_listing(&mut out, l)?;
-            }
-            if args.labels {
-                super::info_labels::print(
-                    &mut out,
-                    &args.file,
-                    &file.volume,
-                    args.label_table.as_deref(),
-                )?;
-            }
+        }
+        for o in &overlays {
+            writeln!(out, "overlay:   {}", overlay_line(o))?;
+        }
+    }
+    Ok(out)
+}
+
+/// The report of a volume (with a DICOM directory's listing and, asked for, its labels).
+fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
+    let mut out = String::new();
+    let file = glint_io::open_volume(&args.file, options)?;
+    // Assumed geometry is worth a warning even when the output goes to a script.
+    for n in file
+        .notes
+        .iter()
+        .filter(|n| n.starts_with("geometry assumed"))
+    {
+        eprintln!("glint: {}: {n}", args.file.display());
+    }
+    // A DICOM directory: every series and every object not read, too.
+    let listing = match args.file.is_dir() {
+        true => Some(glint_io::dicom::list(&args.file, options)?),
+        false => None,
+    };
+    if args.json {
+        let mut v = volume_json(args, &file);
+        if let Some(l) = &listing {
+            listing_json(&mut v, l);
+        }
+        if args.labels {
+            super::info_labels::add_json(
+                &mut v,
+                &args.file,
+                &file.volume,
+                args.label_table.as_deref(),
+            )?;
+        }
+        out = serde_json::to_string_pretty(&v)? + "\n";
+    } else {
+        print_volume(&mut out, args, &file)?;
+        if let Some(l) = &listing {
+            print_listing(&mut out, l)?;
+        }
+        if args.labels {
+            super::info_labels::print(
+                &mut out,
+                &args.file,
+                &file.volume,
+                args.label_table.as_deref(),
+            )?;
         }
     }
     Ok(out)

@@ -1,5 +1,5 @@
 //! The label-map options of the scene commands (`--labels` and what goes with it),
-//! flattened into [`SceneFlags`](super::scene_flags::SceneFlags).
+//! flattened into `SceneFlags` (scene_flags.rs).
 
 use std::path::PathBuf;
 

@@ -30,7 +30,7 @@ pub struct ShadeBatch {
     /// The AVX2 kernel's intermediate values.
     pub(super) scratch: Scratch,
     /// The shadowed form's columns ([`Shader::shade_gradients_shadowed`]).
-    pub(super) shadow: super::shadowed::ShadowScratch,
+    pub(super) shadow: super::scratch::ShadowScratch,
 }
 
 /// Intermediate values of the AVX2 kernel, kept between batches.

@@ -28,6 +28,7 @@ mod avx2;
 mod batch;
 mod dispatch;
 mod material;
+mod scratch;
 mod shadowed;
 mod transport;
 

@@ -14,27 +14,6 @@ use super::transport::{hybrid_terms, medium_factor, phase_hg};
 use super::Shader;
 use crate::math::Vec3;
 
-/// The shadowed form's columns, kept between batches.
-#[derive(Clone, Debug, Default)]
-pub(super) struct ShadowScratch {
-    /// Per sample: gradient magnitude, whether it passes the gate, `N·V`, and the
-    /// diffuse and specular sums.
-    magnitude: Vec<f32>,
-    usable: Vec<bool>,
-    n_dot_v: Vec<f32>,
-    diffuse: Vec<f32>,
-    specular: Vec<f32>,
-    /// Per light and sample (light-major): `N·L`, the lobe's cosine, the lobe's value.
-    n_dot_l: Vec<f32>,
-    cos: Vec<f32>,
-    lobe: Vec<f32>,
-    /// Per light and sample (light-major) the transmittance, per sample the ambient
-    /// occlusion and the phase sum.
-    transmittance: Vec<f32>,
-    occlusion: Vec<f32>,
-    phase: Vec<f32>,
-}
-
 impl ShadeBatch {
     /// The columns [`Shader::shade_gradients_shadowed`] reads besides the others, for
     /// `lights` lights (the shader's placed lights): the transmittance of light `i` to
