@@ -112,6 +112,7 @@ impl KvUnit {
         }
     }
 
+    // shape: emitter (the Verilog module, written line by line)
     fn module_text(&self) -> String {
         let u = &self.unit;
         let cfg = u.config();

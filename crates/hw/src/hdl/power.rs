@@ -267,6 +267,7 @@ impl PowerUnit {
         s
     }
 
+    // shape: emitter (the Verilog module, written line by line)
     fn module_text(&self) -> String {
         let p = self.ports;
         let m = Self::MODULE;
