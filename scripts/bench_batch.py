@@ -13,11 +13,19 @@ times, on this machine's cores:
   - nilearn's plot_img_on_surf (fsaverage5, both hemispheres, lateral and medial) of
     SURFACE_SUBJECTS subjects on the same pool.
 Prints seconds and subjects per hour of each and the ratios; writes OUT_DIR/bench.json.
+
+Each side's CPU seconds (user + system) are counted too: of the `glint batch` process,
+of the Dask workers over a round, and of nilearn's figure calls in the pool processes.
+On a machine other jobs share, wall seconds depend on how much of the cores each side
+got while it ran; CPU seconds per subject do not, so the ratio of those is printed
+beside the wall-clock one (on an idle machine the two agree when every side keeps
+the cores busy).
 """
 
 import json
 import multiprocessing
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -72,17 +80,24 @@ def warm():
     import nilearn.plotting  # noqa: F401
 
 
+def cpu_seconds(who=resource.RUSAGE_SELF):
+    """User plus system CPU seconds of this process (or its waited-for children)."""
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
 def plot_anat(job):
     path, png = job
     import matplotlib.pyplot as plt
     from nilearn import plotting
 
+    cpu = cpu_seconds()
     fig = plt.figure(figsize=(3 * SIZE / 100, SIZE / 100), dpi=100)
     display = plotting.plot_anat(path, display_mode="ortho", figure=fig)
     display.savefig(png, dpi=100)
     display.close()
     plt.close(fig)
-    return png
+    return cpu_seconds() - cpu
 
 
 def plot_surf(job):
@@ -90,10 +105,11 @@ def plot_surf(job):
     import matplotlib.pyplot as plt
     from nilearn import plotting
 
+    cpu = cpu_seconds()
     plotting.plot_img_on_surf(path, surf_mesh="fsaverage5", hemispheres=["left", "right"],
                               views=["lateral", "medial"], colorbar=False, output_file=png)
     plt.close("all")
-    return png
+    return cpu_seconds() - cpu
 
 
 def timed(f):
@@ -112,11 +128,15 @@ def main():
     print(f"bench-batch: {subjects} subjects (MNI152 variants, {len(paths)} files), views "
           f"{','.join(VIEWS)} at {SIZE}x{SIZE}, {cores} cores, {rounds} rounds", file=sys.stderr)
 
+    cpu = {"cli": [], "dask": []}
+
     def cli():
+        before = cpu_seconds(resource.RUSAGE_CHILDREN)
         proc = subprocess.run([glint_bin, "batch", study, "-o", os.path.join(out, "cli"),
                                "--views", ",".join(VIEWS), "--size", f"{SIZE}x{SIZE}",
                                "--preset", PRESET, "--force", "-q"], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
+        cpu["cli"].append(cpu_seconds(resource.RUSAGE_CHILDREN) - before)
 
     import glint
     from dask.distributed import Client, LocalCluster
@@ -130,9 +150,11 @@ def main():
     scene = glint.Scene(preset=PRESET, size=[SIZE, SIZE])
 
     def dask():
+        before = sum(client.run(cpu_seconds).values())
         s = glint.batch.run(study, scene, VIEWS, os.path.join(out, "dask"), client=client,
                             force=True, progress=False)
         assert s["failed"] == 0, s
+        cpu["dask"].append(sum(client.run(cpu_seconds).values()) - before)
 
     t_cli, t_dask = [], []
     for r in range(rounds):
@@ -150,9 +172,13 @@ def main():
     spawn = multiprocessing.get_context("spawn")
     with spawn.Pool(cores, initializer=warm) as pool:
         pool.map(warm_one, range(cores), chunksize=1)
-        t_anat = timed(lambda: pool.map(plot_anat, anat_jobs, chunksize=1))
+        t = time.perf_counter()
+        cpu_anat = sum(pool.map(plot_anat, anat_jobs, chunksize=1))
+        t_anat = time.perf_counter() - t
         print(f"bench-batch: nilearn plot_anat {t_anat:.2f} s", file=sys.stderr)
-        t_surf = timed(lambda: pool.map(plot_surf, surf_jobs, chunksize=1)) if surface else float("nan")
+        t = time.perf_counter()
+        cpu_surf = sum(pool.map(plot_surf, surf_jobs, chunksize=1)) if surface else float("nan")
+        t_surf = time.perf_counter() - t if surface else float("nan")
         print(f"bench-batch: nilearn plot_img_on_surf {t_surf:.2f} s ({surface} subjects)", file=sys.stderr)
 
     per_hour = lambda seconds, n: 3600.0 * n / seconds  # noqa: E731
@@ -162,22 +188,31 @@ def main():
         "glint_batch_s": statistics.median(t_cli), "glint_batch_rounds_s": t_cli,
         "dask_s": statistics.median(t_dask), "dask_rounds_s": t_dask, "dask_startup_s": startup,
         "nilearn_plot_anat_s": t_anat, "nilearn_plot_img_on_surf_s": t_surf,
+        "glint_batch_cpu_s": statistics.median(cpu["cli"]), "glint_batch_cpu_rounds_s": cpu["cli"],
+        "dask_cpu_s": statistics.median(cpu["dask"]), "dask_cpu_rounds_s": cpu["dask"],
+        "nilearn_plot_anat_cpu_s": cpu_anat, "nilearn_plot_img_on_surf_cpu_s": cpu_surf,
+        "load_average": os.getloadavg(),
     }
     rows = [
-        ("glint batch (the command)", results["glint_batch_s"], subjects),
-        (f"glint.batch, Dask LocalCluster of {cores}", results["dask_s"], subjects),
-        ("nilearn plot_anat, 3 cuts", t_anat, subjects),
-        ("nilearn plot_img_on_surf, 4 views", t_surf, surface),
+        ("glint batch (the command)", results["glint_batch_s"], results["glint_batch_cpu_s"], subjects),
+        (f"glint.batch, Dask LocalCluster of {cores}", results["dask_s"], results["dask_cpu_s"], subjects),
+        ("nilearn plot_anat, 3 cuts", t_anat, cpu_anat, subjects),
+        ("nilearn plot_img_on_surf, 4 views", t_surf, cpu_surf, surface),
     ]
-    print(f"{'':42} {'seconds':>9} {'per subject':>12} {'subjects/h':>11}")
-    for name, s, n in rows:
-        print(f"{name:42} {s:9.2f} {s / n:12.3f} {per_hour(s, n):11.0f}")
-    anat_each = t_anat / subjects
-    for name, s, n in rows[:2]:
+    print(f"{'':42} {'seconds':>9} {'per subject':>12} {'subjects/h':>11} {'CPU s/subject':>14}")
+    for name, s, c, n in rows:
+        print(f"{name:42} {s:9.2f} {s / n:12.3f} {per_hour(s, n):11.0f} {c / n:14.3f}")
+    anat_each, anat_cpu = t_anat / subjects, cpu_anat / subjects
+    for name, s, c, n in rows[:2]:
         ratio = anat_each / (s / n)
+        cpu_ratio = anat_cpu / (c / n)
         surf = (t_surf / surface) / (s / n) if surface else float("nan")
-        print(f"{name}: {ratio:.1f}x nilearn plot_anat's subjects/h, {surf:.1f}x plot_img_on_surf's")
-        results[f"ratio_{'cli' if name.startswith('glint batch') else 'dask'}_vs_plot_anat"] = ratio
+        print(f"{name}: {ratio:.1f}x nilearn plot_anat's subjects/h ({cpu_ratio:.1f}x per CPU "
+              f"second), {surf:.1f}x plot_img_on_surf's")
+        key = "cli" if name.startswith("glint batch") else "dask"
+        results[f"ratio_{key}_vs_plot_anat"] = ratio
+        results[f"cpu_ratio_{key}_vs_plot_anat"] = cpu_ratio
+    print(f"bench-batch: load average at the end {os.getloadavg()}", file=sys.stderr)
     with open(os.path.join(out, "bench.json"), "w") as f:
         json.dump(results, f, indent=1)
 

@@ -5,8 +5,9 @@
 //! failed input must show as one card with its error line, sorting by subject must
 //! order the labels as numbers, "failed only" must hide the others, and nothing may be
 //! fetched from anywhere but the disk. Needs `node`, `chromium`
-//! (scripts/install-deps) and `npm ci` in crates/view/browser (scripts/test); with CI
-//! set, a missing piece fails the test.
+//! (scripts/install-deps) and `npm ci` in crates/view/browser (scripts/test); in
+//! strict mode (`GLINT_STRICT` or `CI` set; glint_testkit) a missing piece fails the
+//! test.
 
 use std::path::Path;
 use std::process::Command;
@@ -15,42 +16,10 @@ use glint_batch::{discover, finish, run_local, Discover, LocalOptions, Spec};
 use glint_io::{nifti, Endian};
 use glint_render::{Phantom, Scene, View};
 
-fn ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")
-}
-
-/// Whether the browser, node and playwright-core are here; in CI they must be.
-fn tools_present(browser: &Path) -> bool {
-    let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
-    let missing: Vec<&str> = [
-        (
-            !Path::new(&chromium).exists(),
-            "chromium (scripts/install-deps)",
-        ),
-        (
-            Command::new("node").arg("--version").output().is_err(),
-            "node",
-        ),
-        (
-            !browser.join("node_modules/playwright-core").is_dir(),
-            "playwright-core (npm ci in crates/view/browser)",
-        ),
-    ]
-    .into_iter()
-    .filter_map(|(gone, what)| gone.then_some(what))
-    .collect();
-    if missing.is_empty() {
-        return true;
-    }
-    assert!(!ci(), "missing in CI: {}", missing.join(", "));
-    eprintln!("skipping the browser test: missing {}", missing.join(", "));
-    false
-}
-
 #[test]
 fn the_report_opens_from_the_disk_with_its_thumbnails_and_the_error() {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    if !tools_present(&manifest.join("../view/browser")) {
+    if !glint_testkit::browser_tools(&manifest.join("../view/browser")) {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -115,4 +84,5 @@ fn the_report_opens_from_the_disk_with_its_thumbnails_and_the_error() {
         "report in the browser: {page}; screenshot {}",
         shot.display()
     );
+    glint_testkit::ran("chromium + node (batch report browser test)");
 }

@@ -12,11 +12,14 @@
 //!   external tool that a test ran (or could not run), appended to the file named by
 //!   `GLINT_PATHS_LOG`; `scripts/test` prints the summary at the end of a run so a
 //!   reader sees that nothing was skipped.
+//! - **The browser** ([`browser_tools`]): the headless Chromium, node and
+//!   playwright-core that the browser tests of glint-view and glint-batch drive.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
 /// The values that leave strict mode off (besides an unset variable).
 const FALSE_VALUES: &str = include_str!("../false-values.txt");
@@ -80,6 +83,36 @@ pub fn missing(what: &str) {
     );
     eprintln!("SKIPPED: missing {what} (set GLINT_STRICT=1 to make this a failure)");
     record(&format!("SKIPPED {what}"));
+}
+
+/// Whether a browser test can run: Debian's Chromium (`$CHROMIUM`, by default
+/// `/usr/bin/chromium`; scripts/install-deps), `node`, and playwright-core installed
+/// by `npm ci` in `browser_dir` (crates/view/browser). What is missing is reported by
+/// [`missing`]: in strict mode the test fails, naming it.
+pub fn browser_tools(browser_dir: &Path) -> bool {
+    let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
+    let missing_tools: Vec<&str> = [
+        (
+            !Path::new(&chromium).exists(),
+            "chromium (scripts/install-deps)",
+        ),
+        (
+            Command::new("node").arg("--version").output().is_err(),
+            "node",
+        ),
+        (
+            !browser_dir.join("node_modules/playwright-core").is_dir(),
+            "playwright-core (npm ci in crates/view/browser)",
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(gone, what)| gone.then_some(what))
+    .collect();
+    if missing_tools.is_empty() {
+        return true;
+    }
+    missing(&missing_tools.join(", "));
+    false
 }
 
 /// Records that the optional path `what` ran (a SIMD level, an external tool).

@@ -16,38 +16,10 @@ use std::sync::Arc;
 use glint_render::{Input, Lighting, LightingModel, Phantom, Scene};
 use glint_view::{Access, Token, Viewer, ViewerConfig};
 
-/// Whether the browser, node and playwright-core are here; in strict mode
-/// (glint_testkit) they must be.
-fn tools_present(dir: &Path) -> bool {
-    let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
-    let missing: Vec<&str> = [
-        (
-            !Path::new(&chromium).exists(),
-            "chromium (scripts/install-deps)",
-        ),
-        (
-            Command::new("node").arg("--version").output().is_err(),
-            "node",
-        ),
-        (
-            !dir.join("node_modules/playwright-core").is_dir(),
-            "playwright-core (npm ci in crates/view/browser)",
-        ),
-    ]
-    .into_iter()
-    .filter_map(|(gone, what)| gone.then_some(what))
-    .collect();
-    if missing.is_empty() {
-        return true;
-    }
-    glint_testkit::missing(&missing.join(", "));
-    false
-}
-
 #[test]
 fn the_page_shows_frames_and_dragging_turns_the_volume() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("browser");
-    if !tools_present(&dir) {
+    if !glint_testkit::browser_tools(&dir) {
         return;
     }
     let runtime = tokio::runtime::Runtime::new().unwrap();
@@ -120,7 +92,7 @@ fn tempfile_path(name: &str) -> std::path::PathBuf {
 #[test]
 fn a_path_scene_refines_while_the_mouse_is_still_and_a_drag_restarts_it() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("browser");
-    if !tools_present(&dir) {
+    if !glint_testkit::browser_tools(&dir) {
         return;
     }
     let runtime = tokio::runtime::Runtime::new().unwrap();

@@ -22,8 +22,8 @@ use std::path::{Path, PathBuf};
 
 use crate::clock::Clock;
 use crate::common::{
-    check_affine, checked_voxels, open_maybe_gz, os_or_invalid, read_decoded, read_exact_growing,
-    ScalarType,
+    can_inflate_to, check_affine, checked_voxels, open_maybe_gz, os_or_invalid, read_decoded,
+    read_exact_growing, ScalarType,
 };
 use crate::{IoError, ReadOptions, Samples, Volume, VolumeFile};
 
@@ -184,7 +184,8 @@ struct DataSource {
 }
 
 /// Reads `count` samples of `ty` at byte `offset` of the data file: its size is checked
-/// first when known, and the buffer grows with the data actually read.
+/// first when known; the samples are allocated at once when the file (compressed or
+/// not) can hold them, else grow with the data actually read.
 fn read_samples(
     src: DataSource,
     offset: u64,
@@ -221,15 +222,8 @@ fn read_samples(
             what: format!("the file ends before the data offset {offset}"),
         });
     }
-    read_decoded(
-        &path,
-        reader,
-        count,
-        ty,
-        endian,
-        "voxel data",
-        len.is_some(),
-    )
+    let checked = len.is_some() || can_inflate_to(&path, offset + nbytes as u64);
+    read_decoded(&path, reader, count, ty, endian, "voxel data", checked)
 }
 
 /// The first note: which header the file has.

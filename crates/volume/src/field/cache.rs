@@ -8,9 +8,10 @@
 //! reclamation, Fraser 2004, "Practical lock-freedom", as crossbeam implements it), so
 //! a slot is never rewritten under a reader. The pool is allocated zeroed and untouched
 //! (the operating system maps its pages on first write), so its resident size is that
-//! of the slots used.
+//! of the slots used: it comes from the system allocator, not the global one (see
+//! [`Slots::zeroed`]).
 
-use std::alloc::{alloc_zeroed, dealloc, Layout};
+use std::alloc::{GlobalAlloc, Layout, System};
 use std::collections::VecDeque;
 use std::ptr::NonNull;
 use std::sync::atomic::{AtomicI32, AtomicU64, AtomicUsize, Ordering};
@@ -39,10 +40,19 @@ unsafe impl<T: Sync> Sync for Slots<T> {}
 
 impl<T> Slots<T> {
     /// `len` zeroed values (all-zero bits must be a valid `T`: f32 and i16 are).
+    ///
+    /// From [`System`] (glibc's `calloc`), not the global allocator: a pool is tens to
+    /// hundreds of MiB, above glibc's largest mmap threshold (32 MiB on 64-bit,
+    /// `DEFAULT_MMAP_THRESHOLD_MAX`, mallopt(3)), so `calloc` maps it afresh and skips
+    /// clearing it (malloc/malloc.c, `__libc_calloc`: mmapped chunks are already zero),
+    /// and only the pages of the slots used are ever touched. The glint binary's
+    /// mimalloc instead hands back the memory of the previous volume's pool and must
+    /// clear all of it: with `glint batch` that memset of the whole pool cost more per
+    /// volume than building the bricks the views use (docs/performance.md, issue 32).
     fn zeroed(len: usize) -> Option<Slots<T>> {
         let layout = Layout::array::<T>(len.max(1)).ok()?;
         // SAFETY: the layout has a non-zero size (len >= 1, T is not zero-sized here).
-        let ptr = unsafe { alloc_zeroed(layout) }.cast::<T>();
+        let ptr = unsafe { System.alloc_zeroed(layout) }.cast::<T>();
         Some(Slots {
             ptr: NonNull::new(ptr)?,
             layout,
@@ -67,8 +77,8 @@ impl<T> Slots<T> {
 
 impl<T> Drop for Slots<T> {
     fn drop(&mut self) {
-        // SAFETY: allocated in `zeroed` with this layout.
-        unsafe { dealloc(self.ptr.as_ptr().cast(), self.layout) }
+        // SAFETY: allocated by `System` in `zeroed` with this layout.
+        unsafe { System.dealloc(self.ptr.as_ptr().cast(), self.layout) }
     }
 }
 

@@ -179,7 +179,7 @@ fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool)
                 &recipe.to_world_gradient,
                 &mut out,
             );
-            largest = out.iter().flatten().fold(largest, |m, x| m.max(x.abs()));
+            largest = largest.max(largest_abs(out.as_flattened()));
         }
     }
     let robust = (z0 * sxy).div_ceil(stride)..(z1 * sxy).div_ceil(stride);
@@ -197,28 +197,56 @@ fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool)
     }
 }
 
+/// The largest absolute value of `v` (0 for none), in eight running maxima that the
+/// compiler keeps in one vector register: a single running maximum would chain every
+/// comparison on the one before. The maximum of a set does not depend on the order.
+fn largest_abs(v: &[f32]) -> f32 {
+    let mut lanes = [0.0f32; 8];
+    let mut chunks = v.chunks_exact(8);
+    for chunk in &mut chunks {
+        for (m, x) in lanes.iter_mut().zip(chunk) {
+            *m = m.max(x.abs());
+        }
+    }
+    let rest = chunks
+        .remainder()
+        .iter()
+        .fold(0.0f32, |m, x| m.max(x.abs()));
+    lanes.iter().fold(rest, |m, &x| m.max(x))
+}
+
 /// Per macro cell of layers `cz`, the (min, max) of the filtered values `f` (slices
 /// from `fa`) it covers: cell c covers voxels c*B ..= c*B + B (one voxel of overlap, so
 /// every trilinear sample inside the cell's box reads only voxels it covers).
+///
+/// Per row of cells, first the minimum and maximum of each voxel column over the
+/// cells' voxel rows (element-wise over whole rows, which vectorises), then of each
+/// cell's columns: the same sets of values, so the same extremes as a loop per cell.
 fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize)) -> Vec<(f32, f32)> {
     let [nx, ny, nz] = dims;
     let [cx, cy, _] = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
     let mut out = Vec::with_capacity(cx * cy * (cz.1 - cz.0));
+    let mut lo = vec![0.0f32; nx];
+    let mut hi = vec![0.0f32; nx];
     for ck in cz.0..cz.1 {
         for cj in 0..cy {
-            for ci in 0..cx {
-                let mut lo_c = f32::INFINITY;
-                let mut hi_c = f32::NEG_INFINITY;
-                for k in ck * MACRO_CELL..=((ck + 1) * MACRO_CELL).min(nz - 1) {
-                    for j in cj * MACRO_CELL..=((cj + 1) * MACRO_CELL).min(ny - 1) {
-                        let base = nx * (j + ny * (k - fa));
-                        for i in ci * MACRO_CELL..=((ci + 1) * MACRO_CELL).min(nx - 1) {
-                            let v = f[base + i];
-                            lo_c = lo_c.min(v);
-                            hi_c = hi_c.max(v);
-                        }
+            lo.fill(f32::INFINITY);
+            hi.fill(f32::NEG_INFINITY);
+            for k in ck * MACRO_CELL..=((ck + 1) * MACRO_CELL).min(nz - 1) {
+                for j in cj * MACRO_CELL..=((cj + 1) * MACRO_CELL).min(ny - 1) {
+                    let row = &f[nx * (j + ny * (k - fa))..][..nx];
+                    for ((l, h), &v) in lo.iter_mut().zip(hi.iter_mut()).zip(row) {
+                        *l = l.min(v);
+                        *h = h.max(v);
                     }
                 }
+            }
+            for ci in 0..cx {
+                let columns = ci * MACRO_CELL..=((ci + 1) * MACRO_CELL).min(nx - 1);
+                let lo_c = lo[columns.clone()]
+                    .iter()
+                    .fold(f32::INFINITY, |m, &v| m.min(v));
+                let hi_c = hi[columns].iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
                 out.push((lo_c, hi_c));
             }
         }
