@@ -104,7 +104,10 @@ fn flag_scene(o: &Options) -> anyhow::Result<Scene> {
         if o.scene.size.is_none() && o.scene.scene.is_none() {
             scene.size = PATH_SIZE;
         }
-        scene.lighting.spp.get_or_insert(PATH_SPP);
+        let spp = *scene.lighting.spp.get_or_insert(PATH_SPP);
+        if let Some(r) = o.reference_spp.filter(|&r| r > 0 && r <= spp) {
+            bail!("--reference-spp {r}: the reference's samples per pixel must exceed --spp {spp}");
+        }
     } else if o.reference_spp.is_some_and(|s| s > 0) || o.convergence {
         bail!("--reference-spp and --convergence need --lighting path");
     }
