@@ -157,7 +157,7 @@ fn bad_input_fails_with_one_line_and_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cmp.png");
     let o = out.to_str().unwrap();
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["--sweep", "--sweep-n", "0,10", "-o", o], "n > 0"),
         (&["/nonexistent/volume.nii.gz", "-o", o], "volume"),
         (&["--n", "-5", "-o", o], "n = -5"),
@@ -169,6 +169,20 @@ fn bad_input_fails_with_one_line_and_no_file() {
             "invalid n = NaN",
         ),
         (&["--size", "4x4", "-o", o], "SSIM window"),
+        (&["--reference-spp", "64", "-o", o], "need --lighting path"),
+        (
+            &[
+                "--lighting",
+                "path",
+                "--spp",
+                "8",
+                "--reference-spp",
+                "4",
+                "-o",
+                o,
+            ],
+            "must exceed --spp 8",
+        ),
     ];
     for (args, needle) in cases {
         let mut all = args.to_vec();

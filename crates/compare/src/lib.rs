@@ -29,6 +29,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod converged;
 mod report;
 mod sweep;
 
@@ -39,6 +40,10 @@ use glint_analysis::AnalysisError;
 use glint_lobe::LobeKind;
 use glint_render::{luminance_f32, Depth, RenderError, Rendered, Renderer, Scene, SceneLobe};
 
+pub use converged::{
+    convergence, convergence_schedule, Converged, ConvergedRow, Convergence, ConvergenceStep,
+    REFERENCE_SEED_OFFSET,
+};
 pub use glint_analysis::image::{DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION};
 pub use sweep::{sweep, Sweep, SweepRow, SweepSpec, SWEEP_LOBES, SWEEP_N, SWEEP_V};
 
@@ -215,6 +220,9 @@ pub struct Report {
     pub reference: Reference,
     /// One row per lobe, in the order asked.
     pub rows: Vec<Comparison>,
+    /// Under `path` lighting, when asked: each image's distance to the exact lobe
+    /// traced with many samples ([`run_against`]).
+    pub converged: Option<Converged>,
 }
 
 /// Renders `scene` with the exact lobe and with each of `lobes` (v: see
@@ -225,6 +233,19 @@ pub fn run(
     lobes: &[SceneLobe],
     v: Option<u32>,
 ) -> Result<Report, CompareError> {
+    run_against(renderer, scene, lobes, v, None)
+}
+
+/// [`run`], and with `reference_spp` (a `path` scene only) each image's distance to
+/// the exact lobe traced with that many samples per pixel
+/// ([`Experiment::converged`]).
+pub fn run_against(
+    renderer: Renderer,
+    scene: &Scene,
+    lobes: &[SceneLobe],
+    v: Option<u32>,
+    reference_spp: Option<u32>,
+) -> Result<Report, CompareError> {
     if lobes.is_empty() {
         return Err(CompareError::Invalid(
             "no lobe to compare with exact: give at least one".into(),
@@ -232,14 +253,18 @@ pub fn run(
     }
     let mut experiment = Experiment::new(renderer, scene)?;
     let reference = experiment.reference(scene)?;
-    let rows = lobes
+    let rows: Vec<Comparison> = lobes
         .iter()
         .map(|&lobe| experiment.compare(&reference, lobe, v))
         .collect::<Result<_, _>>()?;
+    let converged = reference_spp
+        .map(|spp| experiment.converged(&reference, &rows, spp))
+        .transpose()?;
     Ok(Report {
         dark: experiment.dark,
         reference,
         rows,
+        converged,
     })
 }
 

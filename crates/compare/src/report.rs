@@ -9,7 +9,7 @@ use glint_lobe::LobeKind;
 use glint_render::{Input, SceneLobe};
 use serde_json::{json, Value};
 
-use crate::{CompareError, Comparison, Report};
+use crate::{CompareError, Comparison, Converged, Report};
 
 /// Milliseconds of a duration.
 pub(crate) fn ms(d: Duration) -> f64 {
@@ -133,12 +133,16 @@ impl Report {
                 out.push_str(&c.table_row("highlight", h));
             }
         }
+        if let Some(c) = &self.converged {
+            out.push_str(&converged_text(c, s.lighting.spp.unwrap_or_default()));
+        }
         out
     }
 
     /// The report as JSON (`glint compare --json`, `glint.compare` in Python): the
     /// resolved scene, the exact render's times, the highlight, and per lobe its
-    /// metrics over the image and the highlight.
+    /// metrics over the image and the highlight; under `path` lighting with a
+    /// reference, `converged`: each image's distance to it.
     pub fn to_json(&self) -> Result<Value, CompareError> {
         let r = &self.reference.shot.rendered;
         let comparisons: Vec<Value> = self
@@ -157,7 +161,7 @@ impl Report {
             .collect();
         let scene = serde_json::to_value(&r.scene)
             .map_err(|e| CompareError::Invalid(format!("the scene as JSON: {e}")))?;
-        Ok(json!({
+        let mut out = json!({
             "scene": scene,
             "exact": { "classify_ms": ms(self.dark.timings.get("classify")), "render_ms": ms(r.timings.get("frame")) },
             "highlight": {
@@ -166,7 +170,12 @@ impl Report {
             },
             "metrics_on": "8-bit sRGB; PSNR over RGB; SSIM on Rec. 709 luma; CIEDE2000 (D65); LDR-FLIP at 67 pixels per degree",
             "comparisons": comparisons,
-        }))
+        });
+        // Only when traced: a `local` report's JSON stays as it was.
+        if let Some(c) = &self.converged {
+            out["converged"] = converged_json(c);
+        }
+        Ok(out)
     }
 
     /// The comparison picture as PNG bytes: per lobe, exact, the lobe and the ΔE heat
@@ -202,4 +211,48 @@ impl Report {
             .collect();
         Ok(comparison_png(&fig, scale_max)?)
     }
+}
+
+/// The section of [`Report::text`] on the distance to the converged reference, the
+/// images having `spp` samples per pixel.
+fn converged_text(c: &Converged, spp: u32) -> String {
+    let mut out = format!(
+        "\ndistance to the exact lobe at {} spp (seed {}; render {:.1} ms), images at {spp} spp:\n\
+         image     scope      PSNR dB  SSIM     mean ΔE  p99 ΔE  FLIP\n",
+        c.spp,
+        c.seed,
+        ms(c.shot.rendered.timings.get("frame")),
+    );
+    for r in &c.rows {
+        let scopes = std::iter::once(("image", &r.image))
+            .chain(r.highlight.iter().map(|h| ("highlight", h)));
+        for (scope, m) in scopes {
+            let de = m.delta_e;
+            out.push_str(&format!(
+                "{:<9} {:<10} {:<8} {:<8} {:<8} {:<7} {}\n",
+                r.label,
+                scope,
+                num(m.psnr, 2),
+                num(m.ssim, 5),
+                num(de.map(|d| d.mean), 4),
+                num(de.map(|d| d.p99), 3),
+                num(m.flip, 5),
+            ));
+        }
+    }
+    out
+}
+
+/// The JSON form of [`Converged`].
+fn converged_json(c: &Converged) -> Value {
+    json!({
+        "spp": c.spp,
+        "seed": c.seed,
+        "render_ms": ms(c.shot.rendered.timings.get("frame")),
+        "rows": c.rows.iter().map(|r| json!({
+            "lobe": r.label,
+            "image": metrics_json(&r.image),
+            "highlight": r.highlight.as_ref().map(metrics_json),
+        })).collect::<Vec<_>>(),
+    })
 }

@@ -10,7 +10,7 @@ use anyhow::bail;
 use glint_analysis::{fmt_num, Staging};
 use glint_compare::{SweepSpec, DELTA_E_SCALE_MAX};
 use glint_lobe::LobeKind;
-use glint_render::{Scene, SceneLobe};
+use glint_render::{LightingModel, Scene, SceneLobe};
 
 use super::choice::choice;
 use super::render::{check_output_dir, open_renderer as open};
@@ -68,17 +68,64 @@ struct Options {
     /// Top of the heat map's ΔE scale (larger values get the top colour).
     #[arg(long, default_value_t = DELTA_E_SCALE_MAX)]
     scale_max: f64,
+    /// With --lighting path: also measure each image against the exact lobe traced
+    /// with this many samples per pixel and another seed [default: 16 x --spp; 0: no
+    /// reference].
+    #[arg(long, conflicts_with = "sweep")]
+    reference_spp: Option<u32>,
+    /// With --lighting path: instead of comparing lobes, trace the scene progressively
+    /// (1, 2, 3, 4, 6, 8, 11, ... samples per pixel, up to --spp) and print each step's
+    /// cumulative render time and its distance to the --reference-spp render.
+    #[arg(long, conflicts_with_all = ["sweep", "json"])]
+    convergence: bool,
+    /// With --convergence: stop at the first step whose mean FLIP is below this.
+    #[arg(long, requires = "convergence")]
+    flip_below: Option<f64>,
     /// No progress messages on stderr.
     #[arg(short, long)]
     quiet: bool,
 }
 
-/// The scene of the flags, lobe exact.
-fn build_scene(o: &Options) -> anyhow::Result<Scene> {
+/// Image size of a `path` comparison that gives no --size and no --scene: small, so
+/// the converged reference takes tens of seconds.
+const PATH_SIZE: [u32; 2] = [128, 128];
+
+/// Samples per pixel of a `path` comparison's images that give no --spp.
+const PATH_SPP: u32 = 16;
+
+/// The scene of the flags (its own lobe); under `path` lighting, [`PATH_SIZE`] and
+/// [`PATH_SPP`] unless given.
+fn flag_scene(o: &Options) -> anyhow::Result<Scene> {
     if o.sweep && (o.scene.n.is_some() || o.scene.v.is_some()) {
         bail!("--sweep chooses n and v itself: drop --n and --v (or use --sweep-n, --sweep-v)");
     }
-    Ok(glint_compare::exact_scene(&o.scene.scene()?))
+    let mut scene = o.scene.scene()?;
+    if scene.lighting.model == LightingModel::Path {
+        if o.scene.size.is_none() && o.scene.scene.is_none() {
+            scene.size = PATH_SIZE;
+        }
+        let spp = *scene.lighting.spp.get_or_insert(PATH_SPP);
+        if let Some(r) = o.reference_spp.filter(|&r| r > 0 && r <= spp) {
+            bail!("--reference-spp {r}: the reference's samples per pixel must exceed --spp {spp}");
+        }
+    } else if o.reference_spp.is_some_and(|s| s > 0) || o.convergence {
+        bail!("--reference-spp and --convergence need --lighting path");
+    }
+    Ok(scene)
+}
+
+/// The converged reference's samples per pixel, if any.
+fn reference_spp(o: &Options, scene: &Scene) -> Option<u32> {
+    let l = &scene.lighting;
+    if l.model != LightingModel::Path {
+        return None;
+    }
+    let own = l.spp.unwrap_or(PATH_SPP);
+    match o.reference_spp {
+        Some(0) => None,
+        Some(s) => Some(s),
+        None => Some(own.saturating_mul(16)),
+    }
 }
 
 /// Runs `glint compare`.
@@ -87,7 +134,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !(o.scale_max.is_finite() && o.scale_max > 0.0) {
         bail!("--scale-max {}: expected a positive number", o.scale_max);
     }
-    let scene = build_scene(&o)?;
+    let own = flag_scene(&o)?;
+    if o.convergence {
+        return run_convergence(&o, own);
+    }
+    let scene = glint_compare::exact_scene(&own);
     if o.sweep {
         return run_sweep(&o, scene);
     }
@@ -99,7 +150,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         o.lobes.clone()
     };
     let renderer = open(&scene, &o.scene.read_options())?;
-    let report = glint_compare::run(renderer, &scene, &lobes, o.scene.v)?;
+    let report = glint_compare::run_against(
+        renderer,
+        &scene,
+        &lobes,
+        o.scene.v,
+        reference_spp(&o, &scene),
+    )?;
     let png = report.figure_png(o.scale_max)?;
     glint_io::write_atomic(&output, |w| w.write_all(&png))?;
     if o.json {
@@ -162,6 +219,59 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
     print!("{md}");
     if !o.quiet {
         eprintln!("glint: wrote {} files into {}", files.len(), out.display());
+    }
+    Ok(())
+}
+
+/// `--convergence`: the scene traced progressively up to its --spp, each step's time
+/// and distance to the converged reference.
+fn run_convergence(o: &Options, scene: Scene) -> anyhow::Result<()> {
+    let max = scene.lighting.spp.unwrap_or(PATH_SPP);
+    let Some(reference) = reference_spp(o, &scene) else {
+        bail!("--convergence needs a reference: --reference-spp above 0");
+    };
+    if let Some(t) = o.flip_below {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--flip-below {t}: expected a positive number");
+        }
+    }
+    let renderer = open(&scene, &o.scene.read_options())?;
+    if !o.quiet {
+        eprintln!("glint compare: tracing the reference, {reference} spp");
+    }
+    println!("spp  seconds  mean dE  FLIP");
+    let conv = glint_compare::convergence(
+        renderer,
+        &scene,
+        reference,
+        &glint_compare::convergence_schedule(max),
+        o.flip_below,
+        &|s| {
+            println!(
+                "{:<4} {:<8.3} {:<8.4} {:.5}",
+                s.spp,
+                s.elapsed.as_secs_f64(),
+                s.image.delta_e.map_or(f64::NAN, |d| d.mean),
+                s.image.flip.unwrap_or(f64::NAN)
+            );
+        },
+    )?;
+    println!(
+        "reference: {} spp, seed {}, {:.1} s, {}x{}",
+        conv.reference_spp,
+        conv.reference_seed,
+        conv.reference_time.as_secs_f64(),
+        scene.size[0],
+        scene.size[1]
+    );
+    match o.flip_below.map(|t| (t, conv.first_below(t))) {
+        Some((t, Some(s))) => println!(
+            "mean FLIP below {t} at {} spp after {:.3} s",
+            s.spp,
+            s.elapsed.as_secs_f64()
+        ),
+        Some((t, None)) => println!("mean FLIP not below {t} by {max} spp"),
+        None => {}
     }
     Ok(())
 }

@@ -351,11 +351,7 @@ impl Classification {
             iso_value: self.settings.iso,
             skip_empty: self.settings.skip_empty,
             dt: (self.settings.step * field.min_spacing()) as f32,
-            // The AVX2 loop's kept samples name their voxel by its place in the brick
-            // pool, not in the grid, so it cannot look up the light volumes: the
-            // `shadows` model runs the reference loop until the samples carry their
-            // grid position (bricked field, issue 31).
-            simd: settings.kernel == Kernel::Auto && simd_supported() && shadows.is_none(),
+            simd: settings.kernel == Kernel::Auto && simd_supported(),
             jitter,
             sampling: self.settings.sampling,
             shadows,

@@ -296,7 +296,7 @@ impl Lanes {
         keep(
             kept,
             (&mut self.alpha[l], self.id[l]),
-            r.base[l],
+            (r.base[l], r.brick[l]),
             t,
             rgba,
             stats,
@@ -336,7 +336,7 @@ impl Lanes {
                 if keep(
                     kept,
                     (&mut self.alpha[l], self.id[l]),
-                    probe.base[l],
+                    (probe.base[l], probe.brick[l]),
                     tl,
                     rgba,
                     stats,

@@ -5,7 +5,7 @@ use std::arch::x86_64::*;
 use glint_core::MAX_LIGHTS;
 
 use super::*;
-use crate::field::brick::{BRICK_ROW, BRICK_SLICE};
+use crate::field::brick::{BRICK, BRICK_ROW, BRICK_SLICE, BRICK_VOXELS};
 use crate::transport::ShadowField;
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
@@ -175,19 +175,34 @@ unsafe fn gather(c: &Caster, kept: &Kept, views: &[Vec3], batch: &mut ShadeBatch
     }
 }
 
+/// The grid cell of a kept sample: its brick's corner in the grid plus the corner
+/// voxel's place in the brick, which is its place in the slot (slots start at
+/// multiples of [`BRICK_VOXELS`], laid out as rows of [`BRICK_ROW`] and slices of
+/// [`BRICK_SLICE`]).
+#[inline(always)]
+fn grid_cell(brick_dims: [usize; 3], s: &Sample) -> [usize; 3] {
+    let (b, v) = (s.brick as usize, s.base as usize % BRICK_VOXELS);
+    let bricks = [
+        b % brick_dims[0],
+        b / brick_dims[0] % brick_dims[1],
+        b / (brick_dims[0] * brick_dims[1]),
+    ];
+    let local = [v % BRICK_ROW, v / BRICK_ROW % BRICK_ROW, v / BRICK_SLICE];
+    std::array::from_fn(|a| bricks[a] * BRICK + local[a])
+}
+
 /// Fills `batch`'s transmittance and occlusion columns for the `kept` samples from
-/// the light volumes, at each sample's index-space position: its cell's corner (from
-/// the corner voxel's linear index) plus its fractions, as the reference loop's
-/// `Caster::add` computes it from the located sample.
+/// the light volumes, at each sample's index-space position: its grid cell's corner
+/// ([`grid_cell`]) plus its fractions, as the reference loop's `Caster::add` computes
+/// it from the located sample.
 fn shadow_columns(c: &Caster, shadows: &ShadowField, kept: &Kept, batch: &mut ShadeBatch) {
     let n = batch.len();
     let lights = shadows.lights();
-    let [nx, ny, _] = c.field.dims;
+    let brick_dims = c.field.brick_dims;
     let (t, occlusion) = batch.shadow_columns(lights);
     let mut tl = [1.0f32; MAX_LIGHTS];
     for (k, s) in kept.0.iter().enumerate().take(n) {
-        let b = s.base as usize;
-        let (i, j, kk) = (b % nx, (b / nx) % ny, b / (nx * ny));
+        let [i, j, kk] = grid_cell(brick_dims, s);
         let p = Vec3::new(i as f32 + s.t[0], j as f32 + s.t[1], kk as f32 + s.t[2]);
         occlusion[k] = shadows.at(p, &mut tl);
         for (l, &x) in tl[..lights].iter().enumerate() {

@@ -150,6 +150,10 @@ pub(super) struct Sample {
     /// The sample's corner-000 voxel in the brick pool (valid while the tile's guard
     /// lives).
     pub(super) base: i32,
+    /// The grid index of the brick holding that voxel: with the voxel's place in its
+    /// slot (`base` modulo the slot size) it gives the sample's grid cell, which the
+    /// `shadows` model's light volumes are indexed by ([`light`]).
+    pub(super) brick: i32,
     /// The ray's index in the tile.
     pub(super) ray: u32,
 }
@@ -361,14 +365,14 @@ pub(super) unsafe fn composite_lanes<const PRE: bool>(
 }
 
 /// Records a composited sample of the ray `id` whose opacity so far is `alpha` (voxel
-/// `base`, fractions `t`, its segment's colour and opacity) and adds its opacity as
-/// the reference loop does, in the same order. Returns whether the ray is now opaque
-/// enough to stop.
+/// `base` in the pool, in the grid's brick `brick`, fractions `t`, its segment's colour
+/// and opacity) and adds its opacity as the reference loop does, in the same order.
+/// Returns whether the ray is now opaque enough to stop.
 #[inline(always)]
 pub(super) fn keep(
     kept: &mut Kept,
     (alpha, id): (&mut f32, u32),
-    base: i32,
+    (base, brick): (i32, i32),
     t: [f32; 3],
     rgba: [f32; 4],
     stats: &mut RenderStats,
@@ -379,6 +383,7 @@ pub(super) fn keep(
         t,
         weight: w,
         base,
+        brick,
         ray: id,
     });
     stats.shaded += 1;

@@ -14,8 +14,9 @@ use crate::field::cache::ABSENT;
 pub(super) struct Reads {
     /// Fractions inside the trilinear cell, per axis.
     pub(super) t: [[f32; LANES]; 3],
-    /// Corner-000 voxel.
+    /// Corner-000 voxel in the brick pool, and its brick's grid index.
     pub(super) base: [i32; LANES],
+    pub(super) brick: [i32; LANES],
     /// Table coordinate (`Lut::position` of the trilinear value).
     pub(super) u: [f32; LANES],
     /// Sample index.
@@ -40,11 +41,12 @@ pub(super) unsafe fn reads_at(
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let base = bases(c, inv, ijk, (mask, memo), guard)?;
+        let (base, brick) = bases(c, inv, ijk, (mask, memo), guard)?;
         let (fr, uv) = values_at(inv, p, ijk, &base);
         let mut r = Reads {
             t: [[0.0; LANES]; 3],
             base,
+            brick,
             u: [0.0; LANES],
             k: [0; LANES],
         };
@@ -76,7 +78,7 @@ impl Default for Memo {
 
 /// Each lane's corner-000 voxel in the brick pool: its brick's slot (from `memo`, or
 /// the page table, the brick built now if absent) plus the voxel's place in the brick,
-/// for the lanes `mask`. Every other lane gets its place in the last slot it used (or
+/// for the lanes `mask`; and each lane's brick index in the grid. Every other lane gets its place in the last slot it used (or
 /// the dummy slot 0), so all loads stay inside the pool. `None` when a brick could not
 /// be built (the cache is full of bricks in use).
 ///
@@ -91,7 +93,7 @@ pub(super) unsafe fn bases(
     ijk: [__m256i; 3],
     (mask, memo): (u8, &mut Memo),
     guard: &Guard,
-) -> Option<[i32; LANES]> {
+) -> Option<([i32; LANES], [i32; LANES])> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
@@ -135,9 +137,10 @@ pub(super) unsafe fn bases(
             }
         }
         let base = _mm256_add_epi32(_mm256_loadu_si256(memo.off.as_ptr().cast()), local);
-        let mut out = [0i32; LANES];
+        let (mut out, mut bricks) = ([0i32; LANES], [0i32; LANES]);
         _mm256_storeu_si256(out.as_mut_ptr().cast(), base);
-        Some(out)
+        _mm256_storeu_si256(bricks.as_mut_ptr().cast(), index);
+        Some((out, bricks))
     }
 }
 
@@ -208,11 +211,12 @@ pub(super) unsafe fn positions(
     }
 }
 
-/// One sample per lane: its table entry, corner voxel, cell fractions, and which
-/// lanes' entries have opacity.
+/// One sample per lane: its table entry, corner voxel (in the pool) and brick (in the
+/// grid), cell fractions, and which lanes' entries have opacity.
 pub(super) struct Probe {
     pub(super) li: [i32; LANES],
     pub(super) base: [i32; LANES],
+    pub(super) brick: [i32; LANES],
     pub(super) fr: [__m256; 3],
     pub(super) opaque: u8,
 }
@@ -289,7 +293,7 @@ pub(super) unsafe fn probe(
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let base = bases(c, inv, ijk, (mask, memo), guard)?;
+        let (base, brick) = bases(c, inv, ijk, (mask, memo), guard)?;
         let (fr, uv) = values_at(inv, p, ijk, &base);
         let mut li = [0i32; LANES];
         _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
@@ -301,6 +305,7 @@ pub(super) unsafe fn probe(
         Some(Probe {
             li,
             base,
+            brick,
             fr,
             opaque,
         })
