@@ -108,85 +108,12 @@ mod tests {
     use glint_lobe::LobeKind;
 
     use super::*;
-    use crate::camera::{Camera, CameraSpec};
+    use crate::lighting::fixtures::{check, fill, shaders};
+
     use crate::lighting::Light;
     use crate::lighting::Material;
     use crate::lighting::Shader;
     use glint_lobe::Geometry;
-
-    /// A deterministic spread of values in [-1, 1) (a Weyl sequence).
-    fn spread(k: usize, salt: f32) -> f32 {
-        let x = (k as f32 * 0.618_034 + salt).fract();
-        2.0 * x - 1.0
-    }
-
-    fn shaders(gate: f32) -> Vec<Shader> {
-        let cam = Camera::frame(&CameraSpec::default(), Vec3::ZERO, 1.0, 8, 8).unwrap();
-        let lights = vec![
-            Light::HEADLIGHT,
-            Light {
-                azimuth: 40.0,
-                elevation: 25.0,
-                intensity: 0.7,
-            },
-            Light {
-                azimuth: -120.0,
-                elevation: -10.0,
-                intensity: 1.3,
-            },
-        ];
-        let mut out = Vec::new();
-        for geometry in [Geometry::Phong, Geometry::Blinn] {
-            for kind in [LobeKind::EnergyFit, LobeKind::Exact, LobeKind::Schlick] {
-                let s = Shader::new(
-                    kind,
-                    37.0,
-                    4,
-                    geometry,
-                    Material::default(),
-                    lights.clone(),
-                    gate,
-                )
-                .unwrap();
-                out.push(s.placed(&cam));
-            }
-        }
-        out
-    }
-
-    /// Fills a batch of `n` samples: normals (or gradients scaled by `scale`), views
-    /// and colours from deterministic spreads, with a few degenerate normals.
-    fn fill(b: &mut ShadeBatch, n: usize, scale: f32) {
-        b.set_len(n);
-        for k in 0..n {
-            let g = Vec3::new(spread(k, 0.1), spread(k, 0.37), spread(k, 0.71)) * scale;
-            let g = match k % 17 {
-                0 => Vec3::ZERO,
-                1 => Vec3::new(f32::NAN, 0.0, 1.0),
-                2 => Vec3::new(f32::INFINITY, 0.0, 0.0),
-                _ => g,
-            };
-            let v = Vec3::new(spread(k, 0.5) * 0.3, spread(k, 0.9) * 0.3, 1.0).normalize_or_zero();
-            for a in 0..3 {
-                b.normal[a][k] = g.get(a);
-                b.view[a][k] = v.get(a);
-                b.color[a][k] = 0.5 + 0.5 * spread(k, 0.2 * a as f32);
-            }
-        }
-    }
-
-    /// The batch's result for sample `k` against the scalar form, bit for bit.
-    fn check(got: &ShadeBatch, want: impl Fn(usize) -> [f32; 3], n: usize, what: &str) {
-        for k in 0..n {
-            let g = [got.color[0][k], got.color[1][k], got.color[2][k]];
-            let w = want(k);
-            assert_eq!(
-                g.map(f32::to_bits),
-                w.map(f32::to_bits),
-                "{what}, sample {k}: {g:?} vs {w:?}"
-            );
-        }
-    }
 
     #[test]
     fn gradient_batches_are_the_scalar_form_bit_for_bit_on_every_path() {

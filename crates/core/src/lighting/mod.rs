@@ -27,6 +27,8 @@ use crate::math::Vec3;
 mod avx2;
 mod batch;
 mod dispatch;
+#[cfg(test)]
+mod fixtures;
 mod material;
 mod scratch;
 mod shadowed;
