@@ -14,6 +14,10 @@ pub enum RenderError {
     /// The volume cannot be rendered (too small, too large, singular affine, ...).
     #[error("volume cannot be rendered: {0}")]
     Volume(String),
+    /// The render was stopped before it finished, on the caller's request (a viewer
+    /// whose user moved while a progressive frame was refining).
+    #[error("render cancelled")]
+    Cancelled,
     /// A render parameter is out of range (size, step, zoom, light, ...).
     #[error("invalid parameter: {0}")]
     Parameter(String),

@@ -1,6 +1,7 @@
 //! The [`Renderer`]: scenes of one volume and one set of meshes turned into images,
 //! keeping what frames share (the field, the meshes, the classification).
 
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -77,6 +78,8 @@ pub struct Renderer {
     /// The path-traced image of the last `path` scene: rendering the same scene with
     /// more samples adds to it; any other change starts again.
     paths: Option<PathAccumulation>,
+    /// Set by another thread to stop a `path` render in flight ([`Renderer::set_cancel`]).
+    cancel: Option<Arc<AtomicBool>>,
 }
 
 impl Renderer {
@@ -114,6 +117,7 @@ impl Renderer {
                 volume: None,
                 shadows: None,
                 paths: None,
+                cancel: None,
             });
         }
         let start = Instant::now();
@@ -206,6 +210,7 @@ impl Renderer {
             volume: None,
             shadows: None,
             paths: None,
+            cancel: None,
         }
     }
 
@@ -452,8 +457,10 @@ impl Renderer {
                             image: PathImage::new(size[0], size[1]),
                         },
                     };
+                    let never = AtomicBool::new(false);
+                    let cancel = self.cancel.clone();
                     let acc = self.paths.insert(acc);
-                    class.trace_paths(
+                    let traced = class.trace_paths_until(
                         shader,
                         frame,
                         &settings,
@@ -461,7 +468,14 @@ impl Renderer {
                         spp,
                         far,
                         progress,
-                    )?;
+                        cancel.as_deref().unwrap_or(&never),
+                    );
+                    if let Err(e) = traced {
+                        // A cancelled batch left some rows with more samples than
+                        // others: the image cannot be continued.
+                        self.paths = None;
+                        return Err(e);
+                    }
                     Ok(acc.image.image(frame.background))
                 }
             }
@@ -497,6 +511,14 @@ impl Renderer {
             field: field.clone(),
         });
         Ok(field)
+    }
+
+    /// Gives the renderer a flag that stops a `path` render in flight when another
+    /// thread sets it: that render returns [`RenderError::Cancelled`] and the samples
+    /// it held are dropped. The flag is the caller's to clear before the next render.
+    /// A clone keeps the flag; give each clone its own (one per viewer client).
+    pub fn set_cancel(&mut self, flag: Option<Arc<AtomicBool>>) {
+        self.cancel = flag;
     }
 
     /// Forgets the path-traced image it holds: the next `path` render starts from no

@@ -44,7 +44,7 @@ pub mod protocol;
 mod session;
 
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -279,11 +279,12 @@ fn hello(viewer: &Viewer) -> ServerMessage {
 /// progressive (`path`) state takes the next sample count after `reached`.
 fn spawn_frame(
     renderer: &Arc<Mutex<Renderer>>,
+    cancel: &Arc<AtomicBool>,
     state: &ClientState,
     purpose: Purpose,
     reached: u32,
 ) -> FrameJob {
-    let (r, mut s) = (renderer.clone(), state.clone());
+    let (r, mut s, cancel) = (renderer.clone(), state.clone(), cancel.clone());
     if purpose == Purpose::Full {
         if let Some(goal) = state.progressive() {
             s.scene.lighting.spp = Some(next_samples(reached, goal));
@@ -291,6 +292,8 @@ fn spawn_frame(
     }
     tokio::task::spawn_blocking(move || {
         let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
+        // A cancel asked of the job before this one (which finished first) is spent.
+        cancel.store(false, Ordering::Relaxed);
         render_frame(&mut r, &s.scene, s.split, purpose, s.seq).map(|f| (f, purpose))
     })
 }
@@ -308,7 +311,14 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     if !send_json(&mut socket, &hello(&viewer)).await {
         return;
     }
-    let renderer = Arc::new(Mutex::new(viewer.renderer.clone()));
+    // Set when input arrives while a progressive frame refines: the frame stops (its
+    // samples are dropped) and the input is answered at once.
+    let cancel = Arc::new(AtomicBool::new(false));
+    let mut renderer = viewer.renderer.clone();
+    renderer.set_cancel(Some(cancel.clone()));
+    let renderer = Arc::new(Mutex::new(renderer));
+    // Whether the frame in flight is a progressive refinement (which input cancels).
+    let mut refining = false;
     let mut state = ClientState {
         scene: viewer.scene.clone(),
         split: Split::Off,
@@ -332,7 +342,8 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 None
             };
             if let Some(purpose) = purpose {
-                inflight = Some(spawn_frame(&renderer, &state, purpose, reached));
+                refining = purpose == Purpose::Full && state.progressive().is_some();
+                inflight = Some(spawn_frame(&renderer, &cancel, &state, purpose, reached));
             }
         }
         tokio::select! {
@@ -348,6 +359,9 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                     }
                     _ => continue,
                 };
+                if inflight.is_some() && refining {
+                    cancel.store(true, Ordering::Relaxed);
+                }
                 let outcome = {
                     let r = renderer.lock().unwrap_or_else(|e| e.into_inner());
                     state.handle(text.as_str(), &r, &viewer.config)
@@ -388,6 +402,13 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                             let scene = serde_json::to_value(&frame.scene).expect("scenes serialise");
                             let msg = ServerMessage::Scene { seq: frame.seq, scene };
                             if !send_json(&mut socket, &msg).await { return }
+                        }
+                    }
+                    Ok(Err(RenderError::Cancelled)) => {
+                        // The refinement's samples are gone: start again from none.
+                        reached = 0;
+                        if wanted == Wanted::Nothing && settle.is_none() {
+                            wanted = Wanted::Frame(Purpose::Full);
                         }
                     }
                     Ok(Err(e)) => {

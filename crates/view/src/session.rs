@@ -76,7 +76,7 @@ pub fn next_samples(done: u32, goal: u32) -> u32 {
 }
 
 /// Renders `scene` for `purpose` (interactive frames at half size; a `path` scene's
-/// interactive frames at one sample per pixel, its full frames to the scene's sample
+/// interactive frames in local lighting, its full frames to the scene's sample
 /// count, continuing the samples `renderer` holds for it) with `split`, encoded with
 /// its header.
 pub fn render_frame(
@@ -90,7 +90,10 @@ pub fn render_frame(
     if purpose == Purpose::Interactive {
         s.size = s.size.map(|x| (x / 2).max(1));
         if s.lighting.model == LightingModel::Path {
-            s.lighting.spp = Some(1);
+            // Drag frames in the cheap model: one path sample of a 512x512 MNI152
+            // frame at half size takes about 0.4 s here (docs/performance.md), over the
+            // 150 ms an input may wait; local lighting takes tens of milliseconds.
+            s.lighting = s.lighting.for_model(LightingModel::Local);
         }
     }
     let start = Instant::now();
@@ -298,6 +301,7 @@ mod tests {
         s.lighting = glint_render::Lighting {
             model: LightingModel::Path,
             spp: Some(2),
+            bounces: Some(3),
             ..Default::default()
         };
         let mut r = Renderer::open(&s.input).unwrap();
@@ -313,7 +317,11 @@ mod tests {
         let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 1).unwrap();
         assert_eq!(f.samples, 5, "the same scene with more samples continues");
         let f = render_frame(&mut r, &s, Split::Off, Purpose::Interactive, 2).unwrap();
-        assert_eq!(f.samples, 1, "interactive path frames take one sample");
+        assert_eq!(
+            f.samples, 0,
+            "interactive path frames are drawn in local lighting"
+        );
+        assert_eq!(r.path_samples(), 5, "and leave the path samples alone");
         let f = render_frame(&mut r, &scene(), Split::Off, Purpose::Full, 3).unwrap();
         assert_eq!(f.samples, 0, "local frames are not path traced");
         let steps: Vec<u32> =

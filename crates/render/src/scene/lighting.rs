@@ -357,6 +357,34 @@ mod tests {
     }
 
     #[test]
+    fn a_cancelled_path_render_drops_its_samples_and_the_next_starts_clean() {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        use std::sync::Arc;
+        let scene = small(path(4));
+        let fresh = Renderer::open(&scene.input)
+            .unwrap()
+            .render(&scene, &|_| {})
+            .unwrap();
+        let flag = Arc::new(AtomicBool::new(false));
+        let mut r = Renderer::open(&scene.input).unwrap();
+        r.set_cancel(Some(flag.clone()));
+        r.render(&small(path(2)), &|_| {}).unwrap();
+        assert_eq!(r.path_samples(), 2);
+        // Cancelled once the first row is done: some rows got samples, most did not.
+        let cancelled = r.render(&scene, &|_| flag.store(true, Ordering::Relaxed));
+        assert!(
+            matches!(cancelled, Err(RenderError::Cancelled)),
+            "{cancelled:?}"
+        );
+        assert_eq!(r.path_samples(), 0, "a part-added batch is dropped");
+        // With the flag cleared the same scene renders as a fresh renderer's.
+        flag.store(false, Ordering::Relaxed);
+        let again = r.render(&scene, &|_| {}).unwrap();
+        assert_eq!(again.image, fresh.image);
+        assert_eq!(r.path_samples(), 4);
+    }
+
+    #[test]
     fn shadows_darken_and_reuse_their_light_volumes() {
         let lit = Lighting {
             model: LightingModel::Shadows,

@@ -1,5 +1,7 @@
 //! Frames of a classification under the `shadows` and `path` models.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 
 use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
@@ -104,6 +106,26 @@ impl Classification {
         far: Option<&[f32]>,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<(), RenderError> {
+        let never = AtomicBool::new(false);
+        self.trace_paths_until(shader, frame, settings, image, spp, far, progress, &never)
+    }
+
+    /// [`Classification::trace_paths`] that stops early when `cancel` is set (by
+    /// another thread: a viewer whose user moved while samples were being added): rows
+    /// not yet begun are left, and the call returns [`RenderError::Cancelled`]. The
+    /// image then holds part of a batch and must be dropped, not continued.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_paths_until(
+        &self,
+        shader: &Shader,
+        frame: &FrameSettings,
+        settings: &PathSettings,
+        image: &mut PathImage,
+        spp: u32,
+        far: Option<&[f32]>,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Result<(), RenderError> {
         settings.validate()?;
         check_spp(spp)?;
         frame.validate()?;
@@ -150,6 +172,9 @@ impl Classification {
             .enumerate()
             .map(|(y, row)| {
                 let mut stats = RenderStats::default();
+                if cancel.load(Ordering::Relaxed) {
+                    return stats;
+                }
                 for (x, sum) in row.iter_mut().enumerate() {
                     let limit = far.map_or(f32::INFINITY, |f| f[y * w + x]);
                     for s in from..spp {
@@ -170,6 +195,9 @@ impl Classification {
                 shaded: a.shaded + b.shaded,
                 skips: a.skips + b.skips,
             });
+        if cancel.load(Ordering::Relaxed) {
+            return Err(RenderError::Cancelled);
+        }
         image.finish_batch(spp, stats);
         Ok(())
     }
