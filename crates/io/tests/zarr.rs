@@ -147,3 +147,37 @@ fn a_level_over_the_voxel_limit_is_refused() {
     let err = open_volume(&data("v04-blosc.zarr"), &options).unwrap_err();
     assert!(matches!(err, IoError::TooLarge { .. }), "{err}");
 }
+
+/// A store missing one of its 12 chunks (missing-chunk.zarr: the same data as
+/// v04-blosc.zarr's level 0 in chunks of 32 x 16 x 5, the one at x 32.., y 16..32,
+/// z 0..5 deleted): read with one note naming how many chunks were missing, that
+/// chunk's voxels the fill value 0 and every other voxel as in the whole store; refused
+/// with one line under `strict`.
+#[test]
+fn a_missing_chunk_reads_as_the_fill_value_with_a_note_or_is_refused_strictly() {
+    let whole = open_volume(&data("v04-blosc.zarr"), &ReadOptions::default()).unwrap();
+    let f = open_volume(&data("missing-chunk.zarr"), &ReadOptions::default()).unwrap();
+    let notes: Vec<&String> = f.notes.iter().filter(|n| n.contains("missing")).collect();
+    assert_eq!(notes.len(), 1, "{:?}", f.notes);
+    assert!(notes[0].contains("1 of 12 chunks missing"), "{}", notes[0]);
+    let (v, w) = (&f.volume, &whole.volume);
+    assert_eq!(v.dims, [64, 48, 10]);
+    for k in 0..10 {
+        for j in 0..48 {
+            for i in 0..64 {
+                let n = i + 64 * (j + 48 * k);
+                let gone = i >= 32 && (16..32).contains(&j) && k < 5;
+                let want = if gone { 0.0 } else { w.samples.get(n) };
+                assert_eq!(v.samples.get(n), want, "voxel {i},{j},{k}");
+            }
+        }
+    }
+    let strict = ReadOptions {
+        strict: true,
+        ..ReadOptions::default()
+    };
+    let err = open_volume(&data("missing-chunk.zarr"), &strict).unwrap_err();
+    let text = err.to_string();
+    assert!(text.contains("1 of 12 chunks are missing"), "{text}");
+    assert!(!text.contains('\n'), "{text}");
+}
