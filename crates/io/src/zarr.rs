@@ -253,6 +253,24 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         .map_err(|e| invalid(path, format!("level '{}': {e}", l.path)))?;
     let xyz = spatial_axes(path, &image.axes)?;
     let shape = array.shape().to_vec();
+    // zarrs decodes a whole chunk before taking what the level needs of it: a chunk
+    // shape from the metadata is checked before any chunk is read.
+    let chunk = array
+        .chunk_shape(&vec![0; shape.len()])
+        .map_err(|e| invalid(path, format!("level '{}': {e}", l.path)))?
+        .iter()
+        .try_fold(1u64, |a, c| a.checked_mul(c.get()))
+        .unwrap_or(u64::MAX);
+    if chunk > options.max_voxels {
+        return Err(IoError::TooLarge {
+            path: path.into(),
+            what: format!(
+                "level '{}': chunks of {chunk} voxels exceed the limit of {} (raise it \
+                 with --max-voxels)",
+                l.path, options.max_voxels
+            ),
+        });
+    }
     let mut notes = vec![format!(
         "OME-Zarr {}, {} level(s)",
         if path.join("zarr.json").is_file() {

@@ -181,3 +181,30 @@ fn a_missing_chunk_reads_as_the_fill_value_with_a_note_or_is_refused_strictly() 
     assert!(text.contains("1 of 12 chunks are missing"), "{text}");
     assert!(!text.contains('\n'), "{text}");
 }
+
+/// An absurd chunk shape in a level's metadata (a chunk of 10^27 voxels over a level
+/// of 30,720, edited into a copy of v05-zstd.zarr as the fuzz target's inputs edit
+/// it): refused in one line before any chunk is read or allocated for.
+#[test]
+fn an_absurd_chunk_shape_is_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("s.zarr");
+    let src = data("v05-zstd.zarr");
+    std::fs::create_dir_all(store.join("0/c/0/0")).unwrap();
+    let mut group: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("zarr.json")).unwrap()).unwrap();
+    let datasets = &mut group["attributes"]["ome"]["multiscales"][0]["datasets"];
+    datasets.as_array_mut().unwrap().truncate(1);
+    std::fs::write(store.join("zarr.json"), group.to_string()).unwrap();
+    let mut array: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("0/zarr.json")).unwrap()).unwrap();
+    array["chunk_grid"]["configuration"]["chunk_shape"] =
+        serde_json::json!([1_000_000_000u64, 1_000_000_000u64, 1_000_000_000u64]);
+    std::fs::write(store.join("0/zarr.json"), array.to_string()).unwrap();
+    std::fs::copy(src.join("0/c/0/0/0"), store.join("0/c/0/0/0")).unwrap();
+    let err = open_volume(&store, &ReadOptions::default()).unwrap_err();
+    let text = err.to_string();
+    assert!(matches!(err, IoError::TooLarge { .. }), "{text}");
+    assert!(text.contains("chunks of"), "{text}");
+    assert!(!text.contains('\n'), "{text}");
+}
