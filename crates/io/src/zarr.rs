@@ -253,24 +253,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         .map_err(|e| invalid(path, format!("level '{}': {e}", l.path)))?;
     let xyz = spatial_axes(path, &image.axes)?;
     let shape = array.shape().to_vec();
-    // zarrs decodes a whole chunk before taking what the level needs of it: a chunk
-    // shape from the metadata is checked before any chunk is read.
-    let chunk = array
-        .chunk_shape(&vec![0; shape.len()])
-        .map_err(|e| invalid(path, format!("level '{}': {e}", l.path)))?
-        .iter()
-        .try_fold(1u64, |a, c| a.checked_mul(c.get()))
-        .unwrap_or(u64::MAX);
-    if chunk > options.max_voxels {
-        return Err(IoError::TooLarge {
-            path: path.into(),
-            what: format!(
-                "level '{}': chunks of {chunk} voxels exceed the limit of {} (raise it \
-                 with --max-voxels)",
-                l.path, options.max_voxels
-            ),
-        });
-    }
+    check_chunks(path, &array, &l.path, options.max_voxels)?;
     let mut notes = vec![format!(
         "OME-Zarr {}, {} level(s)",
         if path.join("zarr.json").is_file() {
@@ -303,12 +286,80 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             what: "spatial axes other than the last three in z, y, x order".into(),
         });
     }
-    let zaxis = xyz[2];
+    let samples = read_samples(
+        path,
+        &array,
+        l,
+        (&ranges, xyz[2], count),
+        options,
+        &mut notes,
+    )?;
+    if samples.len() != count {
+        return Err(invalid(path, "the level's data does not match its shape"));
+    }
+    notes.extend(level_notes(&all, chosen));
+    let affine = diagonal_affine(l.scale, l.translation);
+    let spacing = check_affine(path, &affine)?;
+    Ok(VolumeFile {
+        volume: Volume {
+            dims: l.dims,
+            spacing,
+            affine,
+            samples,
+            slope: 1.0,
+            intercept: 0.0,
+            units: None,
+            colour: None,
+        },
+        format: Format::Zarr,
+        notes,
+        inflate: None,
+    })
+}
+
+/// Refuses a level whose chunks hold more than `max_voxels` voxels: zarrs decodes a
+/// whole chunk before taking what the level needs of it, so a chunk shape from the
+/// metadata is checked before any chunk is read.
+fn check_chunks(
+    path: &Path,
+    array: &Array<FilesystemStore>,
+    level: &str,
+    max_voxels: u64,
+) -> Result<(), IoError> {
+    let chunk = array
+        .chunk_shape(&vec![0; array.shape().len()])
+        .map_err(|e| invalid(path, format!("level '{level}': {e}")))?
+        .iter()
+        .try_fold(1u64, |a, c| a.checked_mul(c.get()))
+        .unwrap_or(u64::MAX);
+    if chunk > max_voxels {
+        return Err(IoError::TooLarge {
+            path: path.into(),
+            what: format!(
+                "level '{level}': chunks of {chunk} voxels exceed the limit of {max_voxels} \
+                 (raise it with --max-voxels)"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The samples of level `l` (`ranges` of its axes, `zaxis` the slowest spatial one,
+/// `count` voxels) in their stored type, with a note naming the chunks missing (or,
+/// `strict`, an error).
+fn read_samples(
+    path: &Path,
+    array: &Array<FilesystemStore>,
+    l: &LevelInfo,
+    (ranges, zaxis, count): (&[std::ops::Range<u64>], usize, usize),
+    options: &ReadOptions,
+    notes: &mut Vec<String>,
+) -> Result<Samples, IoError> {
     let mut missing = (0, 0);
     macro_rules! slabs {
         ($v:ident) => {
             Samples::$v(
-                read_slabs(&array, &ranges, zaxis, count, &mut missing)
+                read_slabs(array, ranges, zaxis, count, &mut missing)
                     .map_err(|e| e.into_io(path, &l.path))?,
             )
         };
@@ -345,40 +396,28 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             l.path
         ));
     }
-    if samples.len() != count {
-        return Err(invalid(path, "the level's data does not match its shape"));
-    }
-    for (i, lv) in all.iter().enumerate() {
-        notes.push(format!(
-            "level {i} '{}': {}x{}x{} {}, voxel {}x{}x{}{}",
-            lv.path,
-            lv.dims[0],
-            lv.dims[1],
-            lv.dims[2],
-            lv.data_type,
-            lv.scale[0],
-            lv.scale[1],
-            lv.scale[2],
-            if i == chosen { " (read)" } else { "" }
-        ));
-    }
-    let affine = diagonal_affine(l.scale, l.translation);
-    let spacing = check_affine(path, &affine)?;
-    Ok(VolumeFile {
-        volume: Volume {
-            dims: l.dims,
-            spacing,
-            affine,
-            samples,
-            slope: 1.0,
-            intercept: 0.0,
-            units: None,
-            colour: None,
-        },
-        format: Format::Zarr,
-        notes,
-        inflate: None,
-    })
+    Ok(samples)
+}
+
+/// One note per level: path, size, type, voxel size, the one read marked.
+fn level_notes(all: &[LevelInfo], chosen: usize) -> Vec<String> {
+    all.iter()
+        .enumerate()
+        .map(|(i, lv)| {
+            format!(
+                "level {i} '{}': {}x{}x{} {}, voxel {}x{}x{}{}",
+                lv.path,
+                lv.dims[0],
+                lv.dims[1],
+                lv.dims[2],
+                lv.data_type,
+                lv.scale[0],
+                lv.scale[1],
+                lv.scale[2],
+                if i == chosen { " (read)" } else { "" }
+            )
+        })
+        .collect()
 }
 
 /// Why a level's chunks could not be read.
