@@ -14,6 +14,8 @@ Stores (a 64 x 48 x 10 volume, z y x on disk, values from a fixed seed):
   v04-gzip-czyx.zarr  NGFF 0.4, Zarr v2, gzip, axes c z y x with 2 channels, 1 level
   bad-pyramid.zarr   level 1 announced larger than level 0 (inconsistent metadata)
   bad-codec.zarr     a compressor id no reader knows
+  missing-chunk.zarr NGFF 0.4, Zarr v2, chunks of 32 x 16 x 5 (12 of them), 1 level, the
+                     chunk at x 32.., y 16..32, z 0..5 deleted (read as the fill value 0)
 """
 import json
 import os
@@ -62,6 +64,11 @@ bad = write("bad-codec.zarr", data, FormatV04(), 2, "zyx", scaler=None)
 meta = json.load(open(os.path.join(bad, "0", ".zarray")))
 meta["compressor"] = {"id": "no-such-codec"}
 json.dump(meta, open(os.path.join(bad, "0", ".zarray"), "w"), indent=2)
+
+# A missing chunk: 12 chunks of 5 x 16 x 32 (z y x), the one at z 0, y 1, x 1 removed.
+miss = write("missing-chunk.zarr", data, FormatV04(), 2, "zyx",
+             storage_options={"chunks": (5, 16, 32)}, scaler=None)
+os.remove(os.path.join(miss, "0", "0", "1", "1"))
 
 lines = []
 for path in stores:

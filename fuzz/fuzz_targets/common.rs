@@ -17,9 +17,9 @@ mod tempfile_dir {
     }
 }
 
-/// Writes `data` to `input.<ext>` in the process's directory and returns the path.
-pub fn input_file(data: &[u8], ext: &str) -> PathBuf {
-    let dir = DIR.get_or_init(|| {
+/// The process's directory.
+fn dir() -> &'static std::path::Path {
+    &DIR.get_or_init(|| {
         let base = if std::path::Path::new("/dev/shm").is_dir() {
             PathBuf::from("/dev/shm")
         } else {
@@ -28,8 +28,21 @@ pub fn input_file(data: &[u8], ext: &str) -> PathBuf {
         let d = base.join(format!("glint-fuzz-{}", std::process::id()));
         std::fs::create_dir_all(&d).expect("create the fuzz directory");
         tempfile_dir::Dir(d)
-    });
-    let path = dir.0.join(format!("input.{ext}"));
+    })
+    .0
+}
+
+/// The path `input.<ext>` in the process's directory, for a target that writes a
+/// directory (a Zarr store).
+#[allow(dead_code)]
+pub fn input_dir(ext: &str) -> PathBuf {
+    dir().join(format!("input.{ext}"))
+}
+
+/// Writes `data` to `input.<ext>` in the process's directory and returns the path.
+#[allow(dead_code)]
+pub fn input_file(data: &[u8], ext: &str) -> PathBuf {
+    let path = dir().join(format!("input.{ext}"));
     std::fs::write(&path, data).expect("write the fuzz input");
     path
 }

@@ -21,7 +21,8 @@ struct Cli {
     /// Memory the volumes may take, e.g. 8GiB or 600MiB (bricks of derived data are
     /// evicted to stay within it; a volume that cannot fit is refused, naming it)
     /// [default: three quarters of the machine's memory, with each volume's bricks
-    /// held to the size of its samples (at least 256 MiB)].
+    /// held to half the size of its samples (at least 128 MiB; every brick of a volume
+    /// whose bricks fit in 256 MiB)].
     #[arg(long, global = true, value_name = "SIZE", value_parser = parse_size)]
     memory_limit: Option<u64>,
     #[command(subcommand)]

@@ -166,7 +166,7 @@ pub struct ReadOptions {
     pub raw: Option<RawParams>,
     /// Refuse what lenient readers accept with a note: DICOM files without the 128-byte
     /// preamble or the file meta group, multi-frame DICOM without frame positions,
-    /// DICOM PixelSpacing of zero.
+    /// DICOM PixelSpacing of zero, OME-Zarr levels with missing chunks.
     pub strict: bool,
     /// What a colour volume's [`Volume::samples`] hold: its luminance (the default) or
     /// one of its channels. The colour itself is in [`Volume::colour`] either way.

@@ -14,9 +14,10 @@ use std::sync::Arc;
 
 use ome_zarr_metadata::v0_4::{self, AxisType, CoordinateTransform};
 use ome_zarr_metadata::AnyOmeFields;
-use zarrs::array::{Array, ArraySubset};
+use zarrs::array::{Array, ArrayError, ArraySubset, ElementOwned};
 use zarrs::filesystem::FilesystemStore;
 use zarrs::group::Group;
+use zarrs::storage::{ReadableStorageTraits, StorageError};
 
 use crate::common::{check_affine, diagonal_affine};
 use crate::{Format, IoError, ReadOptions, Samples, Volume, VolumeFile};
@@ -29,6 +30,9 @@ pub enum Level {
     Finest,
     /// Level `n` (0 finest).
     Index(usize),
+    /// The coarsest (what `glint info` reads: the pyramid's metadata without its
+    /// largest level's samples).
+    Coarsest,
     /// The coarsest level whose largest edge, in voxels, is at least this many (the
     /// image's larger side in pixels: at least one voxel per pixel along the view).
     Auto(usize),
@@ -125,7 +129,13 @@ fn transform(
     n: usize,
 ) -> Result<(Vec<f64>, Vec<f64>), IoError> {
     let (mut scale, mut shift) = (vec![1.0; n], vec![0.0; n]);
-    let wide = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>();
+    // ome_zarr_metadata keeps f32: widen the shortest decimal that names it (0.001,
+    // not 0.0010000000474974513), the value the store's JSON most likely wrote.
+    let wide = |v: &[f32]| {
+        v.iter()
+            .map(|&x| x.to_string().parse().unwrap_or(f64::from(x)))
+            .collect::<Vec<f64>>()
+    };
     for t in ts {
         match t {
             CoordinateTransform::Scale(v0_4::CoordinateTransformScale::List { scale: v }) => {
@@ -212,6 +222,7 @@ pub fn pick(levels: &[LevelInfo], level: Level) -> Option<usize> {
     match level {
         Level::Finest => Some(0),
         Level::Index(i) => (i < levels.len()).then_some(i),
+        Level::Coarsest => levels.len().checked_sub(1),
         Level::Auto(pixels) => Some(
             levels
                 .iter()
@@ -242,6 +253,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         .map_err(|e| invalid(path, format!("level '{}': {e}", l.path)))?;
     let xyz = spatial_axes(path, &image.axes)?;
     let shape = array.shape().to_vec();
+    check_chunks(path, &array, &l.path, options.max_voxels)?;
     let mut notes = vec![format!(
         "OME-Zarr {}, {} level(s)",
         if path.join("zarr.json").is_file() {
@@ -274,41 +286,18 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             what: "spatial axes other than the last three in z, y, x order".into(),
         });
     }
-    let subset = ArraySubset::new_with_ranges(&ranges);
-    let err = |e: zarrs::array::ArrayError| invalid(path, format!("level '{}': {e}", l.path));
-    let samples = match l.data_type.as_str() {
-        "uint8" => Samples::U8(array.retrieve_array_subset(&subset).map_err(err)?),
-        "int8" => Samples::I8(array.retrieve_array_subset(&subset).map_err(err)?),
-        "uint16" => Samples::U16(array.retrieve_array_subset(&subset).map_err(err)?),
-        "int16" => Samples::I16(array.retrieve_array_subset(&subset).map_err(err)?),
-        "uint32" => Samples::U32(array.retrieve_array_subset(&subset).map_err(err)?),
-        "int32" => Samples::I32(array.retrieve_array_subset(&subset).map_err(err)?),
-        "float32" => Samples::F32(array.retrieve_array_subset(&subset).map_err(err)?),
-        "float64" => Samples::F64(array.retrieve_array_subset(&subset).map_err(err)?),
-        other => {
-            return Err(IoError::Unsupported {
-                path: path.into(),
-                what: format!("Zarr data type {other}"),
-            })
-        }
-    };
+    let samples = read_samples(
+        path,
+        &array,
+        l,
+        (&ranges, xyz[2], count),
+        options,
+        &mut notes,
+    )?;
     if samples.len() != count {
         return Err(invalid(path, "the level's data does not match its shape"));
     }
-    for (i, lv) in all.iter().enumerate() {
-        notes.push(format!(
-            "level {i} '{}': {}x{}x{} {}, voxel {}x{}x{}{}",
-            lv.path,
-            lv.dims[0],
-            lv.dims[1],
-            lv.dims[2],
-            lv.data_type,
-            lv.scale[0],
-            lv.scale[1],
-            lv.scale[2],
-            if i == chosen { " (read)" } else { "" }
-        ));
-    }
+    notes.extend(level_notes(&all, chosen));
     let affine = diagonal_affine(l.scale, l.translation);
     let spacing = check_affine(path, &affine)?;
     Ok(VolumeFile {
@@ -326,4 +315,182 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         notes,
         inflate: None,
     })
+}
+
+/// Refuses a level whose chunks hold more than `max_voxels` voxels: zarrs decodes a
+/// whole chunk before taking what the level needs of it, so a chunk shape from the
+/// metadata is checked before any chunk is read.
+fn check_chunks(
+    path: &Path,
+    array: &Array<FilesystemStore>,
+    level: &str,
+    max_voxels: u64,
+) -> Result<(), IoError> {
+    let chunk = array
+        .chunk_shape(&vec![0; array.shape().len()])
+        .map_err(|e| invalid(path, format!("level '{level}': {e}")))?
+        .iter()
+        .try_fold(1u64, |a, c| a.checked_mul(c.get()))
+        .unwrap_or(u64::MAX);
+    if chunk > max_voxels {
+        return Err(IoError::TooLarge {
+            path: path.into(),
+            what: format!(
+                "level '{level}': chunks of {chunk} voxels exceed the limit of {max_voxels} \
+                 (raise it with --max-voxels)"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The samples of level `l` (`ranges` of its axes, `zaxis` the slowest spatial one,
+/// `count` voxels) in their stored type, with a note naming the chunks missing (or,
+/// `strict`, an error).
+fn read_samples(
+    path: &Path,
+    array: &Array<FilesystemStore>,
+    l: &LevelInfo,
+    (ranges, zaxis, count): (&[std::ops::Range<u64>], usize, usize),
+    options: &ReadOptions,
+    notes: &mut Vec<String>,
+) -> Result<Samples, IoError> {
+    let mut missing = (0, 0);
+    macro_rules! slabs {
+        ($v:ident) => {
+            Samples::$v(
+                read_slabs(array, ranges, zaxis, count, &mut missing)
+                    .map_err(|e| e.into_io(path, &l.path))?,
+            )
+        };
+    }
+    let samples = match l.data_type.as_str() {
+        "uint8" => slabs!(U8),
+        "int8" => slabs!(I8),
+        "uint16" => slabs!(U16),
+        "int16" => slabs!(I16),
+        "uint32" => slabs!(U32),
+        "int32" => slabs!(I32),
+        "float32" => slabs!(F32),
+        "float64" => slabs!(F64),
+        other => {
+            return Err(IoError::Unsupported {
+                path: path.into(),
+                what: format!("Zarr data type {other}"),
+            })
+        }
+    };
+    let (absent, chunks) = missing;
+    if absent > 0 {
+        if options.strict {
+            return Err(invalid(
+                path,
+                format!(
+                    "level '{}': {absent} of {chunks} chunks are missing (--strict refuses them)",
+                    l.path
+                ),
+            ));
+        }
+        notes.push(format!(
+            "level '{}': {absent} of {chunks} chunks missing, read as the fill value",
+            l.path
+        ));
+    }
+    Ok(samples)
+}
+
+/// One note per level: path, size, type, voxel size, the one read marked.
+fn level_notes(all: &[LevelInfo], chosen: usize) -> Vec<String> {
+    all.iter()
+        .enumerate()
+        .map(|(i, lv)| {
+            format!(
+                "level {i} '{}': {}x{}x{} {}, voxel {}x{}x{}{}",
+                lv.path,
+                lv.dims[0],
+                lv.dims[1],
+                lv.dims[2],
+                lv.data_type,
+                lv.scale[0],
+                lv.scale[1],
+                lv.scale[2],
+                if i == chosen { " (read)" } else { "" }
+            )
+        })
+        .collect()
+}
+
+/// Why a level's chunks could not be read.
+enum SlabError {
+    Array(ArrayError),
+    Storage(StorageError),
+    Shape,
+}
+
+impl SlabError {
+    fn into_io(self, path: &Path, level: &str) -> IoError {
+        invalid(
+            path,
+            match self {
+                SlabError::Array(e) => format!("level '{level}': {e}"),
+                SlabError::Storage(e) => format!("level '{level}': {e}"),
+                SlabError::Shape => format!("level '{level}': its data does not match its shape"),
+            },
+        )
+    }
+}
+
+/// Reads the level `ranges` selects one slab of chunks at a time (the chunks sharing
+/// a range along the slowest spatial axis `zaxis`, contiguous in glint's x-fastest
+/// order) into one vector of `count` samples: the level is held once, plus one slab
+/// in transit, never a second full copy. `missing` counts the chunks the store does
+/// not hold (read as the array's fill value by `zarrs`) and all the chunks looked at.
+fn read_slabs<T: ElementOwned>(
+    array: &Array<FilesystemStore>,
+    ranges: &[std::ops::Range<u64>],
+    zaxis: usize,
+    count: usize,
+    missing: &mut (usize, usize),
+) -> Result<Vec<T>, SlabError> {
+    let store = array.storage();
+    let whole = ArraySubset::new_with_ranges(ranges);
+    let grid = array
+        .chunks_in_array_subset(&whole)
+        .map_err(|e| SlabError::Array(e.into()))?
+        .ok_or(SlabError::Shape)?;
+    let mut out: Vec<T> = Vec::with_capacity(count);
+    let (first, rows) = (grid.start()[zaxis], grid.shape()[zaxis]);
+    for cz in first..first + rows {
+        let mut index = grid.start().to_vec();
+        index[zaxis] = cz;
+        let bounded = array
+            .chunk_subset_bounded(&index)
+            .map_err(SlabError::Array)?;
+        let mut slab = ranges.to_vec();
+        slab[zaxis] = bounded.start()[zaxis]..bounded.start()[zaxis] + bounded.shape()[zaxis];
+        let slab = ArraySubset::new_with_ranges(&slab);
+        if let Some(chunks) = array
+            .chunks_in_array_subset(&slab)
+            .map_err(|e| SlabError::Array(e.into()))?
+        {
+            for c in &chunks.indices() {
+                missing.1 += 1;
+                if store
+                    .size_key(&array.chunk_key(&c))
+                    .map_err(SlabError::Storage)?
+                    .is_none()
+                {
+                    missing.0 += 1;
+                }
+            }
+        }
+        let part: Vec<T> = array
+            .retrieve_array_subset(&slab)
+            .map_err(SlabError::Array)?;
+        if out.len() + part.len() > count {
+            return Err(SlabError::Shape);
+        }
+        out.extend_from_slice(&part);
+    }
+    Ok(out)
 }

@@ -147,3 +147,64 @@ fn a_level_over_the_voxel_limit_is_refused() {
     let err = open_volume(&data("v04-blosc.zarr"), &options).unwrap_err();
     assert!(matches!(err, IoError::TooLarge { .. }), "{err}");
 }
+
+/// A store missing one of its 12 chunks (missing-chunk.zarr: the same data as
+/// v04-blosc.zarr's level 0 in chunks of 32 x 16 x 5, the one at x 32.., y 16..32,
+/// z 0..5 deleted): read with one note naming how many chunks were missing, that
+/// chunk's voxels the fill value 0 and every other voxel as in the whole store; refused
+/// with one line under `strict`.
+#[test]
+fn a_missing_chunk_reads_as_the_fill_value_with_a_note_or_is_refused_strictly() {
+    let whole = open_volume(&data("v04-blosc.zarr"), &ReadOptions::default()).unwrap();
+    let f = open_volume(&data("missing-chunk.zarr"), &ReadOptions::default()).unwrap();
+    let notes: Vec<&String> = f.notes.iter().filter(|n| n.contains("missing")).collect();
+    assert_eq!(notes.len(), 1, "{:?}", f.notes);
+    assert!(notes[0].contains("1 of 12 chunks missing"), "{}", notes[0]);
+    let (v, w) = (&f.volume, &whole.volume);
+    assert_eq!(v.dims, [64, 48, 10]);
+    for k in 0..10 {
+        for j in 0..48 {
+            for i in 0..64 {
+                let n = i + 64 * (j + 48 * k);
+                let gone = i >= 32 && (16..32).contains(&j) && k < 5;
+                let want = if gone { 0.0 } else { w.samples.get(n) };
+                assert_eq!(v.samples.get(n), want, "voxel {i},{j},{k}");
+            }
+        }
+    }
+    let strict = ReadOptions {
+        strict: true,
+        ..ReadOptions::default()
+    };
+    let err = open_volume(&data("missing-chunk.zarr"), &strict).unwrap_err();
+    let text = err.to_string();
+    assert!(text.contains("1 of 12 chunks are missing"), "{text}");
+    assert!(!text.contains('\n'), "{text}");
+}
+
+/// An absurd chunk shape in a level's metadata (a chunk of 10^27 voxels over a level
+/// of 30,720, edited into a copy of v05-zstd.zarr as the fuzz target's inputs edit
+/// it): refused in one line before any chunk is read or allocated for.
+#[test]
+fn an_absurd_chunk_shape_is_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("s.zarr");
+    let src = data("v05-zstd.zarr");
+    std::fs::create_dir_all(store.join("0/c/0/0")).unwrap();
+    let mut group: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("zarr.json")).unwrap()).unwrap();
+    let datasets = &mut group["attributes"]["ome"]["multiscales"][0]["datasets"];
+    datasets.as_array_mut().unwrap().truncate(1);
+    std::fs::write(store.join("zarr.json"), group.to_string()).unwrap();
+    let mut array: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("0/zarr.json")).unwrap()).unwrap();
+    array["chunk_grid"]["configuration"]["chunk_shape"] =
+        serde_json::json!([1_000_000_000u64, 1_000_000_000u64, 1_000_000_000u64]);
+    std::fs::write(store.join("0/zarr.json"), array.to_string()).unwrap();
+    std::fs::copy(src.join("0/c/0/0/0"), store.join("0/c/0/0/0")).unwrap();
+    let err = open_volume(&store, &ReadOptions::default()).unwrap_err();
+    let text = err.to_string();
+    assert!(matches!(err, IoError::TooLarge { .. }), "{text}");
+    assert!(text.contains("chunks of"), "{text}");
+    assert!(!text.contains('\n'), "{text}");
+}

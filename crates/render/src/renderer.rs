@@ -145,7 +145,12 @@ impl Renderer {
     /// Reads `scene`'s input and its meshes (with their overlays, and the volume's
     /// isosurface in surface mode).
     pub fn open_scene(scene: &Scene) -> Result<Renderer, RenderError> {
-        let mut renderer = Renderer::open(&scene.input)?;
+        Renderer::open_scene_with(scene, &ReadOptions::default())
+    }
+
+    /// [`Renderer::open_scene`] with reader options (e.g. an OME-Zarr pyramid's level).
+    pub fn open_scene_with(scene: &Scene, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        let mut renderer = Renderer::open_with(&scene.input, options)?;
         if scene.has_meshes() || scene.is_surface() {
             renderer.mesh_set(scene)?;
         }

@@ -151,7 +151,17 @@ pub struct Viewer {
 impl Viewer {
     /// Reads the scene's input and checks the scene resolves.
     pub fn new(scene: Scene, config: ViewerConfig) -> Result<Viewer, RenderError> {
-        let mut renderer = Renderer::open_scene(&scene)?;
+        Viewer::with_options(scene, config, &glint_io::ReadOptions::default())
+    }
+
+    /// [`Viewer::new`] reading the input with `options` (e.g. the level of an OME-Zarr
+    /// pyramid, `strict`).
+    pub fn with_options(
+        scene: Scene,
+        config: ViewerConfig,
+        options: &glint_io::ReadOptions,
+    ) -> Result<Viewer, RenderError> {
+        let mut renderer = Renderer::open_scene_with(&scene, options)?;
         let scene = renderer.resolve(&scene)?.scene;
         // A scene of meshes only has no value range (the page's iso slider).
         let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());

@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::bail;
+use glint_io::zarr::Level;
 use glint_io::{
     Endian, Format, MeshFile, RawParams, ReadOptions, ScalarType, VertexData, VertexValues,
     VolumeFile,
@@ -58,6 +59,10 @@ pub struct Args {
     /// SeriesInstanceUID, as listed); default: the only or the largest.
     #[arg(long)]
     series: Option<String>,
+    /// The level of an OME-Zarr pyramid to read for the range and labels (0 the finest)
+    /// [default: the coarsest; every level is listed either way].
+    #[arg(long)]
+    level: Option<usize>,
     /// List the labels of a label map: value, name, voxel count, volume in ml.
     #[arg(long)]
     labels: bool,
@@ -103,6 +108,7 @@ fn read_options(args: &Args) -> anyhow::Result<ReadOptions> {
         max_voxels: args.max_voxels,
         strict: args.strict,
         series: args.series.clone(),
+        level: args.level.map_or(Level::Coarsest, Level::Index),
         ..ReadOptions::default()
     };
     if !args.raw_dims.is_empty() {
@@ -176,17 +182,19 @@ fn mesh_report(args: &Args) -> anyhow::Result<String> {
 /// The report of a volume (with a DICOM directory's listing and, asked for, its labels).
 fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
     let mut out = String::new();
+    let reading = super::spinner::Spinner::start(format!("reading {}", args.file.display()), false);
     let file = glint_io::open_volume(&args.file, options)?;
+    drop(reading);
     // Assumed geometry is worth a warning even when the output goes to a script.
     for n in file
         .notes
         .iter()
-        .filter(|n| n.starts_with("geometry assumed"))
+        .filter(|n| n.starts_with("geometry assumed") || n.contains("chunks missing"))
     {
         eprintln!("glint: {}: {n}", args.file.display());
     }
     // A DICOM directory: every series and every object not read, too.
-    let listing = match args.file.is_dir() {
+    let listing = match args.file.is_dir() && file.format == Format::Dicom {
         true => Some(glint_io::dicom::list(&args.file, options)?),
         false => None,
     };
@@ -597,6 +605,28 @@ mod tests {
         ])
         .unwrap_err();
         assert!(err.to_string().contains("too large"), "{err}");
+    }
+
+    /// An OME-Zarr store (a directory, not of DICOM): every level listed, the coarsest
+    /// read by default and marked, no DICOM "skipped" line for its metadata files;
+    /// `--level` reads another.
+    #[test]
+    fn a_zarr_store_lists_its_levels_without_dicom_lines() {
+        let store = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../io/tests/data/zarr/v05-zstd.zarr"
+        );
+        let text = run(&[store]).unwrap();
+        assert!(!text.contains("skipped"), "{text}");
+        assert!(!text.contains("DICOM"), "{text}");
+        assert_eq!(text.matches("level ").count(), 5, "{text}");
+        assert!(text.contains("level 4 '4': 4x3x10 uint16"), "{text}");
+        assert!(text.contains("(read)"), "{text}");
+        let v = json(&[store]);
+        assert_eq!(v["dims"], serde_json::json!([4, 3, 10]));
+        assert!(v.get("skipped").is_none(), "{v}");
+        let v = json(&[store, "--level", "0"]);
+        assert_eq!(v["dims"], serde_json::json!([64, 48, 10]));
     }
 
     #[test]

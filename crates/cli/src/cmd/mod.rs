@@ -13,4 +13,5 @@ pub mod label_flags;
 pub mod mesh;
 pub mod render;
 pub mod scene_flags;
+mod spinner;
 pub mod view;

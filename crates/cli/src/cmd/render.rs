@@ -12,6 +12,7 @@ use glint_render::{Depth, Input, Kernel, Rendered, Renderer, Scene, SceneLobe};
 
 use super::choice::choice;
 use super::scene_flags::SceneFlags;
+use super::spinner::Spinner;
 
 /// Arguments of `glint render`.
 #[derive(clap::Args)]
@@ -93,11 +94,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let args = *args.opts;
     check_output_dir(&args.output)?;
     let scene = build_scene(&args)?;
+    let reading = Spinner::start(reading_what(&scene), args.quiet);
     let mut renderer = open_renderer(&scene, &args.scene.read_options())?;
+    drop(reading);
     if args.scalar {
         renderer.kernel = Kernel::Scalar;
     }
+    let building = Spinner::start("classifying the volume".into(), args.quiet);
     let resolved = renderer.resolve(&scene)?;
+    drop(building);
     let bar = progress_bar(&args, &resolved.scene);
     let progress = |n: u64| {
         if let Some(b) = &bar {
@@ -161,11 +166,20 @@ pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Res
         Input::None => "cannot open the scene".into(),
     })?;
     if let Input::Path(path) = &scene.input {
-        for note in renderer.notes().iter().filter(|n| n.contains("assumed")) {
+        let worth = |n: &&String| n.contains("assumed") || n.contains("missing");
+        for note in renderer.notes().iter().filter(worth) {
             eprintln!("glint: {}: {note}", path.display());
         }
     }
     Ok(renderer)
+}
+
+/// What the spinner says while the scene's input is read.
+pub(crate) fn reading_what(scene: &Scene) -> String {
+    match &scene.input {
+        Input::Path(p) => format!("reading {}", p.display()),
+        _ => "building the scene".into(),
+    }
 }
 
 /// Refuses before any work when the output's directory does not exist.

@@ -64,7 +64,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ..ViewerConfig::default()
     };
     eprintln!("glint view: loading the volume");
-    let viewer = Arc::new(Viewer::new(scene, config)?);
+    let viewer = Arc::new(Viewer::with_options(
+        scene,
+        config,
+        &args.scene.read_options(),
+    )?);
     let runtime = tokio::runtime::Runtime::new().context("starting the server runtime")?;
     runtime.block_on(async {
         let listener = tokio::net::TcpListener::bind((args.host, args.port))

@@ -30,19 +30,30 @@ const FALLBACK_LIMIT: u64 = 8 << 30;
 /// reads on each of a few threads (a tile crosses tens of bricks).
 pub const MIN_BRICK_SLOTS: u32 = 256;
 
-/// The least the default pool may take: 256 MiB, room for every brick of a volume of
-/// 18 million voxels (the MNI152 template's 8.7 million among them), so small volumes
-/// never evict.
+/// A volume whose every brick fits in this (256 MiB: every brick of a volume of 18
+/// million voxels, the MNI152 template's 8.7 million among them) gets them all by
+/// default, so small volumes never evict.
 pub const DEFAULT_POOL_FLOOR: u64 = 256 << 20;
 
-/// The bricks a pool takes when no limit was set: as many as fit in the bytes of the
-/// field's fixed data (its samples, mostly), or [`DEFAULT_POOL_FLOOR`] if more. A
-/// 16-bit volume then renders within about twice its bytes plus the process (issue 31
-/// asks for 2.5x; a brick costs 14 bytes a voxel, so building every brick of a large
-/// volume would take 7x), evicting the bricks rays left behind; `--memory-limit` gives
-/// the pool more room, up to every brick.
-fn default_pool_slots(fixed: u64) -> u64 {
-    fixed.max(DEFAULT_POOL_FLOOR) / BRICK_BYTES
+/// The least the default pool of a larger volume takes: 128 MiB, some 2,300 bricks,
+/// room for the bricks a 512x512 frame's tiles read at once many times over.
+pub const DEFAULT_POOL_LEAST: u64 = 128 << 20;
+
+/// The bricks a pool takes when no limit was set, for a field of `bricks` bricks and
+/// `fixed` bytes of fixed data: all of them when they fit in [`DEFAULT_POOL_FLOOR`];
+/// else half the bytes of the fixed data (its samples, mostly), or
+/// [`DEFAULT_POOL_LEAST`] if more. A 16-bit volume then renders within about 1.5 times
+/// its bytes plus the process and the frame's transients (issue 31 asks for 2.5x; a
+/// brick costs 14 bytes a voxel, so building every brick of a large volume would take
+/// 7x), evicting the bricks rays left behind; `--memory-limit` gives the pool more
+/// room, up to every brick. Eviction changes no image (a frame with a 4-brick pool
+/// equals a roomy one bit for bit), only the time spent rebuilding.
+fn default_pool_slots(fixed: u64, bricks: u64) -> u64 {
+    if bricks.saturating_mul(BRICK_BYTES) <= DEFAULT_POOL_FLOOR {
+        bricks
+    } else {
+        (fixed / 2).max(DEFAULT_POOL_LEAST) / BRICK_BYTES
+    }
 }
 
 /// The most slots a pool can address (slot offsets are i32 voxel indices).
@@ -97,7 +108,7 @@ pub(crate) fn reserve(fixed: u64, bricks: usize) -> Result<(Reservation, u32), R
     let mut want = (bricks as u64 + 1).min(MAX_SLOTS);
     let least = want.min(u64::from(MIN_BRICK_SLOTS));
     if LIMIT.load(Ordering::Relaxed) == 0 {
-        want = want.min(default_pool_slots(fixed).max(least));
+        want = want.min(default_pool_slots(fixed, want).max(least));
     }
     let mut current = RESERVED.load(Ordering::Acquire);
     loop {
