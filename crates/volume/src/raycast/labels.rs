@@ -167,7 +167,7 @@ impl LabelVolume {
         }
         let shader = &shader.placed(camera);
         let dt = (step * self.min_spacing) as f32;
-        let rows: Vec<(Vec<[f32; 3]>, Vec<f32>, Vec<f32>, RenderStats)> = (0..h)
+        let rows: Vec<Row> = (0..h)
             .into_par_iter()
             .map(|y| {
                 let mut out = (
@@ -373,6 +373,10 @@ impl LabelVolume {
     }
 }
 
+/// One image row: RGB over the background, alpha, first drawn sample's distance,
+/// and the row's work counters.
+type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<f32>, RenderStats);
+
 /// One ray's sampling: its jitter (fraction of a step), where it stops (mm), and the
 /// step (mm).
 struct March {
@@ -391,16 +395,16 @@ fn invert(m: &[[f64; 4]; 4]) -> Option<[[f64; 4]; 4]> {
         return None;
     }
     let mut inv = [[0.0; 4]; 4];
-    for r in 0..3 {
-        for c in 0..3 {
+    for (r, row) in inv.iter_mut().take(3).enumerate() {
+        for (c, x) in row.iter_mut().take(3).enumerate() {
             // Cofactor of (c, r) over the determinant.
             let (r1, r2) = ((c + 1) % 3, (c + 2) % 3);
             let (c1, c2) = ((r + 1) % 3, (r + 2) % 3);
-            inv[r][c] = (a(r1, c1) * a(r2, c2) - a(r1, c2) * a(r2, c1)) / det;
+            *x = (a(r1, c1) * a(r2, c2) - a(r1, c2) * a(r2, c1)) / det;
         }
     }
-    for r in 0..3 {
-        inv[r][3] = -(0..3).map(|c| inv[r][c] * m[c][3]).sum::<f64>();
+    for row in inv.iter_mut().take(3) {
+        row[3] = -(0..3).map(|c| row[c] * m[c][3]).sum::<f64>();
     }
     inv[3][3] = 1.0;
     Some(inv)
