@@ -307,6 +307,19 @@ fn the_chest_ct_mask_lists_its_names_and_renders_with_the_ct() {
         text.contains(": 118 entries, 89 of them present; 0 present value(s)"),
         "{text}"
     );
+    // Asked for all: the table's 118 names, the 29 the mask lacks marked absent.
+    let all = ok(&["info", m, "--labels", "--label-table", t, "--all-labels"]);
+    let rows: Vec<&str> = all
+        .lines()
+        .skip_while(|l| !l.starts_with("labels:"))
+        .filter(|l| {
+            l.split_whitespace()
+                .next()
+                .is_some_and(|v| v.parse::<u32>().is_ok())
+        })
+        .collect();
+    assert_eq!(rows.len(), 118, "{all}");
+    assert_eq!(rows.iter().filter(|l| l.ends_with("(absent)")).count(), 29);
     // Liver: 827404 voxels of 0.703125 x 0.703125 x 2.5 mm (the file's affine).
     let liver: Vec<&str> = text
         .lines()
