@@ -227,9 +227,9 @@ impl LabelMeshes {
             .then(|| label_volume(spec, &grid, &values, &table, &linear))
             .transpose()?;
         let (meshes, colors) = if spec.render_as.surfaces() {
-            if !spec.opacity.is_empty() {
+            if spec.render_as == LabelsAs::Surfaces && !spec.opacity.is_empty() {
                 return Err(RenderError::Parameter(
-                    "per-label opacity applies to a label volume (labels as volume); surfaces are opaque".into(),
+                    "per-label opacity applies to a label volume (labels as volume or both); surfaces are opaque".into(),
                 ));
             }
             let smoothing = spec.smoothing.unwrap_or(DEFAULT_LABEL_SMOOTHING);
