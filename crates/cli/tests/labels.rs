@@ -103,6 +103,115 @@ fn info_lists_labels_with_names_voxels_and_ml() {
 }
 
 #[test]
+fn info_lists_every_table_entry_when_asked_marking_the_absent_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = aseg(dir.path());
+    let p = path.to_str().unwrap();
+    let text = ok(&["info", p, "--labels", "--all-labels"]);
+    // FreeSurfer's 1266 entries less 0 (Unknown, the background): 1265 rows of the
+    // table (2 present, 1263 absent) and 9999, present but not in it.
+    let rows: Vec<&str> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("labels:"))
+        .filter(|l| {
+            l.split_whitespace()
+                .next()
+                .is_some_and(|v| v.parse::<u32>().is_ok())
+        })
+        .collect();
+    assert_eq!(rows.len(), 1266, "{text}");
+    assert_eq!(
+        rows.iter().filter(|l| l.ends_with("(absent)")).count(),
+        1263
+    );
+    let amygdala = rows.iter().find(|l| l.contains("Left-Amygdala")).unwrap();
+    let f: Vec<&str> = amygdala.split_whitespace().collect();
+    assert_eq!(f[..4], ["18", "Left-Amygdala", "0", "0.000"], "{amygdala}");
+    assert!(amygdala.ends_with("(absent)"));
+    assert!(text.contains("1263 not in the map"), "{text}");
+    // Present rows as without the flag.
+    assert!(
+        rows.iter()
+            .any(|l| l.split_whitespace().collect::<Vec<_>>()[..3]
+                == ["17", "Left-Hippocampus", "64"])
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&ok(&["info", p, "--labels", "--all-labels", "--json"])).unwrap();
+    let labels = json["labels"].as_array().unwrap();
+    assert_eq!(labels.len(), 1266);
+    assert_eq!(
+        labels.iter().filter(|l| l["present"] == false).count(),
+        1263
+    );
+    // Without the flag: the labels present only.
+    let json: serde_json::Value =
+        serde_json::from_str(&ok(&["info", p, "--labels", "--json"])).unwrap();
+    assert_eq!(json["labels"].as_array().unwrap().len(), 3);
+    let err = fails(&["info", p, "--all-labels"]);
+    assert!(err.contains("required arguments"), "{err}");
+}
+
+#[test]
+fn render_labels_as_a_volume_in_the_volume_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = aseg(dir.path());
+    let p = path.to_str().unwrap();
+    let out = dir.path().join("vol.png");
+    let scene = dir.path().join("vol.json");
+    let o = out.to_str().unwrap();
+    ok(&[
+        "render",
+        p,
+        "--labels",
+        p,
+        "--labels-as",
+        "volume",
+        "--label-opacity",
+        "Left-Hippocampus=0.5",
+        "--size",
+        "64x64",
+        "-q",
+        "-o",
+        o,
+        "--dump-scene",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(out.is_file());
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    assert_eq!(s["labels"]["render_as"], "volume");
+    assert_eq!(s["labels"]["opacity"]["Left-Hippocampus"], 0.5);
+    let no = dir.path().join("no.png");
+    let n = no.to_str().unwrap();
+    let err = fails(&[
+        "render",
+        "--labels",
+        p,
+        "--labels-as",
+        "volume",
+        "-q",
+        "-o",
+        n,
+    ]);
+    assert!(err.contains("ray cast in a volume's frame"), "{err}");
+    let err = fails(&[
+        "render",
+        p,
+        "--labels",
+        p,
+        "--labels-as",
+        "volume",
+        "--label-opacity",
+        "17",
+        "-q",
+        "-o",
+        n,
+    ]);
+    assert!(err.contains("LABEL=OPACITY"), "{err}");
+    assert!(!no.exists());
+}
+
+#[test]
 fn render_labels_alone_writes_an_image_and_a_scene_with_the_choices() {
     let dir = tempfile::tempdir().unwrap();
     let path = aseg(dir.path());
@@ -198,6 +307,19 @@ fn the_chest_ct_mask_lists_its_names_and_renders_with_the_ct() {
         text.contains(": 118 entries, 89 of them present; 0 present value(s)"),
         "{text}"
     );
+    // Asked for all: the table's 118 names, the 29 the mask lacks marked absent.
+    let all = ok(&["info", m, "--labels", "--label-table", t, "--all-labels"]);
+    let rows: Vec<&str> = all
+        .lines()
+        .skip_while(|l| !l.starts_with("labels:"))
+        .filter(|l| {
+            l.split_whitespace()
+                .next()
+                .is_some_and(|v| v.parse::<u32>().is_ok())
+        })
+        .collect();
+    assert_eq!(rows.len(), 118, "{all}");
+    assert_eq!(rows.iter().filter(|l| l.ends_with("(absent)")).count(), 29);
     // Liver: 827404 voxels of 0.703125 x 0.703125 x 2.5 mm (the file's affine).
     let liver: Vec<&str> = text
         .lines()

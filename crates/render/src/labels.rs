@@ -1,13 +1,17 @@
 //! Label maps as a scene layer ([`LabelSpec`]): a segmentation's labels, named and
 //! coloured by a colour table, drawn as one smoothed surface per label through the
-//! rasterizer (alone, or in a ray-cast volume's frame like other meshes), with a
-//! legend of the labels shown.
+//! rasterizer (alone, or in a ray-cast volume's frame like other meshes), or ray cast
+//! as a label volume in a volume's frame ([`LabelsAs`]), with a legend of the labels
+//! shown.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use glint_core::{srgb_to_linear, Legend, RenderError};
 use glint_io::{read_volume, Mesh, ReadOptions};
 use glint_labels::{label_surfaces, LabelGrid, LabelTable};
+use glint_volume::{LabelLook, LabelVolume};
 use serde::{Deserialize, Serialize};
 
 /// Smoothing of label surfaces when the scene gives none: a Gaussian of one voxel
@@ -42,6 +46,70 @@ pub struct LabelSpec {
     /// Whether the image lists the labels shown (default: yes).
     #[serde(default = "yes", skip_serializing_if = "is_true")]
     pub legend: bool,
+    /// How the labels are drawn (default: surfaces).
+    #[serde(default, skip_serializing_if = "LabelsAs::is_surfaces")]
+    pub render_as: LabelsAs,
+    /// Per-label opacity of the label volume (label name or number to 0..=1, the
+    /// opacity of one voxel's length); labels not named are opaque. Surfaces are
+    /// always opaque.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub opacity: BTreeMap<String, f32>,
+}
+
+/// How a label map is drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LabelsAs {
+    /// One smoothed surface per label, rasterised.
+    #[default]
+    Surfaces,
+    /// A label volume ray cast in the intensity volume's frame: each sample takes its
+    /// nearest voxel's label (no blending across labels), coloured and made opaque by
+    /// the label, lit by the labels' smoothed boundary.
+    Volume,
+    /// Both: the surfaces, and the label volume in front of them.
+    Both,
+}
+
+impl LabelsAs {
+    /// Every value, as named in scene files and on the command line.
+    pub const ALL: [LabelsAs; 3] = [LabelsAs::Surfaces, LabelsAs::Volume, LabelsAs::Both];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            LabelsAs::Surfaces => "surfaces",
+            LabelsAs::Volume => "volume",
+            LabelsAs::Both => "both",
+        }
+    }
+
+    fn is_surfaces(&self) -> bool {
+        *self == LabelsAs::Surfaces
+    }
+
+    fn surfaces(self) -> bool {
+        self != LabelsAs::Volume
+    }
+
+    fn volume(self) -> bool {
+        self != LabelsAs::Surfaces
+    }
+}
+
+impl std::str::FromStr for LabelsAs {
+    type Err = RenderError;
+
+    fn from_str(s: &str) -> Result<LabelsAs, RenderError> {
+        LabelsAs::ALL
+            .into_iter()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| {
+                RenderError::Parameter(format!(
+                    "labels as {s:?}: expected surfaces, volume or both"
+                ))
+            })
+    }
 }
 
 fn yes() -> bool {
@@ -62,6 +130,8 @@ impl LabelSpec {
             hide: Vec::new(),
             smoothing: None,
             legend: true,
+            render_as: LabelsAs::Surfaces,
+            opacity: BTreeMap::new(),
         }
     }
 
@@ -101,6 +171,8 @@ pub(crate) struct LabelMeshes {
     pub(crate) legend: Option<Legend>,
     /// The label grid's world box, voxel centres (min, max), mm.
     pub(crate) bounds: ([f64; 3], [f64; 3]),
+    /// The labels shown as a label volume, when the spec asks for one.
+    pub(crate) volume: Option<Arc<LabelVolume>>,
 }
 
 impl LabelMeshes {
@@ -144,12 +216,31 @@ impl LabelMeshes {
                 summary.len()
             )));
         }
-        let smoothing = spec.smoothing.unwrap_or(DEFAULT_LABEL_SMOOTHING);
-        let surfaces = label_surfaces(&grid, &values, smoothing).map_err(|e| spec.error(e))?;
         let linear = |v: u32| {
             table
                 .color_of(v)
                 .map(|c| srgb_to_linear(f64::from(c) / 255.0) as f32)
+        };
+        let volume = spec
+            .render_as
+            .volume()
+            .then(|| label_volume(spec, &grid, &values, &table, &linear))
+            .transpose()?;
+        let (meshes, colors) = if spec.render_as.surfaces() {
+            if spec.render_as == LabelsAs::Surfaces && !spec.opacity.is_empty() {
+                return Err(RenderError::Parameter(
+                    "per-label opacity applies to a label volume (labels as volume or both); surfaces are opaque".into(),
+                ));
+            }
+            let smoothing = spec.smoothing.unwrap_or(DEFAULT_LABEL_SMOOTHING);
+            let surfaces = label_surfaces(&grid, &values, smoothing).map_err(|e| spec.error(e))?;
+            surfaces
+                .into_iter()
+                .filter(|(_, m)| !m.triangles.is_empty())
+                .map(|(v, m)| (m, linear(v)))
+                .unzip()
+        } else {
+            (Vec::new(), Vec::new())
         };
         let legend = spec.legend.then(|| Legend {
             entries: values
@@ -157,16 +248,12 @@ impl LabelMeshes {
                 .map(|&v| (table.name_of(v), linear(v)))
                 .collect(),
         });
-        let (meshes, colors) = surfaces
-            .into_iter()
-            .filter(|(_, m)| !m.triangles.is_empty())
-            .map(|(v, m)| (m, linear(v)))
-            .unzip();
         Ok(LabelMeshes {
             meshes,
             colors,
             legend,
             bounds: grid.world_bounds(),
+            volume,
         })
     }
 
@@ -191,4 +278,44 @@ impl LabelMeshes {
         }
         Ok(())
     }
+}
+
+/// The label volume of the labels `values` of `grid`: each in its table colour
+/// (`linear`), opaque unless `spec.opacity` names it (by name or number, looked up
+/// in `table`).
+fn label_volume(
+    spec: &LabelSpec,
+    grid: &LabelGrid,
+    values: &[u32],
+    table: &LabelTable,
+    linear: &dyn Fn(u32) -> [f32; 3],
+) -> Result<Arc<LabelVolume>, RenderError> {
+    let mut looks: BTreeMap<u32, LabelLook> = values
+        .iter()
+        .map(|&v| {
+            let look = LabelLook {
+                color: linear(v),
+                opacity: 1.0,
+            };
+            (v, look)
+        })
+        .collect();
+    for (name, &opacity) in &spec.opacity {
+        if !(0.0..=1.0).contains(&opacity) {
+            return Err(RenderError::Parameter(format!(
+                "label {name}: opacity {opacity} is not in 0..=1"
+            )));
+        }
+        let v = table.lookup(name).map_err(|e| spec.error(e))?;
+        // A hidden label, or one not in the map, stays undrawn.
+        if let Some(l) = looks.get_mut(&v) {
+            l.opacity = opacity;
+        }
+    }
+    Ok(Arc::new(LabelVolume::new(
+        grid.dims,
+        grid.affine,
+        &grid.labels,
+        &looks,
+    )?))
 }

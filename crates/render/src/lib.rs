@@ -81,7 +81,7 @@ pub use glint_volume::{
 pub use glint_volume::{
     LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
 };
-pub use labels::{LabelSpec, DEFAULT_LABEL_SMOOTHING};
+pub use labels::{LabelSpec, LabelsAs, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use renderer::{Rendered, Renderer};
 pub use scene::{

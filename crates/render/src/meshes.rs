@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use glint_core::{srgb_to_linear, ColorMap, Legend, Material, RenderError, ScalarColors};
 use glint_raster::{Surfaces, SURFACE_COLOR};
+use glint_volume::LabelVolume;
 
 use crate::labels::{LabelMeshes, LabelSpec};
 
@@ -136,7 +137,8 @@ impl MeshKey {
 /// The meshes of a scene, read and gathered for the rasterizer.
 #[derive(Clone, Debug)]
 pub(crate) struct MeshSet {
-    pub(crate) surfaces: Arc<Surfaces>,
+    /// The surfaces; `None` when there are none (a label map drawn as a volume only).
+    pub(crate) surfaces: Option<Arc<Surfaces>>,
     /// Per scene mesh (the isosurface, when there is one, comes after them and has no
     /// overlay; then the label surfaces).
     pub(crate) overlays: Vec<OverlayKind>,
@@ -146,6 +148,8 @@ pub(crate) struct MeshSet {
     pub(crate) extra_colors: Vec<[f32; 3]>,
     /// The legend of the label surfaces.
     pub(crate) legend: Option<Legend>,
+    /// The label map as a label volume, when the scene draws it so.
+    pub(crate) label_volume: Option<Arc<LabelVolume>>,
 }
 
 impl MeshSet {
@@ -182,7 +186,9 @@ impl MeshSet {
         }
         let mut extra_colors = Vec::new();
         let mut legend = None;
+        let mut label_volume = None;
         if let Some(l) = label_meshes {
+            label_volume = l.volume;
             if extra.is_some() {
                 extra_colors.push(SURFACE_COLOR);
             }
@@ -193,15 +199,21 @@ impl MeshSet {
         } else {
             meshes.extend(extra);
         }
-        let mut surfaces = Surfaces::new(&meshes)?;
-        for (k, colors) in labels {
-            surfaces.set_vertex_colors(k, &colors)?;
-        }
+        let surfaces = if meshes.is_empty() && label_volume.is_some() {
+            None
+        } else {
+            let mut surfaces = Surfaces::new(&meshes)?;
+            for (k, colors) in labels {
+                surfaces.set_vertex_colors(k, &colors)?;
+            }
+            Some(Arc::new(surfaces))
+        };
         Ok(MeshSet {
-            surfaces: Arc::new(surfaces),
+            surfaces,
             overlays,
             extra_colors,
             legend,
+            label_volume,
         })
     }
 
@@ -236,7 +248,11 @@ impl MeshSet {
         let range = match range {
             Some(r) => r,
             None => {
-                let values = self.surfaces.scalars().unwrap_or_default();
+                let values = self
+                    .surfaces
+                    .as_ref()
+                    .and_then(|s| s.scalars())
+                    .unwrap_or_default();
                 let (lo, hi) = ScalarColors::robust_range(map, values).ok_or_else(|| {
                     RenderError::Parameter(
                         "the overlays hold no finite values, or all the same value: give a range"

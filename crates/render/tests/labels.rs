@@ -189,3 +189,87 @@ fn scenes_without_labels_serialise_as_before_and_labels_round_trip() {
     let text = r#"{"version": 1, "labels": {"path": "seg.nii.gz"}}"#;
     assert_eq!(Scene::from_json(text).unwrap().input, Input::None);
 }
+
+/// A scene of the label map at `path` drawn as a label volume `how` in the frame of
+/// the same file read as an intensity volume through a transparent transfer
+/// function, so every pixel shows the labels alone.
+fn volume_scene(path: &Path, spec: LabelSpec) -> Scene {
+    let mut s = scene(spec);
+    s.input = Input::Path(path.to_path_buf());
+    s.mode = glint_render::RenderMode::Composite;
+    s.transfer_function = Some(
+        glint_render::TransferFunction::from_flat(&[0.0, 0.0, 100.0, 0.0], &[0.0, 1.0, 1.0, 1.0])
+            .unwrap(),
+    );
+    s
+}
+
+#[test]
+fn labels_as_a_volume_show_their_table_colours_unblended() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = two_blocks(dir.path(), "aseg.nii", 17, 18, 0.0);
+    let mut spec = LabelSpec::new(&path);
+    spec.render_as = glint_render::LabelsAs::Volume;
+    let r = render(&volume_scene(&path, spec.clone())).unwrap();
+    let names: Vec<String> = r.legend.unwrap().entries.into_iter().map(|e| e.0).collect();
+    assert_eq!(names, ["Left-Hippocampus", "Left-Amygdala"]);
+    let (hippo, amygdala) = (linear([220, 216, 20]), linear([103, 255, 255]));
+    let close = |p: [f32; 3], c: [f32; 3]| (0..3).all(|k| (p[k] - c[k]).abs() < 1e-5);
+    let (mut h, mut a) = (0, 0);
+    for (i, p) in r.image.rgb.iter().enumerate() {
+        // Nearest-label classification: a pixel is one label's colour or the
+        // background, never a blend of the two where they meet.
+        if close(*p, hippo) {
+            h += 1;
+        } else if close(*p, amygdala) {
+            a += 1;
+        } else {
+            assert!(close(*p, [0.0; 3]), "pixel {i}: {p:?}");
+            assert_eq!(r.image.alpha[i], 0.0);
+        }
+    }
+    assert!(h > 300 && a > 300, "{h} hippocampus, {a} amygdala pixels");
+    // As the surfaces: the patient's right (label 18, higher x) on the image's left.
+    let img = &r.image;
+    let at = |x: u32, y: u32| img.rgb[(y * img.width + x) as usize];
+    assert!(close(at(30, 48), amygdala) && close(at(66, 48), hippo));
+    // The scene says how the labels were drawn.
+    assert_eq!(
+        r.scene.labels.as_ref().unwrap().render_as,
+        glint_render::LabelsAs::Volume
+    );
+    let json = r.scene.to_json().unwrap();
+    assert!(json.contains("\"render_as\": \"volume\""), "{json}");
+
+    // A hidden label is not drawn; a translucent one lets the background through.
+    spec.hide = vec!["Left-Amygdala".into()];
+    spec.opacity.insert("17".into(), 0.2);
+    let r = render(&volume_scene(&path, spec.clone())).unwrap();
+    assert!(!r.image.rgb.iter().any(|p| close(*p, amygdala)));
+    let partial = r
+        .image
+        .alpha
+        .iter()
+        .filter(|a| **a > 0.1 && **a < 0.9)
+        .count();
+    assert!(partial > 300, "{partial} translucent pixels");
+    assert!(r.image.alpha.iter().all(|a| *a < 0.9));
+}
+
+#[test]
+fn a_label_volume_needs_a_volume_and_opacity_needs_a_label_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = two_blocks(dir.path(), "aseg.nii", 17, 18, 0.0);
+    let mut spec = LabelSpec::new(&path);
+    spec.render_as = glint_render::LabelsAs::Volume;
+    let err = glint_io::one_line(&render(&scene(spec)).unwrap_err());
+    assert!(err.contains("ray cast in a volume's frame"), "{err}");
+    let mut spec = LabelSpec::new(&path);
+    spec.opacity.insert("17".into(), 0.5);
+    let err = glint_io::one_line(&render(&scene(spec.clone())).unwrap_err());
+    assert!(err.contains("per-label opacity"), "{err}");
+    spec.render_as = glint_render::LabelsAs::Volume;
+    spec.opacity.insert("17".into(), 1.5);
+    let err = glint_io::one_line(&render(&volume_scene(&path, spec)).unwrap_err());
+    assert!(err.contains("opacity 1.5"), "{err}");
+}

@@ -54,7 +54,10 @@ pub use lut::{Lut, LUT_SIZE};
 pub use phantom::Phantom;
 pub use preint::Sampling;
 pub use presets::{preset, Preset, PRESETS};
-pub use raycast::{Classification, ClassifySettings, FrameSettings, Kernel, TERMINATION_OPACITY};
+pub use raycast::{
+    Classification, ClassifySettings, FrameSettings, Kernel, LabelLook, LabelVolume,
+    TERMINATION_OPACITY,
+};
 pub use tf::{TransferFunction, TransferFunctionFile};
 pub use transport::{
     check_spp, LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES,

@@ -20,6 +20,7 @@ use serde_json::{json, Value};
     glint info ct_series/            (a directory of DICOM slices)\n  \
     glint info aseg.mgz --labels     (labels, names, voxels, ml)\n  \
     glint info mask.nii.gz --labels --label-table totalsegmentator\n  \
+    glint info mask.nii.gz --labels --label-table t.csv --all-labels  (absent ones too)\n  \
     glint info head.raw --raw-dims 256,256,128 --raw-type u16 --raw-spacing 0.9,0.9,1.5")]
 pub struct Args {
     /// The file (.nii, .nii.gz, .nrrd, .nhdr, .dcm, DICOM directory, .stl, .obj, .ply,
@@ -71,6 +72,10 @@ pub struct Args {
     /// files named *aseg*, *aparc*, *wmparc*, else none].
     #[arg(long, value_name = "TABLE", requires = "labels")]
     label_table: Option<String>,
+    /// With --labels: every entry of the colour table, those the map does not hold
+    /// listed with 0 voxels and marked absent (default: the labels present only).
+    #[arg(long, requires = "labels")]
+    all_labels: bool,
 }
 
 /// Runs `glint info`.
@@ -208,7 +213,10 @@ fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
                 &mut v,
                 &args.file,
                 &file.volume,
-                args.label_table.as_deref(),
+                &super::info_labels::Listing {
+                    table: args.label_table.as_deref(),
+                    all: args.all_labels,
+                },
             )?;
         }
         out = serde_json::to_string_pretty(&v)? + "\n";
@@ -222,7 +230,10 @@ fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
                 &mut out,
                 &args.file,
                 &file.volume,
-                args.label_table.as_deref(),
+                &super::info_labels::Listing {
+                    table: args.label_table.as_deref(),
+                    all: args.all_labels,
+                },
             )?;
         }
     }

@@ -10,23 +10,33 @@ use glint_render::label_maps::{LabelGrid, LabelTable};
 use glint_render::LabelSpec;
 use serde_json::{json, Value};
 
-/// One label present in a map.
+/// One label of a map (or, listing all, of its table).
 struct Row {
     value: u32,
     name: String,
     in_table: bool,
+    /// Whether the map holds the label (listing all, the table's other entries are
+    /// listed with 0 voxels).
+    present: bool,
     voxels: u64,
     ml: f64,
     color: [u8; 3],
 }
 
-/// The labels of `volume` (read from `path`) named by `table` (a built-in name or a
-/// file; default as a scene's label map chooses it).
-fn rows(
-    path: &Path,
-    volume: &Volume,
-    table: Option<&str>,
-) -> anyhow::Result<(LabelTable, Vec<Row>)> {
+/// Which labels `glint info --labels` lists.
+pub struct Listing<'a> {
+    /// The colour table (a built-in name or a file; default as a scene's label map
+    /// chooses it).
+    pub table: Option<&'a str>,
+    /// Every entry of the table too, those the map does not hold with 0 voxels
+    /// (default: the labels present only).
+    pub all: bool,
+}
+
+/// The labels of `volume` (read from `path`) named by the listing's table, in value
+/// order.
+fn rows(path: &Path, volume: &Volume, listing: &Listing) -> anyhow::Result<(LabelTable, Vec<Row>)> {
+    let table = listing.table;
     let grid = LabelGrid::from_volume(volume)
         .with_context(|| format!("{}: cannot list labels", path.display()))?;
     let table = match table
@@ -37,18 +47,31 @@ fn rows(
         None => LabelTable::new("none"),
     };
     let ml = grid.voxel_ml();
-    let rows = grid
-        .summary()
-        .into_iter()
-        .map(|(value, e)| Row {
-            value,
-            name: table.name_of(value),
-            in_table: table.get(value).is_some(),
-            voxels: e.voxels,
-            ml: e.voxels as f64 * ml,
-            color: table.color_of(value),
-        })
+    let summary = grid.summary();
+    let row = |value: u32, voxels: u64, present: bool| Row {
+        value,
+        name: table.name_of(value),
+        in_table: table.get(value).is_some(),
+        present,
+        voxels,
+        ml: voxels as f64 * ml,
+        color: table.color_of(value),
+    };
+    let mut rows: Vec<Row> = summary
+        .iter()
+        .map(|(&value, e)| row(value, e.voxels, true))
         .collect();
+    if listing.all {
+        // The table's background entry (0, "Unknown" in FreeSurfer's) is not a label.
+        rows.extend(
+            table
+                .entries()
+                .map(|(v, _)| v)
+                .filter(|v| *v != 0 && !summary.contains_key(v))
+                .map(|v| row(v, 0, false)),
+        );
+        rows.sort_by_key(|r| r.value);
+    }
     Ok((table, rows))
 }
 
@@ -57,25 +80,36 @@ pub fn print(
     out: &mut String,
     path: &Path,
     volume: &Volume,
-    table: Option<&str>,
+    listing: &Listing,
 ) -> anyhow::Result<()> {
-    let (table, rows) = rows(path, volume, table)?;
-    let missing = rows.iter().filter(|r| !r.in_table).count();
+    let (table, rows) = rows(path, volume, listing)?;
+    let present = rows.iter().filter(|r| r.present).count();
+    let missing = rows.iter().filter(|r| r.present && !r.in_table).count();
     writeln!(
         out,
-        "labels:    {} present; table {}: {} entries, {} of them present; {missing} present value(s) not in it",
-        rows.len(),
+        "labels:    {present} present; table {}: {} entries, {} of them present; {missing} present value(s) not in it",
         table.source,
         table.len(),
-        rows.len() - missing
+        present - missing
     )?;
+    if listing.all {
+        writeln!(
+            out,
+            "           listing every entry of the table: {} not in the map (0 voxels, marked absent)",
+            rows.len() - present
+        )?;
+    }
     writeln!(
         out,
         "  {:>6}  {:<36} {:>10} {:>12}  colour",
         "value", "name", "voxels", "ml"
     )?;
     for r in &rows {
-        let mark = if r.in_table { "" } else { " (not in table)" };
+        let mark = match (r.present, r.in_table) {
+            (false, _) => " (absent)",
+            (true, false) => " (not in table)",
+            (true, true) => "",
+        };
         let [cr, cg, cb] = r.color;
         writeln!(
             out,
@@ -91,9 +125,9 @@ pub fn add_json(
     v: &mut Value,
     path: &Path,
     volume: &Volume,
-    table: Option<&str>,
+    listing: &Listing,
 ) -> anyhow::Result<()> {
-    let (table, rows) = rows(path, volume, table)?;
+    let (table, rows) = rows(path, volume, listing)?;
     v["label_table"] = json!({"source": table.source, "entries": table.len()});
     v["labels"] = rows
         .iter()
@@ -102,6 +136,7 @@ pub fn add_json(
                 "value": r.value,
                 "name": r.name,
                 "in_table": r.in_table,
+                "present": r.present,
                 "voxels": r.voxels,
                 "ml": r.ml,
                 "color": r.color,

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::bail;
-use glint_render::{Input, LabelSpec, Scene};
+use glint_render::{Input, LabelSpec, LabelsAs, Scene};
 
 /// Label-map options.
 #[derive(clap::Args, Default)]
@@ -34,6 +34,17 @@ pub struct LabelFlags {
     /// No legend of the labels shown.
     #[arg(long)]
     pub no_legend: bool,
+    /// How the labels are drawn: surfaces (smoothed, rasterised), volume (a label
+    /// volume ray cast in the volume's frame: nearest-label classification, each
+    /// label's colour and opacity, lit by the labels' boundary; needs a volume in a
+    /// ray-cast mode) or both [default: surfaces].
+    #[arg(long, value_name = "HOW", value_parser = ["surfaces", "volume", "both"])]
+    pub labels_as: Option<String>,
+    /// Per-label opacity of the label volume, NAME=OPACITY (name or number, opacity
+    /// of one voxel's length in 0..1; comma-separated, repeatable) [default: 1 for
+    /// the labels shown].
+    #[arg(long, value_name = "LABEL=OPACITY", value_delimiter = ',')]
+    pub label_opacity: Vec<String>,
 }
 
 impl LabelFlags {
@@ -50,10 +61,12 @@ impl LabelFlags {
             || !self.show.is_empty()
             || !self.hide.is_empty()
             || self.label_smoothing.is_some()
-            || self.no_legend;
+            || self.no_legend
+            || self.labels_as.is_some()
+            || !self.label_opacity.is_empty();
         let Some(spec) = &mut scene.labels else {
             if given {
-                bail!("--label-table, --show, --hide, --label-smoothing and --no-legend need --labels");
+                bail!("--label-table, --show, --hide, --label-smoothing, --no-legend, --labels-as and --label-opacity need --labels");
             }
             return Ok(());
         };
@@ -71,6 +84,19 @@ impl LabelFlags {
         }
         if self.no_legend {
             spec.legend = false;
+        }
+        if let Some(how) = &self.labels_as {
+            spec.render_as = how.parse::<LabelsAs>()?;
+        }
+        for item in &self.label_opacity {
+            let Some((name, value)) = item.rsplit_once('=') else {
+                bail!("--label-opacity {item:?}: expected LABEL=OPACITY, e.g. liver=0.4");
+            };
+            let opacity: f32 = match value.trim().parse() {
+                Ok(o) if (0.0..=1.0).contains(&o) => o,
+                _ => bail!("--label-opacity {item:?}: the opacity must be a number in 0..1"),
+            };
+            spec.opacity.insert(name.trim().to_string(), opacity);
         }
         Ok(())
     }

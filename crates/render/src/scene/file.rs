@@ -86,8 +86,22 @@ impl Scene {
                     *p = dir.join(&*p);
                 }
             }
+            if let Some(t) = scene.table_file_mut() {
+                if Path::new(t.as_str()).is_relative() {
+                    *t = dir.join(t.as_str()).to_string_lossy().into_owned();
+                }
+            }
         }
         Ok(scene)
+    }
+
+    /// The label map's colour table when it names a file (not a built-in table).
+    fn table_file_mut(&mut self) -> Option<&mut String> {
+        let table = self.labels.as_mut()?.table.as_mut()?;
+        let builtin = glint_labels::BUILTIN_TABLES
+            .iter()
+            .any(|b| b.eq_ignore_ascii_case(table));
+        (!builtin).then_some(table)
     }
 
     /// Writes the scene as JSON to `path` atomically (no partial file on failure),
@@ -109,6 +123,12 @@ impl Scene {
                     format!("resolving {}: {e}", p.display()),
                 ))
             })?;
+        }
+        if let Some(t) = scene.table_file_mut() {
+            let abs = std::path::absolute(t.as_str()).map_err(|e| {
+                RenderError::Io(std::io::Error::new(e.kind(), format!("resolving {t}: {e}")))
+            })?;
+            *t = abs.to_string_lossy().into_owned();
         }
         Ok(scene)
     }
@@ -165,6 +185,44 @@ mod tests {
         assert_eq!(back.input, Input::Path(cwd.join("brain.nii.gz")));
         assert_eq!(back.meshes[0].path, cwd.join("lh.gii"));
         assert_eq!(back, scene.with_absolute_paths().unwrap());
+    }
+
+    #[test]
+    fn a_label_table_file_is_rebased_like_the_label_map_and_a_builtin_is_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let sub = dir.path().join("study");
+        std::fs::create_dir(&sub).unwrap();
+        let mut labels = crate::LabelSpec::new("seg/mask.nii.gz");
+        labels.table = Some("tables/structures.csv".into());
+        let scene = Scene {
+            input: Input::Path("ct.nii.gz".into()),
+            labels: Some(labels),
+            ..Scene::default()
+        };
+        let file = sub.join("scene.json");
+        std::fs::write(&file, scene.to_json().unwrap()).unwrap();
+        let loaded = Scene::load(&file).unwrap();
+        let l = loaded.labels.as_ref().unwrap();
+        assert_eq!(l.path, sub.join("seg/mask.nii.gz"));
+        let table = sub.join("tables/structures.csv");
+        assert_eq!(l.table.as_deref(), Some(table.to_str().unwrap()));
+        // Saved: absolute, like the map's path.
+        let saved = dir.path().join("saved.json");
+        scene.save(&saved).unwrap();
+        let back = Scene::load(&saved).unwrap();
+        let cwd = std::env::current_dir().unwrap();
+        let table = cwd.join("tables/structures.csv");
+        let l = back.labels.as_ref().unwrap();
+        assert_eq!(l.table.as_deref(), Some(table.to_str().unwrap()));
+        // A built-in table's name is not a path.
+        let mut builtin = scene.clone();
+        builtin.labels.as_mut().unwrap().table = Some("FreeSurfer".into());
+        std::fs::write(&file, builtin.to_json().unwrap()).unwrap();
+        let loaded = Scene::load(&file).unwrap();
+        let l = loaded.labels.as_ref().unwrap();
+        assert_eq!(l.table.as_deref(), Some("FreeSurfer"));
+        let abs = builtin.with_absolute_paths().unwrap();
+        assert_eq!(abs.labels.unwrap().table.as_deref(), Some("FreeSurfer"));
     }
 
     #[test]

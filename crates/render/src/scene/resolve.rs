@@ -5,11 +5,13 @@ use std::sync::Arc;
 
 use glint_core::camera::Camera;
 use glint_core::{
-    Image, Legend, Light, Material, MaterialOverrides, RenderError, RenderMode, ScalarColors,
-    Shader, MAX_LIGHTS,
+    Image, Legend, Light, Material, MaterialOverrides, RenderError, RenderMode, RenderStats,
+    ScalarColors, Shader, MAX_LIGHTS,
 };
 use glint_raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
-use glint_volume::{preset, ClassifySettings, Field, FrameSettings, Kernel, TransferFunction};
+use glint_volume::{
+    preset, ClassifySettings, Field, FrameSettings, Kernel, LabelVolume, TransferFunction,
+};
 
 use super::{Input, Scene, Transport, DEFAULT_SHININESS};
 use crate::hwlobe::HwCache;
@@ -62,14 +64,17 @@ pub enum Plan {
 /// Meshes rasterised into a ray-cast volume's frame ([`Plan::Volume`]).
 #[derive(Clone, Debug)]
 pub struct MeshLayer {
-    /// The meshes, read.
-    pub surfaces: Arc<Surfaces>,
+    /// The meshes, read (`None`: none, only a label volume).
+    pub surfaces: Option<Arc<Surfaces>>,
     /// Size, supersampling, colours (the camera is the volume's).
     pub settings: SurfaceSettings,
     /// The colours of the scalar overlays, when any.
     pub colors: Option<ScalarColors>,
     /// The labels shown, when the scene has a label map with a legend.
     pub legend: Option<Legend>,
+    /// The label map ray cast as a volume, when the scene draws it so, and its
+    /// sample step (voxels of the label grid's smallest edge).
+    pub label_volume: Option<(Arc<LabelVolume>, f64)>,
 }
 
 impl MeshLayer {
@@ -82,11 +87,32 @@ impl MeshLayer {
         shader: &Shader,
         volume: impl FnOnce(&[f32]) -> Result<Image, RenderError>,
     ) -> Result<Image, RenderError> {
-        let (behind, far) =
-            self.surfaces
-                .render_layer(camera, shader, &self.settings, self.colors.as_ref())?;
-        let mut image = volume(&far)?;
         let bg = self.settings.background;
+        let (w, h) = (self.settings.width, self.settings.height);
+        let (mut behind, mut far) = match &self.surfaces {
+            Some(s) => s.render_layer(camera, shader, &self.settings, self.colors.as_ref())?,
+            None => {
+                let n = w as usize * h as usize;
+                let empty = Image {
+                    width: w,
+                    height: h,
+                    rgb: vec![bg; n],
+                    alpha: vec![0.0; n],
+                    stats: RenderStats::default(),
+                };
+                (empty, vec![f32::INFINITY; n])
+            }
+        };
+        if let Some((labels, step)) = &self.label_volume {
+            // The label volume in front of the surfaces, then the volume in front of
+            // both.
+            let (front, first) = labels.render_layer(camera, shader, (w, h), bg, *step, &far)?;
+            over(&mut behind, &front, bg);
+            for (f, l) in far.iter_mut().zip(first) {
+                *f = f.min(l);
+            }
+        }
+        let mut image = volume(&far)?;
         for ((rgb, a), (b_rgb, b_a)) in image
             .rgb
             .iter_mut()
@@ -102,6 +128,24 @@ impl MeshLayer {
         image.stats.shaded += behind.stats.shaded;
         Ok(image)
     }
+}
+
+/// Puts `front` (RGB over `bg`, alpha its opacity) over `behind` (the same), in place.
+fn over(behind: &mut Image, front: &Image, bg: [f32; 3]) {
+    for ((rgb, a), (f_rgb, f_a)) in behind
+        .rgb
+        .iter_mut()
+        .zip(behind.alpha.iter_mut())
+        .zip(front.rgb.iter().zip(&front.alpha))
+    {
+        let t = 1.0 - f_a;
+        for i in 0..3 {
+            rgb[i] = f_rgb[i] + t * (rgb[i] - bg[i]);
+        }
+        *a = f_a + t * *a;
+    }
+    behind.stats.shaded += front.stats.shaded;
+    behind.stats.samples += front.stats.samples;
 }
 
 /// The lights of a scene: at least one, at most [`MAX_LIGHTS`].
@@ -174,6 +218,14 @@ impl Scene {
         };
         let n = *scene.lobe.n.get_or_insert(SURFACE_SHININESS);
         let layer = scene.resolve_mesh_layer(set)?;
+        let surfaces = match (layer.surfaces, &layer.label_volume) {
+            (Some(s), None) => s,
+            _ => {
+                return Err(RenderError::Parameter(
+                    "a label volume is ray cast in a volume's frame: give the intensity volume and a ray-cast mode, or draw the labels as surfaces".into(),
+                ))
+            }
+        };
         scene.camera.validate()?;
         let specular = scene.lobe.specular(n, hw)?;
         let shader = Shader::with_specular(
@@ -187,7 +239,7 @@ impl Scene {
             scene,
             shader,
             plan: Plan::Surface {
-                surfaces: layer.surfaces,
+                surfaces,
                 settings: layer.settings,
                 colors: layer.colors,
                 legend: layer.legend,
@@ -224,6 +276,7 @@ impl Scene {
             settings,
             colors,
             legend: set.legend.clone(),
+            label_volume: set.label_volume.clone().map(|v| (v, self.step)),
         })
     }
 

@@ -488,6 +488,8 @@ fn a_volume_with_meshes_composites_the_volume_over_them() {
     let camera = r.camera(&base).unwrap();
     let meshes = layer
         .surfaces
+        .as_ref()
+        .unwrap()
         .render(&camera, &shader, &layer.settings, None)
         .unwrap();
     let (mut covered, mut uncovered) = (0, 0);

@@ -4,6 +4,7 @@
 mod caster;
 mod cells;
 mod classify;
+mod labels;
 mod settings;
 mod start;
 
@@ -17,6 +18,7 @@ use avx2::Scratch;
 type Scratch = ();
 
 pub use classify::Classification;
+pub use labels::{LabelLook, LabelVolume};
 pub use settings::{ClassifySettings, FrameSettings, Kernel};
 
 /// Accumulated opacity at which a ray stops (early ray termination, Levoy 1990).
