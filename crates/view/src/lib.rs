@@ -308,25 +308,36 @@ fn spawn_frame(
     })
 }
 
-async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
-    let Some(_seat) = Seat::take(&viewer) else {
+/// Seats a new client and greets it: `None` (the socket told why, or gone) when the
+/// viewer is full or the greeting cannot be sent.
+async fn admit(socket: &mut WebSocket, viewer: &Arc<Viewer>) -> Option<Seat> {
+    let Some(seat) = Seat::take(viewer) else {
         let message = format!(
             "server busy: at most {} clients at once",
             viewer.config.max_clients
         );
-        send_json(&mut socket, &ServerMessage::Error { message }).await;
+        send_json(socket, &ServerMessage::Error { message }).await;
         let _ = socket.send(Message::Close(None)).await;
-        return;
+        return None;
     };
-    if !send_json(&mut socket, &hello(&viewer)).await {
-        return;
-    }
-    // Set when input arrives while a progressive frame refines: the frame stops (its
-    // samples are dropped) and the input is answered at once.
+    send_json(socket, &hello(viewer)).await.then_some(seat)
+}
+
+/// A client's own renderer (sharing the viewer's data) and the flag that stops its
+/// progressive frame in flight: set when input arrives while a frame refines, so the
+/// input is answered at once (the refinement's samples are dropped).
+fn client_renderer(viewer: &Viewer) -> (Arc<Mutex<Renderer>>, Arc<AtomicBool>) {
     let cancel = Arc::new(AtomicBool::new(false));
     let mut renderer = viewer.renderer.clone();
     renderer.set_cancel(Some(cancel.clone()));
-    let renderer = Arc::new(Mutex::new(renderer));
+    (Arc::new(Mutex::new(renderer)), cancel)
+}
+
+async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
+    let Some(_seat) = admit(&mut socket, &viewer).await else {
+        return;
+    };
+    let (renderer, cancel) = client_renderer(&viewer);
     // Whether the frame in flight is a progressive refinement (which input cancels).
     let mut refining = false;
     let mut state = ClientState {
