@@ -11,6 +11,9 @@
 //                                            frames' sample count grows; a drag
 //                                            restarts it at one sample, then it grows
 //                                            again
+//   node drive.mjs labels URL                a scene with a label map: the legend lists
+//                                            the labels; unticking the first changes
+//                                            the canvas, "all" brings the first back
 //   node drive.mjs bench URL SECONDS         drag for SECONDS; frames/s received
 //                                            during the drag, input-to-frame latency
 //
@@ -18,8 +21,8 @@
 import { chromium } from "playwright-core";
 
 const [mode, url, arg, foreignUrl] = process.argv.slice(2);
-if (!["test", "bench", "progressive"].includes(mode) || !url) {
-  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs progressive URL | drive.mjs bench URL SECONDS");
+if (!["test", "bench", "progressive", "labels"].includes(mode) || !url) {
+  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs progressive URL | drive.mjs labels URL | drive.mjs bench URL SECONDS");
   process.exit(2);
 }
 const browser = await chromium.launch({
@@ -43,7 +46,24 @@ try {
   const box = await page.locator("#frame").boundingBox();
   const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
   const pixels = () => page.evaluate(() => document.getElementById("frame").toDataURL());
-  if (mode === "progressive") {
+  // Waits for the full frame after `act` and returns the canvas.
+  const afterFrame = async (act) => {
+    const full = await page.evaluate(() => window.glint.full);
+    await act();
+    await page.waitForFunction((n) => window.glint.full > n, full, { timeout: 120000 });
+    return pixels();
+  };
+  if (mode === "labels") {
+    const rows = await page.locator("#labels label").allTextContents();
+    const visible = await page.locator("#labels-box").isVisible();
+    const before = await pixels();
+    const hidden = await afterFrame(() => page.locator("#labels input").first().uncheck());
+    const all = await afterFrame(() => page.click("#labels-all"));
+    const errors = await page.evaluate(() => window.glint.errors);
+    const report = { rows, visible, changed: hidden !== before, restored: all === before, errors };
+    console.log(JSON.stringify(report));
+    if (!visible || !report.changed || !report.restored || errors.length) process.exitCode = 1;
+  } else if (mode === "progressive") {
     const g = () => page.evaluate(() => ({ samples: window.glint.samples, log: window.glint.sampleLog.slice(), errors: window.glint.errors }));
     const first = (await g()).samples;
     // Mouse still: refined frames arrive with more samples.

@@ -40,6 +40,8 @@
 #![forbid(unsafe_code)]
 
 pub mod access;
+pub mod labels;
+pub mod levels;
 pub mod protocol;
 mod session;
 
@@ -59,9 +61,13 @@ use glint_render::{
 };
 
 pub use access::{is_loopback, Access, Token};
+pub use labels::{LabelInfo, LabelList};
+pub use levels::PyramidLevel;
 pub use session::{apply_patch, next_samples, render_frame, Frame, MAX_VIEW_SIDE};
 
+use levels::Stage;
 use protocol::{ClientMessage, Purpose, ServerMessage, Split};
+use tokio::sync::watch;
 
 /// Why the viewer refused something.
 #[derive(Debug, thiserror::Error)]
@@ -144,8 +150,17 @@ pub struct Viewer {
     renderer: Renderer,
     scene: Scene,
     range: [f32; 2],
+    /// The labels of the scene's label map, if it has one (the page's legend).
+    labels: Option<LabelList>,
+    /// The pyramid level `renderer` reads (`None`: not a pyramid).
+    level: Option<PyramidLevel>,
+    /// The finer level to read when `renderer` reads a coarse stand-in.
+    finer: Option<(glint_io::ReadOptions, PyramidLevel)>,
+    /// The finer level once read ([`Viewer::refine`]); clients watch it.
+    refined: watch::Sender<Option<Arc<Stage>>>,
     config: ViewerConfig,
     clients: AtomicUsize,
+    cancelled: AtomicUsize,
 }
 
 impl Viewer {
@@ -155,23 +170,73 @@ impl Viewer {
     }
 
     /// [`Viewer::new`] reading the input with `options` (e.g. the level of an OME-Zarr
-    /// pyramid, `strict`).
+    /// pyramid, `strict`). An OME-Zarr store asked for at `Level::Auto` is opened at
+    /// its coarsest level when that is not the one asked for: [`Viewer::refine`] then
+    /// reads the level asked for.
     pub fn with_options(
         scene: Scene,
         config: ViewerConfig,
         options: &glint_io::ReadOptions,
     ) -> Result<Viewer, RenderError> {
-        let mut renderer = Renderer::open_scene_with(&scene, options)?;
+        let plan = levels::plan(&scene.input, options)?;
+        let mut renderer = Renderer::open_scene_with(&scene, &plan.first)?;
         let scene = renderer.resolve(&scene)?.scene;
         // A scene of meshes only has no value range (the page's iso slider).
         let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
+        let labels = scene.labels.as_ref().map(LabelList::read).transpose()?;
         Ok(Viewer {
             renderer,
             scene,
             range: [lo, hi],
+            labels,
+            level: plan.level,
+            finer: plan.finer,
+            refined: watch::Sender::new(None),
             config,
             clients: AtomicUsize::new(0),
+            cancelled: AtomicUsize::new(0),
         })
+    }
+
+    /// Reads the finer pyramid level when the viewer started from a coarse one, and
+    /// offers it to every client: each swaps it in when its camera rests (no drag
+    /// under way, no frame in flight), new clients start from it. Blocks while
+    /// reading (call it on a thread of its own). Returns the level offered, `None`
+    /// when there is none to read or it was read already.
+    pub fn refine(&self) -> Result<Option<PyramidLevel>, RenderError> {
+        let Some((options, level)) = &self.finer else {
+            return Ok(None);
+        };
+        if self.refined.borrow().is_some() {
+            return Ok(None);
+        }
+        let mut renderer = Renderer::open_scene_with(&self.scene, options)?;
+        renderer.resolve(&self.scene)?;
+        let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
+        self.refined.send_replace(Some(Arc::new(Stage {
+            renderer,
+            level: level.clone(),
+            range: [lo, hi],
+        })));
+        Ok(Some(level.clone()))
+    }
+
+    /// The pyramid level a new client starts from (`None`: not a pyramid).
+    pub fn level(&self) -> Option<PyramidLevel> {
+        match &*self.refined.borrow() {
+            Some(stage) => Some(stage.level.clone()),
+            None => self.level.clone(),
+        }
+    }
+
+    /// Progressive refinements stopped by a client's input, over all clients.
+    pub fn cancelled(&self) -> usize {
+        self.cancelled.load(Ordering::SeqCst)
+    }
+
+    /// The labels of the scene's label map (`None` without one).
+    pub fn labels(&self) -> Option<&LabelList> {
+        self.labels.as_ref()
     }
 
     /// Clients connected now.
@@ -274,14 +339,20 @@ enum Wanted {
 /// A frame being rendered on the blocking pool, with what it is for.
 type FrameJob = tokio::task::JoinHandle<Result<(Frame, Purpose), RenderError>>;
 
-/// The first message a client gets: the scene and the names it may choose from.
-fn hello(viewer: &Viewer) -> ServerMessage {
+/// The first message a client gets: the scene and the names it may choose from;
+/// `stage`: the finer level, when the client starts from it.
+fn hello(viewer: &Viewer, stage: Option<&Stage>) -> ServerMessage {
     ServerMessage::Hello {
         scene: serde_json::to_value(&viewer.scene).expect("scenes serialise"),
         presets: PRESETS.iter().map(|p| p.name).collect(),
         lobes: SceneLobe::ALL.map(|k| k.name()).to_vec(),
         views: View::NAMES.to_vec(),
-        range: viewer.range,
+        range: stage.map_or(viewer.range, |s| s.range),
+        level: stage.map_or_else(|| viewer.level.clone(), |s| Some(s.level.clone())),
+        labels: viewer
+            .labels
+            .as_ref()
+            .map_or_else(Vec::new, |l| l.entries().to_vec()),
     }
 }
 
@@ -293,24 +364,35 @@ fn spawn_frame(
     state: &ClientState,
     purpose: Purpose,
     reached: u32,
+    labels: Option<&LabelList>,
 ) -> FrameJob {
-    let (r, mut s, cancel) = (renderer.clone(), state.clone(), cancel.clone());
+    let (r, mut s) = (renderer.clone(), state.clone());
+    if let Some(list) = labels {
+        s.scene = list.visible(&s.scene);
+    }
     if purpose == Purpose::Full {
         if let Some(goal) = state.progressive() {
             s.scene.lighting.spp = Some(next_samples(reached, goal));
         }
     }
+    // A cancel asked of the job before this one (which finished first) is spent.
+    // Cleared here, before the job is queued, not when it starts: input arriving
+    // while it waits for a thread must stop it too (issue 29's protocol test).
+    cancel.store(false, Ordering::Relaxed);
     tokio::task::spawn_blocking(move || {
         let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
-        // A cancel asked of the job before this one (which finished first) is spent.
-        cancel.store(false, Ordering::Relaxed);
         render_frame(&mut r, &s.scene, s.split, purpose, s.seq).map(|f| (f, purpose))
     })
 }
 
 /// Seats a new client and greets it: `None` (the socket told why, or gone) when the
-/// viewer is full or the greeting cannot be sent.
-async fn admit(socket: &mut WebSocket, viewer: &Arc<Viewer>) -> Option<Seat> {
+/// viewer is full or the greeting cannot be sent; `stage`: the finer level, when the
+/// client starts from it.
+async fn admit(
+    socket: &mut WebSocket,
+    viewer: &Arc<Viewer>,
+    stage: Option<&Stage>,
+) -> Option<Seat> {
     let Some(seat) = Seat::take(viewer) else {
         let message = format!(
             "server busy: at most {} clients at once",
@@ -320,24 +402,144 @@ async fn admit(socket: &mut WebSocket, viewer: &Arc<Viewer>) -> Option<Seat> {
         let _ = socket.send(Message::Close(None)).await;
         return None;
     };
-    send_json(socket, &hello(viewer)).await.then_some(seat)
+    send_json(socket, &hello(viewer, stage))
+        .await
+        .then_some(seat)
 }
 
-/// A client's own renderer (sharing the viewer's data) and the flag that stops its
-/// progressive frame in flight: set when input arrives while a frame refines, so the
-/// input is answered at once (the refinement's samples are dropped).
-fn client_renderer(viewer: &Viewer) -> (Arc<Mutex<Renderer>>, Arc<AtomicBool>) {
+/// A client's own renderer (sharing the viewer's data, or `stage`'s, the finer level)
+/// and the flag that stops its progressive frame in flight: set when input arrives
+/// while a frame refines, so the input is answered at once (the refinement's samples
+/// are dropped).
+fn client_renderer(
+    viewer: &Viewer,
+    stage: Option<&Stage>,
+) -> (Arc<Mutex<Renderer>>, Arc<AtomicBool>) {
     let cancel = Arc::new(AtomicBool::new(false));
-    let mut renderer = viewer.renderer.clone();
+    let mut renderer = stage.map_or(&viewer.renderer, |s| &s.renderer).clone();
     renderer.set_cancel(Some(cancel.clone()));
     (Arc::new(Mutex::new(renderer)), cancel)
 }
 
+/// Swaps the finer level in for a client whose camera rests: its renderer renders
+/// from it (the cancel flag kept), and the page is told. `false`: the socket is gone.
+async fn swap_level(
+    socket: &mut WebSocket,
+    renderer: &Mutex<Renderer>,
+    cancel: &Arc<AtomicBool>,
+    stage: &Stage,
+) -> bool {
+    let mut fine = stage.renderer.clone();
+    fine.set_cancel(Some(cancel.clone()));
+    *renderer.lock().unwrap_or_else(|e| e.into_inner()) = fine;
+    let msg = ServerMessage::Level {
+        level: stage.level.clone(),
+    };
+    send_json(socket, &msg).await
+}
+
+/// What a connection owes its client: the next frame, a save, the full frame due when
+/// the input settles, and how far the current `path` state has refined.
+struct Pending {
+    wanted: Wanted,
+    save: bool,
+    settle: Option<tokio::time::Instant>,
+    /// Samples per pixel the last full frame of the current state held (`path`).
+    reached: u32,
+}
+
+impl Pending {
+    /// The frame to render next, if any (a save first), taken off the list.
+    fn take(&mut self) -> Option<Purpose> {
+        if self.save {
+            self.save = false;
+            Some(Purpose::Save)
+        } else if let Wanted::Frame(p) = self.wanted {
+            self.wanted = Wanted::Nothing;
+            Some(p)
+        } else {
+            None
+        }
+    }
+
+    /// Whether the camera rests: no drag under way, no drag frame owed.
+    fn resting(&self) -> bool {
+        self.settle.is_none() && self.wanted != Wanted::Frame(Purpose::Interactive)
+    }
+
+    /// A full frame again when nothing else is owed (a `path` state refining).
+    fn refine(&mut self) {
+        if self.wanted == Wanted::Nothing && self.settle.is_none() {
+            self.wanted = Wanted::Frame(Purpose::Full);
+        }
+    }
+}
+
+/// Sends a finished frame (and, for a full or saved one, its scene) or the error of
+/// a failed one; a `path` state still holding still asks for its next refinement.
+/// `false`: the socket is gone.
+async fn finished(
+    socket: &mut WebSocket,
+    viewer: &Viewer,
+    state: &ClientState,
+    pending: &mut Pending,
+    done: Result<Result<(Frame, Purpose), RenderError>, tokio::task::JoinError>,
+) -> bool {
+    let message = match done {
+        Ok(Ok((frame, purpose))) => {
+            // A `path` state still holding still refines: the next full frame adds
+            // samples, until the scene's count.
+            if purpose == Purpose::Full && frame.seq == state.seq {
+                pending.reached = frame.samples;
+                if state
+                    .progressive()
+                    .is_some_and(|goal| pending.reached < goal)
+                {
+                    pending.refine();
+                }
+            }
+            if socket
+                .send(Message::Binary(frame.message.into()))
+                .await
+                .is_err()
+            {
+                return false;
+            }
+            if purpose == Purpose::Interactive {
+                return true;
+            }
+            let scene = serde_json::to_value(&frame.scene).expect("scenes serialise");
+            return send_json(
+                socket,
+                &ServerMessage::Scene {
+                    seq: frame.seq,
+                    scene,
+                },
+            )
+            .await;
+        }
+        Ok(Err(RenderError::Cancelled)) => {
+            // The refinement's samples are gone: start again from none.
+            viewer.cancelled.fetch_add(1, Ordering::SeqCst);
+            pending.reached = 0;
+            pending.refine();
+            return true;
+        }
+        Ok(Err(e)) => glint_io::one_line(&e),
+        Err(_) => "the render failed unexpectedly".into(),
+    };
+    send_json(socket, &ServerMessage::Error { message }).await
+}
+
 async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
-    let Some(_seat) = admit(&mut socket, &viewer).await else {
+    let mut stages = viewer.refined.subscribe();
+    let stage = stages.borrow_and_update().clone();
+    let Some(_seat) = admit(&mut socket, &viewer, stage.as_deref()).await else {
         return;
     };
-    let (renderer, cancel) = client_renderer(&viewer);
+    let (renderer, cancel) = client_renderer(&viewer, stage.as_deref());
+    // The finer level, read since and not yet swapped in (when the camera rests).
+    let mut finer: Option<Arc<Stage>> = None;
     // Whether the frame in flight is a progressive refinement (which input cancels).
     let mut refining = false;
     let mut state = ClientState {
@@ -345,26 +547,28 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         split: Split::Off,
         seq: 0,
     };
-    let mut wanted = Wanted::Frame(Purpose::Full);
-    let mut save = false;
+    let mut pending = Pending {
+        wanted: Wanted::Frame(Purpose::Full),
+        save: false,
+        settle: None,
+        reached: 0,
+    };
     let mut inflight: Option<FrameJob> = None;
-    let mut settle: Option<tokio::time::Instant> = None;
-    // Samples per pixel the last full frame of the current state held (`path`).
-    let mut reached = 0;
     loop {
+        if inflight.is_none() && pending.resting() {
+            if let Some(stage) = finer.take() {
+                if !swap_level(&mut socket, &renderer, &cancel, &stage).await {
+                    return;
+                }
+                (pending.wanted, pending.reached) = (Wanted::Frame(Purpose::Full), 0);
+            }
+        }
         if inflight.is_none() {
-            let purpose = if save {
-                save = false;
-                Some(Purpose::Save)
-            } else if let Wanted::Frame(p) = wanted {
-                wanted = Wanted::Nothing;
-                Some(p)
-            } else {
-                None
-            };
-            if let Some(purpose) = purpose {
+            if let Some(purpose) = pending.take() {
                 refining = purpose == Purpose::Full && state.progressive().is_some();
-                inflight = Some(spawn_frame(&renderer, &cancel, &state, purpose, reached));
+                let labels = viewer.labels();
+                let job = spawn_frame(&renderer, &cancel, &state, purpose, pending.reached, labels);
+                inflight = Some(job);
             }
         }
         tokio::select! {
@@ -385,20 +589,20 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 }
                 let outcome = {
                     let r = renderer.lock().unwrap_or_else(|e| e.into_inner());
-                    state.handle(text.as_str(), &r, &viewer.config)
+                    state.handle(text.as_str(), &r, &viewer)
                 };
                 match outcome {
                     Ok(Action::Render { interactive }) => {
-                        reached = 0;
+                        pending.reached = 0;
                         if interactive {
-                            wanted = Wanted::Frame(Purpose::Interactive);
-                            settle = Some(tokio::time::Instant::now() + viewer.config.settle);
+                            pending.wanted = Wanted::Frame(Purpose::Interactive);
+                            pending.settle = Some(tokio::time::Instant::now() + viewer.config.settle);
                         } else {
-                            wanted = Wanted::Frame(Purpose::Full);
-                            settle = None;
+                            pending.wanted = Wanted::Frame(Purpose::Full);
+                            pending.settle = None;
                         }
                     }
-                    Ok(Action::Save) => save = true,
+                    Ok(Action::Save) => pending.save = true,
                     Err(e) => {
                         let message = glint_io::one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
@@ -407,45 +611,13 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
             }
             done = async { inflight.as_mut().expect("guarded").await }, if inflight.is_some() => {
                 inflight = None;
-                match done {
-                    Ok(Ok((frame, purpose))) => {
-                        // A `path` state still holding still refines: the next full
-                        // frame adds samples, until the scene's count.
-                        if purpose == Purpose::Full && frame.seq == state.seq {
-                            reached = frame.samples;
-                            let more = state.progressive().is_some_and(|goal| reached < goal);
-                            if more && wanted == Wanted::Nothing && settle.is_none() {
-                                wanted = Wanted::Frame(Purpose::Full);
-                            }
-                        }
-                        if socket.send(Message::Binary(frame.message.into())).await.is_err() { return }
-                        if purpose != Purpose::Interactive {
-                            let scene = serde_json::to_value(&frame.scene).expect("scenes serialise");
-                            let msg = ServerMessage::Scene { seq: frame.seq, scene };
-                            if !send_json(&mut socket, &msg).await { return }
-                        }
-                    }
-                    Ok(Err(RenderError::Cancelled)) => {
-                        // The refinement's samples are gone: start again from none.
-                        reached = 0;
-                        if wanted == Wanted::Nothing && settle.is_none() {
-                            wanted = Wanted::Frame(Purpose::Full);
-                        }
-                    }
-                    Ok(Err(e)) => {
-                        let message = glint_io::one_line(&e);
-                        if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
-                    }
-                    Err(_) => {
-                        let message = "the render failed unexpectedly".into();
-                        if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
-                    }
-                }
+                if !finished(&mut socket, &viewer, &state, &mut pending, done).await { return }
             }
-            _ = tokio::time::sleep_until(settle.unwrap_or_else(tokio::time::Instant::now)), if settle.is_some() => {
-                settle = None;
-                wanted = Wanted::Frame(Purpose::Full);
+            _ = tokio::time::sleep_until(pending.settle.unwrap_or_else(tokio::time::Instant::now)), if pending.settle.is_some() => {
+                pending.settle = None;
+                pending.wanted = Wanted::Frame(Purpose::Full);
             }
+            Ok(()) = stages.changed() => finer = stages.borrow_and_update().clone(),
         }
     }
 }
@@ -477,8 +649,9 @@ impl ClientState {
         &mut self,
         text: &str,
         renderer: &Renderer,
-        config: &ViewerConfig,
+        viewer: &Viewer,
     ) -> Result<Action, ViewError> {
+        let config = &viewer.config;
         if text.len() > config.max_message_bytes {
             return Err(ViewError::Message(format!(
                 "message of {} bytes refused: at most {}",
@@ -494,7 +667,7 @@ impl ClientState {
                 interactive,
                 scene,
             } => {
-                self.scene = apply_patch(renderer, &self.scene, &scene)?;
+                self.scene = apply_patch(renderer, &self.scene, &scene, viewer.labels())?;
                 self.seq = seq;
                 Ok(Action::Render { interactive })
             }

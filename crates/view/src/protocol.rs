@@ -59,6 +59,17 @@ pub enum ServerMessage {
         views: Vec<&'static str>,
         /// The volume's value range (for the iso slider).
         range: [f32; 2],
+        /// The labels present in the scene's label map, in value order (empty
+        /// without one): the page's legend, toggled through `labels.hide`.
+        labels: Vec<crate::labels::LabelInfo>,
+        /// The pyramid level the frames come from (null: not a pyramid).
+        level: Option<crate::levels::PyramidLevel>,
+    },
+    /// The frames now come from another pyramid level (the finer one, read in the
+    /// background, swapped in when the camera rests).
+    Level {
+        /// The level.
+        level: crate::levels::PyramidLevel,
     },
     /// The resolved scene a full frame was rendered from.
     Scene {

@@ -10,6 +10,7 @@ use glint_render::{
 };
 use serde_json::{Map, Value};
 
+use crate::labels::{merge_labels, LabelList};
 use crate::protocol::{Format, FrameHeader, Purpose, Split};
 use crate::ViewError;
 
@@ -19,8 +20,8 @@ pub const MAX_VIEW_SIDE: u32 = 2048;
 
 /// Scene fields a client may not change: the server renders only the volume (and
 /// meshes and label map) it was started with; a client naming another file would have
-/// the server read it.
-const FIXED_FIELDS: [&str; 5] = ["input", "meshes", "labels", "version", "derived"];
+/// the server read it. Of the label map, only [`crate::labels::LABEL_FIELDS`] change.
+const FIXED_FIELDS: [&str; 4] = ["input", "meshes", "version", "derived"];
 
 /// JPEG quality of frames sent while the user drags (small and quick).
 const INTERACTIVE_QUALITY: u8 = 70;
@@ -33,18 +34,38 @@ const DIFF_FULL_SCALE: f32 = 0.05;
 
 /// `scene` with the fields of `patch` applied ([`Scene::patch`]: the rule every front
 /// end shares), checked against `renderer`'s volume; the fields naming the data are
-/// the server's and cannot be changed.
+/// the server's and cannot be changed. A `labels` patch is merged into the scene's
+/// label map field by field ([`crate::labels::LABEL_FIELDS`]: which labels are shown)
+/// and checked against `labels`, the labels present.
 pub fn apply_patch(
     renderer: &Renderer,
     scene: &Scene,
     patch: &Map<String, Value>,
+    labels: Option<&LabelList>,
 ) -> Result<Scene, ViewError> {
     if let Some(key) = patch.keys().find(|k| FIXED_FIELDS.contains(&k.as_str())) {
         return Err(ViewError::Message(format!(
             "the viewer does not change '{key}'"
         )));
     }
-    let next = scene.patch(patch)?;
+    let next = match patch.get("labels") {
+        Some(l) => {
+            let mut patch = patch.clone();
+            patch.insert("labels".into(), merge_labels(scene.labels.as_ref(), l)?);
+            scene.patch(&patch)?
+        }
+        None => scene.patch(patch)?,
+    };
+    let mut check = next.clone();
+    if let (Some(list), Some(spec)) = (labels, &next.labels) {
+        if next.labels != scene.labels {
+            list.check(spec)?;
+            // Checked without building the new label meshes, which the next frame
+            // does (once): the rest of the scene against the meshes built last.
+            check.labels = scene.labels.clone();
+        }
+        check = list.visible(&check);
+    }
     if next.size.iter().any(|&s| s > MAX_VIEW_SIDE) {
         return Err(ViewError::Message(format!(
             "image size {}x{}: the viewer renders at most {MAX_VIEW_SIDE} per side",
@@ -52,7 +73,7 @@ pub fn apply_patch(
         )));
     }
     // A clone shares the volume and meshes (resolving may read meshes it lacks).
-    renderer.clone().resolve(&next)?;
+    renderer.clone().resolve(&check)?;
     Ok(next)
 }
 
@@ -228,7 +249,7 @@ mod tests {
     fn patches_merge_nested_fields_and_refuse_bad_ones() {
         let r = Renderer::open(&scene().input).unwrap();
         let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
-        let s = apply_patch(&r, &scene(), &patch(r#"{"camera": {"azimuth": 30}}"#)).unwrap();
+        let s = apply_patch(&r, &scene(), &patch(r#"{"camera": {"azimuth": 30}}"#), None).unwrap();
         assert_eq!(s.camera.azimuth, 30.0);
         assert_eq!(s.camera.view, scene().camera.view);
         for (bad, needle) in [
@@ -240,7 +261,7 @@ mod tests {
             (r#"{"size": [99999, 2]}"#, "99999"),
             (r#"{"lobe": {"n": 1e9}}"#, "1000000000"),
         ] {
-            let err = apply_patch(&r, &scene(), &patch(bad))
+            let err = apply_patch(&r, &scene(), &patch(bad), None)
                 .unwrap_err()
                 .to_string();
             assert!(err.contains(needle), "{bad}: '{err}'");
@@ -252,7 +273,7 @@ mod tests {
         let mut r = Renderer::open(&scene().input).unwrap();
         let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
         let hw = r#"{"lobe": {"kind": "hw", "n": 30, "hw": {"out_bits": 10}}}"#;
-        let s = apply_patch(&r, &scene(), &patch(hw)).unwrap();
+        let s = apply_patch(&r, &scene(), &patch(hw), None).unwrap();
         assert_eq!(s.lobe.kind, glint_render::SceneLobe::Hw);
         assert_eq!(s.lobe.hw.as_ref().map(|c| c.out_bits), Some(10));
         // The frame's scene names the whole unit, and the image is not float K_4's.
@@ -274,7 +295,7 @@ mod tests {
         );
         // The scene's v (4) contradicts a v = 3 unit: refused, saying why.
         let v3 = r#"{"lobe": {"kind": "hw", "hw": {"v": 3, "square_frac": [14, 14, 12]}}}"#;
-        let err = apply_patch(&r, &scene(), &patch(v3))
+        let err = apply_patch(&r, &scene(), &patch(v3), None)
             .unwrap_err()
             .to_string();
         assert!(err.contains("contradicts"), "{err}");

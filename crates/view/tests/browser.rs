@@ -142,3 +142,71 @@ fn a_path_scene_refines_while_the_mouse_is_still_and_a_drag_restarts_it() {
     );
     eprintln!("progressive browser test: {report}");
 }
+
+/// Issue 33: the legend of a label map in the page: a checkbox per label; unticking
+/// one changes the canvas, "all" brings the first image back.
+#[test]
+fn the_legend_toggles_labels_by_name() {
+    use glint_io::{nifti, Endian, Samples, Volume};
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("browser");
+    if !glint_testkit::browser_tools(&dir) {
+        return;
+    }
+    // Two blocks side by side, FreeSurfer's 17 and 18, over the same file as a volume.
+    let n = 16;
+    let values: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, i / n % n, i / (n * n));
+            let inside = (5..11).contains(&y) && (5..11).contains(&z);
+            match x {
+                2..=7 if inside => 17,
+                8..=13 if inside => 18,
+                _ => 0,
+            }
+        })
+        .collect();
+    let path = tempfile_path("aseg-legend.nii");
+    let vol = Volume::new([n; 3], [1.0; 3], Samples::U8(values)).unwrap();
+    nifti::write(&path, &vol, false, Endian::Little).unwrap();
+    let scene = Scene {
+        input: Input::Path(path.clone()),
+        labels: Some(glint_render::LabelSpec::new(&path)),
+        size: [128, 128],
+        ..Scene::default()
+    };
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
+        .unwrap();
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    let url = access.url();
+    runtime.spawn(glint_view::serve(listener, viewer, access));
+    let out = Command::new("node")
+        .current_dir(&dir)
+        .args(["drive.mjs", "labels", &url])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "drive.mjs failed: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    let rows: Vec<&str> = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r.as_str().unwrap())
+        .collect();
+    assert_eq!(rows.len(), 2, "{report}");
+    assert!(
+        rows[0].contains("Left-Hippocampus") && rows[0].contains("216"),
+        "{report}"
+    );
+    assert!(rows[1].contains("Left-Amygdala"), "{report}");
+    assert_eq!(report["changed"], true, "{report}");
+    assert_eq!(report["restored"], true, "{report}");
+    eprintln!("legend browser test: {report}");
+}

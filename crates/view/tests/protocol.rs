@@ -254,3 +254,279 @@ async fn a_mesh_scene_is_served_and_rotates() {
     assert!(err["message"].as_str().unwrap().contains("meshes"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Decodes a PNG frame (8-bit RGB) into its pixels.
+fn rgb_pixels(png_bytes: &[u8]) -> Vec<[u8; 3]> {
+    let mut reader = png::Decoder::new(std::io::Cursor::new(png_bytes))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    buf[..info.buffer_size()]
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect()
+}
+
+/// The PNG of the client's current state (a `save`), after its frame for `seq`.
+async fn saved(c: &mut Client, seq: u32) -> Vec<[u8; 3]> {
+    send(c, r#"{"type": "save"}"#).await;
+    let (h, png) = frame(c, Purpose::Save).await;
+    assert_eq!(h.seq, seq);
+    rgb_pixels(&png)
+}
+
+/// Issue 33: the hello lists the label map's labels (number, name, colour, voxels),
+/// and a `labels` update hiding one changes the frame exactly where that label was.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn labels_are_listed_and_hiding_one_changes_only_its_pixels() {
+    use glint_io::{nifti, Endian, Samples, Volume};
+    let dir = std::env::temp_dir().join(format!("glint-view-labels-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // Two 6-voxel cubes side by side along x: FreeSurfer's 17 Left-Hippocampus and
+    // 18 Left-Amygdala (colours (220, 216, 20) and (103, 255, 255) in
+    // FreeSurferColorLUT.txt); 5x6x6 and 6x6x6 voxels.
+    let n = 16;
+    let values: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, i / n % n, i / (n * n));
+            let inside = (5..11).contains(&y) && (5..11).contains(&z);
+            match x {
+                3..=7 if inside => 17,
+                8..=13 if inside => 18,
+                _ => 0,
+            }
+        })
+        .collect();
+    let path = dir.join("aseg.nii");
+    let vol = Volume::new([n; 3], [1.0; 3], Samples::U8(values)).unwrap();
+    nifti::write(&path, &vol, false, Endian::Little).unwrap();
+    // The same file as the volume, made transparent, so a pixel shows the labels
+    // alone, unshaded (a pixel is its label's colour), without the legend.
+    let mut spec = glint_render::LabelSpec::new(&path);
+    spec.legend = false;
+    let scene = Scene {
+        input: Input::Path(path.clone()),
+        labels: Some(spec),
+        size: [64, 64],
+        ssaa: Some(1),
+        mode: glint_render::RenderMode::Composite,
+        transfer_function: Some(
+            glint_render::TransferFunction::from_flat(
+                &[0.0, 0.0, 100.0, 0.0],
+                &[0.0, 1.0, 1.0, 1.0],
+            )
+            .unwrap(),
+        ),
+        camera: glint_render::CameraSpec {
+            projection: glint_render::Projection::Orthographic,
+            ..glint_render::CameraSpec::default()
+        },
+        material: glint_render::MaterialOverrides {
+            ambient: Some(1.0),
+            diffuse: Some(0.0),
+            specular: Some(0.0),
+            shade: Some(false),
+        },
+        ..Scene::default()
+    };
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer, access));
+    let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    let hello = json_of(&mut c, "hello").await;
+    assert_eq!(
+        hello["labels"],
+        serde_json::json!([
+            {"value": 17, "name": "Left-Hippocampus", "color": "#dcd814", "voxels": 180, "shown": true},
+            {"value": 18, "name": "Left-Amygdala", "color": "#67ffff", "voxels": 216, "shown": true},
+        ])
+    );
+    frame(&mut c, Purpose::Full).await;
+    let all = saved(&mut c, 0).await;
+    let near = |p: [u8; 3], c: [u8; 3]| (0..3).all(|k| p[k].abs_diff(c[k]) <= 2);
+    let (hippo, amygdala) = ([220, 216, 20], [103, 255, 255]);
+    let count = |img: &[[u8; 3]], c| img.iter().filter(|p| near(**p, c)).count();
+    assert!(count(&all, hippo) > 100 && count(&all, amygdala) > 100);
+
+    // Hide 17: the next frame changes exactly where it was drawn.
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 1, "scene": {"labels": {"hide": ["17"]}}}"#,
+    )
+    .await;
+    let (h, _) = frame(&mut c, Purpose::Full).await;
+    assert_eq!(h.seq, 1);
+    let hidden = saved(&mut c, 1).await;
+    let mut changed = 0;
+    for (i, (a, b)) in all.iter().zip(&hidden).enumerate() {
+        if a != b {
+            changed += 1;
+            assert!(near(*a, hippo), "pixel {i} changed but was {a:?}");
+        } else {
+            assert!(!near(*a, hippo), "pixel {i} of label 17 unchanged");
+        }
+    }
+    assert_eq!(changed, count(&all, hippo));
+    // By name, both hidden ("none"): the label layer goes, no label pixel is left.
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 2, "scene": {"labels": {"hide": ["Left-Hippocampus", "left-amygdala"]}}}"#,
+    )
+    .await;
+    let none = saved(&mut c, 2).await;
+    assert_eq!(count(&none, hippo) + count(&none, amygdala), 0);
+    // "All" again: the first image, pixel for pixel.
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 3, "scene": {"labels": {"show": null, "hide": []}}}"#,
+    )
+    .await;
+    assert_eq!(saved(&mut c, 3).await, all);
+    // The file, its table and names not in it stay refused, one line each.
+    for (patch, needle) in [
+        (r#"{"labels": {"path": "/etc/passwd"}}"#, "labels.path"),
+        (
+            r#"{"labels": {"table": "totalsegmentator"}}"#,
+            "labels.table",
+        ),
+        (
+            r#"{"labels": {"hide": ["Left-Hipocampus"]}}"#,
+            "Left-Hippocampus",
+        ),
+        (r#"{"labels": "none"}"#, "takes an object"),
+    ] {
+        let msg = format!(r#"{{"type": "update", "seq": 4, "scene": {patch}}}"#);
+        send(&mut c, &msg).await;
+        let err = json_of(&mut c, "error").await;
+        let text = err["message"].as_str().unwrap();
+        assert!(
+            text.contains(needle) && !text.contains('\n'),
+            "{patch}: {text}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 29: input arriving while a `path` refinement is traced stops it. The first
+/// frame (one sample) is answered at once by an update: the server has already started
+/// the refinement to 2 (it starts the next one before it reads another message), so
+/// the update arrives during it. Stopped, it sends no frame; the next frame is the
+/// update's, at one sample, and the count grows again from there.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn input_stops_a_path_refinement_in_flight_and_the_samples_restart() {
+    let scene = Scene {
+        input: Input::Phantom {
+            name: Phantom::SheppLogan,
+            size: 48,
+        },
+        // One sample of a frame takes about 0.17 s here (debug build, 2 cores): the
+        // refinement the input meets is long beside the message's way to the server.
+        size: [256, 256],
+        lighting: glint_render::Lighting {
+            model: glint_render::LightingModel::Path,
+            spp: Some(64),
+            ..glint_render::Lighting::default()
+        },
+        ..Scene::default()
+    };
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer.clone(), access));
+    let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    let (h, _) = frame(&mut c, Purpose::Full).await;
+    assert_eq!((h.seq, h.samples), (0, 1));
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 1, "scene": {"camera": {"azimuth": 40}}}"#,
+    )
+    .await;
+    let mut after = Vec::new();
+    while after.len() < 2 {
+        let (h, _) = frame(&mut c, Purpose::Full).await;
+        after.push((h.seq, h.samples));
+    }
+    // No frame of the old camera at 2 samples: the refinement in flight was stopped.
+    assert_eq!(after, [(1, 1), (1, 2)]);
+    assert_eq!(viewer.cancelled(), 1);
+}
+
+/// Issue 31: a viewer of an OME-Zarr pyramid asked for its `auto` level starts from
+/// the coarsest level; once the finer one is read, the client (camera at rest) is
+/// told, and its next frame comes from it; a client arriving later starts from it.
+/// The store is the io crate's fixture (written by zarr-python, 5 levels).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_pyramid_is_shown_coarse_first_then_at_the_auto_level() {
+    use glint_io::zarr::Level;
+    use glint_io::ReadOptions;
+    let store = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../io/tests/data/zarr/v04-blosc.zarr");
+    let scene = Scene {
+        input: Input::Path(store),
+        size: [48, 48],
+        ..Scene::default()
+    };
+    // At 48 pixels, auto is level 0 (64x48x10): level 1's 32 voxels are too few.
+    let auto = ReadOptions {
+        level: Level::Auto(48),
+        ..ReadOptions::default()
+    };
+    let viewer =
+        Arc::new(Viewer::with_options(scene.clone(), ViewerConfig::default(), &auto).unwrap());
+    let level = |l: usize, dims: [usize; 3], coarse: bool| glint_view::PyramidLevel {
+        level: l,
+        levels: 5,
+        dims,
+        coarse,
+    };
+    assert_eq!(viewer.level(), Some(level(4, [4, 3, 10], true)));
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer.clone(), access));
+    let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    let hello = json_of(&mut c, "hello").await;
+    assert_eq!(
+        hello["level"],
+        serde_json::json!({"level": 4, "levels": 5, "dims": [4, 3, 10], "coarse": true})
+    );
+    let (_, coarse) = frame(&mut c, Purpose::Full).await;
+    let v = viewer.clone();
+    let read = tokio::task::spawn_blocking(move || v.refine())
+        .await
+        .unwrap();
+    assert_eq!(read.unwrap(), Some(level(0, [64, 48, 10], false)));
+    // The level message comes before the first frame of the finer level.
+    let fine = loop {
+        match next(&mut c).await {
+            Message::Text(t) => {
+                let m: serde_json::Value = serde_json::from_str(&t).unwrap();
+                if m["type"] == "level" {
+                    assert_eq!(m["level"]["level"], 0, "{m}");
+                    assert_eq!(m["level"]["coarse"], false, "{m}");
+                    break frame(&mut c, Purpose::Full).await.1;
+                }
+                assert_eq!(m["type"], "scene", "{m}");
+            }
+            Message::Binary(_) => panic!("a frame before the level message"),
+            other => panic!("{other:?}"),
+        }
+    };
+    assert_ne!(fine, coarse, "the finer level changes the image");
+    assert_eq!(viewer.refine().unwrap(), None, "read once");
+    let (mut d, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    assert_eq!(json_of(&mut d, "hello").await["level"]["level"], 0);
+    // A level asked for by number is read as asked, and is the only one.
+    let two = ReadOptions {
+        level: Level::Index(2),
+        ..ReadOptions::default()
+    };
+    let v = Viewer::with_options(scene, ViewerConfig::default(), &two).unwrap();
+    assert_eq!(v.level(), Some(level(2, [16, 12, 10], false)));
+    assert_eq!(v.refine().unwrap(), None);
+}

@@ -4,9 +4,11 @@
 const $ = (id) => document.getElementById(id);
 const canvas = $("frame");
 const ctx = canvas.getContext("2d");
-const glint = (window.glint = { frames: 0, full: 0, samples: 0, sampleLog: [], latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
+const glint = (window.glint = { level: null, frameLevels: [], frames: 0, full: 0, samples: 0, sampleLog: [], latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
 let seq = 0;
 let scene = null;
+// The pyramid level of an OME-Zarr store the frames come from ("" otherwise).
+let levelText = "";
 const frameTimes = [];
 
 // A viewer on a non-loopback address needs its token (the printed URL's ?token=...):
@@ -47,9 +49,13 @@ ws.onmessage = async (ev) => {
         b.onclick = () => { scene.camera = { ...scene.camera, view: v, azimuth: 0, elevation: 0 }; update({ camera: { view: v, azimuth: 0, elevation: 0 } }); };
         views.append(b);
       }
+      showLabels(msg.labels || []);
+      showLevel(msg.level);
       $("iso").min = msg.range[0];
       $("iso").max = msg.range[1];
       showScene(scene);
+    } else if (msg.type === "level") {
+      showLevel(msg.level);
     } else if (msg.type === "scene") {
       glint.scene = msg.scene;
       if (glint.saving) { download("scene.json", new Blob([JSON.stringify(msg.scene, null, 2)], { type: "application/json" })); glint.saving = false; }
@@ -85,7 +91,8 @@ ws.onmessage = async (ev) => {
   frameTimes.push(now);
   while (frameTimes.length && now - frameTimes[0] > 1000) frameTimes.shift();
   $("timing").textContent = `${h.width}×${h.height} in ${h.ms.toFixed(1)} ms · ${frameTimes.length} frames/s`;
-  $("status").textContent = h.purpose === 0 ? "interactive" : "";
+  glint.frameLevels.push(glint.level ? glint.level.level : null);
+  $("status").textContent = [h.purpose === 0 ? "interactive" : "", levelText].filter((t) => t).join(" · ");
   $("error").textContent = "";
 };
 ws.onclose = () => { $("status").textContent = "disconnected"; };
@@ -102,6 +109,52 @@ function showScene(s) {
   const l = s.lighting || { model: "local" };
   $("lighting").value = l.model;
   if (l.spp !== undefined) $("spp").value = l.spp;
+}
+
+// The legend of the label map: a checkbox per label present (colour, name, voxel
+// count); a change sends the labels not ticked as the scene's labels.hide list.
+function showLabels(labels) {
+  glint.labels = labels;
+  const box = $("labels");
+  box.innerHTML = "";
+  $("labels-box").hidden = labels.length === 0;
+  for (const l of labels) {
+    const row = document.createElement("label");
+    const tick = document.createElement("input");
+    tick.type = "checkbox";
+    tick.checked = l.shown;
+    tick.dataset.value = String(l.value);
+    tick.onchange = sendLabels;
+    const swatch = document.createElement("span");
+    swatch.className = "swatch";
+    swatch.style.background = l.color;
+    const name = document.createElement("span");
+    name.textContent = l.name;
+    const voxels = document.createElement("span");
+    voxels.className = "voxels";
+    voxels.textContent = l.voxels.toLocaleString("en");
+    row.title = `label ${l.value}`;
+    row.append(tick, swatch, name, voxels);
+    box.append(row);
+  }
+}
+
+function sendLabels() {
+  const hide = [...$("labels").querySelectorAll("input")].filter((t) => !t.checked).map((t) => t.dataset.value);
+  update({ labels: { show: null, hide } });
+}
+
+function tickAll(on) {
+  for (const t of $("labels").querySelectorAll("input")) t.checked = on;
+  sendLabels();
+}
+
+// A pyramid's level: "level 4 of 0–4 (4×3×10), loading a finer one" while coarse.
+function showLevel(level) {
+  glint.level = level || null;
+  if (!level) { levelText = ""; return; }
+  levelText = `level ${level.level} of 0–${level.levels - 1} (${level.dims.join("×")})${level.coarse ? ", loading a finer one" : ""}`;
+  $("status").textContent = levelText;
 }
 
 function download(name, blob) {
@@ -157,3 +210,5 @@ $("lighting").onchange = (e) => {
 };
 $("spp").onchange = (e) => { if ($("lighting").value === "path") update({ lighting: { spp: Number(e.target.value) } }); };
 $("save").onclick = () => { glint.saving = true; send({ type: "save" }); };
+$("labels-all").onclick = () => tickAll(true);
+$("labels-none").onclick = () => tickAll(false);
