@@ -4,6 +4,7 @@ use std::net::IpAddr;
 use std::sync::Arc;
 
 use anyhow::Context;
+use glint_io::zarr::Level;
 use glint_render::SceneLobe;
 use glint_view::{Access, Token, Viewer, ViewerConfig};
 
@@ -15,10 +16,15 @@ use super::scene_flags::SceneFlags;
 #[command(after_help = "Examples:\n  \
     glint view                                   # the built-in phantom\n  \
     glint view brain.nii.gz --preset mr-t2-brain\n  \
-    glint view --scene brain.json --port 9000\n\n\
+    glint view --scene brain.json --port 9000\n  \
+    glint view ct.nii.gz --labels seg.nii.gz --labels-as volume\n  \
+    glint view stack.zarr                        # OME-Zarr: coarse level first\n\n\
 Open the printed URL in a browser: drag to orbit, wheel to zoom, the panel sets the\n\
 preset, mode, lobe, n, v, geometry, light and split view (exact | lobe, or their\n\
-difference); Save downloads the scene (for glint render --scene) and a PNG.\n\n\
+difference); Save downloads the scene (for glint render --scene) and a PNG. With\n\
+--labels, a Labels panel toggles each label by name (all/none). An OME-Zarr store is\n\
+read at --level auto unless --level is given, coarse first: its coarsest level is\n\
+shown at once, the auto level replaces it when read and the camera rests.\n\n\
 Access: only the viewer's own page may use it. A request must name this machine\n\
 (localhost, a loopback address or the --host address, with the port; else 421), and a\n\
 WebSocket opened by a page of any other origin is refused (403); clients that send no\n\
@@ -63,12 +69,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         max_clients: args.max_clients as usize,
         ..ViewerConfig::default()
     };
+    // An OME-Zarr pyramid is shown coarse first: its coarsest level at once, then the
+    // auto level (at least one voxel per pixel), read in the background.
+    let mut options = args.scene.read_options();
+    if args.scene.level.is_none() {
+        options.level = Level::Auto(scene.size[0].max(scene.size[1]) as usize);
+    }
     eprintln!("glint view: loading the volume");
-    let viewer = Arc::new(Viewer::with_options(
-        scene,
-        config,
-        &args.scene.read_options(),
-    )?);
+    let viewer = Arc::new(Viewer::with_options(scene, config, &options)?);
+    if let Some(level) = viewer.level().filter(|l| l.coarse) {
+        eprintln!(
+            "glint view: showing level {} ({}x{}x{}) while the finer one is read",
+            level.level, level.dims[0], level.dims[1], level.dims[2]
+        );
+        let v = viewer.clone();
+        std::thread::spawn(move || {
+            match v.refine() {
+            Ok(Some(l)) => eprintln!(
+                "glint view: level {} ({}x{}x{}) read; each client switches to it when its camera rests",
+                l.level, l.dims[0], l.dims[1], l.dims[2]
+            ),
+            Ok(None) => {}
+            Err(e) => eprintln!(
+                "glint view: the finer level could not be read, the coarse one stays: {}",
+                glint_io::one_line(&e)
+            ),
+        }
+        });
+    }
     let runtime = tokio::runtime::Runtime::new().context("starting the server runtime")?;
     runtime.block_on(async {
         let listener = tokio::net::TcpListener::bind((args.host, args.port))
