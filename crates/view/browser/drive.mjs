@@ -11,7 +11,7 @@
 //                                            frames' sample count grows; a drag
 //                                            restarts it at one sample, then it grows
 //                                            again
-//   node drive.mjs labels URL                a scene with a label map: the legend lists
+//   node drive.mjs labels URL [SHOT.png]     a scene with a label map: the legend lists
 //                                            the labels; unticking the first changes
 //                                            the canvas, "all" brings the first back
 //   node drive.mjs bench URL SECONDS         drag for SECONDS; frames/s received
@@ -22,7 +22,7 @@ import { chromium } from "playwright-core";
 
 const [mode, url, arg, foreignUrl] = process.argv.slice(2);
 if (!["test", "bench", "progressive", "labels"].includes(mode) || !url) {
-  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs progressive URL | drive.mjs labels URL | drive.mjs bench URL SECONDS");
+  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs progressive URL | drive.mjs labels URL [SHOT.png] | drive.mjs bench URL SECONDS");
   process.exit(2);
 }
 const browser = await chromium.launch({
@@ -57,10 +57,16 @@ try {
     const rows = await page.locator("#labels label").allTextContents();
     const visible = await page.locator("#labels-box").isVisible();
     const before = await pixels();
+    // Click to full frame, ms (reported, not checked: the label layer is rebuilt).
+    let t = Date.now();
     const hidden = await afterFrame(() => page.locator("#labels input").first().uncheck());
+    const hideMs = Date.now() - t;
+    t = Date.now();
     const all = await afterFrame(() => page.click("#labels-all"));
+    const allMs = Date.now() - t;
+    if (arg) await page.screenshot({ path: arg });
     const errors = await page.evaluate(() => window.glint.errors);
-    const report = { rows, visible, changed: hidden !== before, restored: all === before, errors };
+    const report = { rows: rows.length <= 8 ? rows : rows.length, visible, changed: hidden !== before, restored: all === before, hide_ms: hideMs, all_ms: allMs, errors };
     console.log(JSON.stringify(report));
     if (!visible || !report.changed || !report.restored || errors.length) process.exitCode = 1;
   } else if (mode === "progressive") {
