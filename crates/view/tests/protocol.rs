@@ -457,8 +457,9 @@ async fn input_stops_a_path_refinement_in_flight_and_the_samples_restart() {
 }
 
 /// Issue 31: a viewer of an OME-Zarr pyramid asked for its `auto` level starts from
-/// the coarsest level; once the finer one is read, the client (camera at rest) is
-/// told, and its next frame comes from it; a client arriving later starts from it.
+/// the coarsest level; the finer one, read during a drag, is not swapped in until
+/// the drag ends; then the client is told, and its next frame comes from it; a client
+/// arriving later starts from it.
 /// The store is the io crate's fixture (written by zarr-python, 5 levels).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_pyramid_is_shown_coarse_first_then_at_the_auto_level() {
@@ -476,8 +477,11 @@ async fn a_pyramid_is_shown_coarse_first_then_at_the_auto_level() {
         level: Level::Auto(48),
         ..ReadOptions::default()
     };
-    let viewer =
-        Arc::new(Viewer::with_options(scene.clone(), ViewerConfig::default(), &auto).unwrap());
+    let config = ViewerConfig {
+        settle: Duration::from_secs(60),
+        ..ViewerConfig::default()
+    };
+    let viewer = Arc::new(Viewer::with_options(scene.clone(), config, &auto).unwrap());
     let level = |l: usize, dims: [usize; 3], coarse: bool| glint_view::PyramidLevel {
         level: l,
         levels: 5,
@@ -496,12 +500,39 @@ async fn a_pyramid_is_shown_coarse_first_then_at_the_auto_level() {
         serde_json::json!({"level": 4, "levels": 5, "dims": [4, 3, 10], "coarse": true})
     );
     let (_, coarse) = frame(&mut c, Purpose::Full).await;
+    // A drag under way (its full frame not due for a minute) when the level is read.
+    let drag = |seq: u32| {
+        format!(
+            r#"{{"type": "update", "seq": {seq}, "interactive": true, "scene": {{"camera": {{"azimuth": {}}}}}}}"#,
+            10 * seq
+        )
+    };
+    send(&mut c, &drag(1)).await;
+    frame(&mut c, Purpose::Interactive).await;
     let v = viewer.clone();
     let read = tokio::task::spawn_blocking(move || v.refine())
         .await
         .unwrap();
     assert_eq!(read.unwrap(), Some(level(0, [64, 48, 10], false)));
-    // The level message comes before the first frame of the finer level.
+    // Still dragging: no level message before the drag's next frame.
+    send(&mut c, &drag(2)).await;
+    loop {
+        match next(&mut c).await {
+            Message::Text(t) => assert!(!t.contains(r#""type":"level""#), "{t}"),
+            Message::Binary(b) => {
+                let (h, _) = FrameHeader::decode(&b).unwrap();
+                assert_eq!((h.seq, h.purpose), (2, Purpose::Interactive));
+                break;
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    // The mouse is let go: the level message, then the first frame of the finer level.
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 3, "scene": {"camera": {"azimuth": 0}}}"#,
+    )
+    .await;
     let fine = loop {
         match next(&mut c).await {
             Message::Text(t) => {
