@@ -14,6 +14,9 @@
 //   node drive.mjs labels URL [SHOT.png]     a scene with a label map: the legend lists
 //                                            the labels; unticking the first changes
 //                                            the canvas, "all" brings the first back
+//   node drive.mjs levels URL                an OME-Zarr pyramid shown coarse first:
+//                                            the first frame's level and status, then
+//                                            a frame of the finer level and its status
 //   node drive.mjs bench URL SECONDS         drag for SECONDS; frames/s received
 //                                            during the drag, input-to-frame latency
 //
@@ -21,8 +24,8 @@
 import { chromium } from "playwright-core";
 
 const [mode, url, arg, foreignUrl] = process.argv.slice(2);
-if (!["test", "bench", "progressive", "labels"].includes(mode) || !url) {
-  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs progressive URL | drive.mjs labels URL [SHOT.png] | drive.mjs bench URL SECONDS");
+if (!["test", "bench", "progressive", "labels", "levels"].includes(mode) || !url) {
+  console.error("usage: drive.mjs test URL OUT.png [FOREIGN_URL] | drive.mjs progressive URL | drive.mjs labels URL [SHOT.png] | drive.mjs levels URL | drive.mjs bench URL SECONDS");
   process.exit(2);
 }
 const browser = await chromium.launch({
@@ -53,7 +56,15 @@ try {
     await page.waitForFunction((n) => window.glint.full > n, full, { timeout: 120000 });
     return pixels();
   };
-  if (mode === "labels") {
+  if (mode === "levels") {
+    // Each frame's level and the status shown with it.
+    const first = await page.evaluate(() => window.glint.frameLevels[0]);
+    await page.waitForFunction(() => window.glint.level && !window.glint.level.coarse && window.glint.frameLevels.at(-1).level === window.glint.level.level, null, { timeout: 120000 });
+    const later = await page.evaluate(() => window.glint.frameLevels.at(-1));
+    const errors = await page.evaluate(() => window.glint.errors);
+    console.log(JSON.stringify({ first, later, errors }));
+    if (errors.length) process.exitCode = 1;
+  } else if (mode === "labels") {
     const rows = await page.locator("#labels label").allTextContents();
     const visible = await page.locator("#labels-box").isVisible();
     const before = await pixels();

@@ -210,3 +210,65 @@ fn the_legend_toggles_labels_by_name() {
     assert_eq!(report["restored"], true, "{report}");
     eprintln!("legend browser test: {report}");
 }
+
+/// Issue 31: the page of a pyramid shown coarse first says the coarse level in its
+/// status with the first frame, then the finer one with a later frame.
+#[test]
+fn the_page_shows_the_pyramid_level_coarse_first() {
+    use glint_io::zarr::Level;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("browser");
+    if !glint_testkit::browser_tools(&dir) {
+        return;
+    }
+    let store = Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/data/zarr/v04-blosc.zarr");
+    let scene = Scene {
+        input: Input::Path(store),
+        size: [64, 64],
+        ..Scene::default()
+    };
+    let options = glint_io::ReadOptions {
+        level: Level::Auto(64),
+        ..glint_io::ReadOptions::default()
+    };
+    let viewer = Arc::new(Viewer::with_options(scene, ViewerConfig::default(), &options).unwrap());
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
+        .unwrap();
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    let url = access.url();
+    runtime.spawn(glint_view::serve(listener, viewer.clone(), access));
+    // The finer level is read once the page is seated (its hello already said the
+    // coarse level, and its first frame is drawn from it).
+    let v = viewer.clone();
+    let refine = std::thread::spawn(move || {
+        let start = std::time::Instant::now();
+        while v.clients() == 0 && start.elapsed().as_secs() < 120 {
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        v.refine()
+    });
+    let out = Command::new("node")
+        .current_dir(&dir)
+        .args(["drive.mjs", "levels", &url])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "drive.mjs failed: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(refine.join().unwrap().unwrap().is_some());
+    let report: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(report["first"]["level"], 4, "{report}");
+    let first = report["first"]["status"].as_str().unwrap();
+    assert!(
+        first.contains("level 4 of 0–4 (4×3×10), loading a finer one"),
+        "{report}"
+    );
+    assert_eq!(report["later"]["level"], 0, "{report}");
+    let later = report["later"]["status"].as_str().unwrap();
+    assert_eq!(later, "level 0 of 0–4 (64×48×10)", "{report}");
+    eprintln!("levels browser test: {report}");
+}

@@ -34,7 +34,12 @@ function fill(select, names) {
   for (const n of names) select.add(new Option(n, n));
 }
 
-ws.onmessage = async (ev) => {
+// Messages are handled one after another, in the order they came: a frame's image is
+// decoded asynchronously, and a message after it (a level change) must not overtake it.
+let handled = Promise.resolve();
+ws.onmessage = (ev) => { handled = handled.then(() => handle(ev)).catch((e) => glint.errors.push(String(e))); };
+
+async function handle(ev) {
   if (typeof ev.data === "string") {
     const msg = JSON.parse(ev.data);
     if (msg.type === "hello") {
@@ -91,8 +96,8 @@ ws.onmessage = async (ev) => {
   frameTimes.push(now);
   while (frameTimes.length && now - frameTimes[0] > 1000) frameTimes.shift();
   $("timing").textContent = `${h.width}×${h.height} in ${h.ms.toFixed(1)} ms · ${frameTimes.length} frames/s`;
-  glint.frameLevels.push(glint.level ? glint.level.level : null);
   $("status").textContent = [h.purpose === 0 ? "interactive" : "", levelText].filter((t) => t).join(" · ");
+  glint.frameLevels.push({ level: glint.level ? glint.level.level : null, status: $("status").textContent });
   $("error").textContent = "";
 };
 ws.onclose = () => { $("status").textContent = "disconnected"; };
