@@ -21,6 +21,7 @@ use glint_core::RenderError;
 
 mod frames;
 mod medium;
+mod occluders;
 mod path;
 mod rng;
 mod shadows;
@@ -29,7 +30,9 @@ mod tracking;
 #[cfg(test)]
 mod tests;
 
+pub use frames::PathTarget;
 pub(crate) use medium::Medium;
+pub use occluders::Occluders;
 pub use path::PathImage;
 pub(crate) use shadows::{occlusion_grid, DensityGrid};
 pub use shadows::{ShadowField, ShadowSettings, LIGHT_CELL};
