@@ -15,8 +15,8 @@ use rayon::prelude::*;
 
 use glint_core::Vec3;
 
-use super::shadows::{grid_len, LIGHT_CELL};
 use super::tracking::{CellWalk, IndexRay};
+use super::{grid_len, LIGHT_CELL};
 use crate::field::{Field, MACRO_CELL};
 
 /// Added to the half edge of a grid cell in the overlap test, so triangles lying on a

@@ -179,7 +179,7 @@ impl<'a> PathTracer<'a> {
         mut self,
         occluders: Option<&'a Occluders>,
     ) -> Result<PathTracer<'a>, glint_core::RenderError> {
-        let grid = self.track.field.dims().map(super::shadows::grid_len);
+        let grid = self.track.field.dims().map(super::grid_len);
         if occluders.is_some_and(|o| o.dims() != grid) {
             return Err(glint_core::RenderError::Parameter(
                 "the mesh occupancy was built for another volume's grid".into(),

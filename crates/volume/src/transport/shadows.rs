@@ -27,12 +27,8 @@ use glint_core::{RenderError, Shader, Vec3, MAX_LIGHTS};
 
 use super::medium::Medium;
 use super::occluders::Occluders;
+use super::{grid_len, LIGHT_CELL};
 use crate::field::Field;
-
-/// Edge of the light volume's cells, in voxels (the grid's spacing). Two voxels: an
-/// eighth of the field's points, which one core sweeps in a few milliseconds on the
-/// MNI152 scene; docs/lighting.md gives the measured cost and error.
-pub const LIGHT_CELL: usize = 2;
 
 /// Grid planes between a sample and the point whose transmittance it reads (towards
 /// the light).
@@ -56,11 +52,6 @@ pub(crate) struct DensityGrid {
     pub(crate) sigma: Vec<f32>,
     /// mm per grid step along each index axis.
     pub(crate) step_mm: [f32; 3],
-}
-
-/// Grid points along an axis of `d` voxels: `0, h, 2h, ...` up to the last voxel.
-pub(super) fn grid_len(d: usize) -> usize {
-    (d - 1).div_ceil(LIGHT_CELL) + 1
 }
 
 impl DensityGrid {
