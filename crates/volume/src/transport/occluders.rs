@@ -193,6 +193,55 @@ fn triangle_touches_box(v: &[[f64; 3]; 3], h: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glint_io::{Samples, Volume};
+
+    #[test]
+    fn rays_meet_the_first_occupied_cell_after_their_own() {
+        let vol = Volume::new([16; 3], [1.0; 3], Samples::F32(vec![0.0; 16 * 16 * 16])).unwrap();
+        let field = Field::new(&vol).unwrap();
+        // A small triangle near (8, 8, 8): grid point (4, 4, 4) alone, whose cell
+        // holds index positions 7..9 along each axis.
+        let tri = [
+            Vec3::new(8.0, 7.9, 8.0),
+            Vec3::new(8.2, 7.9, 8.1),
+            Vec3::new(8.1, 8.1, 8.2),
+        ];
+        let occ = Occluders::new(&field, [tri]);
+        assert_eq!(occ.dims(), [9; 3]);
+        assert_eq!(occ.count(), 1);
+        assert!(occ.occupied([4, 4, 4]));
+        let ray = |o: [f32; 3], d: [f32; 3]| IndexRay {
+            o: Vec3::new(o[0], o[1], o[2]),
+            d: Vec3::new(d[0], d[1], d[2]),
+        };
+        let inf = f32::INFINITY;
+        let hit = occ.first_hit(&ray([2.0, 8.0, 8.0], [1.0, 0.0, 0.0]), 0.0, inf);
+        assert_eq!(hit, Some(5.0));
+        // Towards -x at 2 index units per mm: the cell's face x = 9 at 2.5 mm.
+        let hit = occ.first_hit(&ray([14.0, 8.0, 8.0], [-2.0, 0.0, 0.0]), 0.0, inf);
+        assert_eq!(hit, Some(2.5));
+        // Not within [0, 2] mm; a ray beside the cell; a ray leaving it (its own
+        // cell is skipped: the bias).
+        assert_eq!(
+            occ.first_hit(&ray([14.0, 8.0, 8.0], [-2.0, 0.0, 0.0]), 0.0, 2.0),
+            None
+        );
+        assert_eq!(
+            occ.first_hit(&ray([2.0, 10.5, 8.0], [1.0, 0.0, 0.0]), 0.0, inf),
+            None
+        );
+        assert_eq!(
+            occ.first_hit(&ray([8.0, 8.0, 8.0], [0.0, 0.0, 1.0]), 0.0, inf),
+            None
+        );
+        // Empty occupancy: nothing, whatever the ray.
+        let none = Occluders::new(&field, []);
+        assert_eq!(none.count(), 0);
+        assert_eq!(
+            none.first_hit(&ray([2.0, 8.0, 8.0], [1.0, 0.0, 0.0]), 0.0, inf),
+            None
+        );
+    }
 
     #[test]
     fn the_box_test_finds_overlaps_and_gaps() {
