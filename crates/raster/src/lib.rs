@@ -297,6 +297,14 @@ impl Surfaces {
         self.triangles.len()
     }
 
+    /// The corners of every triangle (world mm, as the meshes place them), triangle by
+    /// triangle: what light transport voxelises to let the meshes occlude the volume.
+    pub fn triangle_corners(&self) -> impl Iterator<Item = [Vec3; 3]> + '_ {
+        self.triangles
+            .iter()
+            .map(|t| t.map(|i| self.positions[i as usize]))
+    }
+
     /// The camera `settings` place around the meshes' bounding sphere.
     pub fn camera(&self, settings: &SurfaceSettings) -> Result<Camera, RenderError> {
         settings.validate()?;

@@ -9,8 +9,8 @@ use glint_core::camera::{Camera, Projection};
 use glint_core::{Image, Legend, RenderError, RenderMode, ScalarColors, Shader, Timings};
 use glint_io::{ReadOptions, Volume};
 use glint_volume::{
-    Classification, ClassifySettings, Field, FrameSettings, Kernel, PathImage, Prefilter,
-    ShadowField, ShadowSettings, TransferFunction,
+    Classification, ClassifySettings, Field, FrameSettings, Kernel, Occluders, PathImage,
+    PathTarget, Prefilter, ShadowField, ShadowSettings, TransferFunction,
 };
 
 use crate::hwlobe::HwCache;
@@ -24,7 +24,18 @@ use crate::scene::{Derived, Input, MeshLayer, Plan, Resolved, Scene, Transport};
 struct ShadowCache {
     class: Arc<Classification>,
     settings: ShadowSettings,
+    /// The meshes' occupancy the light volumes were built with.
+    occluders: Option<Arc<Occluders>>,
     field: Arc<ShadowField>,
+}
+
+/// The meshes voxelised on a field's light-volume grid, for the meshes and field they
+/// were built from (rebuilt when either changes).
+#[derive(Clone)]
+struct OccluderCache {
+    surfaces: Arc<glint_raster::Surfaces>,
+    field: Arc<Field>,
+    occluders: Arc<Occluders>,
 }
 
 /// A path-traced image being accumulated, for the scene it renders (the resolved
@@ -75,6 +86,9 @@ pub struct Renderer {
     volume: Option<Arc<Volume>>,
     /// The last light volumes (`shadows` scenes).
     shadows: Option<ShadowCache>,
+    /// The meshes as occluders of the volume's light (`shadows` and `path` scenes
+    /// with meshes).
+    occluders: Option<OccluderCache>,
     /// The path-traced image of the last `path` scene: rendering the same scene with
     /// more samples adds to it; any other change starts again.
     paths: Option<PathAccumulation>,
@@ -116,6 +130,7 @@ impl Renderer {
                 notes: Vec::new(),
                 volume: None,
                 shadows: None,
+                occluders: None,
                 paths: None,
                 cancel: None,
             });
@@ -214,6 +229,7 @@ impl Renderer {
             notes: Vec::new(),
             volume: None,
             shadows: None,
+            occluders: None,
             paths: None,
             cancel: None,
         }
@@ -376,7 +392,9 @@ impl Renderer {
                 }
                 let camera = class.camera(&frame)?;
                 let legend = meshes.as_ref().and_then(|m| m.legend.clone());
+                let occluders = self.occluders(&class, meshes.as_ref(), transport, &mut timings);
                 let volume = VolumeFrame {
+                    occluders: occluders.as_ref(),
                     class: &class,
                     shader: &resolved.shader,
                     frame: &frame,
@@ -426,6 +444,8 @@ struct VolumeFrame<'a> {
     frame: &'a FrameSettings,
     camera: &'a Camera,
     meshes: Option<&'a MeshLayer>,
+    /// The meshes as occluders of the volume's light (`shadows` and `path`).
+    occluders: Option<&'a Arc<Occluders>>,
 }
 
 impl Renderer {
@@ -446,7 +466,7 @@ impl Renderer {
                     Some(far) => class.render_in_front(shader, frame, progress, far),
                 },
                 Transport::Shadows(settings) => {
-                    let lights = self.shadow_field(class, shader, frame, v.camera, settings)?;
+                    let lights = self.shadow_field(class, v, settings)?;
                     class.render_shadowed(shader, frame, progress, far, &lights)
                 }
                 Transport::Path { spp, settings } => {
@@ -465,13 +485,17 @@ impl Renderer {
                     let never = AtomicBool::new(false);
                     let cancel = self.cancel.clone();
                     let acc = self.paths.insert(acc);
-                    let traced = class.trace_paths_until(
+                    let target = PathTarget {
+                        image: &mut acc.image,
+                        spp,
+                        far,
+                        occluders: v.occluders.map(|o| &**o),
+                    };
+                    let traced = class.trace_paths_into(
                         shader,
                         frame,
                         &settings,
-                        &mut acc.image,
-                        spp,
-                        far,
+                        target,
                         progress,
                         cancel.as_deref().unwrap_or(&never),
                     );
@@ -491,31 +515,70 @@ impl Renderer {
         }
     }
 
-    /// The light volumes of `shader`'s lights for `camera`: the last ones when they
-    /// were built for the same classification, settings and light directions.
+    /// The light volumes of the frame's lights for its camera, its meshes opaque: the
+    /// last ones when they were built for the same classification, settings, meshes
+    /// and light directions.
     fn shadow_field(
         &mut self,
         class: &Arc<Classification>,
-        shader: &Shader,
-        frame: &FrameSettings,
-        camera: &Camera,
+        v: &VolumeFrame,
         settings: ShadowSettings,
     ) -> Result<Arc<ShadowField>, RenderError> {
+        let same_occluders = |c: &ShadowCache| match (&c.occluders, v.occluders) {
+            (None, None) => true,
+            (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        };
         if let Some(c) = &self.shadows {
             if Arc::ptr_eq(&c.class, class)
                 && c.settings == settings
-                && c.field.is_for(shader, camera)
+                && same_occluders(c)
+                && c.field.is_for(v.shader, v.camera)
             {
                 return Ok(c.field.clone());
             }
         }
-        let field = Arc::new(class.shadow_field(shader, frame, &settings)?);
+        let occluders = v.occluders.map(|o| &**o);
+        let field = Arc::new(class.shadow_field_occluded(v.shader, v.frame, &settings, occluders)?);
         self.shadows = Some(ShadowCache {
             class: class.clone(),
             settings,
+            occluders: v.occluders.cloned(),
             field: field.clone(),
         });
         Ok(field)
+    }
+
+    /// The meshes of `layer` voxelised on `class`'s field, for the `shadows` and
+    /// `path` models (`None` in `local` or without meshes): the last ones when the
+    /// meshes and the field are the same; the time of a build is recorded as
+    /// `occluders`.
+    fn occluders(
+        &mut self,
+        class: &Classification,
+        layer: Option<&MeshLayer>,
+        transport: Transport,
+        timings: &mut Timings,
+    ) -> Option<Arc<Occluders>> {
+        if matches!(transport, Transport::Local) {
+            return None;
+        }
+        let surfaces = layer?.surfaces.as_ref()?;
+        let field = class.field();
+        if let Some(c) = &self.occluders {
+            if Arc::ptr_eq(&c.surfaces, surfaces) && Arc::ptr_eq(&c.field, field) {
+                return Some(c.occluders.clone());
+            }
+        }
+        let occluders = Arc::new(timings.time("occluders", || {
+            Occluders::new(field, surfaces.triangle_corners())
+        }));
+        self.occluders = Some(OccluderCache {
+            surfaces: surfaces.clone(),
+            field: field.clone(),
+            occluders: occluders.clone(),
+        });
+        Some(occluders)
     }
 
     /// Gives the renderer a flag that stops a `path` render in flight when another

@@ -60,6 +60,6 @@ pub use raycast::{
 };
 pub use tf::{TransferFunction, TransferFunctionFile};
 pub use transport::{
-    check_spp, LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES,
-    MAX_SPP,
+    check_spp, LightingModel, Occluders, PathImage, PathSettings, PathTarget, ShadowField,
+    ShadowSettings, MAX_BOUNCES, MAX_SPP,
 };

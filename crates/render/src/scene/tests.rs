@@ -6,6 +6,7 @@ use glint_core::Timings;
 use glint_hw::Config as HwConfig;
 use glint_lobe::{Geometry, LobeKind, Specular};
 use glint_raster::SURFACE_COLOR;
+use glint_volume::LightingModel;
 
 use super::*;
 use crate::meshes::{DEFAULT_SSAA, SURFACE_SHININESS};
@@ -551,4 +552,92 @@ fn a_volume_with_meshes_in_surface_mode_joins_its_isosurface() {
         panic!("a surface plan expected");
     };
     assert_eq!(surfaces.mesh_count(), 2);
+}
+
+/// Meshes occlude the volume's light in `shadows` and `path` (issue 29): two small
+/// octahedra in the empty corners of the phantom's box, left and right of it, with a
+/// light from the image's side: where the local images with and without them agree
+/// (pixels the meshes do not cover), the `shadows` image with them is nowhere
+/// brighter and darker in some (without occluders the two are the same); the
+/// occupancy is built for `shadows` and `path` with meshes only, and kept while the
+/// camera moves.
+#[test]
+fn meshes_shadow_the_volume_in_shadows_and_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = |name: &str, x: f32| {
+        let path = octahedron_at(dir.path(), [x, 0.0, 0.0], 15.0);
+        let named = dir.path().join(name);
+        std::fs::rename(&path, &named).unwrap();
+        MeshSpec::new(named)
+    };
+    let base = Scene {
+        input: Input::Phantom {
+            name: Phantom::SheppLogan,
+            size: 48,
+        },
+        size: [48, 40],
+        ssaa: Some(1),
+        lights: vec![Light {
+            azimuth: 90.0,
+            elevation: 0.0,
+            intensity: 1.0,
+        }],
+        ..Scene::default()
+    };
+    let with = Scene {
+        meshes: vec![mesh("left.obj", -82.0), mesh("right.obj", 82.0)],
+        ..base.clone()
+    };
+    let lit = |s: &Scene, model: LightingModel| Scene {
+        lighting: Lighting {
+            model,
+            spp: (model == LightingModel::Path).then_some(1),
+            ..Lighting::default()
+        },
+        ..s.clone()
+    };
+    let mut r = Renderer::open_scene(&with).unwrap();
+    let stage = |t: &Timings| t.stages().iter().any(|(s, _)| *s == "occluders");
+    let local_with = r
+        .render(&lit(&with, LightingModel::Local), &|_| {})
+        .unwrap();
+    assert!(!stage(&local_with.timings), "local builds no occupancy");
+    let shadows_with = r
+        .render(&lit(&with, LightingModel::Shadows), &|_| {})
+        .unwrap();
+    assert!(
+        stage(&shadows_with.timings),
+        "shadows with meshes builds it"
+    );
+    let path_with = r.render(&lit(&with, LightingModel::Path), &|_| {}).unwrap();
+    assert!(!stage(&path_with.timings), "path reuses the occupancy");
+    let mut moved = lit(&with, LightingModel::Shadows);
+    moved.camera.azimuth = 20.0;
+    assert!(!stage(&r.render(&moved, &|_| {}).unwrap().timings), "kept");
+    let mut alone = Renderer::open_scene(&base).unwrap();
+    let local_alone = alone
+        .render(&lit(&base, LightingModel::Local), &|_| {})
+        .unwrap();
+    let shadows_alone = alone
+        .render(&lit(&base, LightingModel::Shadows), &|_| {})
+        .unwrap();
+    assert!(!stage(&shadows_alone.timings), "no meshes, no occupancy");
+    let (mut open, mut darker, mut drop) = (0, 0, 0.0f32);
+    for i in 0..48 * 40 {
+        if local_with.image.rgb[i] != local_alone.image.rgb[i] {
+            continue;
+        }
+        open += 1;
+        let (a, b) = (shadows_with.image.rgb[i], shadows_alone.image.rgb[i]);
+        for c in 0..3 {
+            assert!(a[c] <= b[c] + 1e-6, "pixel {i}: {a:?} brighter than {b:?}");
+        }
+        darker += usize::from(a[1] < b[1] - 1e-3);
+        drop = drop.max(b[1] - a[1]);
+    }
+    assert!(open > 48 * 40 / 2, "{open} pixels uncovered");
+    assert!(
+        darker >= 20 && drop > 0.01,
+        "{darker} darker pixels, largest drop {drop}"
+    );
 }

@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
 
+use super::occluders::Occluders;
 use super::path::{PathImage, PathTracer};
 use super::shadows::{ShadowField, ShadowSettings};
 use super::{check_spp, PathSettings};
@@ -35,6 +36,20 @@ fn check_far(frame: &FrameSettings, far: Option<&[f32]>) -> Result<(), RenderErr
     }
 }
 
+/// What [`Classification::trace_paths_into`] adds samples to, and what stops its
+/// rays besides the volume.
+pub struct PathTarget<'a> {
+    /// The image the samples are added to.
+    pub image: &'a mut PathImage,
+    /// Samples per pixel it holds when the call returns.
+    pub spp: u32,
+    /// Per pixel, where the camera ray stops (mm; the meshes' depth), when given.
+    pub far: Option<&'a [f32]>,
+    /// Meshes voxelised on this classification's field ([`Occluders::new`]): shadow
+    /// rays and scattered paths end where they enter an occupied cell.
+    pub occluders: Option<&'a Occluders>,
+}
+
 impl Classification {
     /// The `shadows` model's light volumes for the lights of `shader` placed for the
     /// camera of `frame` ([`ShadowField`]), with ambient occlusion when `settings`
@@ -45,6 +60,20 @@ impl Classification {
         shader: &Shader,
         frame: &FrameSettings,
         settings: &ShadowSettings,
+    ) -> Result<ShadowField, RenderError> {
+        self.shadow_field_occluded(shader, frame, settings, None)
+    }
+
+    /// [`Classification::shadow_field`] with the grid points `occluders` occupy
+    /// (meshes voxelised by [`Occluders::new`] on this classification's field) opaque:
+    /// the meshes cast their shadows into the volume. `None` gives the light volumes
+    /// of [`Classification::shadow_field`], bit for bit.
+    pub fn shadow_field_occluded(
+        &self,
+        shader: &Shader,
+        frame: &FrameSettings,
+        settings: &ShadowSettings,
+        occluders: Option<&Occluders>,
     ) -> Result<ShadowField, RenderError> {
         let camera = self.camera(frame)?;
         let placed = shader.placed(&camera);
@@ -60,6 +89,7 @@ impl Classification {
             ShadowField::light_bits(&placed),
             &dirs,
             occlusion,
+            occluders,
         )
     }
 
@@ -126,6 +156,32 @@ impl Classification {
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
     ) -> Result<(), RenderError> {
+        let target = PathTarget {
+            image,
+            spp,
+            far,
+            occluders: None,
+        };
+        self.trace_paths_into(shader, frame, settings, target, progress, cancel)
+    }
+
+    /// [`Classification::trace_paths_until`] into `target`, which may hold meshes as
+    /// occluders: then shadow rays and scattered paths end where they meet them.
+    pub fn trace_paths_into(
+        &self,
+        shader: &Shader,
+        frame: &FrameSettings,
+        settings: &PathSettings,
+        target: PathTarget,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Result<(), RenderError> {
+        let PathTarget {
+            image,
+            spp,
+            far,
+            occluders,
+        } = target;
         settings.validate()?;
         check_spp(spp)?;
         frame.validate()?;
@@ -164,7 +220,8 @@ impl Classification {
             camera,
             size,
             *settings,
-        )?;
+        )?
+        .occluded_by(occluders)?;
         let w = frame.width as usize;
         let stats = image
             .sums_mut()

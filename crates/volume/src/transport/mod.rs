@@ -21,6 +21,7 @@ use glint_core::RenderError;
 
 mod frames;
 mod medium;
+mod occluders;
 mod path;
 mod rng;
 mod shadows;
@@ -29,10 +30,22 @@ mod tracking;
 #[cfg(test)]
 mod tests;
 
+pub use frames::PathTarget;
 pub(crate) use medium::Medium;
+pub use occluders::Occluders;
 pub use path::PathImage;
 pub(crate) use shadows::{occlusion_grid, DensityGrid};
-pub use shadows::{ShadowField, ShadowSettings, LIGHT_CELL};
+pub use shadows::{ShadowField, ShadowSettings};
+
+/// Edge of the light volume's cells, in voxels (the grid's spacing). Two voxels: an
+/// eighth of the field's points, which one core sweeps in a few milliseconds on the
+/// MNI152 scene; docs/lighting.md gives the measured cost and error.
+pub const LIGHT_CELL: usize = 2;
+
+/// Grid points along an axis of `d` voxels: `0, h, 2h, ...` up to the last voxel.
+pub(crate) fn grid_len(d: usize) -> usize {
+    (d - 1).div_ceil(LIGHT_CELL) + 1
+}
 
 /// Most samples per pixel a path-traced image takes.
 pub const MAX_SPP: u32 = 1 << 16;

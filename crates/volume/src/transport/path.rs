@@ -15,6 +15,7 @@ use glint_core::{luminance_f32, Image, RenderStats, Shader, SurfacePart, Vec3};
 use glint_lobe::{Frame, Scatter, SpecularSampler};
 
 use super::medium::Medium;
+use super::occluders::Occluders;
 use super::rng::Rng;
 use super::tracking::{IndexRay, Tracker};
 use super::PathSettings;
@@ -118,6 +119,8 @@ pub(crate) struct PathTracer<'a> {
     /// Offset (mm) of rays leaving a surface event, past the matter the event lies
     /// in: one voxel of the smallest spacing.
     pub(crate) surface_bias: f32,
+    /// Meshes that end shadow rays and scattered paths, when the scene has any.
+    pub(crate) occluders: Option<&'a Occluders>,
 }
 
 /// One path's result: radiance, whether the camera ray met matter, scattering events.
@@ -166,7 +169,30 @@ impl<'a> PathTracer<'a> {
             lights,
             axes,
             surface_bias: field.min_spacing() as f32,
+            occluders: None,
         })
+    }
+
+    /// The tracer with `occluders` (voxelised on its field) ending its shadow rays
+    /// and scattered paths.
+    pub(crate) fn occluded_by(
+        mut self,
+        occluders: Option<&'a Occluders>,
+    ) -> Result<PathTracer<'a>, glint_core::RenderError> {
+        let grid = self.track.field.dims().map(super::grid_len);
+        if occluders.is_some_and(|o| o.dims() != grid) {
+            return Err(glint_core::RenderError::Parameter(
+                "the mesh occupancy was built for another volume's grid".into(),
+            ));
+        }
+        self.occluders = occluders;
+        Ok(self)
+    }
+
+    /// Where `ray` meets the meshes over `[t0, t1]` (its first cell excluded).
+    #[inline]
+    fn mesh_hit(&self, ray: &IndexRay, t0: f32, t1: f32) -> Option<f32> {
+        self.occluders.and_then(|o| o.first_hit(ray, t0, t1))
     }
 
     #[inline(always)]
@@ -191,8 +217,15 @@ impl<'a> PathTracer<'a> {
         let mut events = 0;
         let env = self.settings.environment;
         loop {
-            let Some(t) = self.track.free_path(&ray, t0, t1, &mut rng) else {
-                if events > 0 {
+            // Camera rays stop at the meshes' depth (`far`); scattered rays at their
+            // cells, where the path ends: meshes absorb.
+            let mesh = if events > 0 {
+                self.mesh_hit(&ray, t0, t1)
+            } else {
+                None
+            };
+            let Some(t) = self.track.free_path(&ray, t0, mesh.unwrap_or(t1), &mut rng) else {
+                if events > 0 && mesh.is_none() {
                     for c in 0..3 {
                         radiance[c] += beta[c] * env;
                     }
@@ -283,6 +316,9 @@ impl<'a> PathTracer<'a> {
                 continue;
             }
             let shadow = IndexRay { o: p, d: l_index };
+            if self.mesh_hit(&shadow, t0, f32::INFINITY).is_some() {
+                continue;
+            }
             let tr = self.track.transmittance(&shadow, t0, f32::INFINITY, rng);
             if tr > 0.0 {
                 for c in 0..3 {

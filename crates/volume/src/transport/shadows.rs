@@ -26,12 +26,9 @@ use rayon::prelude::*;
 use glint_core::{RenderError, Shader, Vec3, MAX_LIGHTS};
 
 use super::medium::Medium;
+use super::occluders::Occluders;
+use super::{grid_len, LIGHT_CELL};
 use crate::field::Field;
-
-/// Edge of the light volume's cells, in voxels (the grid's spacing). Two voxels: an
-/// eighth of the field's points, which one core sweeps in a few milliseconds on the
-/// MNI152 scene; docs/lighting.md gives the measured cost and error.
-pub const LIGHT_CELL: usize = 2;
 
 /// Grid planes between a sample and the point whose transmittance it reads (towards
 /// the light).
@@ -55,11 +52,6 @@ pub(crate) struct DensityGrid {
     pub(crate) sigma: Vec<f32>,
     /// mm per grid step along each index axis.
     pub(crate) step_mm: [f32; 3],
-}
-
-/// Grid points along an axis of `d` voxels: `0, h, 2h, ...` up to the last voxel.
-fn grid_len(d: usize) -> usize {
-    (d - 1).div_ceil(LIGHT_CELL) + 1
 }
 
 impl DensityGrid {
@@ -205,8 +197,9 @@ struct LightGrid {
 
 impl LightGrid {
     /// Propagates the transmittance towards the light of index-space direction `d`
-    /// (index units per mm, towards the light).
-    fn new(density: &DensityGrid, d: Vec3) -> LightGrid {
+    /// (index units per mm, towards the light); grid points `occluders` occupy are
+    /// opaque (transmittance 0, and what lies behind them reads it).
+    fn new(density: &DensityGrid, d: Vec3, occluders: Option<&Occluders>) -> LightGrid {
         let da = [d.x, d.y, d.z];
         let a = (0..3)
             .max_by(|&x, &y| da[x].abs().total_cmp(&da[y].abs()))
@@ -242,6 +235,20 @@ impl LightGrid {
         } else {
             (0..len[0]).collect()
         };
+        let occupied = |m: usize, u: usize, v: usize| {
+            occluders.is_some_and(|o| {
+                let mut p = [0; 3];
+                (p[a], p[b], p[c]) = (m, u, v);
+                o.occupied(p)
+            })
+        };
+        if let Some(&first) = order.first() {
+            for (i, x) in t[plane * first..][..plane].iter_mut().enumerate() {
+                if occupied(first, i % len[1], i / len[1]) {
+                    *x = 0.0;
+                }
+            }
+        }
         for w in order.windows(2) {
             let (up, m) = (w[0], w[1]);
             let (done, rest) = t.split_at_mut(plane * up.max(m));
@@ -260,7 +267,11 @@ impl LightGrid {
                             sigma_at(up, uu, vv)
                         });
                         let tau = s * 0.5 * (sigma_at(m, u, v) + su);
-                        *out = tu * (-tau).exp();
+                        *out = if occupied(m, u, v) {
+                            0.0
+                        } else {
+                            tu * (-tau).exp()
+                        };
                     }
                 });
         }
@@ -359,12 +370,14 @@ pub struct ShadowField {
 
 impl ShadowField {
     /// Light volumes for the lights of index-space directions `dirs` (world bits in
-    /// `world`), from `density`, with `occlusion` when given.
+    /// `world`), from `density`, with `occlusion` when given, the grid points
+    /// `occluders` occupy opaque.
     pub(crate) fn new(
         density: &DensityGrid,
         world: Vec<[u32; 3]>,
         dirs: &[Vec3],
         occlusion: Option<Arc<Vec<f32>>>,
+        occluders: Option<&Occluders>,
     ) -> Result<ShadowField, RenderError> {
         if dirs.len() > MAX_LIGHTS {
             return Err(RenderError::Parameter(format!(
@@ -372,9 +385,19 @@ impl ShadowField {
                 dirs.len()
             )));
         }
+        if let Some(o) = occluders {
+            if o.dims() != density.dims {
+                return Err(RenderError::Parameter(
+                    "the mesh occupancy was built for another volume's grid".into(),
+                ));
+            }
+        }
         Ok(ShadowField {
             dirs: world,
-            lights: dirs.iter().map(|&d| LightGrid::new(density, d)).collect(),
+            lights: dirs
+                .iter()
+                .map(|&d| LightGrid::new(density, d, occluders))
+                .collect(),
             occlusion: occlusion.map(|o| (o, density.dims)),
         })
     }

@@ -591,3 +591,195 @@ fn light_volumes_refuse_other_lights_and_mip() {
         .trace_paths(&shader, &frame, &settings, &mut img, 1, None, &|_| {})
         .is_err());
 }
+
+/// A uniform slab (32^3 voxels of 1 mm, matter of opacity `alpha` per voxel up to
+/// height `top`, none above) and a square mesh (two triangles) at height `z` over
+/// `[x0, x1] x [y0, y1]` (world = index here).
+fn slab_under_a_square(
+    alpha: f64,
+    top: f32,
+    [x0, x1, y0, y1, z]: [f32; 5],
+) -> (Classification, Occluders, [f32; 5]) {
+    let vol = volume(
+        [32, 32, 32],
+        [1.0; 3],
+        |_, _, k| if k <= top { 1.0 } else { 0.0 },
+    );
+    let class = classify(&vol, &white(&[(0.0, 0.0), (0.5, 0.0), (1.0, alpha)]));
+    let c = [
+        Vec3::new(x0, y0, z),
+        Vec3::new(x1, y0, z),
+        Vec3::new(x1, y1, z),
+        Vec3::new(x0, y1, z),
+    ];
+    let occ = Occluders::new(class.field(), [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]);
+    (class, occ, [x0, x1, y0, y1, z])
+}
+
+/// How far `(x, y)` lies inside the square `[x0, x1] x [y0, y1]` (negative: outside).
+fn inside_by(q: [f32; 5], x: f32, y: f32) -> f32 {
+    let [x0, x1, y0, y1, _] = q;
+    (x - x0).min(x1 - x).min(y - y0).min(y1 - y)
+}
+
+#[test]
+fn a_mesh_casts_its_shadow_into_the_light_volume() {
+    let (class, occ, q) = slab_under_a_square(0.05, 31.0, [4.0, 26.0, 6.0, 26.0, 20.3]);
+    // The square's cells: grid x 2..=13, y 3..=13 on grid plane z 10 (2-voxel cells,
+    // each the box of one grid step around its point).
+    assert_eq!(occ.count(), 12 * 11, "occupied grid points");
+    assert!(occ.occupied([2, 3, 10]) && occ.occupied([13, 13, 10]));
+    assert!(!occ.occupied([1, 3, 10]) && !occ.occupied([2, 3, 11]) && !occ.occupied([2, 3, 9]));
+    // Light from straight above (the headlight of a superior view), then from 35
+    // degrees aside: the shadow is the square's projection along the light.
+    for azimuth in [0.0, 35.0] {
+        let frame = FrameSettings {
+            width: 8,
+            height: 8,
+            camera: glint_core::CameraSpec {
+                view: glint_core::View::Superior,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let light = Light {
+            azimuth,
+            elevation: 0.0,
+            intensity: 1.0,
+        };
+        let shader = albedo_one(vec![light], 0.0);
+        let settings = ShadowSettings::default();
+        let bare = class.shadow_field(&shader, &frame, &settings).unwrap();
+        let none = class
+            .shadow_field_occluded(&shader, &frame, &settings, None)
+            .unwrap();
+        let shaded = class
+            .shadow_field_occluded(&shader, &frame, &settings, Some(&occ))
+            .unwrap();
+        let l = shader.placed(&class.camera(&frame).unwrap()).world_lights()[0].0;
+        assert!(l.z > 0.8, "{l:?}");
+        let (mut dark, mut open) = (0, 0);
+        for k in 0..32 {
+            for j in 0..32 {
+                for i in 0..32 {
+                    let p = Vec3::new(i as f32, j as f32, k as f32);
+                    let t0 = bare.transmittance(0, p.to_array()).unwrap();
+                    let t1 = shaded.transmittance(0, p.to_array()).unwrap();
+                    assert_eq!(
+                        t0.to_bits(),
+                        none.transmittance(0, p.to_array()).unwrap().to_bits()
+                    );
+                    // Where the ray towards the light crosses the square's plane.
+                    let s = (q[4] - p.z) / l.z;
+                    let hit = p + l * s;
+                    let inside = inside_by(q, hit.x, hit.y);
+                    // Margins (mm): a grid cell and the shadow bias for the vertical
+                    // light, whose sweep is exact; for the oblique one the sweep's
+                    // bilinear blur too (a spread of about 3 mm after 10 planes).
+                    let (din, dout) = if azimuth == 0.0 {
+                        (1.0, -2.0)
+                    } else {
+                        (8.0, -10.0)
+                    };
+                    if s >= 2.3 && inside >= din {
+                        assert!(t0 > 0.1, "{p:?}: {t0} without the mesh");
+                        assert!(t1 < 0.02, "{p:?} in the shadow: {t1}");
+                        dark += 1;
+                    } else if s < 0.0 || inside <= dout {
+                        let tol = if azimuth == 0.0 { 1e-5 } else { 0.02 };
+                        assert!((t1 - t0).abs() <= tol * t0, "{p:?}: {t1} vs {t0}");
+                        open += 1;
+                    }
+                }
+            }
+        }
+        assert!(dark > 200 && open > 10_000, "{dark} dark, {open} open");
+    }
+}
+
+#[test]
+fn a_mesh_shadows_the_path_traced_volume() {
+    // The square at z = 30.5 over matter up to z = 26, lit from straight above; the
+    // camera looks down through it (camera rays pass: `far` would stop them at a
+    // mesh in a scene, here it is not given) onto the slab below. Single scattering:
+    // the volume under the square gets no light at all (its collisions' shadow rays
+    // all meet the square) and the rest exactly what it had; with 4 bounces, light
+    // scattered in from the sides lights the shadow a little and the open part loses
+    // what came from under the square.
+    let (class, occ, q) = slab_under_a_square(0.1, 26.0, [10.0, 22.0, 10.0, 22.0, 30.5]);
+    let frame = FrameSettings {
+        width: 24,
+        height: 24,
+        camera: glint_core::CameraSpec {
+            view: glint_core::View::Superior,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let shader = albedo_one(vec![Light::HEADLIGHT], 0.0);
+    let trace = |occluders: Option<&Occluders>, threads: usize, bounces: u32| {
+        let settings = PathSettings {
+            bounces,
+            seed: 21,
+            environment: 0.0,
+        };
+        on_threads(threads, || {
+            let mut img = PathImage::new(24, 24);
+            let target = PathTarget {
+                image: &mut img,
+                spp: 24,
+                far: None,
+                occluders,
+            };
+            let never = std::sync::atomic::AtomicBool::new(false);
+            class
+                .trace_paths_into(&shader, &frame, &settings, target, &|_| {}, &never)
+                .unwrap();
+            img.image([0.0; 3])
+        })
+    };
+    let cam = class.camera(&frame).unwrap();
+    // Sums of the green channel over the pixels whose ray meets the slab's middle
+    // (z = 15) 3 mm or more inside the square's shadow, and 6 mm or more outside it.
+    let sums = |img: &glint_core::Image| {
+        let (mut dark, mut open) = ((0.0f64, 0), (0.0f64, 0));
+        for y in 0..24u32 {
+            for x in 0..24u32 {
+                let (eye, dir) = cam.ray(x as f32, y as f32, 24, 24);
+                let at = eye + dir * ((15.0 - eye.z) / dir.z);
+                let inside = inside_by(q, at.x, at.y);
+                let v = f64::from(img.rgb[(y * 24 + x) as usize][1]);
+                let within = |c: f32| (0.0..31.0).contains(&c);
+                if inside >= 3.0 {
+                    dark = (dark.0 + v, dark.1 + 1);
+                } else if inside <= -6.0 && within(at.x) && within(at.y) {
+                    open = (open.0 + v, open.1 + 1);
+                }
+            }
+        }
+        assert!(dark.1 >= 4 && open.1 >= 20, "{dark:?} dark, {open:?} open");
+        (dark.0, open.0)
+    };
+    for bounces in [1, 4] {
+        let bare = trace(None, 2, bounces);
+        let shaded = trace(Some(&occ), 2, bounces);
+        let again = trace(Some(&occ), 1, bounces);
+        let bits =
+            |img: &glint_core::Image| img.rgb.iter().map(|c| c[1].to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&shaded), bits(&again), "2 threads against 1");
+        let (d0, o0) = sums(&bare);
+        let (d1, o1) = sums(&shaded);
+        eprintln!("path, {bounces} bounces: shadow {d0} -> {d1}, open {o0} -> {o1}");
+        assert!(d0 > 0.0, "the slab is lit without the mesh");
+        if bounces == 1 {
+            assert!(d1 < 0.02 * d0, "in the shadow: {d1} against {d0}");
+            assert!(
+                (o1 - o0).abs() <= 1e-9 * o0,
+                "in the open: {o1} against {o0}"
+            );
+        } else {
+            assert!(d1 < 0.5 * d0, "in the shadow: {d1} against {d0}");
+            assert!(o1 <= o0 && o1 > 0.85 * o0, "in the open: {o1} against {o0}");
+        }
+    }
+}
