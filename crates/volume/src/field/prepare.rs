@@ -4,11 +4,13 @@
 //! keeping no copy of the volume; the values and gradients themselves are built later,
 //! per brick, where rays go.
 
+use std::sync::{Mutex, PoisonError};
+
 use rayon::prelude::*;
 
 use glint_core::RenderError;
 
-use super::brick::Recipe;
+use super::brick::{Recipe, Scratch};
 use super::filter::{row_gradients, span, Neighbours};
 use super::MACRO_CELL;
 
@@ -33,6 +35,31 @@ struct Slab {
     robust: Vec<f32>,
 }
 
+/// Buffers that slabs hand on to the next slab a thread takes: at most one set per
+/// thread at a time, so the pass pages in a few slabs' worth of memory however many
+/// slabs the volume has, and frees it at its end. (Fresh buffers per slab made the
+/// kernel's zeroing of new pages the largest cost of a first image: 36% of an end-to-end
+/// run's samples on the MNI152 bench scene, `perf record --call-graph dwarf`.)
+struct Spares<T>(Mutex<Vec<T>>);
+
+impl<T: Default> Spares<T> {
+    fn new() -> Self {
+        Spares(Mutex::new(Vec::new()))
+    }
+
+    /// `f` with a spare set of buffers (or a new one), which then goes back.
+    fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> R {
+        let spare = self.0.lock().unwrap_or_else(PoisonError::into_inner).pop();
+        let mut b = spare.unwrap_or_default();
+        let r = f(&mut b);
+        self.0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .push(b);
+        r
+    }
+}
+
 /// Macro-cell layers per slab: about 16 MiB of f32 slices per slab (more layers for
 /// small slices, at least one), so a slab's halo of filtered slices stays a small
 /// share of its work and its buffers stay small beside the volume.
@@ -47,15 +74,18 @@ fn layers_per_slab(dims: [usize; 3]) -> usize {
 pub(super) fn finite_range(recipe: &Recipe) -> Result<(f32, f32), RenderError> {
     let [nx, ny, nz] = recipe.dims;
     let step = (layers_per_slab(recipe.dims) * MACRO_CELL).max(1);
+    let spares = Spares::<Vec<f32>>::new();
     let (lo, hi) = (0..nz.div_ceil(step))
         .into_par_iter()
         .map(|s| {
             let (z0, z1) = (s * step, ((s + 1) * step).min(nz));
-            let mut raw = vec![0.0f32; nx * ny * (z1 - z0)];
-            recipe
-                .source
-                .read([0, 0, z0 as isize], [nx, ny, z1 - z0], &mut raw);
-            finite_min_max(&raw)
+            spares.with(|raw| {
+                raw.resize(nx * ny * (z1 - z0), 0.0);
+                recipe
+                    .source
+                    .read([0, 0, z0 as isize], [nx, ny, z1 - z0], raw);
+                finite_min_max(raw)
+            })
         })
         .reduce(
             || (f32::INFINITY, f32::NEG_INFINITY),
@@ -94,11 +124,12 @@ pub(super) fn prepare(
     let slabs = cell_dims[2].div_ceil(layers);
     let count = nx * ny * nz;
     let stride = count.div_ceil(glint_io::ROBUST_SAMPLES).max(1);
+    let spares = Spares::<Buffers>::new();
     let parts: Vec<Slab> = (0..slabs)
         .into_par_iter()
         .map(|s| {
             let cz = (s * layers, ((s + 1) * layers).min(cell_dims[2]));
-            let slab = slab(recipe, cz, stride, range.is_none());
+            let slab = spares.with(|b| slab(recipe, cz, stride, range.is_none(), b));
             progress((slab_slices(dims, cz, cell_dims[2]).1 - cz.0 * MACRO_CELL) as u64);
             slab
         })
@@ -143,8 +174,17 @@ fn slab_slices(dims: [usize; 3], cz: (usize, usize), layers: usize) -> (usize, u
     (z0, z1)
 }
 
-/// One slab of cell layers `cz.0 .. cz.1`.
-fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool) -> Slab {
+/// A slab's buffers: the prefilter's, and the filtered values.
+type Buffers = (Scratch, Vec<f32>);
+
+/// One slab of cell layers `cz.0 .. cz.1`, in the buffers `b`.
+fn slab(
+    recipe: &Recipe,
+    cz: (usize, usize),
+    stride: usize,
+    measure_range: bool,
+    (scratch, f): &mut Buffers,
+) -> Slab {
     let dims = recipe.dims;
     let [nx, ny, nz] = dims;
     let sxy = nx * ny;
@@ -155,7 +195,8 @@ fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool)
     let fb = z1.max(cz.1 * MACRO_CELL).min(nz - 1);
     // With the range of the physical values read (all finite: the caller measures the
     // range here only when the source has no others).
-    let (f, range) = recipe.values_ranged([0, 0, fa], [nx - 1, ny - 1, fb], measure_range);
+    let range = recipe.values_into([0, 0, fa], [nx - 1, ny - 1, fb], measure_range, scratch, f);
+    let f = &f[..];
     let row = |j: usize, k: usize| &f[nx * (j + ny * (k - fa))..][..nx];
     let mut largest = 0.0f32;
     let mut out = vec![[0.0f32; 3]; nx];
@@ -191,7 +232,7 @@ fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool)
         .collect();
     Slab {
         range,
-        cells: cells(&f, dims, fa, cz),
+        cells: cells(f, dims, fa, cz),
         largest,
         robust,
     }
