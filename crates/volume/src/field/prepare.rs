@@ -198,31 +198,13 @@ fn slab(
     let range = recipe.values_into([0, 0, fa], [nx - 1, ny - 1, fb], measure_range, scratch, f);
     let f = &f[..];
     let row = |j: usize, k: usize| &f[nx * (j + ny * (k - fa))..][..nx];
-    let mut largest = 0.0f32;
-    let mut out = vec![[0.0f32; 3]; nx];
-    for k in z0..z1 {
-        let (km, kp, sk) = span(k, nz);
-        for j in 0..ny {
-            let (jm, jp, sj) = span(j, ny);
-            let n = Neighbours {
-                jm: row(jm, k),
-                jp: row(jp, k),
-                span_j: sj,
-                km: row(j, km),
-                kp: row(j, kp),
-                span_k: sk,
-            };
-            row_gradients(
-                row(j, k),
-                &n,
-                (0, nx),
-                (true, true),
-                &recipe.to_world_gradient,
-                &mut out,
-            );
-            largest = largest.max(largest_abs(out.as_flattened()));
-        }
-    }
+    let g = &recipe.to_world_gradient;
+    // The shortcut's argument needs finite index gradients; a slab whose differences
+    // overflow takes the general path.
+    let largest = match diagonal(g).map(|d| largest_axis_aligned(d, z0..z1, dims, row)) {
+        Some(l) if l.is_finite() => l,
+        _ => largest_world(g, z0..z1, dims, row),
+    };
     let robust = (z0 * sxy).div_ceil(stride)..(z1 * sxy).div_ceil(stride);
     let robust = robust
         .map(|m| {
@@ -236,6 +218,94 @@ fn slab(
         largest,
         robust,
     }
+}
+
+/// The largest world gradient component of the voxels of slices `ks`: each gradient
+/// as the bricks compute it ([`row_gradients`]), then its largest component.
+fn largest_world<'a>(
+    g: &[[f32; 3]; 3],
+    ks: std::ops::Range<usize>,
+    [nx, ny, nz]: [usize; 3],
+    row: impl Fn(usize, usize) -> &'a [f32],
+) -> f32 {
+    let mut largest = 0.0f32;
+    let mut out = vec![[0.0f32; 3]; nx];
+    for k in ks {
+        let (km, kp, sk) = span(k, nz);
+        for j in 0..ny {
+            let (jm, jp, sj) = span(j, ny);
+            let n = Neighbours {
+                jm: row(jm, k),
+                jp: row(jp, k),
+                span_j: sj,
+                km: row(j, km),
+                kp: row(j, kp),
+                span_k: sk,
+            };
+            row_gradients(row(j, k), &n, (0, nx), (true, true), g, &mut out);
+            largest = largest.max(largest_abs(out.as_flattened()));
+        }
+    }
+    largest
+}
+
+/// The diagonal of `g` when every other entry is zero and the diagonal's are finite
+/// and non-zero (the affine is a scaling, perhaps with flips, as for most scans).
+fn diagonal(g: &[[f32; 3]; 3]) -> Option<[f32; 3]> {
+    let off = (0..3).all(|a| (0..3).all(|b| a == b || g[a][b] == 0.0));
+    let d = [g[0][0], g[1][1], g[2][2]];
+    (off && d.iter().all(|x| x.is_finite() && *x != 0.0)).then_some(d)
+}
+
+/// [`largest_world`] for a diagonal `g` (`d`), with the same result bit for bit and
+/// without the matrix: world component a of a voxel is `d[a] * g_a + 0 * g_b + 0 *
+/// g_c`, which is `d[a] * g_a` (the index gradients are finite, so the zero products
+/// are zeros and adding them changes nothing but the sign of a zero); rounding is
+/// monotonic and symmetric, so the largest `|d[a] * g_a|` over voxels is `|d[a]|`
+/// times the largest `|g_a|`, rounded. Each `g_a` is the difference [`row_gradients`]
+/// takes, divided by the same span.
+fn largest_axis_aligned<'a>(
+    d: [f32; 3],
+    ks: std::ops::Range<usize>,
+    [nx, ny, nz]: [usize; 3],
+    row: impl Fn(usize, usize) -> &'a [f32],
+) -> f32 {
+    let mut m = [0.0f32; 3];
+    for k in ks {
+        let (km, kp, sk) = span(k, nz);
+        for j in 0..ny {
+            let (jm, jp, sj) = span(j, ny);
+            let c = row(j, k);
+            // Along i: one-sided at both ends, central between (row_gradients's faces).
+            let ends = ((c[1] - c[0]) / 1.0)
+                .abs()
+                .max(((c[nx - 1] - c[nx - 2]) / 1.0).abs());
+            m[0] = m[0]
+                .max(ends)
+                .max(largest_abs_diff(&c[2..], &c[..nx - 2], 2.0));
+            m[1] = m[1].max(largest_abs_diff(row(jp, k), row(jm, k), sj));
+            m[2] = m[2].max(largest_abs_diff(row(j, kp), row(j, km), sk));
+        }
+    }
+    (0..3).fold(0.0f32, |l, a| l.max(d[a].abs() * m[a]))
+}
+
+/// The largest `|(a[i] - b[i]) / span|` (0 for none), in eight running maxima as
+/// [`largest_abs`].
+fn largest_abs_diff(a: &[f32], b: &[f32], span: f32) -> f32 {
+    let mut lanes = [0.0f32; 8];
+    let (mut ca, mut cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    for (x, y) in (&mut ca).zip(&mut cb) {
+        for ((m, &x), &y) in lanes.iter_mut().zip(x).zip(y) {
+            *m = m.max(((x - y) / span).abs());
+        }
+    }
+    let rest = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .fold(0.0f32, |m, (&x, &y)| m.max(((x - y) / span).abs()));
+    lanes.iter().fold(rest, |m, &x| m.max(x))
 }
 
 /// The largest absolute value of `v` (0 for none), in eight running maxima that the
