@@ -68,6 +68,18 @@ pub(crate) struct Scratch {
     filter: Vec<f32>,
 }
 
+impl Scratch {
+    /// Buffers for boxes of up to `voxels` voxels with their padding, so that a pass
+    /// over boxes of slightly different sizes does not grow them (a grown buffer is a
+    /// new one, paged in afresh, with the old one's pages still resident).
+    pub(crate) fn with_capacity(voxels: usize) -> Self {
+        Scratch {
+            raw: Vec::with_capacity(voxels),
+            filter: Vec::new(),
+        }
+    }
+}
+
 impl Recipe {
     /// Reconstruction values (the physical values, non-finite ones replaced, then
     /// prefiltered) of the voxels `lo ..= hi` (inclusive, inside the volume), i

@@ -40,17 +40,18 @@ struct Slab {
 /// slabs the volume has, and frees it at its end. (Fresh buffers per slab made the
 /// kernel's zeroing of new pages the largest cost of a first image: 36% of an end-to-end
 /// run's samples on the MNI152 bench scene, `perf record --call-graph dwarf`.)
-struct Spares<T>(Mutex<Vec<T>>);
+struct Spares<T, F>(Mutex<Vec<T>>, F);
 
-impl<T: Default> Spares<T> {
-    fn new() -> Self {
-        Spares(Mutex::new(Vec::new()))
+impl<T, F: Fn() -> T> Spares<T, F> {
+    /// A pool whose new sets of buffers `make` makes (with room for the largest slab).
+    fn new(make: F) -> Self {
+        Spares(Mutex::new(Vec::new()), make)
     }
 
     /// `f` with a spare set of buffers (or a new one), which then goes back.
     fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> R {
         let spare = self.0.lock().unwrap_or_else(PoisonError::into_inner).pop();
-        let mut b = spare.unwrap_or_default();
+        let mut b = spare.unwrap_or_else(&self.1);
         let r = f(&mut b);
         self.0
             .lock()
@@ -74,7 +75,7 @@ fn layers_per_slab(dims: [usize; 3]) -> usize {
 pub(super) fn finite_range(recipe: &Recipe) -> Result<(f32, f32), RenderError> {
     let [nx, ny, nz] = recipe.dims;
     let step = (layers_per_slab(recipe.dims) * MACRO_CELL).max(1);
-    let spares = Spares::<Vec<f32>>::new();
+    let spares = Spares::new(|| Vec::with_capacity(nx * ny * step));
     let (lo, hi) = (0..nz.div_ceil(step))
         .into_par_iter()
         .map(|s| {
@@ -124,7 +125,15 @@ pub(super) fn prepare(
     let slabs = cell_dims[2].div_ceil(layers);
     let count = nx * ny * nz;
     let stride = count.div_ceil(glint_io::ROBUST_SAMPLES).max(1);
-    let spares = Spares::<Buffers>::new();
+    // A slab filters at most its cell layers' slices and one more on each side, and
+    // reads one more on each side again for the prefilter.
+    let slices = layers * MACRO_CELL + 2;
+    let spares = Spares::new(|| -> Buffers {
+        (
+            Scratch::with_capacity(nx * ny * (slices + 2)),
+            Vec::with_capacity(nx * ny * slices),
+        )
+    });
     let parts: Vec<Slab> = (0..slabs)
         .into_par_iter()
         .map(|s| {
