@@ -17,11 +17,16 @@ pub const ROBUST_SAMPLES: usize = 1 << 20;
 /// constant data. `None` when no value is finite.
 pub fn robust_range(count: usize, value: impl Fn(usize) -> f64) -> Option<(f64, f64)> {
     let stride = count.div_ceil(ROBUST_SAMPLES).max(1);
-    let mut v: Vec<f64> = (0..count)
-        .step_by(stride)
-        .map(value)
-        .filter(|x| x.is_finite())
-        .collect();
+    // Sized up front: collecting through the filter grows the vector by doubling, each
+    // step a fresh allocation the kernel zeroes (up to twice the subsample's 8 MiB
+    // paged in; 19% of an end-to-end MNI152 render's perf samples once).
+    let mut v: Vec<f64> = Vec::with_capacity(count.div_ceil(stride));
+    v.extend(
+        (0..count)
+            .step_by(stride)
+            .map(value)
+            .filter(|x| x.is_finite()),
+    );
     if v.is_empty() {
         return None;
     }

@@ -9,9 +9,10 @@
 //! with duplicated border voxels for interpolation without neighbour lookups). A brick
 //! at the volume's far faces holds fewer voxels; the rest of its slot is never read.
 
+use std::cell::RefCell;
 use std::sync::Arc;
 
-use super::filter::{binomial_box, quantise, row_gradients, span, Neighbours};
+use super::filter::{binomial_box_into, quantise, row_gradients, span, Neighbours};
 use super::source::Source;
 use super::Prefilter;
 
@@ -58,29 +59,59 @@ pub(crate) struct Recipe {
     pub(crate) inv_scale: f32,
 }
 
+/// Reusable buffers for [`Recipe::values_into`]: the physical values read and the
+/// prefilter's slices. A pass over many boxes keeps one per thread, so their memory is
+/// paged in once rather than afresh for each box.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    raw: Vec<f32>,
+    filter: Vec<f32>,
+}
+
+impl Scratch {
+    /// Buffers for boxes of up to `voxels` voxels with their padding, so that a pass
+    /// over boxes of slightly different sizes does not grow them (a grown buffer is a
+    /// new one, paged in afresh, with the old one's pages still resident).
+    pub(crate) fn with_capacity(voxels: usize) -> Self {
+        Scratch {
+            raw: Vec::with_capacity(voxels),
+            filter: Vec::new(),
+        }
+    }
+}
+
 impl Recipe {
     /// Reconstruction values (the physical values, non-finite ones replaced, then
     /// prefiltered) of the voxels `lo ..= hi` (inclusive, inside the volume), i
     /// fastest.
     pub(crate) fn values(&self, lo: [usize; 3], hi: [usize; 3]) -> Vec<f32> {
-        self.values_ranged(lo, hi, false).0
+        let mut out = Vec::new();
+        self.values_into(lo, hi, false, &mut Scratch::default(), &mut out);
+        out
     }
 
-    /// [`Recipe::values`], and when `measure` the (min, max) of the physical values
-    /// read for them (the voxels and the faces of the box around them: every one a
-    /// voxel of the volume).
-    pub(crate) fn values_ranged(
+    /// [`Recipe::values`] into `out` (resized; every element overwritten), with the
+    /// buffers of `scratch`; when `measure`, returns the (min, max) of the physical
+    /// values read for them (the voxels and the faces of the box around them: every
+    /// one a voxel of the volume), else (0, 0).
+    pub(crate) fn values_into(
         &self,
         lo: [usize; 3],
         hi: [usize; 3],
         measure: bool,
-    ) -> (Vec<f32>, (f32, f32)) {
+        scratch: &mut Scratch,
+        out: &mut Vec<f32>,
+    ) -> (f32, f32) {
         let size = [0, 1, 2].map(|a| hi[a] - lo[a] + 1);
         let pad = usize::from(self.prefilter == Prefilter::Binomial);
         let read_size = size.map(|s| s + 2 * pad);
-        let mut raw = vec![0.0f32; read_size.iter().product()];
+        let raw = match self.prefilter {
+            Prefilter::None => &mut *out,
+            Prefilter::Binomial => &mut scratch.raw,
+        };
+        raw.resize(read_size.iter().product(), 0.0);
         let start = lo.map(|x| x as isize - pad as isize);
-        self.source.read(start, read_size, &mut raw);
+        self.source.read(start, read_size, raw);
         if let Some(fill) = self.fill {
             for v in raw.iter_mut().filter(|v| !v.is_finite()) {
                 *v = fill;
@@ -94,11 +125,10 @@ impl Recipe {
         } else {
             (0.0, 0.0)
         };
-        let values = match self.prefilter {
-            Prefilter::None => raw,
-            Prefilter::Binomial => binomial_box(&raw, read_size),
-        };
-        (values, range)
+        if self.prefilter == Prefilter::Binomial {
+            binomial_box_into(&scratch.raw, read_size, out, &mut scratch.filter);
+        }
+        range
     }
 
     /// Builds brick `b` into `values` and `gradients` (each [`BRICK_VOXELS`] long, brick
@@ -110,7 +140,13 @@ impl Recipe {
         // The filtered values one voxel around the brick, for central differences.
         let flo = lo.map(|x| x.saturating_sub(1));
         let fhi = [0, 1, 2].map(|a| (hi[a] + 1).min(dims[a] - 1));
-        let f = self.values(flo, fhi);
+        // This thread's buffers from its last brick: a brick's boxes are small, but a
+        // frame builds thousands.
+        thread_local! {
+            static BUFFERS: RefCell<(Scratch, Vec<f32>)> = RefCell::default();
+        }
+        let (mut scratch, mut f) = BUFFERS.take();
+        self.values_into(flo, fhi, false, &mut scratch, &mut f);
         let fs = [0, 1, 2].map(|a| fhi[a] - flo[a] + 1);
         let row = |j: usize, k: usize| &f[fs[0] * ((j - flo[1]) + fs[1] * (k - flo[2]))..][..fs[0]];
         let (ilo, ihi) = (lo[0] - flo[0], hi[0] - flo[0] + 1);
@@ -146,5 +182,6 @@ impl Recipe {
                 }
             }
         }
+        BUFFERS.set((scratch, f));
     }
 }

@@ -10,34 +10,58 @@
 /// padding with copies of the face (a face voxel then counts its missing neighbour as
 /// itself, as the whole-volume filter did); each output is
 /// `0.25 a + 0.5 b + 0.25 c`, evaluated left to right, x first, then y, then z.
+#[cfg(test)]
 pub(super) fn binomial_box(src: &[f32], size: [usize; 3]) -> Vec<f32> {
+    let mut out = Vec::new();
+    binomial_box_into(src, size, &mut out, &mut Vec::new());
+    out
+}
+
+/// [`binomial_box`] into `out` (resized to the inner box; its old contents are all
+/// overwritten), one slice at a time: each slice of `src` filtered along x and y into
+/// a ring of three in `scratch`, and each output slice along z from the ring as soon
+/// as its three inputs are there. The same operations on the same values as three
+/// whole-box passes, so the same bits; but the only memory it touches besides `src`
+/// and `out` is four slices, and both buffers are the caller's to reuse (fresh pages
+/// for whole-box temporaries per slab were most of the pass before the first frame).
+pub(super) fn binomial_box_into(
+    src: &[f32],
+    size: [usize; 3],
+    out: &mut Vec<f32>,
+    scratch: &mut Vec<f32>,
+) {
     let [sx, sy, sz] = size;
     debug_assert!(sx >= 3 && sy >= 3 && sz >= 3 && src.len() == sx * sy * sz);
     let (ox, oy, oz) = (sx - 2, sy - 2, sz - 2);
-    // Along x: every row of the box.
-    let mut x = vec![0.0f32; ox * sy * sz];
-    for (out, r) in x.chunks_exact_mut(ox).zip(src.chunks_exact(sx)) {
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = 0.25 * r[i] + 0.5 * r[i + 1] + 0.25 * r[i + 2];
+    let plane = ox * oy;
+    out.resize(plane * oz, 0.0);
+    // One slice along x, then three slices along x and y (a ring indexed by k mod 3).
+    scratch.resize(ox * sy + 3 * plane, 0.0);
+    let (x, ring) = scratch.split_at_mut(ox * sy);
+    for (k, slice) in src.chunks_exact(sx * sy).enumerate() {
+        // Along x: every row of the slice.
+        for (o, r) in x.chunks_exact_mut(ox).zip(slice.chunks_exact(sx)) {
+            for (i, o) in o.iter_mut().enumerate() {
+                *o = 0.25 * r[i] + 0.5 * r[i + 1] + 0.25 * r[i + 2];
+            }
         }
-    }
-    // Along y: rows 1..sy-1 of each slice.
-    let mut y = vec![0.0f32; ox * oy * sz];
-    for (out, slice) in y.chunks_exact_mut(ox * oy).zip(x.chunks_exact(ox * sy)) {
-        for (j, o) in out.chunks_exact_mut(ox).enumerate() {
-            let row = |jj: usize| &slice[ox * jj..][..ox];
+        // Along y: rows 1..sy-1.
+        let y = &mut ring[plane * (k % 3)..][..plane];
+        for (j, o) in y.chunks_exact_mut(ox).enumerate() {
+            let row = |jj: usize| &x[ox * jj..][..ox];
             mix(o, row(j), row(j + 1), row(j + 2));
         }
+        // Along z: output slice k - 2 from y slices k - 2, k - 1, k.
+        if k >= 2 {
+            let sl = |kk: usize| &ring[plane * (kk % 3)..][..plane];
+            mix(
+                &mut out[plane * (k - 2)..][..plane],
+                sl(k - 2),
+                sl(k - 1),
+                sl(k),
+            );
+        }
     }
-    drop(x);
-    // Along z: slices 1..sz-1.
-    let mut z = vec![0.0f32; ox * oy * oz];
-    let plane = ox * oy;
-    for (k, o) in z.chunks_exact_mut(plane).enumerate() {
-        let sl = |kk: usize| &y[plane * kk..][..plane];
-        mix(o, sl(k), sl(k + 1), sl(k + 2));
-    }
-    z
 }
 
 /// `out = 0.25 a + 0.5 b + 0.25 c` elementwise (vectorises).
@@ -166,27 +190,61 @@ mod tests {
         cur
     }
 
-    #[test]
-    fn a_padded_box_filters_as_the_whole_volume() {
-        let dims = [6, 5, 4];
-        let v: Vec<f32> = (0..120).map(|i| ((i * 7919 % 97) as f32).sqrt()).collect();
-        let whole = binomial_whole(&v, dims);
-        // The whole volume padded with copies of its faces.
+    /// A volume of `dims` padded with copies of its faces, as the field reads boxes.
+    fn padded(v: &[f32], dims: [usize; 3]) -> Vec<f32> {
         let size = dims.map(|d| d + 2);
-        let mut padded = Vec::new();
+        let mut out = Vec::new();
         for k in 0..size[2] {
             for j in 0..size[1] {
                 for i in 0..size[0] {
                     let c = |x: usize, n: usize| x.saturating_sub(1).min(n - 1);
-                    let (a, b, d) = (c(i, 6), c(j, 5), c(k, 4));
-                    padded.push(v[a + 6 * (b + 5 * d)]);
+                    let (a, b, d) = (c(i, dims[0]), c(j, dims[1]), c(k, dims[2]));
+                    out.push(v[a + dims[0] * (b + dims[1] * d)]);
                 }
             }
         }
-        let boxed = binomial_box(&padded, size);
+        out
+    }
+
+    fn samples(n: usize, seed: usize) -> Vec<f32> {
+        (0..n)
+            .map(|i| (((i + seed) * 7919 % 97) as f32).sqrt())
+            .collect()
+    }
+
+    #[test]
+    fn a_padded_box_filters_as_the_whole_volume() {
+        let dims = [6, 5, 4];
+        let v = samples(120, 0);
+        let whole = binomial_whole(&v, dims);
+        let boxed = binomial_box(&padded(&v, dims), dims.map(|d| d + 2));
         assert_eq!(boxed.len(), whole.len());
         for (i, (a, b)) in boxed.iter().zip(&whole).enumerate() {
             assert_eq!(a.to_bits(), b.to_bits(), "voxel {i}");
+        }
+    }
+
+    /// Buffers reused from a larger box, a smaller one and a box of another shape
+    /// (their stale contents must not show) give the whole-volume filter's bits.
+    #[test]
+    fn reused_buffers_filter_as_the_whole_volume() {
+        let (mut out, mut scratch) = (Vec::new(), Vec::new());
+        for (seed, dims) in [[7, 6, 5], [2, 3, 1], [9, 4, 6], [1, 1, 1]]
+            .into_iter()
+            .enumerate()
+        {
+            let v = samples(dims.iter().product(), seed * 13);
+            binomial_box_into(
+                &padded(&v, dims),
+                dims.map(|d| d + 2),
+                &mut out,
+                &mut scratch,
+            );
+            let whole = binomial_whole(&v, dims);
+            assert_eq!(out.len(), whole.len(), "{dims:?}");
+            for (i, (a, b)) in out.iter().zip(&whole).enumerate() {
+                assert_eq!(a.to_bits(), b.to_bits(), "{dims:?} voxel {i}");
+            }
         }
     }
 

@@ -4,11 +4,13 @@
 //! keeping no copy of the volume; the values and gradients themselves are built later,
 //! per brick, where rays go.
 
+use std::sync::{Mutex, PoisonError};
+
 use rayon::prelude::*;
 
 use glint_core::RenderError;
 
-use super::brick::Recipe;
+use super::brick::{Recipe, Scratch};
 use super::filter::{row_gradients, span, Neighbours};
 use super::MACRO_CELL;
 
@@ -33,6 +35,32 @@ struct Slab {
     robust: Vec<f32>,
 }
 
+/// Buffers that slabs hand on to the next slab a thread takes: at most one set per
+/// thread at a time, so the pass pages in a few slabs' worth of memory however many
+/// slabs the volume has, and frees it at its end. (Fresh buffers per slab made the
+/// kernel's zeroing of new pages the largest cost of a first image: 36% of an end-to-end
+/// run's samples on the MNI152 bench scene, `perf record --call-graph dwarf`.)
+struct Spares<T, F>(Mutex<Vec<T>>, F);
+
+impl<T, F: Fn() -> T> Spares<T, F> {
+    /// A pool whose new sets of buffers `make` makes (with room for the largest slab).
+    fn new(make: F) -> Self {
+        Spares(Mutex::new(Vec::new()), make)
+    }
+
+    /// `f` with a spare set of buffers (or a new one), which then goes back.
+    fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> R {
+        let spare = self.0.lock().unwrap_or_else(PoisonError::into_inner).pop();
+        let mut b = spare.unwrap_or_else(&self.1);
+        let r = f(&mut b);
+        self.0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .push(b);
+        r
+    }
+}
+
 /// Macro-cell layers per slab: about 16 MiB of f32 slices per slab (more layers for
 /// small slices, at least one), so a slab's halo of filtered slices stays a small
 /// share of its work and its buffers stay small beside the volume.
@@ -47,15 +75,18 @@ fn layers_per_slab(dims: [usize; 3]) -> usize {
 pub(super) fn finite_range(recipe: &Recipe) -> Result<(f32, f32), RenderError> {
     let [nx, ny, nz] = recipe.dims;
     let step = (layers_per_slab(recipe.dims) * MACRO_CELL).max(1);
+    let spares = Spares::new(|| Vec::with_capacity(nx * ny * step));
     let (lo, hi) = (0..nz.div_ceil(step))
         .into_par_iter()
         .map(|s| {
             let (z0, z1) = (s * step, ((s + 1) * step).min(nz));
-            let mut raw = vec![0.0f32; nx * ny * (z1 - z0)];
-            recipe
-                .source
-                .read([0, 0, z0 as isize], [nx, ny, z1 - z0], &mut raw);
-            finite_min_max(&raw)
+            spares.with(|raw| {
+                raw.resize(nx * ny * (z1 - z0), 0.0);
+                recipe
+                    .source
+                    .read([0, 0, z0 as isize], [nx, ny, z1 - z0], raw);
+                finite_min_max(raw)
+            })
         })
         .reduce(
             || (f32::INFINITY, f32::NEG_INFINITY),
@@ -94,11 +125,20 @@ pub(super) fn prepare(
     let slabs = cell_dims[2].div_ceil(layers);
     let count = nx * ny * nz;
     let stride = count.div_ceil(glint_io::ROBUST_SAMPLES).max(1);
+    // A slab filters at most its cell layers' slices and one more on each side, and
+    // reads one more on each side again for the prefilter.
+    let slices = layers * MACRO_CELL + 2;
+    let spares = Spares::new(|| -> Buffers {
+        (
+            Scratch::with_capacity(nx * ny * (slices + 2)),
+            Vec::with_capacity(nx * ny * slices),
+        )
+    });
     let parts: Vec<Slab> = (0..slabs)
         .into_par_iter()
         .map(|s| {
             let cz = (s * layers, ((s + 1) * layers).min(cell_dims[2]));
-            let slab = slab(recipe, cz, stride, range.is_none());
+            let slab = spares.with(|b| slab(recipe, cz, stride, range.is_none(), b));
             progress((slab_slices(dims, cz, cell_dims[2]).1 - cz.0 * MACRO_CELL) as u64);
             slab
         })
@@ -143,8 +183,17 @@ fn slab_slices(dims: [usize; 3], cz: (usize, usize), layers: usize) -> (usize, u
     (z0, z1)
 }
 
-/// One slab of cell layers `cz.0 .. cz.1`.
-fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool) -> Slab {
+/// A slab's buffers: the prefilter's, and the filtered values.
+type Buffers = (Scratch, Vec<f32>);
+
+/// One slab of cell layers `cz.0 .. cz.1`, in the buffers `b`.
+fn slab(
+    recipe: &Recipe,
+    cz: (usize, usize),
+    stride: usize,
+    measure_range: bool,
+    (scratch, f): &mut Buffers,
+) -> Slab {
     let dims = recipe.dims;
     let [nx, ny, nz] = dims;
     let sxy = nx * ny;
@@ -155,11 +204,42 @@ fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool)
     let fb = z1.max(cz.1 * MACRO_CELL).min(nz - 1);
     // With the range of the physical values read (all finite: the caller measures the
     // range here only when the source has no others).
-    let (f, range) = recipe.values_ranged([0, 0, fa], [nx - 1, ny - 1, fb], measure_range);
+    let range = recipe.values_into([0, 0, fa], [nx - 1, ny - 1, fb], measure_range, scratch, f);
+    let f = &f[..];
     let row = |j: usize, k: usize| &f[nx * (j + ny * (k - fa))..][..nx];
+    let g = &recipe.to_world_gradient;
+    // The shortcut's argument needs finite index gradients; a slab whose differences
+    // overflow takes the general path.
+    let largest = match diagonal(g).map(|d| largest_axis_aligned(d, z0..z1, dims, row)) {
+        Some(l) if l.is_finite() => l,
+        _ => largest_world(g, z0..z1, dims, row),
+    };
+    let robust = (z0 * sxy).div_ceil(stride)..(z1 * sxy).div_ceil(stride);
+    let robust = robust
+        .map(|m| {
+            let i = m * stride;
+            f[i - fa * sxy]
+        })
+        .collect();
+    Slab {
+        range,
+        cells: cells(f, dims, fa, cz),
+        largest,
+        robust,
+    }
+}
+
+/// The largest world gradient component of the voxels of slices `ks`: each gradient
+/// as the bricks compute it ([`row_gradients`]), then its largest component.
+fn largest_world<'a>(
+    g: &[[f32; 3]; 3],
+    ks: std::ops::Range<usize>,
+    [nx, ny, nz]: [usize; 3],
+    row: impl Fn(usize, usize) -> &'a [f32],
+) -> f32 {
     let mut largest = 0.0f32;
     let mut out = vec![[0.0f32; 3]; nx];
-    for k in z0..z1 {
+    for k in ks {
         let (km, kp, sk) = span(k, nz);
         for j in 0..ny {
             let (jm, jp, sj) = span(j, ny);
@@ -171,30 +251,70 @@ fn slab(recipe: &Recipe, cz: (usize, usize), stride: usize, measure_range: bool)
                 kp: row(j, kp),
                 span_k: sk,
             };
-            row_gradients(
-                row(j, k),
-                &n,
-                (0, nx),
-                (true, true),
-                &recipe.to_world_gradient,
-                &mut out,
-            );
+            row_gradients(row(j, k), &n, (0, nx), (true, true), g, &mut out);
             largest = largest.max(largest_abs(out.as_flattened()));
         }
     }
-    let robust = (z0 * sxy).div_ceil(stride)..(z1 * sxy).div_ceil(stride);
-    let robust = robust
-        .map(|m| {
-            let i = m * stride;
-            f[i - fa * sxy]
-        })
-        .collect();
-    Slab {
-        range,
-        cells: cells(&f, dims, fa, cz),
-        largest,
-        robust,
+    largest
+}
+
+/// The diagonal of `g` when every other entry is zero and the diagonal's are finite
+/// and non-zero (the affine is a scaling, perhaps with flips, as for most scans).
+fn diagonal(g: &[[f32; 3]; 3]) -> Option<[f32; 3]> {
+    let off = (0..3).all(|a| (0..3).all(|b| a == b || g[a][b] == 0.0));
+    let d = [g[0][0], g[1][1], g[2][2]];
+    (off && d.iter().all(|x| x.is_finite() && *x != 0.0)).then_some(d)
+}
+
+/// [`largest_world`] for a diagonal `g` (`d`), with the same result bit for bit and
+/// without the matrix: world component a of a voxel is `d[a] * g_a + 0 * g_b + 0 *
+/// g_c`, which is `d[a] * g_a` (the index gradients are finite, so the zero products
+/// are zeros and adding them changes nothing but the sign of a zero); rounding is
+/// monotonic and symmetric, so the largest `|d[a] * g_a|` over voxels is `|d[a]|`
+/// times the largest `|g_a|`, rounded. Each `g_a` is the difference [`row_gradients`]
+/// takes, divided by the same span.
+fn largest_axis_aligned<'a>(
+    d: [f32; 3],
+    ks: std::ops::Range<usize>,
+    [nx, ny, nz]: [usize; 3],
+    row: impl Fn(usize, usize) -> &'a [f32],
+) -> f32 {
+    let mut m = [0.0f32; 3];
+    for k in ks {
+        let (km, kp, sk) = span(k, nz);
+        for j in 0..ny {
+            let (jm, jp, sj) = span(j, ny);
+            let c = row(j, k);
+            // Along i: one-sided at both ends, central between (row_gradients's faces).
+            let ends = ((c[1] - c[0]) / 1.0)
+                .abs()
+                .max(((c[nx - 1] - c[nx - 2]) / 1.0).abs());
+            m[0] = m[0]
+                .max(ends)
+                .max(largest_abs_diff(&c[2..], &c[..nx - 2], 2.0));
+            m[1] = m[1].max(largest_abs_diff(row(jp, k), row(jm, k), sj));
+            m[2] = m[2].max(largest_abs_diff(row(j, kp), row(j, km), sk));
+        }
     }
+    (0..3).fold(0.0f32, |l, a| l.max(d[a].abs() * m[a]))
+}
+
+/// The largest `|(a[i] - b[i]) / span|` (0 for none), in eight running maxima as
+/// [`largest_abs`].
+fn largest_abs_diff(a: &[f32], b: &[f32], span: f32) -> f32 {
+    let mut lanes = [0.0f32; 8];
+    let (mut ca, mut cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    for (x, y) in (&mut ca).zip(&mut cb) {
+        for ((m, &x), &y) in lanes.iter_mut().zip(x).zip(y) {
+            *m = m.max(((x - y) / span).abs());
+        }
+    }
+    let rest = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .fold(0.0f32, |m, (&x, &y)| m.max(((x - y) / span).abs()));
+    lanes.iter().fold(rest, |m, &x| m.max(x))
 }
 
 /// The largest absolute value of `v` (0 for none), in eight running maxima that the

@@ -243,6 +243,26 @@ fn nan_samples_and_small_volumes_equal_the_whole_volume_computation() {
     check_against_oracle(&linear_volume(), Prefilter::None);
 }
 
+/// An axis-aligned affine (anisotropic, one axis flipped) takes the pass's shortcut
+/// for the largest gradient component; its quantisation step and gradients stay the
+/// oracle's, also when differences overflow f32 (where the shortcut gives way).
+#[test]
+fn axis_aligned_affines_equal_the_whole_volume_computation() {
+    let dims = [21, 18, 11];
+    let mut vol = Volume::new(dims, [0.7, 1.3, 2.1], Samples::I16(blob(dims))).unwrap();
+    vol.affine[1][1] = -1.3;
+    vol.affine[1][3] = 30.0;
+    for &prefilter in Prefilter::ALL {
+        check_against_oracle(&vol, prefilter);
+    }
+    let mut v: Vec<f32> = blob(dims).iter().map(|&x| f32::from(x)).collect();
+    v[400] = 3e38;
+    v[402] = -3e38;
+    let mut huge = Volume::new(dims, [0.5, 1.0, 2.0], Samples::F32(v)).unwrap();
+    huge.affine[0][0] = -0.5;
+    check_against_oracle(&huge, Prefilter::None);
+}
+
 /// A pool far smaller than the bricks a pass reads: bricks are evicted and rebuilt,
 /// or built outside the cache when it is full of bricks in use, with the same values.
 #[test]
