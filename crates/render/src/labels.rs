@@ -30,7 +30,8 @@ pub struct LabelSpec {
     /// The colour table: `freesurfer`, `totalsegmentator` (built in) or a table file
     /// (FreeSurfer LUT text, 3D Slicer `.ctbl`/`.txt`, `.json`, `.csv`). Default:
     /// `freesurfer` for files named like FreeSurfer's (`aseg`, `aparc`, `wmparc`),
-    /// else none (labels named by number, generated colours).
+    /// a DICOM Segmentation's own segments, else none (labels named by number,
+    /// generated colours).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table: Option<String>,
     /// Only these labels (names or numbers); empty: every label present.
@@ -184,7 +185,9 @@ impl LabelMeshes {
         drop(volume);
         let table = match &spec.table {
             Some(t) => LabelTable::open(t).map_err(|e| spec.error(e))?,
-            None => LabelTable::new("generated"),
+            None => LabelTable::embedded(&spec.path)
+                .map_err(|e| spec.error(e))?
+                .unwrap_or_else(|| LabelTable::new("generated")),
         };
         let summary = grid.summary();
         let lookup = |names: &[String]| -> Result<Vec<u32>, RenderError> {

@@ -17,8 +17,8 @@ pub struct LabelFlags {
     pub labels: Option<PathBuf>,
     /// The labels' colour table: freesurfer, totalsegmentator (built in), or a file
     /// (FreeSurfer LUT text, Slicer .ctbl/.txt, .json, .csv) [default: freesurfer for
-    /// files named *aseg*, *aparc*, *wmparc*; else labels by number, generated
-    /// colours].
+    /// files named *aseg*, *aparc*, *wmparc*; a DICOM SEG's own segments; else labels
+    /// by number, generated colours].
     #[arg(long, value_name = "TABLE")]
     pub label_table: Option<String>,
     /// Only these labels (names or numbers, comma-separated); repeatable.
