@@ -54,7 +54,7 @@ pub use grid::{world_box, LabelExtent, LabelGrid};
 pub use segmentation::cielab_to_srgb;
 pub use surface::{label_surfaces, MAX_SMOOTHING};
 pub use table::{
-    generated_color, named_color, LabelEntry, LabelTable, BUILTIN_TABLES, MAX_TABLE_BYTES,
+    generated_color, named_color, LabelEntry, LabelTable, BUILTIN_TABLES, MAX_TABLE_BYTES, OPAQUE,
 };
 
 use std::path::PathBuf;

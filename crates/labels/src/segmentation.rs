@@ -6,7 +6,7 @@ use std::path::Path;
 use glint_io::dicom::{read_segments, Segment};
 use glint_io::{Format, ReadOptions};
 
-use crate::table::{named_color, LabelEntry, LabelTable};
+use crate::table::{named_color, LabelEntry, LabelTable, OPAQUE};
 use crate::LabelError;
 
 /// The D65 white point (CIE XYZ, Y = 1). DICOM does not name the illuminant of
@@ -74,6 +74,7 @@ impl LabelTable {
                 LabelEntry {
                     name: s.label.clone(),
                     color,
+                    alpha: OPAQUE,
                 },
             );
         }
