@@ -41,8 +41,8 @@ pub struct LabelFlags {
     #[arg(long, value_name = "HOW", value_parser = ["surfaces", "volume", "both"])]
     pub labels_as: Option<String>,
     /// Per-label opacity of the label volume, NAME=OPACITY (name or number, opacity
-    /// of one voxel's length in 0..1; comma-separated, repeatable) [default: 1 for
-    /// the labels shown].
+    /// of one voxel's length in 0..1; comma-separated, repeatable) [default: the
+    /// table's alpha, 1 without one].
     #[arg(long, value_name = "LABEL=OPACITY", value_delimiter = ',')]
     pub label_opacity: Vec<String>,
 }
