@@ -3,7 +3,8 @@
 //! glint-io reads) becomes a [`LabelGrid`]; a [`LabelTable`] names and colours its
 //! values (FreeSurfer's `FreeSurferColorLUT.txt` and TotalSegmentator's class list are
 //! built in; FreeSurfer LUT text, 3D Slicer `.ctbl`/`.txt`, JSON and CSV tables are
-//! read); [`LabelGrid::summary`] counts voxels and millilitres per label; and
+//! read; a DICOM Segmentation carries its own, [`LabelTable::embedded`]);
+//! [`LabelGrid::summary`] counts voxels and millilitres per label; and
 //! [`label_surfaces`] extracts one smoothed, closed surface per label in world mm.
 //!
 //! ```
@@ -44,14 +45,16 @@
 
 mod builtin;
 mod grid;
+mod segmentation;
 mod surface;
 mod table;
 
 pub use builtin::{FREESURFER_LUT, TOTALSEGMENTATOR_CLASSES};
 pub use grid::{world_box, LabelExtent, LabelGrid};
+pub use segmentation::cielab_to_srgb;
 pub use surface::{label_surfaces, MAX_SMOOTHING};
 pub use table::{
-    generated_color, named_color, LabelEntry, LabelTable, BUILTIN_TABLES, MAX_TABLE_BYTES,
+    generated_color, named_color, LabelEntry, LabelTable, BUILTIN_TABLES, MAX_TABLE_BYTES, OPAQUE,
 };
 
 use std::path::PathBuf;

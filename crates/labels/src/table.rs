@@ -21,7 +21,14 @@ pub struct LabelEntry {
     pub name: String,
     /// sRGB colour.
     pub color: [u8; 3],
+    /// Opacity, 0 (clear) to 255 (opaque, [`OPAQUE`]): a Slicer table's fourth colour
+    /// column, 255 minus a FreeSurfer LUT's (its transparency), a JSON table's
+    /// `alpha`. A label volume takes it as the label's default opacity.
+    pub alpha: u8,
 }
+
+/// The alpha of an opaque label, and of every entry a table gives no alpha.
+pub const OPAQUE: u8 = 255;
 
 /// Names and colours of label values. Values not in the table get
 /// [`generated_color`] and the name `label N`.
@@ -76,6 +83,11 @@ impl LabelTable {
     pub fn color_of(&self, value: u32) -> [u8; 3] {
         self.get(value)
             .map_or_else(|| generated_color(value), |e| e.color)
+    }
+
+    /// The alpha of `value`: the table's, else [`OPAQUE`].
+    pub fn alpha_of(&self, value: u32) -> u8 {
+        self.get(value).map_or(OPAQUE, |e| e.alpha)
     }
 
     /// The value a user means by `key`: a number, or a name (case-insensitive).
@@ -137,6 +149,7 @@ impl LabelTable {
                 LabelEntry {
                     name: (*name).into(),
                     color,
+                    alpha: OPAQUE,
                 },
             );
         }
@@ -197,9 +210,10 @@ impl LabelTable {
     /// Parses LUT text, one label a line: `value name r g b [a]`, `#` starting a
     /// comment line, blank lines skipped. FreeSurfer's `FreeSurferColorLUT.txt` and
     /// 3D Slicer's colour tables (`.ctbl`, `.txt`) share this layout; their fourth
-    /// colour column differs (FreeSurfer: 0 for every structure; Slicer: opacity
-    /// 0-255), and glint reads it only to check it (`slicer` names the file's kind
-    /// in errors). Names may not contain spaces (neither format allows them).
+    /// colour column differs: FreeSurfer's is a transparency (0 for every structure of
+    /// its LUT; alpha = 255 - t, as FreeSurfer's `colortab.c` reads it), Slicer's an
+    /// opacity 0-255 (`slicer`, which also names the file's kind in errors). Absent:
+    /// opaque. Names may not contain spaces (neither format allows them).
     pub fn parse_lut(text: &str, path: &Path, slicer: bool) -> Result<LabelTable, LabelError> {
         let kind = if slicer { "Slicer colour table" } else { "LUT" };
         let mut table = LabelTable::new(path.display().to_string());
@@ -223,7 +237,7 @@ impl LabelTable {
             let value = f[0]
                 .parse::<u32>()
                 .map_err(|_| bad(format!("label value {:?} is not a whole number", f[0])))?;
-            let mut rgba = [0u8; 4];
+            let mut rgba = [0, 0, 0, if slicer { OPAQUE } else { 0 }];
             for (k, s) in f[2..].iter().enumerate() {
                 rgba[k] = s
                     .parse::<u8>()
@@ -234,6 +248,7 @@ impl LabelTable {
                 LabelEntry {
                     name: f[1].into(),
                     color: [rgba[0], rgba[1], rgba[2]],
+                    alpha: if slicer { rgba[3] } else { OPAQUE - rgba[3] },
                 },
             );
         }
@@ -241,8 +256,8 @@ impl LabelTable {
     }
 
     /// Parses a JSON table: an object whose keys are label values and whose values are
-    /// a name, or `{"name": ..., "color": [r, g, b]}` (sRGB 0-255; absent: as
-    /// [`named_color`] chooses).
+    /// a name, or `{"name": ..., "color": [r, g, b], "alpha": a}` (sRGB 0-255; absent:
+    /// as [`named_color`] chooses; alpha 0-1, absent: opaque).
     pub fn parse_json(text: &str, path: &Path) -> Result<LabelTable, LabelError> {
         let bad = |what: String| LabelError::Table {
             path: path.into(),
@@ -259,8 +274,8 @@ impl LabelTable {
             let v = key
                 .parse::<u32>()
                 .map_err(|_| bad(format!("key {key:?} is not a label value")))?;
-            let (name, color) = match entry {
-                serde_json::Value::String(s) => (s.clone(), None),
+            let (name, color, alpha) = match entry {
+                serde_json::Value::String(s) => (s.clone(), None, OPAQUE),
                 serde_json::Value::Object(o) => {
                     let name = o
                         .get("name")
@@ -272,7 +287,15 @@ impl LabelTable {
                             bad(format!("label {v}: \"color\" must be [r, g, b] in 0..=255"))
                         })?),
                     };
-                    (name.to_string(), color)
+                    let alpha = match o.get("alpha") {
+                        None => OPAQUE,
+                        Some(a) => a
+                            .as_f64()
+                            .filter(|a| (0.0..=1.0).contains(a))
+                            .map(|a| (a * 255.0).round() as u8)
+                            .ok_or_else(|| bad(format!("label {v}: \"alpha\" must be in 0..=1")))?,
+                    };
+                    (name.to_string(), color, alpha)
                 }
                 _ => return Err(bad(format!("label {v}: expected a name or an object"))),
             };
@@ -281,6 +304,7 @@ impl LabelTable {
                 LabelEntry {
                     color: color.unwrap_or_else(|| named_color(&name, v)),
                     name,
+                    alpha,
                 },
             );
         }
@@ -354,6 +378,7 @@ impl LabelTable {
                 LabelEntry {
                     name: f[name].into(),
                     color,
+                    alpha: OPAQUE,
                 },
             );
         }

@@ -303,3 +303,41 @@ fn smoothing_out_of_range_is_refused() {
         ));
     }
 }
+
+#[test]
+fn table_alpha_from_freesurfer_slicer_and_json() {
+    // FreeSurfer's fourth colour column is a transparency (alpha = 255 - t,
+    // FreeSurfer's colortab.c); Slicer's is an opacity; absent: opaque.
+    let fs = LabelTable::parse_lut(
+        "17 Hippo 220 216 20 64\n18 Amyg 103 255 255\n",
+        Path::new("fs.txt"),
+        false,
+    )
+    .unwrap();
+    assert_eq!((fs.alpha_of(17), fs.alpha_of(18)), (191, 255));
+    let slicer = LabelTable::parse_lut(
+        "1 liver 200 100 90 128\n2 aorta 220 40 40\n",
+        Path::new("t.ctbl"),
+        true,
+    )
+    .unwrap();
+    assert_eq!((slicer.alpha_of(1), slicer.alpha_of(2)), (128, 255));
+    // A value not in the table is opaque.
+    assert_eq!(slicer.alpha_of(9), glint_labels::OPAQUE);
+    let json = LabelTable::parse_json(
+        r#"{"1": {"name": "liver", "alpha": 0.5}, "2": "aorta"}"#,
+        Path::new("t.json"),
+    )
+    .unwrap();
+    assert_eq!((json.alpha_of(1), json.alpha_of(2)), (128, 255));
+    let err = LabelTable::parse_json(
+        r#"{"1": {"name": "liver", "alpha": 2}}"#,
+        Path::new("t.json"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("\"alpha\" must be in 0..=1"), "{err}");
+    // FreeSurfer's own LUT: every structure opaque (its column is 0 throughout).
+    let fs = LabelTable::freesurfer();
+    assert!(fs.entries().all(|(_, e)| e.alpha == 255));
+}

@@ -30,7 +30,8 @@ pub struct LabelSpec {
     /// The colour table: `freesurfer`, `totalsegmentator` (built in) or a table file
     /// (FreeSurfer LUT text, 3D Slicer `.ctbl`/`.txt`, `.json`, `.csv`). Default:
     /// `freesurfer` for files named like FreeSurfer's (`aseg`, `aparc`, `wmparc`),
-    /// else none (labels named by number, generated colours).
+    /// a DICOM Segmentation's own segments, else none (labels named by number,
+    /// generated colours).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table: Option<String>,
     /// Only these labels (names or numbers); empty: every label present.
@@ -50,8 +51,8 @@ pub struct LabelSpec {
     #[serde(default, skip_serializing_if = "LabelsAs::is_surfaces")]
     pub render_as: LabelsAs,
     /// Per-label opacity of the label volume (label name or number to 0..=1, the
-    /// opacity of one voxel's length); labels not named are opaque. Surfaces are
-    /// always opaque.
+    /// opacity of one voxel's length); labels not named take the table's alpha
+    /// (opaque when it has none). Surfaces are always opaque.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub opacity: BTreeMap<String, f32>,
 }
@@ -184,7 +185,9 @@ impl LabelMeshes {
         drop(volume);
         let table = match &spec.table {
             Some(t) => LabelTable::open(t).map_err(|e| spec.error(e))?,
-            None => LabelTable::new("generated"),
+            None => LabelTable::embedded(&spec.path)
+                .map_err(|e| spec.error(e))?
+                .unwrap_or_else(|| LabelTable::new("generated")),
         };
         let summary = grid.summary();
         let lookup = |names: &[String]| -> Result<Vec<u32>, RenderError> {
@@ -281,8 +284,8 @@ impl LabelMeshes {
 }
 
 /// The label volume of the labels `values` of `grid`: each in its table colour
-/// (`linear`), opaque unless `spec.opacity` names it (by name or number, looked up
-/// in `table`).
+/// (`linear`) and with its table alpha as opacity, unless `spec.opacity` names it (by
+/// name or number, looked up in `table`).
 fn label_volume(
     spec: &LabelSpec,
     grid: &LabelGrid,
@@ -295,7 +298,7 @@ fn label_volume(
         .map(|&v| {
             let look = LabelLook {
                 color: linear(v),
-                opacity: 1.0,
+                opacity: f32::from(table.alpha_of(v)) / 255.0,
             };
             (v, look)
         })

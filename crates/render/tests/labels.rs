@@ -273,3 +273,56 @@ fn a_label_volume_needs_a_volume_and_opacity_needs_a_label_volume() {
     let err = glint_io::one_line(&render(&volume_scene(&path, spec)).unwrap_err());
     assert!(err.contains("opacity 1.5"), "{err}");
 }
+
+#[test]
+fn a_table_alpha_is_the_label_volume_default_opacity_and_surfaces_stay_opaque() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = two_blocks(dir.path(), "seg.nii", 1, 2, 0.0);
+    let table = dir.path().join("t.json");
+    std::fs::write(
+        &table,
+        r#"{"1": {"name": "faint", "color": [200, 0, 0], "alpha": 0.2}, "2": {"name": "solid", "color": [0, 0, 200]}}"#,
+    )
+    .unwrap();
+    let mut spec = LabelSpec::new(&path);
+    spec.table = Some(table.display().to_string());
+    spec.render_as = glint_render::LabelsAs::Volume;
+    let alpha_where = |r: &glint_render::Rendered, c: [f32; 3]| -> Vec<f32> {
+        let img = &r.image;
+        (0..img.rgb.len())
+            .filter(|&i| {
+                let p = img.rgb[i];
+                let k = if c[0] > 0.0 { 0 } else { 2 };
+                p[k] > 0.05 && p[2 - k] < 1e-6
+            })
+            .map(|i| img.alpha[i])
+            .collect()
+    };
+    let r = render(&volume_scene(&path, spec.clone())).unwrap();
+    let faint = alpha_where(&r, [1.0, 0.0, 0.0]);
+    let solid = alpha_where(&r, [0.0, 0.0, 1.0]);
+    assert!(
+        faint.len() > 300 && solid.len() > 300,
+        "{} {}",
+        faint.len(),
+        solid.len()
+    );
+    // Alpha 0.2 per voxel length over 6 voxels: 1 - 0.8^6 = 0.74, well below opaque.
+    assert!(faint.iter().all(|a| *a < 0.9), "{faint:?}");
+    assert!(solid.iter().filter(|a| **a == 1.0).count() > 300);
+    // --label-opacity overrides the table.
+    spec.opacity.insert("faint".into(), 1.0);
+    let r = render(&volume_scene(&path, spec.clone())).unwrap();
+    assert!(
+        alpha_where(&r, [1.0, 0.0, 0.0])
+            .iter()
+            .filter(|a| **a == 1.0)
+            .count()
+            > 300
+    );
+    // Surfaces are drawn opaque whatever the table says (the rasterizer does not blend).
+    spec.opacity.clear();
+    spec.render_as = glint_render::LabelsAs::Surfaces;
+    let r = render(&scene(spec)).unwrap();
+    assert!(r.image.alpha.iter().filter(|a| **a == 1.0).count() > 1000);
+}

@@ -44,7 +44,7 @@ fn rows(path: &Path, volume: &Volume, listing: &Listing) -> anyhow::Result<(Labe
         .or_else(|| LabelSpec::default_table(path))
     {
         Some(t) => LabelTable::open(&t)?,
-        None => LabelTable::new("none"),
+        None => LabelTable::embedded(path)?.unwrap_or_else(|| LabelTable::new("none")),
     };
     let ml = grid.voxel_ml();
     let summary = grid.summary();

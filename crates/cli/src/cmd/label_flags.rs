@@ -17,8 +17,8 @@ pub struct LabelFlags {
     pub labels: Option<PathBuf>,
     /// The labels' colour table: freesurfer, totalsegmentator (built in), or a file
     /// (FreeSurfer LUT text, Slicer .ctbl/.txt, .json, .csv) [default: freesurfer for
-    /// files named *aseg*, *aparc*, *wmparc*; else labels by number, generated
-    /// colours].
+    /// files named *aseg*, *aparc*, *wmparc*; a DICOM SEG's own segments; else labels
+    /// by number, generated colours].
     #[arg(long, value_name = "TABLE")]
     pub label_table: Option<String>,
     /// Only these labels (names or numbers, comma-separated); repeatable.
@@ -41,8 +41,8 @@ pub struct LabelFlags {
     #[arg(long, value_name = "HOW", value_parser = ["surfaces", "volume", "both"])]
     pub labels_as: Option<String>,
     /// Per-label opacity of the label volume, NAME=OPACITY (name or number, opacity
-    /// of one voxel's length in 0..1; comma-separated, repeatable) [default: 1 for
-    /// the labels shown].
+    /// of one voxel's length in 0..1; comma-separated, repeatable) [default: the
+    /// table's alpha, 1 without one].
     #[arg(long, value_name = "LABEL=OPACITY", value_delimiter = ',')]
     pub label_opacity: Vec<String>,
 }

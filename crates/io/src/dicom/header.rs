@@ -58,6 +58,8 @@ pub(super) struct Header {
     pub description: Option<String>,
     /// DoseGridScaling and DoseUnits of an RT Dose (PS3.3 C.8.8.3).
     pub dose: Option<(f64, Option<String>)>,
+    /// SOPClassUID (a Segmentation is read by `seg`).
+    pub sop_class: Option<String>,
     /// What was assumed to open the file (no preamble, no meta group).
     pub notes: Vec<String>,
 }
@@ -77,7 +79,7 @@ fn un_text(e: &InMemElement) -> Option<String> {
     Some(String::from_utf8_lossy(&bytes).into_owned())
 }
 
-fn floats(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<Vec<f64>> {
+pub(super) fn floats(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<Vec<f64>> {
     let e = obj.get(tag)?;
     match un_vr(e) {
         Some(VR::DS) => un_text(e)?
@@ -94,7 +96,7 @@ fn float(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<f64> {
     floats(obj, tag).and_then(|v| v.first().copied())
 }
 
-fn string(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<String> {
+pub(super) fn string(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<String> {
     let e = obj.get(tag)?;
     let s = match un_vr(e) {
         Some(_) => un_text(e)?,
@@ -103,7 +105,7 @@ fn string(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<String> {
     Some(s.trim().trim_end_matches('\0').to_string()).filter(|s| !s.is_empty())
 }
 
-fn int(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<i64> {
+pub(super) fn int(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<i64> {
     let e = obj.get(tag)?;
     match un_vr(e) {
         // UN values are little endian: UN only occurs in explicit VR little endian
@@ -123,7 +125,7 @@ fn int(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<i64> {
 }
 
 /// The first item of a sequence.
-fn item(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<&InMemDicomObject> {
+pub(super) fn item(obj: &InMemDicomObject, tag: dicom_core::Tag) -> Option<&InMemDicomObject> {
     obj.get(tag)
         .and_then(InMemElement::items)
         .and_then(|i| i.first())
@@ -483,6 +485,7 @@ fn header_of(
         rescale_type: string(obj, tags::RESCALE_TYPE),
         description: string(obj, tags::SERIES_DESCRIPTION),
         dose,
+        sop_class: string(obj, tags::SOP_CLASS_UID),
         notes: Vec::new(),
     })
 }

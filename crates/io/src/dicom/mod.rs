@@ -4,7 +4,9 @@
 //! colour) or compressed pixel data (JPEG baseline, extended 8 and 12-bit and lossless,
 //! JPEG-LS, JPEG 2000, RLE). Colour images (RGB, YBR_FULL, YBR_FULL_422, YBR_ICT,
 //! YBR_RCT) become colour volumes ([`Volume::colour`]). A directory may hold several
-//! series and non-image objects: one image series is read ([`list`], `series`).
+//! series and non-image objects: one image series is read ([`list`], `series`). A
+//! Segmentation (DICOM SEG) file is read as a label map ([`read_segments`] gives its
+//! segments' names and colours; see `seg`).
 //!
 //! Slices are sorted by their position along the slice normal (row x column direction
 //! cosines), the slice step comes from the positions (not SliceThickness), and uneven
@@ -30,6 +32,7 @@ mod header;
 mod jpeg;
 mod pixels;
 mod scan;
+mod seg;
 mod series;
 
 use std::collections::BTreeMap;
@@ -42,6 +45,7 @@ use crate::common::checked_voxels;
 use crate::{Format, IoError, ReadOptions, Rgb, Samples, Volume, VolumeFile};
 
 pub use scan::MAX_NESTING;
+pub use seg::{read_segments, Segment};
 pub use series::{list, Listing, Series, Skipped};
 
 /// Tolerance on direction cosines when checking that slices share an orientation.
@@ -145,6 +149,9 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             ));
         }
         notes.extend(h.notes.iter().cloned());
+        if seg::is_segmentation(h.sop_class.as_deref()) {
+            return seg::read(path, h, options, notes);
+        }
         vec![h]
     };
     check_series(path, &headers)?;
