@@ -169,8 +169,13 @@ pub struct ReadOptions {
     /// DICOM PixelSpacing of zero, OME-Zarr levels with missing chunks.
     pub strict: bool,
     /// What a colour volume's [`Volume::samples`] hold: its luminance (the default) or
-    /// one of its channels. The colour itself is in [`Volume::colour`] either way.
+    /// one of its channels. The colour itself is in [`Volume::colour`] either way,
+    /// unless [`ReadOptions::colour`] is off.
     pub grey: Grey,
+    /// Keep a colour volume's colour in [`Volume::colour`] (the default: renderers
+    /// then draw it in colour); `false` drops it after reading, leaving the grey
+    /// samples alone, which render as a grey volume (`glint render --channel`).
+    pub colour: bool,
     /// The DICOM series to read from a directory that holds several, by its
     /// SeriesInstanceUID; `None` reads the only image series, or the largest (with a
     /// note naming the others).
@@ -236,6 +241,7 @@ impl Default for ReadOptions {
             raw: None,
             strict: false,
             grey: Grey::Luminance,
+            colour: true,
             series: None,
             level: zarr::Level::Finest,
         }
@@ -280,6 +286,15 @@ pub fn read_volume(path: &Path, options: &ReadOptions) -> Result<Volume, IoError
 
 /// Reads a volume like [`read_volume`], with the format and notes.
 pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
+    let mut file = open_any_volume(path, options)?;
+    if !options.colour {
+        file.volume.colour = None;
+    }
+    Ok(file)
+}
+
+/// [`open_volume`] before [`ReadOptions::colour`] is applied.
+fn open_any_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     if let Err(e) = std::fs::metadata(path) {
         return Err(IoError::Os {
             path: path.into(),

@@ -9,8 +9,8 @@ use glint_core::camera::{Camera, Projection};
 use glint_core::{Image, Legend, RenderError, RenderMode, ScalarColors, Shader, Timings};
 use glint_io::{ReadOptions, Volume};
 use glint_volume::{
-    Classification, ClassifySettings, Field, FrameSettings, Kernel, Occluders, PathImage,
-    PathTarget, Prefilter, ShadowField, ShadowSettings, TransferFunction,
+    Classification, ClassifySettings, ColourVolume, Field, FrameSettings, Kernel, Occluders,
+    PathImage, PathTarget, Prefilter, ShadowField, ShadowSettings, TransferFunction,
 };
 
 use crate::hwlobe::HwCache;
@@ -94,6 +94,11 @@ pub struct Renderer {
     paths: Option<PathAccumulation>,
     /// Set by another thread to stop a `path` render in flight ([`Renderer::set_cancel`]).
     cancel: Option<Arc<AtomicBool>>,
+    /// A colour volume's colours ([`glint_io::Volume::colour`]), on the field's grid:
+    /// its samples take their colour from them, their opacity from the transfer
+    /// function of its grey samples. (A volume read with
+    /// [`ReadOptions::colour`] off has none and renders grey.)
+    colours: Option<Arc<ColourVolume>>,
 }
 
 impl Renderer {
@@ -133,6 +138,7 @@ impl Renderer {
                 occluders: None,
                 paths: None,
                 cancel: None,
+                colours: None,
             });
         }
         let start = Instant::now();
@@ -186,6 +192,7 @@ impl Renderer {
     ) -> Result<Renderer, RenderError> {
         let field = Field::shared(volume.clone(), prefilter)?;
         let mut renderer = Renderer::from_field(Arc::new(field));
+        renderer.colours = ColourVolume::from_volume(&volume)?.map(Arc::new);
         renderer.volume = Some(volume);
         Ok(renderer)
     }
@@ -232,6 +239,7 @@ impl Renderer {
             occluders: None,
             paths: None,
             cancel: None,
+            colours: None,
         }
     }
 
@@ -337,6 +345,8 @@ impl Renderer {
 
     /// The classification for `tf` and `settings`: the last one when they are the
     /// same, else a new one (which replaces it). Returns it and whether it was built.
+    /// A colour volume's classification takes its colours from the data
+    /// ([`Classification::with_colour`]).
     pub fn classification(
         &mut self,
         tf: &TransferFunction,
@@ -351,7 +361,11 @@ impl Renderer {
             .field
             .clone()
             .ok_or_else(|| RenderError::Parameter("the renderer has no volume".into()))?;
-        let c = Arc::new(Classification::new(field, tf, settings)?);
+        let mut c = Classification::new(field, tf, settings)?;
+        if let Some(colours) = &self.colours {
+            c = c.with_colour(colours.clone())?;
+        }
+        let c = Arc::new(c);
         self.classification = Some((tf.clone(), c.clone()));
         Ok((c, true))
     }

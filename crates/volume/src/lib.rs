@@ -55,7 +55,7 @@ pub use phantom::Phantom;
 pub use preint::Sampling;
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{
-    Classification, ClassifySettings, FrameSettings, Kernel, LabelLook, LabelVolume,
+    Classification, ClassifySettings, ColourVolume, FrameSettings, Kernel, LabelLook, LabelVolume,
     TERMINATION_OPACITY,
 };
 pub use tf::{TransferFunction, TransferFunctionFile};

@@ -130,9 +130,10 @@ pub struct SceneFlags {
     /// group, multi-frame DICOM without frame positions).
     #[arg(long)]
     pub strict: bool,
-    /// A colour volume (DICOM RGB or YBR) as one grey: its luminance (ITU-R BT.601
-    /// luma) or one channel [default: luminance].
-    #[arg(long, value_parser = choice::<Grey>(Grey::ALL.map(Grey::name)))]
+    /// A colour volume (DICOM RGB or YBR) rendered grey: its luminance (ITU-R BT.601
+    /// luma) or one channel, through the transfer function's colours [default: the
+    /// volume's own colours, with opacity from its luminance].
+    #[arg(long, value_parser = choice::<Grey>(CHANNEL_NAMES))]
     pub channel: Option<Grey>,
     /// Level of an OME-Zarr pyramid to render: 0 (the finest), 1, ..., or auto (the
     /// coarsest with at least as many voxels along its longest edge as the image has
@@ -189,6 +190,9 @@ pub struct SceneFlags {
     pub labels: LabelFlags,
 }
 
+/// `--channel`'s values: [`Grey::name`]s and their short forms (`Grey`'s `FromStr`).
+const CHANNEL_NAMES: [&str; 8] = ["luminance", "luma", "red", "r", "green", "g", "blue", "b"];
+
 impl SceneFlags {
     /// Makes `scene`'s lobe `kind`; a `hw` lobe takes its unit's v unless --v was
     /// given (a --v that contradicts the unit is refused when the scene is resolved).
@@ -214,6 +218,7 @@ impl SceneFlags {
         ReadOptions {
             strict: self.strict,
             grey: self.channel.unwrap_or_default(),
+            colour: self.channel.is_none(),
             level: match self.level {
                 None => Level::Finest,
                 Some(LevelArg::Index(i)) => Level::Index(i),

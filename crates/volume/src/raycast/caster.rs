@@ -5,6 +5,7 @@ use glint_core::camera::Camera;
 use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3, MAX_LIGHTS};
 
 use super::settings::FrameSettings;
+use super::ColourVolume;
 use super::{ISO_REFINE_STEPS, TERMINATION_OPACITY, TILE};
 use crate::field::{Field, Loc, MACRO_CELL};
 use crate::lut::Lut;
@@ -39,6 +40,9 @@ pub(super) struct Caster<'a> {
     pub(super) sampling: Sampling,
     /// The `shadows` model's light volumes (`None`: local lighting).
     pub(super) shadows: Option<&'a ShadowField>,
+    /// A colour volume's colours, which replace the transfer function's
+    /// ([`Classification::with_colour`](super::Classification::with_colour)).
+    pub(super) colour: Option<&'a ColourVolume>,
 }
 
 impl Caster<'_> {
@@ -273,7 +277,10 @@ impl Caster<'_> {
     ) -> bool {
         stats.shaded += 1;
         let grad = self.field.gradient_at(loc, guard);
-        let base = [rgba[0], rgba[1], rgba[2]];
+        let base = match self.colour {
+            Some(c) => c.at(loc),
+            None => [rgba[0], rgba[1], rgba[2]],
+        };
         let rgb = match self.shadows {
             None => self.shader.shade(base, grad, lighting),
             Some(s) => {
@@ -366,7 +373,10 @@ impl Caster<'_> {
                 let e = self.lut.get(threshold);
                 let g = self.field.gradient_in(p, guard);
                 let lighting = self.shader.for_ray(view);
-                let base = [e[0], e[1], e[2]];
+                let base = match self.colour {
+                    Some(c) => c.at(&self.field.locate(p)),
+                    None => [e[0], e[1], e[2]],
+                };
                 let rgb = match self.shadows {
                     None => self.shader.shade(base, g, &lighting),
                     Some(s) => self.shade_shadowed(s, p, base, g, &lighting),

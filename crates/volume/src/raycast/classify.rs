@@ -9,6 +9,7 @@ use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
 
 use super::caster::{Caster, IndexRays, Pixels};
 use super::cells::{active_bounds, chessboard_distance, visible_blocks, visible_cells};
+use super::colour::ColourVolume;
 use super::settings::{ClassifySettings, FrameSettings, Kernel};
 use super::start::StartBounds;
 use super::{simd_supported, Scratch, TILE};
@@ -130,6 +131,8 @@ pub struct Classification {
     medium: OnceLock<Medium>,
     density: OnceLock<DensityGrid>,
     occlusion: OnceLock<Arc<Vec<f32>>>,
+    /// [`Classification::with_colour`].
+    colour: Option<Arc<ColourVolume>>,
 }
 
 impl Classification {
@@ -179,7 +182,33 @@ impl Classification {
             density: OnceLock::new(),
             occlusion: OnceLock::new(),
             opaque_world,
+            colour: None,
         })
+    }
+
+    /// The classification with each composite or iso sample's colour taken from
+    /// `colour` (a colour volume's data, trilinear) instead of the transfer function:
+    /// the transfer function of the field's grey values still gives the opacity, and
+    /// the field's gradient the normal. MIP keeps the transfer function's colour, and
+    /// the `path` model's medium the transfer function's albedo. Frames with colour
+    /// run the reference compositing loop (the SIMD loop reads no colour). Refused when
+    /// `colour`'s grid is not the field's.
+    pub fn with_colour(mut self, colour: Arc<ColourVolume>) -> Result<Classification, RenderError> {
+        if colour.dims() != self.field.dims {
+            return Err(RenderError::Parameter(format!(
+                "colour volume of {:?} voxels for a field of {:?}",
+                colour.dims(),
+                self.field.dims
+            )));
+        }
+        self.colour = Some(colour);
+        Ok(self)
+    }
+
+    /// The colours samples take ([`Classification::with_colour`]); `None`: the
+    /// transfer function's.
+    pub fn colour(&self) -> Option<&Arc<ColourVolume>> {
+        self.colour.as_ref()
     }
 
     /// The classified field as a participating medium (built on first use).
@@ -351,10 +380,11 @@ impl Classification {
             iso_value: self.settings.iso,
             skip_empty: self.settings.skip_empty,
             dt: (self.settings.step * field.min_spacing()) as f32,
-            simd: settings.kernel == Kernel::Auto && simd_supported(),
+            simd: settings.kernel == Kernel::Auto && simd_supported() && self.colour.is_none(),
             jitter,
             sampling: self.settings.sampling,
             shadows,
+            colour: self.colour.as_deref(),
         };
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)

@@ -4,6 +4,7 @@
 mod caster;
 mod cells;
 mod classify;
+mod colour;
 mod labels;
 mod settings;
 mod start;
@@ -18,6 +19,7 @@ use avx2::Scratch;
 type Scratch = ();
 
 pub use classify::Classification;
+pub use colour::ColourVolume;
 pub use labels::{LabelLook, LabelVolume};
 pub use settings::{ClassifySettings, FrameSettings, Kernel};
 
