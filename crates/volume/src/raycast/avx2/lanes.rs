@@ -36,22 +36,20 @@ pub(super) struct Lanes {
 }
 
 impl Lanes {
-    /// Starts `ray` (the tile's ray `id`) in lane `l`.
+    /// Starts `ray` in lane `l`.
     #[inline(always)]
-    pub(super) fn set(&mut self, l: usize, ray: &Ray, id: u32) {
+    pub(super) fn set(&mut self, l: usize, ray: &LaneRay) {
         for a in 0..3 {
-            self.o[a][l] = ray.o.get(a);
-            self.d[a][l] = ray.d.get(a);
+            self.o[a][l] = ray.o[a];
+            self.d[a][l] = ray.d[a];
             self.inv_dk[a][l] = ray.inv_dk[a];
-            self.up[a][l] = if ray.face_up[a] { -1 } else { 0 };
+            self.up[a][l] = ray.up[a];
         }
         self.j[l] = ray.j;
-        // Sample indices are exact in f32 below 2^24 (as `Ray::t` assumes), so within
-        // i32; a longer ray is cut there.
-        self.k[l] = ray.k0.clamp(-(1 << 24), 1 << 24) as i32;
-        self.k1[l] = ray.k1.clamp(-(1 << 24), 1 << 24) as i32;
+        self.k[l] = ray.k0;
+        self.k1[l] = ray.k1;
         self.alpha[l] = 0.0;
-        self.id[l] = id;
+        self.id[l] = ray.id;
         self.prev_k[l] = i32::MIN;
         self.last[l] = Last::default();
         self.live |= 1 << l;

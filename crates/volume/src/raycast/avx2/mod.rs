@@ -36,7 +36,7 @@ use std::arch::x86_64::*;
 
 use crossbeam_epoch::Guard;
 
-use super::caster::{Caster, Pixels, Ray};
+use super::caster::{Caster, Pixels};
 use super::TERMINATION_OPACITY;
 use crate::field::MACRO_CELL;
 use crate::preint::{Last, Sampling};
@@ -68,10 +68,12 @@ macro_rules! axes {
 
 mod lanes;
 mod light;
+mod rays;
 mod reads;
 
 use lanes::Lanes;
 use light::light;
+use rays::LaneRay;
 use reads::*;
 
 /// Samples per chunk (f32 lanes of an AVX2 register).
@@ -188,6 +190,9 @@ impl Kept {
 #[derive(Default)]
 pub(super) struct Scratch {
     pub(super) views: Vec<Vec3>,
+    /// The tile's rays that meet a visible cell, in pixel order
+    /// ([`Scratch::tile_rays`]).
+    pub(super) rays: Vec<LaneRay>,
     pub(super) colors: Vec<[f32; 3]>,
     pub(super) kept: Kept,
     pub(super) light: ShadeBatch,
@@ -198,17 +203,6 @@ pub(super) struct Scratch {
 pub(super) fn refill<T: Copy>(v: &mut Vec<T>, n: usize, x: T) {
     v.clear();
     v.resize(n, x);
-}
-
-/// The ray of the tile's pixel `i` (row-major in the tile) when it meets a visible
-/// cell, its view vector recorded in `views[i]`.
-#[inline(always)]
-pub(super) fn pixel_ray(c: &Caster, px: &Pixels, i: usize, views: &mut [Vec3]) -> Option<Ray> {
-    let tw = px.xs.1 - px.xs.0;
-    let (x, y) = (px.xs.0 + i % tw, px.ys.0 + i / tw);
-    let (ray, view) = c.ray(x as f32, y as f32, (px.start[i], px.end[i]))?;
-    views[i] = view;
-    Some(ray)
 }
 
 /// Lane `l`'s bit of an eight-bit mask `m`, as a vector mask (all ones or zero).
@@ -226,6 +220,22 @@ pub(super) unsafe fn lane_mask(m: u8) -> __m256i {
 }
 
 impl Scratch {
+    /// Sets up the rays of the tile `px` (`n` pixels) eight at a time
+    /// ([`rays::rays8`]), before any is marched, keeping those that meet a visible cell
+    /// in pixel order.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+    #[inline(always)]
+    pub(super) unsafe fn tile_rays(&mut self, c: &Caster, px: &Pixels, n: usize) {
+        self.rays.clear();
+        for i0 in (0..n).step_by(LANES) {
+            // SAFETY: this function's contract; i0 is a multiple of 8 below n, which
+            // is at most TILE * TILE.
+            unsafe { rays::rays8(c, px, (i0, n), &mut self.rays, &mut self.views) };
+        }
+    }
+
     /// Starts a tile of `n` rays: no kept samples, zero colours, and `n` zero
     /// opacities appended to `alpha`. Returns where the tile's opacities start.
     #[inline(always)]
@@ -256,6 +266,7 @@ pub(super) unsafe fn finish(
         colors,
         kept,
         light: buffers,
+        ..
     } = scratch;
     if kept.len() > 0 {
         // SAFETY: this function's contract.
@@ -326,23 +337,19 @@ pub(super) unsafe fn composite_lanes<const PRE: bool>(
     unsafe {
         let n = (px.xs.1 - px.xs.0) * (px.ys.1 - px.ys.0);
         let start = scratch.begin(n, alpha);
-        let Scratch { views, kept, .. } = &mut *scratch;
+        scratch.tile_rays(c, px, n);
+        let Scratch { kept, rays, .. } = &mut *scratch;
         let inv = Invariants::new(c);
         let mut lanes = Lanes::default();
         let mut next = 0;
         loop {
-            // Fill the idle lanes with the next rays that meet a visible cell.
+            // Fill the idle lanes with the next rays.
             let mut idle = !lanes.live;
-            while idle != 0 && next < n {
+            while idle != 0 && next < rays.len() {
                 let l = idle.trailing_zeros() as usize;
                 idle &= idle - 1;
-                while lanes.live & (1 << l) == 0 && next < n {
-                    let i = next;
-                    next += 1;
-                    if let Some(ray) = pixel_ray(c, px, i, views) {
-                        lanes.set(l, &ray, i as u32);
-                    }
-                }
+                lanes.set(l, rays.get_unchecked(next));
+                next += 1;
             }
             if lanes.live == 0 {
                 break;
