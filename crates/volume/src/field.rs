@@ -34,7 +34,7 @@ mod tests;
 use brick::{brick_dims, Recipe, BRICK, BRICK_ROW, BRICK_SHIFT, BRICK_SLICE, BRICK_VOXELS};
 pub use budget::{memory_limit, set_memory_limit, MIN_BRICK_SLOTS, PROCESS_OVERHEAD};
 use cache::BrickCache;
-pub use source::Source;
+pub use source::{open_zarr, Source};
 
 /// Largest voxel count the caster accepts: 2^33 (a 2048 x 2048 x 2048 volume). Memory,
 /// not this, bounds what renders: the samples stay in their stored type and bricks are
