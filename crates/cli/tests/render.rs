@@ -161,7 +161,10 @@ fn a_zarr_store_with_a_missing_or_corrupt_chunk() {
         "{stderr}"
     );
     assert_eq!(
-        stderr.lines().filter(|l| l.starts_with("glint: error")).count(),
+        stderr
+            .lines()
+            .filter(|l| l.starts_with("glint: error"))
+            .count(),
         1,
         "{stderr}"
     );

@@ -54,7 +54,9 @@ fn boxes(dims: [usize; 3]) -> Vec<([isize; 3], [usize; 3])> {
     ];
     let mut state = 12345u64;
     let mut next = |n: usize| {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((state >> 33) % n as u64) as usize
     };
     for _ in 0..60 {
@@ -120,7 +122,10 @@ fn a_missing_chunk_reads_as_the_fill_value_with_the_same_note() {
     let whole = open_volume(&path, &ReadOptions::default()).unwrap();
     let s = Stream::open(&path, &ReadOptions::default(), 0, 1).unwrap();
     assert_eq!(s.notes(), &whole.notes[..]);
-    assert!(s.notes().iter().any(|n| n.contains("1 of 12 chunks missing")));
+    assert!(s
+        .notes()
+        .iter()
+        .any(|n| n.contains("1 of 12 chunks missing")));
     let size = whole.volume.dims;
     let mut out = vec![f32::NAN; size.iter().product()];
     s.read_box([0, 0, 0], size, &mut out);
@@ -131,7 +136,10 @@ fn a_missing_chunk_reads_as_the_fill_value_with_the_same_note() {
         strict: true,
         ..ReadOptions::default()
     };
-    let err = Stream::open(&path, &strict, 0, 1).err().unwrap().to_string();
+    let err = Stream::open(&path, &strict, 0, 1)
+        .err()
+        .unwrap()
+        .to_string();
     let whole_err = open_volume(&path, &strict).unwrap_err().to_string();
     assert_eq!(err, whole_err);
     assert!(err.contains("1 of 12 chunks are missing"), "{err}");
@@ -152,7 +160,10 @@ fn a_corrupt_chunk_is_one_line_of_problem() {
     assert_eq!(s.problem(), None);
     s.read_box([0, 0, 0], [2, 2, 2], &mut out);
     let problem = s.problem().expect("the corrupt chunk is reported");
-    assert!(problem.contains("c.zarr") && problem.contains("level '0'"), "{problem}");
+    assert!(
+        problem.contains("c.zarr") && problem.contains("level '0'"),
+        "{problem}"
+    );
     assert!(!problem.contains('\n'), "{problem}");
 }
 

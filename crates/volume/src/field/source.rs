@@ -2,10 +2,8 @@
 //! box of voxels, so the field keeps the samples in their stored type (or in a chunked
 //! store on disk) and converts only the boxes it builds.
 
-use std::path::Path;
-
 use glint_io::zarr::Stream;
-use glint_io::{IoError, ReadOptions, Samples, Volume};
+use glint_io::{Samples, Volume};
 
 /// The samples of a field, read a box at a time.
 ///
@@ -160,22 +158,6 @@ fn physical_box(v: &Volume, lo: [isize; 3], size: [usize; 3], out: &mut [f32]) {
         Samples::F32(s) => go(v, s, lo, size, out),
         Samples::F64(s) => go(v, s, lo, size, out),
     }
-}
-
-/// Share of the memory limit ([`super::budget::memory_limit`]) an OME-Zarr level's chunk cache
-/// may take at most: a quarter, the rest left to the bricks and other fields.
-const CHUNK_CACHE_SHARE: u64 = 4;
-
-/// Opens level [`ReadOptions::level`] of the OME-Zarr store at `path` as a source
-/// that decodes chunks as bricks need them ([`Stream`]): its chunk cache holds two
-/// layers of chunks per rayon thread, at most a quarter of the memory limit.
-pub fn open_zarr(path: &Path, options: &ReadOptions) -> Result<Stream, IoError> {
-    Stream::open(
-        path,
-        options,
-        super::budget::memory_limit() / CHUNK_CACHE_SHARE,
-        rayon::current_num_threads(),
-    )
 }
 
 /// A level of an OME-Zarr store, read a box at a time through its bounded chunk cache
