@@ -1,5 +1,11 @@
 //! OME-Zarr (OME-NGFF 0.4 on Zarr v2, 0.5 on Zarr v3) multiscale images: the pyramid's
-//! levels from the group's `multiscales` metadata, and one level read as a volume.
+//! levels from the group's `multiscales` metadata, and one level read as a volume
+//! ([`read`]) or opened as a [`Stream`] that hands out boxes of voxels through a
+//! bounded cache of decoded chunks (what `glint render` and `glint view` use: the
+//! field's bricks are built from the chunks as rays reach them, and the level is never
+//! held whole). Both open the level with the same checks (sizes
+//! against `max_voxels`, the chunk shape before any chunk is decoded, data type, axes,
+//! affine).
 //!
 //! The arrays are read with `zarrs` (codecs blosc, gzip, zstd, sharding) and the
 //! metadata parsed and validated by `ome_zarr_metadata`; this module only maps the
