@@ -27,7 +27,7 @@ use zarrs::storage::{ReadableStorageTraits, StorageError};
 
 mod stream;
 
-pub use stream::Stream;
+pub use stream::{Stream, STREAM_MAX_VOXELS};
 
 use crate::common::{check_affine, diagonal_affine};
 use crate::{Format, IoError, ReadOptions, Samples, Volume, VolumeFile};
@@ -267,9 +267,13 @@ impl Opened {
 }
 
 /// Opens level [`ReadOptions::level`] of the store at `path` and checks its metadata
-/// (size against `max_voxels`, chunk shape, data type, axes, affine) before any chunk
-/// is read.
-pub(crate) fn open_level(path: &Path, options: &ReadOptions) -> Result<Opened, IoError> {
+/// (its voxels against `level_voxels`, the chunk shape against `max_voxels`, data type,
+/// axes, affine) before any chunk is read.
+pub(crate) fn open_level(
+    path: &Path,
+    options: &ReadOptions,
+    level_voxels: u64,
+) -> Result<Opened, IoError> {
     let all = levels(path)?;
     let chosen = pick(&all, options.level).ok_or_else(|| {
         invalid(
@@ -282,7 +286,7 @@ pub(crate) fn open_level(path: &Path, options: &ReadOptions) -> Result<Opened, I
         )
     })?;
     let l = &all[chosen];
-    let count = crate::common::checked_voxels(path, l.dims, 1, options.max_voxels)?;
+    let count = crate::common::checked_voxels(path, l.dims, 1, level_voxels)?;
     let (store, image) = multiscale(path)?;
     let store: Arc<dyn ReadableStorageTraits> = store;
     let array = Array::open(store, &format!("/{}", l.path))
@@ -344,7 +348,7 @@ pub(crate) fn open_level(path: &Path, options: &ReadOptions) -> Result<Opened, I
 /// notes list every level, the one read marked. ([`Stream`] reads boxes of a level
 /// through a bounded chunk cache instead, never the whole level.)
 pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
-    let mut o = open_level(path, options)?;
+    let mut o = open_level(path, options, options.max_voxels)?;
     let samples = read_samples(path, &mut o, options)?;
     if samples.len() != o.count {
         return Err(invalid(path, "the level's data does not match its shape"));

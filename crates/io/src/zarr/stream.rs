@@ -18,6 +18,13 @@ use zarrs::storage::ReadableStorageTraits;
 use super::{count_missing, level_notes, missing_note, open_level};
 use crate::{IoError, ReadOptions};
 
+/// The most voxels a streamed level may have: 2^33, the field's limit
+/// (`glint_volume::MAX_FIELD_VOXELS`). A stream allocates nothing sized by the level's
+/// voxel count (its cache is bounded; the field's largest table, the macro cells, takes
+/// 1/8 byte a voxel), so [`ReadOptions::max_voxels`], the guard of the readers that
+/// hold a volume whole, bounds its chunks, not the level.
+pub const STREAM_MAX_VOXELS: u64 = 1 << 33;
+
 /// A sample type a Zarr level may hold, read from its native-endian decoded bytes.
 trait Element: Copy + Into<f64> {
     const SIZE: usize;
@@ -99,8 +106,8 @@ pub struct Stream {
 
 impl Stream {
     /// Opens level [`ReadOptions::level`] of the store at `path`, with the checks
-    /// [`super::read`] makes (metadata, sizes against `max_voxels`, the chunk shape
-    /// before any chunk is decoded), and counts the chunks missing (a note, or under
+    /// [`super::read`] makes (metadata, the chunk shape against `max_voxels` before
+    /// any chunk is decoded; the level's voxels against [`STREAM_MAX_VOXELS`]), and counts the chunks missing (a note, or under
     /// `strict` an error). The cache holds up to `2 * threads` layers of chunks (a
     /// layer: the chunks sharing a range of z, what one slab of the field's pass reads;
     /// two, as a slab may straddle two), no more than `limit` bytes, at least one
@@ -111,7 +118,7 @@ impl Stream {
         limit: u64,
         threads: usize,
     ) -> Result<Stream, IoError> {
-        let mut o = open_level(path, options)?;
+        let mut o = open_level(path, options, STREAM_MAX_VOXELS.max(options.max_voxels))?;
         let l = o.level().clone();
         let stored = Stored::of(&l.data_type).expect("checked by open_level");
         let whole = ArraySubset::new_with_ranges(&o.ranges);
