@@ -178,3 +178,31 @@ fn copy_dir(from: &Path, to: &Path) {
         }
     }
 }
+
+/// Four threads reading overlapping boxes of one stream at once, through a cache of
+/// two chunks (every read evicts another thread's chunks): no deadlock, and every box
+/// equals the whole read.
+#[test]
+fn concurrent_reads_through_a_small_cache_equal_the_whole_level() {
+    let path = data("missing-chunk.zarr");
+    let whole = open_volume(&path, &ReadOptions::default()).unwrap().volume;
+    let chunk = Stream::open(&path, &ReadOptions::default(), 0, 1)
+        .unwrap()
+        .chunk_bytes();
+    let s = Stream::open(&path, &ReadOptions::default(), 2 * chunk, 4).unwrap();
+    let all = boxes(whole.dims);
+    std::thread::scope(|scope| {
+        for t in 0..4 {
+            let (s, whole, all) = (&s, &whole, &all);
+            scope.spawn(move || {
+                for (lo, size) in all.iter().cycle().skip(t * 7).take(all.len()) {
+                    let mut out = vec![f32::NAN; size.iter().product()];
+                    s.read_box(*lo, *size, &mut out);
+                    assert!(out == expected(whole, *lo, *size), "thread {t} box {lo:?}");
+                }
+            });
+        }
+    });
+    assert!(s.cached_chunks() <= 2);
+    assert_eq!(s.problem(), None);
+}
