@@ -206,3 +206,44 @@ fn concurrent_reads_through_a_small_cache_equal_the_whole_level() {
     assert!(s.cached_chunks() <= 2);
     assert_eq!(s.problem(), None);
 }
+
+/// A level of 2^32 voxels (no chunk written: every one missing), over the whole
+/// read's limit of 2^31: the whole read refuses it, the stream opens it (it allocates
+/// nothing by the level's size) and reads the fill value; its chunks are still checked
+/// against `max_voxels`.
+#[test]
+fn a_streamed_level_may_exceed_the_whole_reads_voxel_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("big.zarr");
+    let src = data("v05-zstd.zarr");
+    std::fs::create_dir_all(store.join("0")).unwrap();
+    let mut group: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("zarr.json")).unwrap()).unwrap();
+    let datasets = &mut group["attributes"]["ome"]["multiscales"][0]["datasets"];
+    datasets.as_array_mut().unwrap().truncate(1);
+    std::fs::write(store.join("zarr.json"), group.to_string()).unwrap();
+    let mut array: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("0/zarr.json")).unwrap()).unwrap();
+    array["shape"] = serde_json::json!([1024, 2048, 2048]);
+    array["chunk_grid"]["configuration"]["chunk_shape"] = serde_json::json!([64, 256, 256]);
+    array["codecs"] = serde_json::json!([{"name": "bytes", "configuration": {"endian": "little"}}]);
+    std::fs::write(store.join("0/zarr.json"), array.to_string()).unwrap();
+    let options = ReadOptions::default();
+    let err = open_volume(&store, &options).unwrap_err();
+    assert!(matches!(err, glint_io::IoError::TooLarge { .. }), "{err}");
+    let s = Stream::open(&store, &options, 0, 1).unwrap();
+    assert_eq!(s.dims(), [2048, 2048, 1024]);
+    assert!(s
+        .notes()
+        .iter()
+        .any(|n| n.contains("1024 of 1024 chunks missing")));
+    let mut out = vec![f32::NAN; 8];
+    s.read_box([2047, 2047, 1023], [2, 2, 2], &mut out);
+    assert_eq!(out, vec![0.0; 8]);
+    let small_chunks = ReadOptions {
+        max_voxels: 1 << 20,
+        ..ReadOptions::default()
+    };
+    let err = Stream::open(&store, &small_chunks, 0, 1).err().unwrap();
+    assert!(err.to_string().contains("chunks of"), "{err}");
+}
