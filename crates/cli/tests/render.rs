@@ -112,3 +112,61 @@ fn render_prints_the_geometry_the_reader_assumed() {
     assert!(stderr.contains("--strict"), "{stderr}");
     assert!(!strict_out.exists());
 }
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &to.join(e.file_name()));
+        } else {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+/// An OME-Zarr store streamed into the bricks: a missing chunk is noted on stderr and
+/// the image written, `--strict` refuses it; a corrupt chunk (found while the field is
+/// built) fails with one line naming the store and writes nothing.
+#[test]
+fn a_zarr_store_with_a_missing_or_corrupt_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("m.zarr");
+    copy_dir(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/data/zarr/missing-chunk.zarr"),
+        &store,
+    );
+    let out = dir.path().join("m.png");
+    let run = render(&[], &store, &out);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("1 of 12 chunks missing"), "{stderr}");
+    assert!(out.is_file());
+
+    let strict_out = dir.path().join("strict.png");
+    let run = render(&["--strict"], &store, &strict_out);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(stderr.contains("1 of 12 chunks are missing"), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(!strict_out.exists());
+
+    std::fs::write(store.join("0/1/1/1"), b"not a blosc chunk").unwrap();
+    let bad_out = dir.path().join("bad.png");
+    let run = render(&[], &store, &bad_out);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains("m.zarr: level '0'") && stderr.contains("blosc"),
+        "{stderr}"
+    );
+    assert_eq!(
+        stderr
+            .lines()
+            .filter(|l| l.starts_with("glint: error"))
+            .count(),
+        1,
+        "{stderr}"
+    );
+    assert!(!bad_out.exists());
+}

@@ -33,7 +33,7 @@
 //! | NRRD `.nrrd`, `.nhdr` | [`nrrd`] | raw, gzip, text | raw, gzip |
 //! | FreeSurfer MGH `.mgh`, `.mgz` | [`mgh`] | uchar, short, ushort, int, float | no |
 //! | DICOM file or directory | [`dicom`] | native, deflate, JPEG (8, 12-bit, lossless), JPEG-LS, JPEG 2000, RLE; grey, 1-bit and colour | no |
-//! | OME-Zarr directory (NGFF 0.4, 0.5; Zarr v2, v3) | [`zarr`] | one pyramid level; blosc, gzip, zstd, sharding | no |
+//! | OME-Zarr directory (NGFF 0.4, 0.5; Zarr v2, v3) | [`zarr`] | one pyramid level, read whole or streamed a box at a time ([`zarr::Stream`]); blosc, gzip, zstd, sharding | no |
 //! | raw samples | [`raw`] | yes | yes |
 //! | STL | [`mesh`] | binary, ASCII | binary |
 //! | OBJ | [`mesh`] | yes | yes |

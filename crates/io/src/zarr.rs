@@ -1,5 +1,11 @@
 //! OME-Zarr (OME-NGFF 0.4 on Zarr v2, 0.5 on Zarr v3) multiscale images: the pyramid's
-//! levels from the group's `multiscales` metadata, and one level read as a volume.
+//! levels from the group's `multiscales` metadata, and one level read as a volume
+//! ([`read`]) or opened as a [`Stream`] that hands out boxes of voxels through a
+//! bounded cache of decoded chunks (what `glint render` and `glint view` use: the
+//! field's bricks are built from the chunks as rays reach them, and the level is never
+//! held whole). Both open the level with the same checks (sizes
+//! against `max_voxels`, the chunk shape before any chunk is decoded, data type, axes,
+//! affine).
 //!
 //! The arrays are read with `zarrs` (codecs blosc, gzip, zstd, sharding) and the
 //! metadata parsed and validated by `ome_zarr_metadata`; this module only maps the
@@ -18,6 +24,10 @@ use zarrs::array::{Array, ArrayError, ArraySubset, ElementOwned};
 use zarrs::filesystem::FilesystemStore;
 use zarrs::group::Group;
 use zarrs::storage::{ReadableStorageTraits, StorageError};
+
+mod stream;
+
+pub use stream::{Stream, STREAM_MAX_VOXELS};
 
 use crate::common::{check_affine, diagonal_affine};
 use crate::{Format, IoError, ReadOptions, Samples, Volume, VolumeFile};
@@ -232,9 +242,38 @@ pub fn pick(levels: &[LevelInfo], level: Level) -> Option<usize> {
     }
 }
 
-/// Reads one level of an OME-Zarr store ([`ReadOptions::level`]) as a volume; the
-/// notes list every level, the one read marked.
-pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
+/// One level of a store opened, its metadata checked: what [`read`] and [`Stream`] share.
+pub(crate) struct Opened {
+    pub(crate) all: Vec<LevelInfo>,
+    pub(crate) chosen: usize,
+    pub(crate) array: Array<dyn ReadableStorageTraits>,
+    /// Index 0 along time and channel axes, the whole extent along the spatial ones.
+    pub(crate) ranges: Vec<std::ops::Range<u64>>,
+    /// The slowest spatial axis (z) among the array's axes.
+    pub(crate) zaxis: usize,
+    /// Voxels of the level.
+    pub(crate) count: usize,
+    pub(crate) affine: [[f64; 4]; 4],
+    pub(crate) spacing: [f64; 3],
+    /// The version and the time point and channel read.
+    pub(crate) notes: Vec<String>,
+}
+
+impl Opened {
+    /// The level opened.
+    pub(crate) fn level(&self) -> &LevelInfo {
+        &self.all[self.chosen]
+    }
+}
+
+/// Opens level [`ReadOptions::level`] of the store at `path` and checks its metadata
+/// (its voxels against `level_voxels`, the chunk shape against `max_voxels`, data type,
+/// axes, affine) before any chunk is read.
+pub(crate) fn open_level(
+    path: &Path,
+    options: &ReadOptions,
+    level_voxels: u64,
+) -> Result<Opened, IoError> {
     let all = levels(path)?;
     let chosen = pick(&all, options.level).ok_or_else(|| {
         invalid(
@@ -247,8 +286,9 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         )
     })?;
     let l = &all[chosen];
-    let count = crate::common::checked_voxels(path, l.dims, 1, options.max_voxels)?;
+    let count = crate::common::checked_voxels(path, l.dims, 1, level_voxels)?;
     let (store, image) = multiscale(path)?;
+    let store: Arc<dyn ReadableStorageTraits> = store;
     let array = Array::open(store, &format!("/{}", l.path))
         .map_err(|e| invalid(path, format!("level '{}': {e}", l.path)))?;
     let xyz = spatial_axes(path, &image.axes)?;
@@ -263,7 +303,6 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         },
         all.len()
     )];
-    // Index 0 along time and channel axes, the whole extent along the spatial ones.
     let ranges: Vec<std::ops::Range<u64>> = (0..shape.len())
         .map(|a| {
             if xyz.contains(&a) {
@@ -286,25 +325,40 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             what: "spatial axes other than the last three in z, y, x order".into(),
         });
     }
-    let samples = read_samples(
-        path,
-        &array,
-        l,
-        (&ranges, xyz[2], count),
-        options,
-        &mut notes,
-    )?;
-    if samples.len() != count {
-        return Err(invalid(path, "the level's data does not match its shape"));
-    }
-    notes.extend(level_notes(&all, chosen));
+    stream::Stored::of(&l.data_type).ok_or_else(|| IoError::Unsupported {
+        path: path.into(),
+        what: format!("Zarr data type {}", l.data_type),
+    })?;
     let affine = diagonal_affine(l.scale, l.translation);
     let spacing = check_affine(path, &affine)?;
+    Ok(Opened {
+        chosen,
+        array,
+        ranges,
+        zaxis: xyz[2],
+        count,
+        affine,
+        spacing,
+        notes,
+        all,
+    })
+}
+
+/// Reads one level of an OME-Zarr store ([`ReadOptions::level`]) as a volume; the
+/// notes list every level, the one read marked. ([`Stream`] reads boxes of a level
+/// through a bounded chunk cache instead, never the whole level.)
+pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
+    let mut o = open_level(path, options, options.max_voxels)?;
+    let samples = read_samples(path, &mut o, options)?;
+    if samples.len() != o.count {
+        return Err(invalid(path, "the level's data does not match its shape"));
+    }
+    o.notes.extend(level_notes(&o.all, o.chosen));
     Ok(VolumeFile {
         volume: Volume {
-            dims: l.dims,
-            spacing,
-            affine,
+            dims: o.level().dims,
+            spacing: o.spacing,
+            affine: o.affine,
             samples,
             slope: 1.0,
             intercept: 0.0,
@@ -312,7 +366,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
             colour: None,
         },
         format: Format::Zarr,
-        notes,
+        notes: o.notes,
         inflate: None,
     })
 }
@@ -322,7 +376,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
 /// metadata is checked before any chunk is read.
 fn check_chunks(
     path: &Path,
-    array: &Array<FilesystemStore>,
+    array: &Array<dyn ReadableStorageTraits>,
     level: &str,
     max_voxels: u64,
 ) -> Result<(), IoError> {
@@ -344,22 +398,15 @@ fn check_chunks(
     Ok(())
 }
 
-/// The samples of level `l` (`ranges` of its axes, `zaxis` the slowest spatial one,
-/// `count` voxels) in their stored type, with a note naming the chunks missing (or,
-/// `strict`, an error).
-fn read_samples(
-    path: &Path,
-    array: &Array<FilesystemStore>,
-    l: &LevelInfo,
-    (ranges, zaxis, count): (&[std::ops::Range<u64>], usize, usize),
-    options: &ReadOptions,
-    notes: &mut Vec<String>,
-) -> Result<Samples, IoError> {
+/// The samples of the level `o` opened in their stored type, with a note naming the
+/// chunks missing (or, `strict`, an error).
+fn read_samples(path: &Path, o: &mut Opened, options: &ReadOptions) -> Result<Samples, IoError> {
     let mut missing = (0, 0);
+    let l = o.level().clone();
     macro_rules! slabs {
         ($v:ident) => {
             Samples::$v(
-                read_slabs(array, ranges, zaxis, count, &mut missing)
+                read_slabs(&o.array, &o.ranges, o.zaxis, o.count, &mut missing)
                     .map_err(|e| e.into_io(path, &l.path))?,
             )
         };
@@ -380,23 +427,59 @@ fn read_samples(
             })
         }
     };
-    let (absent, chunks) = missing;
+    missing_note(path, &l.path, missing, options.strict, &mut o.notes)?;
+    Ok(samples)
+}
+
+/// The note on `missing` (chunks absent, chunks in all) of level `level`, pushed onto
+/// `notes`; under `strict`, an error instead.
+pub(crate) fn missing_note(
+    path: &Path,
+    level: &str,
+    (absent, chunks): (usize, usize),
+    strict: bool,
+    notes: &mut Vec<String>,
+) -> Result<(), IoError> {
     if absent > 0 {
-        if options.strict {
+        if strict {
             return Err(invalid(
                 path,
                 format!(
-                    "level '{}': {absent} of {chunks} chunks are missing (--strict refuses them)",
-                    l.path
+                    "level '{level}': {absent} of {chunks} chunks are missing (--strict refuses them)"
                 ),
             ));
         }
         notes.push(format!(
-            "level '{}': {absent} of {chunks} chunks missing, read as the fill value",
-            l.path
+            "level '{level}': {absent} of {chunks} chunks missing, read as the fill value"
         ));
     }
-    Ok(samples)
+    Ok(())
+}
+
+/// Counts the chunks of `array` that `subset` touches into `missing.1`, and those the
+/// store does not hold (read as the array's fill value) into `missing.0`.
+pub(crate) fn count_missing(
+    array: &Array<dyn ReadableStorageTraits>,
+    subset: &ArraySubset,
+    missing: &mut (usize, usize),
+) -> Result<(), SlabError> {
+    let store = array.storage();
+    if let Some(chunks) = array
+        .chunks_in_array_subset(subset)
+        .map_err(|e| SlabError::Array(e.into()))?
+    {
+        for c in &chunks.indices() {
+            missing.1 += 1;
+            if store
+                .size_key(&array.chunk_key(&c))
+                .map_err(SlabError::Storage)?
+                .is_none()
+            {
+                missing.0 += 1;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// One note per level: path, size, type, voxel size, the one read marked.
@@ -421,14 +504,14 @@ fn level_notes(all: &[LevelInfo], chosen: usize) -> Vec<String> {
 }
 
 /// Why a level's chunks could not be read.
-enum SlabError {
+pub(crate) enum SlabError {
     Array(ArrayError),
     Storage(StorageError),
     Shape,
 }
 
 impl SlabError {
-    fn into_io(self, path: &Path, level: &str) -> IoError {
+    pub(crate) fn into_io(self, path: &Path, level: &str) -> IoError {
         invalid(
             path,
             match self {
@@ -446,13 +529,12 @@ impl SlabError {
 /// in transit, never a second full copy. `missing` counts the chunks the store does
 /// not hold (read as the array's fill value by `zarrs`) and all the chunks looked at.
 fn read_slabs<T: ElementOwned>(
-    array: &Array<FilesystemStore>,
+    array: &Array<dyn ReadableStorageTraits>,
     ranges: &[std::ops::Range<u64>],
     zaxis: usize,
     count: usize,
     missing: &mut (usize, usize),
 ) -> Result<Vec<T>, SlabError> {
-    let store = array.storage();
     let whole = ArraySubset::new_with_ranges(ranges);
     let grid = array
         .chunks_in_array_subset(&whole)
@@ -469,21 +551,7 @@ fn read_slabs<T: ElementOwned>(
         let mut slab = ranges.to_vec();
         slab[zaxis] = bounded.start()[zaxis]..bounded.start()[zaxis] + bounded.shape()[zaxis];
         let slab = ArraySubset::new_with_ranges(&slab);
-        if let Some(chunks) = array
-            .chunks_in_array_subset(&slab)
-            .map_err(|e| SlabError::Array(e.into()))?
-        {
-            for c in &chunks.indices() {
-                missing.1 += 1;
-                if store
-                    .size_key(&array.chunk_key(&c))
-                    .map_err(SlabError::Storage)?
-                    .is_none()
-                {
-                    missing.0 += 1;
-                }
-            }
-        }
+        count_missing(array, &slab, missing)?;
         let part: Vec<T> = array
             .retrieve_array_subset(&slab)
             .map_err(SlabError::Array)?;

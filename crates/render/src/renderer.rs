@@ -10,7 +10,7 @@ use glint_core::{Image, Legend, RenderError, RenderMode, ScalarColors, Shader, T
 use glint_io::{ReadOptions, Volume};
 use glint_volume::{
     Classification, ClassifySettings, ColourVolume, Field, FrameSettings, Kernel, Occluders,
-    PathImage, PathTarget, Prefilter, ShadowField, ShadowSettings, TransferFunction,
+    PathImage, PathTarget, Prefilter, ShadowField, ShadowSettings, Source, TransferFunction,
 };
 
 use crate::hwlobe::HwCache;
@@ -81,9 +81,10 @@ pub struct Renderer {
     pub kernel: Kernel,
     opened: Timings,
     notes: Vec<String>,
-    /// The volume the field was built from, kept to rebuild the field when a scene
-    /// asks for another [`Prefilter`]; `None` for a renderer made from a field.
-    volume: Option<Arc<Volume>>,
+    /// The source the field was built from (a volume, a streamed OME-Zarr level),
+    /// kept to rebuild the field when a scene asks for another [`Prefilter`]; `None`
+    /// for a renderer made from a field.
+    source: Option<Arc<dyn Source>>,
     /// The last light volumes (`shadows` scenes).
     shadows: Option<ShadowCache>,
     /// The meshes as occluders of the volume's light (`shadows` and `path` scenes
@@ -133,7 +134,7 @@ impl Renderer {
                 kernel: Kernel::Auto,
                 opened: Timings::default(),
                 notes: Vec::new(),
-                volume: None,
+                source: None,
                 shadows: None,
                 occluders: None,
                 paths: None,
@@ -142,6 +143,21 @@ impl Renderer {
             });
         }
         let start = Instant::now();
+        if let Input::Path(path) = input {
+            if options.raw.is_none() && glint_io::zarr::is_store(path) {
+                // An OME-Zarr level is streamed: its chunks are decoded into the bricks
+                // as they are built, through a bounded cache, never read whole.
+                let stream = glint_volume::open_zarr(path, options)?;
+                let mut read = Timings::default();
+                read.record("read", start.elapsed());
+                let notes = stream.notes().to_vec();
+                let mut renderer = Renderer::from_source(Arc::new(stream), prefilter)?;
+                read.extend(&renderer.opened);
+                renderer.opened = read;
+                renderer.notes = notes;
+                return Ok(renderer);
+            }
+        }
         let opened = input.open_with(options)?;
         let mut read = Timings::default();
         // Inflating is reported apart from reading and parsing (issue 12).
@@ -193,7 +209,20 @@ impl Renderer {
         let field = Field::shared(volume.clone(), prefilter)?;
         let mut renderer = Renderer::from_field(Arc::new(field));
         renderer.colours = ColourVolume::from_volume(&volume)?.map(Arc::new);
-        renderer.volume = Some(volume);
+        renderer.source = Some(volume);
+        Ok(renderer)
+    }
+
+    /// A renderer of any [`Source`] (e.g. an OME-Zarr level streamed from disk,
+    /// [`glint_volume::open_zarr`]), its field built with `prefilter`; the source is
+    /// kept to rebuild the field for another one.
+    pub fn from_source(
+        source: Arc<dyn Source>,
+        prefilter: Prefilter,
+    ) -> Result<Renderer, RenderError> {
+        let field = Field::from_source(source.clone(), prefilter, &|_, _| {})?;
+        let mut renderer = Renderer::from_field(Arc::new(field));
+        renderer.source = Some(source);
         Ok(renderer)
     }
 
@@ -206,14 +235,14 @@ impl Renderer {
         if field.prefilter() == prefilter {
             return Ok(());
         }
-        let Some(volume) = &self.volume else {
+        let Some(source) = &self.source else {
             return Err(RenderError::Parameter(format!(
                 "prefilter {}: this renderer was given a field built with prefilter {}",
                 prefilter.name(),
                 field.prefilter().name()
             )));
         };
-        let field = Field::shared(volume.clone(), prefilter)?;
+        let field = Field::from_source(source.clone(), prefilter, &|_, _| {})?;
         self.opened.extend(field.timings());
         self.field = Some(Arc::new(field));
         self.classification = None;
@@ -234,7 +263,7 @@ impl Renderer {
             hw: HwCache::default(),
             kernel: Kernel::Auto,
             notes: Vec::new(),
-            volume: None,
+            source: None,
             shadows: None,
             occluders: None,
             paths: None,

@@ -11,11 +11,13 @@
 //! those of a field that computed everything up front.
 
 use std::cell::RefCell;
+use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 
 use crossbeam_epoch::Guard;
-use glint_io::Volume;
+use glint_io::zarr::Stream;
+use glint_io::{IoError, ReadOptions, Volume};
 
 use glint_core::RenderError;
 use glint_core::Timings;
@@ -52,6 +54,22 @@ pub const MACRO_CELL: usize = 4;
 pub(crate) struct Loc {
     pub ijk: [usize; 3],
     pub t: [f32; 3],
+}
+
+/// Share of the memory limit ([`budget::memory_limit`]) an OME-Zarr level's chunk cache
+/// may take at most: a quarter, the rest left to the bricks and other fields.
+const CHUNK_CACHE_SHARE: u64 = 4;
+
+/// Opens level [`ReadOptions::level`] of the OME-Zarr store at `path` as a source
+/// that decodes chunks as bricks need them ([`Stream`]): its chunk cache holds two
+/// layers of chunks per rayon thread, at most a quarter of the memory limit.
+pub fn open_zarr(path: &Path, options: &ReadOptions) -> Result<Stream, IoError> {
+    Stream::open(
+        path,
+        options,
+        budget::memory_limit() / CHUNK_CACHE_SHARE,
+        rayon::current_num_threads(),
+    )
 }
 
 /// Fields built so far, to tell their bricks apart in the per-thread fallback cache.

@@ -47,8 +47,8 @@ mod tf;
 pub mod transport;
 
 pub use field::{
-    memory_limit, set_memory_limit, Field, Prefilter, Source, MACRO_CELL, MAX_FIELD_VOXELS,
-    MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
+    memory_limit, open_zarr, set_memory_limit, Field, Prefilter, Source, MACRO_CELL,
+    MAX_FIELD_VOXELS, MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
 };
 pub use lut::{Lut, LUT_SIZE};
 pub use phantom::Phantom;

@@ -2,6 +2,7 @@
 //! box of voxels, so the field keeps the samples in their stored type (or in a chunked
 //! store on disk) and converts only the boxes it builds.
 
+use glint_io::zarr::Stream;
 use glint_io::{Samples, Volume};
 
 /// The samples of a field, read a box at a time.
@@ -156,6 +157,36 @@ fn physical_box(v: &Volume, lo: [isize; 3], size: [usize; 3], out: &mut [f32]) {
         Samples::I32(s) => go(v, s, lo, size, out),
         Samples::F32(s) => go(v, s, lo, size, out),
         Samples::F64(s) => go(v, s, lo, size, out),
+    }
+}
+
+/// A level of an OME-Zarr store, read a box at a time through its bounded chunk cache
+/// (the cache's bound is what it keeps resident).
+impl Source for Stream {
+    fn dims(&self) -> [usize; 3] {
+        Stream::dims(self)
+    }
+
+    fn affine(&self) -> [[f64; 4]; 4] {
+        Stream::affine(self)
+    }
+
+    fn resident_bytes(&self) -> u64 {
+        self.cache_bound()
+    }
+
+    fn may_be_non_finite(&self) -> bool {
+        // Integer types convert to finite f32 (slope 1, intercept 0), as for a
+        // `Volume` read whole.
+        self.is_float()
+    }
+
+    fn read(&self, lo: [isize; 3], size: [usize; 3], out: &mut [f32]) {
+        self.read_box(lo, size, out)
+    }
+
+    fn problem(&self) -> Option<String> {
+        Stream::problem(self)
     }
 }
 
