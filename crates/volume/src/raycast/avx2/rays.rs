@@ -19,9 +19,9 @@ use super::*;
 pub(in crate::raycast) struct LaneRay {
     pub(super) o: [f32; 3],
     pub(super) d: [f32; 3],
-    /// [`Ray::inv_dk`].
+    /// `Ray::inv_dk`.
     pub(super) inv_dk: [f32; 3],
-    /// [`Ray::face_up`], as all ones or zero.
+    /// `Ray::face_up`, as all ones or zero.
     pub(super) up: [i32; 3],
     pub(super) j: f32,
     /// First and last sample, clamped to +-2^24 (exact in f32, as `Ray::t` assumes).
@@ -62,7 +62,7 @@ unsafe fn bound<const FLOOR: bool>(x: __m256) -> __m256i {
     }
 }
 
-/// `v - floor(v)`, as [`jitter`]'s `fract`.
+/// `v - floor(v)`, as `jitter`'s `fract`.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -130,6 +130,68 @@ unsafe fn directions(c: &Caster, x: __m256, y: __m256) -> ([__m256; 3], [__m256;
     }
 }
 
+/// The slab test of `Caster::ray` against the clip box for rays `o + t d` (t in mm):
+/// the entry and exit parameters, `Ray::inv_dk`, `Ray::face_up` (all ones or
+/// zero), and the rays not refused by an axis they do not move along (all ones).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[inline(always)]
+unsafe fn slabs(c: &Caster, o: [__m256; 3], d: [__m256; 3]) -> Slabs {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
+        let (lo_box, hi_box) = c.clip_box;
+        let (mut t0, mut t1) = (_mm256_setzero_ps(), _mm256_set1_ps(f32::INFINITY));
+        let mut inv_dk = [_mm256_setzero_ps(); 3];
+        let mut up = [_mm256_setzero_ps(); 3];
+        let mut inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        let abs = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX));
+        for a in 0..3 {
+            let (lo, hi) = (_mm256_set1_ps(lo_box[a]), _mm256_set1_ps(hi_box[a]));
+            let flat = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_and_ps(d[a], abs), _mm256_set1_ps(1e-12));
+            let outside = _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_LT_OQ>(o[a], lo),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(o[a], hi),
+            );
+            inside = _mm256_andnot_ps(_mm256_and_ps(flat, outside), inside);
+            let inv = _mm256_div_ps(_mm256_set1_ps(1.0), d[a]);
+            let ta = _mm256_mul_ps(_mm256_sub_ps(lo, o[a]), inv);
+            let tb = _mm256_mul_ps(_mm256_sub_ps(hi, o[a]), inv);
+            let near = _mm256_max_ps(t0, _mm256_min_ps(ta, tb));
+            let far = _mm256_min_ps(t1, _mm256_max_ps(ta, tb));
+            t0 = _mm256_blendv_ps(near, t0, flat);
+            t1 = _mm256_blendv_ps(far, t1, flat);
+            inv_dk[a] = _mm256_blendv_ps(
+                _mm256_div_ps(inv, _mm256_set1_ps(c.dt)),
+                _mm256_set1_ps(f32::INFINITY),
+                flat,
+            );
+            let rising = _mm256_cmp_ps::<_CMP_GT_OQ>(d[a], _mm256_setzero_ps());
+            up[a] = _mm256_or_ps(rising, flat);
+        }
+        (t0, t1, inv_dk, up, inside)
+    }
+}
+
+/// [`slabs`]'s result: entry, exit, steps per index unit, face-up masks, inside mask.
+type Slabs = (__m256, __m256, [__m256; 3], [__m256; 3], __m256);
+
+/// `jitter` of eight pixels.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[inline(always)]
+unsafe fn jitters(x: __m256, y: __m256) -> __m256 {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
+        let h = _mm256_add_ps(
+            _mm256_mul_ps(_mm256_set1_ps(0.067_110_56), x),
+            _mm256_mul_ps(_mm256_set1_ps(0.005_837_15), y),
+        );
+        fract(_mm256_mul_ps(_mm256_set1_ps(52.982_918), fract(h)))
+    }
+}
+
 /// Sets up the rays of the tile's pixels `i0 .. i0 + 8` (those below `n`), as
 /// `Caster::ray` does: each that meets a visible cell is appended to `out`, its view
 /// vector written to `views`.
@@ -169,44 +231,13 @@ pub(super) unsafe fn rays8(
         );
         let y = _mm256_add_ps(_mm256_set1_ps(px.ys.0 as f32), row);
         let (o, d, dir) = directions(c, x, y);
-        // Slab test against the clip box, t in mm (`Caster::ray`).
-        let (lo_box, hi_box) = c.clip_box;
-        let (mut t0, mut t1) = (_mm256_setzero_ps(), _mm256_set1_ps(f32::INFINITY));
-        let mut inv_dk = [_mm256_setzero_ps(); 3];
-        let mut up = [_mm256_setzero_ps(); 3];
-        let abs = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX));
-        for a in 0..3 {
-            let (lo, hi) = (_mm256_set1_ps(lo_box[a]), _mm256_set1_ps(hi_box[a]));
-            let flat = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_and_ps(d[a], abs), _mm256_set1_ps(1e-12));
-            let outside = _mm256_or_ps(
-                _mm256_cmp_ps::<_CMP_LT_OQ>(o[a], lo),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(o[a], hi),
-            );
-            valid = _mm256_andnot_ps(_mm256_and_ps(flat, outside), valid);
-            let inv = _mm256_div_ps(_mm256_set1_ps(1.0), d[a]);
-            let ta = _mm256_mul_ps(_mm256_sub_ps(lo, o[a]), inv);
-            let tb = _mm256_mul_ps(_mm256_sub_ps(hi, o[a]), inv);
-            let near = _mm256_max_ps(t0, _mm256_min_ps(ta, tb));
-            let far = _mm256_min_ps(t1, _mm256_max_ps(ta, tb));
-            t0 = _mm256_blendv_ps(near, t0, flat);
-            t1 = _mm256_blendv_ps(far, t1, flat);
-            inv_dk[a] = _mm256_blendv_ps(
-                _mm256_div_ps(inv, _mm256_set1_ps(c.dt)),
-                _mm256_set1_ps(f32::INFINITY),
-                flat,
-            );
-            let rising = _mm256_cmp_ps::<_CMP_GT_OQ>(d[a], _mm256_setzero_ps());
-            up[a] = _mm256_or_ps(rising, flat);
-        }
+        let (t0, t1, inv_dk, up, inside) = slabs(c, o, d);
+        valid = _mm256_and_ps(valid, inside);
         let t0 = _mm256_max_ps(t0, start);
         let t1 = _mm256_min_ps(t1, end);
         valid = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(t0, t1), valid);
         let j = if c.jitter {
-            let h = _mm256_add_ps(
-                _mm256_mul_ps(_mm256_set1_ps(0.067_110_56), x),
-                _mm256_mul_ps(_mm256_set1_ps(0.005_837_15), y),
-            );
-            fract(_mm256_mul_ps(_mm256_set1_ps(52.982_918), fract(h)))
+            jitters(x, y)
         } else {
             _mm256_setzero_ps()
         };
