@@ -27,10 +27,9 @@ pub(super) struct Prepared {
     pub(super) largest: f32,
 }
 
-/// One slab's share of [`Prepared`].
+/// One slab's share of [`Prepared`] (its cells are written in place).
 struct Slab {
     range: (f32, f32),
-    cells: Vec<(f32, f32)>,
     largest: f32,
     robust: Vec<f32>,
 }
@@ -67,6 +66,16 @@ impl<T, F: Fn() -> T> Spares<T, F> {
 fn layers_per_slab(dims: [usize; 3]) -> usize {
     let slice = (dims[0] * dims[1] * 4).max(1);
     ((16 << 20) / (slice * MACRO_CELL)).clamp(1, 8)
+}
+
+/// Bytes the pass's buffers take at most, on `threads` threads: per thread the read
+/// slices of a slab with the prefilter's halo, the filter's four slices of scratch and
+/// the filtered slices (the pass over NaN-free sources; the finite-range pass before it,
+/// when there is one, takes less).
+pub(super) fn pass_bytes(dims: [usize; 3], threads: usize) -> u64 {
+    let slices = (layers_per_slab(dims) * MACRO_CELL + 2) as u64;
+    let slice = (dims[0] * dims[1] * std::mem::size_of::<f32>()) as u64;
+    threads as u64 * slice * ((slices + 2) + 4 + slices)
 }
 
 /// The finite range of the physical values, in a pass of its own, for sources whose
@@ -134,20 +143,26 @@ pub(super) fn prepare(
             Vec::with_capacity(nx * ny * slices),
         )
     });
-    let parts: Vec<Slab> = (0..slabs)
-        .into_par_iter()
-        .map(|s| {
+    // Each slab writes its layers' cells in place: collected per slab and joined, the
+    // cells were held twice at the end of the pass (512 MiB more at the peak of a
+    // 2048x2048x1024 level).
+    let mut cells = vec![(0.0f32, 0.0f32); cell_dims.iter().product()];
+    let parts: Vec<Slab> = cells
+        .par_chunks_mut(layers * cell_dims[0] * cell_dims[1])
+        .enumerate()
+        .map(|(s, cells)| {
             let cz = (s * layers, ((s + 1) * layers).min(cell_dims[2]));
-            let slab = spares.with(|b| slab(recipe, cz, stride, range.is_none(), b));
+            let slab = spares.with(|b| slab(recipe, cz, stride, range.is_none(), b, cells));
             progress((slab_slices(dims, cz, cell_dims[2]).1 - cz.0 * MACRO_CELL) as u64);
             slab
         })
         .collect();
+    debug_assert_eq!(parts.len(), slabs);
     let mut out = Prepared {
         range: range.unwrap_or((f32::INFINITY, f32::NEG_INFINITY)),
         robust: (0.0, 0.0),
         cell_dims,
-        cells: Vec::with_capacity(cell_dims.iter().product()),
+        cells,
         largest: 0.0,
     };
     let mut sub = Vec::with_capacity(count.div_ceil(stride));
@@ -155,7 +170,6 @@ pub(super) fn prepare(
         if range.is_none() {
             out.range = (out.range.0.min(p.range.0), out.range.1.max(p.range.1));
         }
-        out.cells.extend_from_slice(&p.cells);
         out.largest = out.largest.max(p.largest);
         sub.extend_from_slice(&p.robust);
     }
@@ -186,13 +200,15 @@ fn slab_slices(dims: [usize; 3], cz: (usize, usize), layers: usize) -> (usize, u
 /// A slab's buffers: the prefilter's, and the filtered values.
 type Buffers = (Scratch, Vec<f32>);
 
-/// One slab of cell layers `cz.0 .. cz.1`, in the buffers `b`.
+/// One slab of cell layers `cz.0 .. cz.1`, in the buffers `b`; its macro cells into
+/// `cells_out` (the layers' cells, in order).
 fn slab(
     recipe: &Recipe,
     cz: (usize, usize),
     stride: usize,
     measure_range: bool,
     (scratch, f): &mut Buffers,
+    cells_out: &mut [(f32, f32)],
 ) -> Slab {
     let dims = recipe.dims;
     let [nx, ny, nz] = dims;
@@ -221,9 +237,9 @@ fn slab(
             f[i - fa * sxy]
         })
         .collect();
+    cells(f, dims, fa, cz, cells_out);
     Slab {
         range,
-        cells: cells(f, dims, fa, cz),
         largest,
         robust,
     }
@@ -342,10 +358,11 @@ fn largest_abs(v: &[f32]) -> f32 {
 /// Per row of cells, first the minimum and maximum of each voxel column over the
 /// cells' voxel rows (element-wise over whole rows, which vectorises), then of each
 /// cell's columns: the same sets of values, so the same extremes as a loop per cell.
-fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize)) -> Vec<(f32, f32)> {
+fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize), out: &mut [(f32, f32)]) {
     let [nx, ny, nz] = dims;
     let [cx, cy, _] = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
-    let mut out = Vec::with_capacity(cx * cy * (cz.1 - cz.0));
+    debug_assert_eq!(out.len(), cx * cy * (cz.1 - cz.0));
+    let mut out = out.iter_mut();
     let mut lo = vec![0.0f32; nx];
     let mut hi = vec![0.0f32; nx];
     for ck in cz.0..cz.1 {
@@ -367,9 +384,10 @@ fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize)) -> Vec<(f32
                     .iter()
                     .fold(f32::INFINITY, |m, &v| m.min(v));
                 let hi_c = hi[columns].iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
-                out.push((lo_c, hi_c));
+                if let Some(o) = out.next() {
+                    *o = (lo_c, hi_c);
+                }
             }
         }
     }
-    out
 }
