@@ -207,9 +207,12 @@ impl Field {
         let bricks: usize = brick_dims.iter().product();
         let cell_count: usize = dims.iter().map(|d| (d - 1).div_ceil(MACRO_CELL)).product();
         // Samples, macro cells (8 bytes each), the page table (4 per brick) and the
-        // classification's distance map (1 per cell).
-        let fixed = source.resident_bytes() + 9 * cell_count as u64 + 4 * bricks as u64;
-        let (reservation, slots) = budget::reserve(fixed, bricks)?;
+        // classification's distance map (1 per cell) with its two working arrays while
+        // it is computed (the visible cells, the padded distances: 1 per cell each;
+        // `raycast/cells.rs`).
+        let fixed = source.resident_bytes() + 11 * cell_count as u64 + 4 * bricks as u64;
+        let pass = prepare::pass_bytes(dims, rayon::current_num_threads());
+        let (reservation, slots) = budget::reserve(fixed, pass, bricks)?;
         // Gradient in index space g_idx; world gradient = A^-T g_idx (chain rule on
         // f(x) = f_idx(A^-1 (x - o))).
         let grad_to_world = transpose3(&to_index).map(|row| row.map(|x| x as f32));

@@ -98,12 +98,19 @@ fn mib(b: u64) -> String {
     format!("{:.0} MiB", b as f64 / (1u64 << 20) as f64)
 }
 
-/// Reserves `fixed` bytes and a pool for up to `bricks` bricks: as many slots as the
+/// Reserves `fixed` bytes, `transient` more (the first pass's buffers, freed after it
+/// but counted for the field's life so that the pass's peak stays within the limit,
+/// and not used to size the default pool), and a pool for up to `bricks` bricks: as
+/// many slots as the
 /// budget leaves (all bricks and the dummy slot when they fit; without a limit set, no
 /// more than [`default_pool_slots`]), at least
 /// [`MIN_BRICK_SLOTS`] (or all, if fewer). Errors, naming the limit, when even that does
 /// not fit.
-pub(crate) fn reserve(fixed: u64, bricks: usize) -> Result<(Reservation, u32), RenderError> {
+pub(crate) fn reserve(
+    fixed: u64,
+    transient: u64,
+    bricks: usize,
+) -> Result<(Reservation, u32), RenderError> {
     let limit = memory_limit();
     let mut want = (bricks as u64 + 1).min(MAX_SLOTS);
     let least = want.min(u64::from(MIN_BRICK_SLOTS));
@@ -115,15 +122,18 @@ pub(crate) fn reserve(fixed: u64, bricks: usize) -> Result<(Reservation, u32), R
         let room = limit
             .saturating_sub(current)
             .saturating_sub(PROCESS_OVERHEAD)
-            .saturating_sub(fixed);
+            .saturating_sub(fixed)
+            .saturating_sub(transient);
         let slots = want.min(room / BRICK_BYTES);
         if slots < least {
             return Err(RenderError::Volume(format!(
                 "the volume needs at least {} ({} of samples and tables, {} of bricks, {} \
-                 for the process{}), over the memory limit of {} (--memory-limit)",
-                mib(fixed + least * BRICK_BYTES + PROCESS_OVERHEAD + current),
+                 for the first pass's buffers, {} for the process{}), over the memory limit \
+                 of {} (--memory-limit)",
+                mib(fixed + transient + least * BRICK_BYTES + PROCESS_OVERHEAD + current),
                 mib(fixed),
                 mib(least * BRICK_BYTES),
+                mib(transient),
                 mib(PROCESS_OVERHEAD),
                 if current > 0 {
                     format!(", {} for other volumes", mib(current))
@@ -133,7 +143,7 @@ pub(crate) fn reserve(fixed: u64, bricks: usize) -> Result<(Reservation, u32), R
                 mib(limit)
             )));
         }
-        let bytes = fixed + slots * BRICK_BYTES;
+        let bytes = fixed + transient + slots * BRICK_BYTES;
         match RESERVED.compare_exchange(
             current,
             current + bytes,

@@ -305,22 +305,35 @@ fn a_small_cache_evicts_and_rebuilds_the_same_bricks() {
 #[test]
 fn the_memory_limit_bounds_the_pool_and_refuses_what_cannot_fit() {
     // A limit too small for even the process: one clear error naming it.
-    let (r, slots) = budget::reserve(0, 10).unwrap();
+    let (r, slots) = budget::reserve(0, 0, 10).unwrap();
     assert_eq!(slots, 11);
     drop(r);
     // Without a limit set, the pool of a volume of many bricks takes half the bytes of
     // its fixed data, or the least for a smaller one; one whose bricks all fit in the
     // floor gets them all.
     let brick = super::brick::BRICK_BYTES;
-    let (_r, slots) = budget::reserve(1 << 30, 1 << 20).unwrap();
+    let (_r, slots) = budget::reserve(1 << 30, 0, 1 << 20).unwrap();
     assert_eq!(u64::from(slots), (1 << 29) / brick);
-    let (_r, slots) = budget::reserve(1 << 20, 1 << 20).unwrap();
+    let (_r, slots) = budget::reserve(1 << 20, 0, 1 << 20).unwrap();
     assert_eq!(u64::from(slots), budget::DEFAULT_POOL_LEAST / brick);
     let all = budget::DEFAULT_POOL_FLOOR / brick - 1;
-    let (_r, slots) = budget::reserve(1 << 20, all as usize - 1).unwrap();
+    let (_r, slots) = budget::reserve(1 << 20, 0, all as usize - 1).unwrap();
     assert_eq!(u64::from(slots), all);
-    let err = budget::reserve(u64::MAX / 2, 10).err().unwrap().to_string();
+    let err = budget::reserve(u64::MAX / 2, 0, 10)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("memory limit"), "{err}");
+    assert!(err.contains("--memory-limit"), "{err}");
+    // The first pass's buffers count against the limit (a pass that cannot fit is
+    // refused, naming them) but do not enlarge the default pool.
+    let (_r, slots) = budget::reserve(1 << 30, 1 << 28, 1 << 20).unwrap();
+    assert_eq!(u64::from(slots), (1 << 29) / brick);
+    let err = budget::reserve(0, u64::MAX / 2, 10)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("first pass's buffers"), "{err}");
     assert!(err.contains("--memory-limit"), "{err}");
 }
 
