@@ -113,18 +113,6 @@ fn render_prints_the_geometry_the_reader_assumed() {
     assert!(!strict_out.exists());
 }
 
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &to.join(e.file_name()));
-        } else {
-            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-        }
-    }
-}
-
 /// An OME-Zarr store streamed into the bricks: a missing chunk is noted on stderr and
 /// the image written, `--strict` refuses it; a corrupt chunk (found while the field is
 /// built) fails with one line naming the store and writes nothing.
@@ -132,7 +120,7 @@ fn copy_dir(from: &Path, to: &Path) {
 fn a_zarr_store_with_a_missing_or_corrupt_chunk() {
     let dir = tempfile::tempdir().unwrap();
     let store = dir.path().join("m.zarr");
-    copy_dir(
+    glint_testkit::copy_dir(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/data/zarr/missing-chunk.zarr"),
         &store,
     );

@@ -151,7 +151,7 @@ fn a_missing_chunk_reads_as_the_fill_value_with_the_same_note() {
 fn a_corrupt_chunk_is_one_line_of_problem() {
     let dir = tempfile::tempdir().unwrap();
     let store = dir.path().join("c.zarr");
-    copy_dir(&data("missing-chunk.zarr"), &store);
+    glint_testkit::copy_dir(&data("missing-chunk.zarr"), &store);
     // The chunk at x 0..32, y 0..16, z 0..5.
     std::fs::write(store.join("0/0/0/0"), b"not a blosc chunk").unwrap();
     let s = Stream::open(&store, &ReadOptions::default(), 0, 1).unwrap();
@@ -165,18 +165,6 @@ fn a_corrupt_chunk_is_one_line_of_problem() {
         "{problem}"
     );
     assert!(!problem.contains('\n'), "{problem}");
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &to.join(e.file_name()));
-        } else {
-            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-        }
-    }
 }
 
 /// Four threads reading overlapping boxes of one stream at once, through a cache of

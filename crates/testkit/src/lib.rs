@@ -146,6 +146,20 @@ fn record(line: &str) {
     }
 }
 
+/// Copies the directory tree `from` to `to` (created), e.g. a test store to edit in a
+/// temporary directory. Panics on an I/O error (test set-up).
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &to.join(e.file_name()));
+        } else {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
