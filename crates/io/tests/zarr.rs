@@ -3,16 +3,12 @@
 //! (tests/data/zarr/reference.tsv), the pyramid listed, `Level::Auto` picking the
 //! coarsest level with enough voxels, and bad stores refused with one line.
 
-use std::path::{Path, PathBuf};
-
 use glint_io::zarr::{self, Level};
 use glint_io::{open_volume, Format, IoError, ReadOptions, Samples};
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/zarr")
-        .join(name)
-}
+mod common;
+
+use common::{edited_one_level_store, zarr_data as data};
 
 struct Reference {
     store: String,
@@ -188,19 +184,12 @@ fn a_missing_chunk_reads_as_the_fill_value_with_a_note_or_is_refused_strictly() 
 #[test]
 fn an_absurd_chunk_shape_is_refused_before_reading() {
     let dir = tempfile::tempdir().unwrap();
-    let store = dir.path().join("s.zarr");
-    let src = data("v05-zstd.zarr");
+    let store = edited_one_level_store(dir.path(), |array| {
+        array["chunk_grid"]["configuration"]["chunk_shape"] =
+            serde_json::json!([1_000_000_000u64, 1_000_000_000u64, 1_000_000_000u64]);
+    });
     std::fs::create_dir_all(store.join("0/c/0/0")).unwrap();
-    let mut group: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(src.join("zarr.json")).unwrap()).unwrap();
-    let datasets = &mut group["attributes"]["ome"]["multiscales"][0]["datasets"];
-    datasets.as_array_mut().unwrap().truncate(1);
-    std::fs::write(store.join("zarr.json"), group.to_string()).unwrap();
-    let mut array: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(src.join("0/zarr.json")).unwrap()).unwrap();
-    array["chunk_grid"]["configuration"]["chunk_shape"] =
-        serde_json::json!([1_000_000_000u64, 1_000_000_000u64, 1_000_000_000u64]);
-    std::fs::write(store.join("0/zarr.json"), array.to_string()).unwrap();
+    let src = data("v05-zstd.zarr");
     std::fs::copy(src.join("0/c/0/0/0"), store.join("0/c/0/0/0")).unwrap();
     let err = open_volume(&store, &ReadOptions::default()).unwrap_err();
     let text = err.to_string();

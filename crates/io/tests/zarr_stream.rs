@@ -4,16 +4,12 @@
 //! missing chunk reads as the fill value with the whole read's note (refused under
 //! `strict`), and a corrupt chunk is reported as one line.
 
-use std::path::{Path, PathBuf};
-
 use glint_io::zarr::{Level, Stream};
 use glint_io::{open_volume, ReadOptions, Volume};
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/zarr")
-        .join(name)
-}
+mod common;
+
+use common::{edited_one_level_store, zarr_data as data};
 
 fn at_level(level: usize) -> ReadOptions {
     ReadOptions {
@@ -202,20 +198,12 @@ fn concurrent_reads_through_a_small_cache_equal_the_whole_level() {
 #[test]
 fn a_streamed_level_may_exceed_the_whole_reads_voxel_limit() {
     let dir = tempfile::tempdir().unwrap();
-    let store = dir.path().join("big.zarr");
-    let src = data("v05-zstd.zarr");
-    std::fs::create_dir_all(store.join("0")).unwrap();
-    let mut group: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(src.join("zarr.json")).unwrap()).unwrap();
-    let datasets = &mut group["attributes"]["ome"]["multiscales"][0]["datasets"];
-    datasets.as_array_mut().unwrap().truncate(1);
-    std::fs::write(store.join("zarr.json"), group.to_string()).unwrap();
-    let mut array: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(src.join("0/zarr.json")).unwrap()).unwrap();
-    array["shape"] = serde_json::json!([1024, 2048, 2048]);
-    array["chunk_grid"]["configuration"]["chunk_shape"] = serde_json::json!([64, 256, 256]);
-    array["codecs"] = serde_json::json!([{"name": "bytes", "configuration": {"endian": "little"}}]);
-    std::fs::write(store.join("0/zarr.json"), array.to_string()).unwrap();
+    let store = edited_one_level_store(dir.path(), |array| {
+        array["shape"] = serde_json::json!([1024, 2048, 2048]);
+        array["chunk_grid"]["configuration"]["chunk_shape"] = serde_json::json!([64, 256, 256]);
+        array["codecs"] =
+            serde_json::json!([{"name": "bytes", "configuration": {"endian": "little"}}]);
+    });
     let options = ReadOptions::default();
     let err = open_volume(&store, &options).unwrap_err();
     assert!(matches!(err, glint_io::IoError::TooLarge { .. }), "{err}");

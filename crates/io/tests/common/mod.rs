@@ -3,7 +3,7 @@
 
 pub mod table;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The directory scripts/fetch-samples fills (`$GLINT_DATA/samples`).
 pub fn samples_dir() -> PathBuf {
@@ -110,4 +110,30 @@ pub fn assert_affine_eq(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4], tol: f64) {
             );
         }
     }
+}
+
+/// A Zarr test store written by scripts/make-zarr-fixtures.py (tests/data/zarr).
+pub fn zarr_data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/zarr")
+        .join(name)
+}
+
+/// A copy of `v05-zstd.zarr`'s group with its first level only, in `dir`, the level's
+/// array metadata changed by `edit` (no chunk copied): a store with metadata a test
+/// needs. Returns the store's path.
+pub fn edited_one_level_store(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) -> PathBuf {
+    let store = dir.join("s.zarr");
+    let src = zarr_data("v05-zstd.zarr");
+    std::fs::create_dir_all(store.join("0")).unwrap();
+    let mut group: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("zarr.json")).unwrap()).unwrap();
+    let datasets = &mut group["attributes"]["ome"]["multiscales"][0]["datasets"];
+    datasets.as_array_mut().unwrap().truncate(1);
+    std::fs::write(store.join("zarr.json"), group.to_string()).unwrap();
+    let mut array: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(src.join("0/zarr.json")).unwrap()).unwrap();
+    edit(&mut array);
+    std::fs::write(store.join("0/zarr.json"), array.to_string()).unwrap();
+    store
 }
