@@ -30,6 +30,7 @@ mod colour;
 mod geometry;
 mod header;
 mod jpeg;
+mod jpegls;
 mod pixels;
 mod scan;
 mod seg;

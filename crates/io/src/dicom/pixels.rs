@@ -1,8 +1,8 @@
 //! Pixel data: native (uncompressed, any byte order and VR, 1-bit packed, colour
 //! interleaved or planar, YBR_FULL and YBR_FULL_422) read directly; encapsulated (JPEG
-//! baseline, extended and lossless, JPEG-LS, JPEG 2000, RLE) decoded by dicom-pixeldata
-//! after the codestream headers are checked against Rows and Columns, except the JPEG
-//! frames `jpeg` decodes.
+//! baseline, extended and lossless, JPEG 2000, RLE) decoded by dicom-pixeldata after the
+//! codestream headers are checked against Rows and Columns, except the JPEG frames
+//! `jpeg` decodes and JPEG-LS, which `jpegls` decodes.
 
 use dicom_core::value::{PrimitiveValue, Value};
 use dicom_dictionary_std::tags;
@@ -11,9 +11,9 @@ use dicom_pixeldata::PixelDecoder;
 
 use super::checks::{check_codestream, check_rle};
 use super::header::Header;
-use super::jpeg;
 use super::scan::{self, ts_name};
 use super::{colour, invalid, one_line};
+use super::{jpeg, jpegls};
 use crate::{IoError, Samples};
 
 const EXPLICIT_BE: &str = "1.2.840.10008.1.2.2";
@@ -251,6 +251,50 @@ fn split_frames(h: &Header, words: &[u32], frame_len: usize) -> Vec<Samples> {
         .collect()
 }
 
+/// Whether a transfer syntax is JPEG-LS (lossless or near-lossless).
+fn is_jpeg_ls(ts: &str) -> bool {
+    ts == "1.2.840.10008.1.2.4.80" || ts == "1.2.840.10008.1.2.4.81"
+}
+
+/// Decodes JPEG-LS frames with [`jpegls`] into what dicom-pixeldata made of CharLS's
+/// output (the decoder it used before): the frames' bytes in turn, read as words of
+/// BitsAllocated, RGB for three samples a pixel, planar configuration 0.
+fn decode_jpeg_ls(
+    h: &Header,
+    fragments: &[Vec<u8>],
+    offsets: &[u32],
+    total: usize,
+) -> Result<(Vec<u32>, Layout), IoError> {
+    let path = h.path.as_path();
+    let fail = |e: String| {
+        invalid(
+            path,
+            format!("cannot decode {} pixel data: {e}", ts_name(&h.ts)),
+        )
+    };
+    if h.bits_allocated != 8 && h.bits_allocated != 16 {
+        return Err(fail(
+            "BitsAllocated other than 8 or 16 is not supported".into(),
+        ));
+    }
+    let spp = usize::from(h.samples_per_pixel);
+    let frames = jpeg::frames(path, fragments, offsets, h.frames)?;
+    let mut data = Vec::new();
+    for f in &frames {
+        data.extend(
+            jpegls::decode(f, h.rows * h.cols * spp)
+                .map_err(fail)?
+                .bytes,
+        );
+    }
+    let layout = Layout {
+        photometric: if spp == 3 { "RGB" } else { &h.photometric }.to_string(),
+        planar: false,
+    };
+    let bytes = usize::from(h.bits_allocated.div_ceil(8));
+    Ok((bytes_to_words(&data, bytes, false, total), layout))
+}
+
 /// Whether a transfer syntax is one of JPEG's (baseline, extended, lossless).
 fn is_jpeg(ts: &str) -> bool {
     ts.starts_with("1.2.840.10008.1.2.4.5") || ts.starts_with("1.2.840.10008.1.2.4.7")
@@ -314,6 +358,9 @@ fn decode(
         // empty ones), so the headers are looked for in all of them together.
         let all: Vec<u8> = seq.fragments().iter().flatten().copied().collect();
         check_codestream(path, &h.ts, &all, pixels * spp, h.samples_per_pixel)?;
+        if is_jpeg_ls(&h.ts) {
+            return decode_jpeg_ls(h, seq.fragments(), seq.offset_table(), total);
+        }
     }
     // Backstop for decoder panics the checks above do not foresee (found by fuzzing or
     // not): a malformed file is an error, not an abort. The buffers are dropped on
