@@ -151,9 +151,9 @@ fn default_thresholds(maxval: i32, near: i32) -> (i32, i32, i32) {
         (t1, t2, clamp(f * (21 - 4) + 4 + 7 * near, t2))
     } else {
         let f = 256 / (maxval + 1);
-        let t1 = clamp((3 / f).max(2) + 3 * near, near + 1);
-        let t2 = clamp((7 / f).max(3) + 5 * near, t1);
-        (t1, t2, clamp((21 / f).max(4) + 7 * near, t2))
+        let t1 = clamp((3 / f + 3 * near).max(2), near + 1);
+        let t2 = clamp((7 / f + 5 * near).max(3), t1);
+        (t1, t2, clamp((21 / f + 7 * near).max(4), t2))
     }
 }
 
@@ -700,4 +700,117 @@ pub(super) fn decode(data: &[u8], max_samples: usize) -> Result<Decoded, String>
         out.iter().flat_map(|v| v.to_le_bytes()).collect()
     };
     Ok(Decoded { bytes })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The CharLS-made cases of scripts/jpegls-fixtures.py: (name, codestream, CharLS's
+    /// decode).
+    fn fixtures() -> Vec<(String, Vec<u8>, Vec<u8>)> {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/jpegls");
+        let mut cases: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.extension().is_some_and(|x| x == "jls"))
+            .map(|p| {
+                let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+                let raw = std::fs::read(p.with_extension("raw")).unwrap();
+                (name, std::fs::read(&p).unwrap(), raw)
+            })
+            .collect();
+        cases.sort();
+        assert_eq!(cases.len(), 17, "the fixture set in {}", dir.display());
+        cases
+    }
+
+    #[test]
+    fn every_fixture_decodes_to_charls_bytes() {
+        for (name, jls, raw) in fixtures() {
+            let got = decode(&jls, 1 << 20).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(got.bytes.len(), raw.len(), "{name}");
+            let differing = got.bytes.iter().zip(&raw).filter(|(a, b)| a != b).count();
+            assert_eq!(
+                differing, 0,
+                "{name}: {differing} bytes differ from CharLS's"
+            );
+        }
+    }
+
+    /// Inserts an LSE id 1 segment after the frame header.
+    fn with_preset(jls: &[u8], fields: [u16; 5]) -> Vec<u8> {
+        let sof = jls.windows(2).position(|w| w == [0xFF, 0xF7]).unwrap();
+        let at = sof + 2 + usize::from(u16::from_be_bytes([jls[sof + 2], jls[sof + 3]]));
+        let mut lse = vec![0xFF, 0xF8, 0, 13, 1];
+        for f in fields {
+            lse.extend(f.to_be_bytes());
+        }
+        [&jls[..at], &lse, &jls[at..]].concat()
+    }
+
+    #[test]
+    fn presets_that_restate_the_defaults_decode_the_same() {
+        let (_, jls, raw) = fixtures()
+            .into_iter()
+            .find(|c| c.0 == "grey8-lossless")
+            .unwrap();
+        // MAXVAL 255, NEAR 0: T1 3, T2 7, T3 21, RESET 64 (T.87 C.2.4.1.1.1).
+        let explicit = with_preset(&jls, [255, 3, 7, 21, 64]);
+        assert_eq!(decode(&explicit, 1 << 20).unwrap().bytes, raw);
+        let zeros = with_preset(&jls, [0; 5]);
+        assert_eq!(decode(&zeros, 1 << 20).unwrap().bytes, raw);
+        // Other thresholds change the contexts: the same bits decode to other samples.
+        let other = with_preset(&jls, [255, 4, 9, 30, 32]);
+        assert_ne!(decode(&other, 1 << 20).map(|d| d.bytes).ok(), Some(raw));
+        let disordered = with_preset(&jls, [255, 9, 4, 30, 64]);
+        assert!(decode(&disordered, 1 << 20).is_err());
+    }
+
+    #[test]
+    fn the_default_thresholds_are_t87s() {
+        // T.87 Table C.3 for 8 bits; C.2.4.1.1.1's formulas for 12 and 16 bits and NEAR.
+        assert_eq!(default_thresholds(255, 0), (3, 7, 21));
+        assert_eq!(default_thresholds(4095, 0), (18, 67, 276));
+        assert_eq!(default_thresholds(65535, 0), (18, 67, 276));
+        assert_eq!(default_thresholds(255, 3), (12, 22, 42));
+        assert_eq!(default_thresholds(3, 0), (2, 3, 3));
+        // MAXVAL 31: FACTOR 8; MAX(2, 3/8 + 3) = 3, MAX(3, 7/8 + 5) = 5, MAX(4, 21/8 + 7) = 9.
+        assert_eq!(default_thresholds(31, 1), (3, 5, 9));
+    }
+
+    #[test]
+    fn a_frame_larger_than_the_image_is_refused_before_any_allocation() {
+        let (_, jls, _) = fixtures().into_iter().next().unwrap();
+        let e = decode(&jls, 100).unwrap_err();
+        assert!(e.contains("larger than the image"), "{e}");
+    }
+
+    #[test]
+    fn cut_and_altered_codestreams_give_errors_or_samples_never_a_panic() {
+        let mut errors = 0;
+        let mut decoded = 0;
+        for (_, jls, raw) in fixtures() {
+            for cut in (2..jls.len()).step_by(7) {
+                match decode(&jls[..cut], 1 << 20) {
+                    Ok(d) => {
+                        decoded += 1;
+                        assert_eq!(d.bytes.len(), raw.len());
+                    }
+                    Err(_) => errors += 1,
+                }
+            }
+            // Every byte in turn flipped, in the headers and the scan data.
+            for at in (0..jls.len()).step_by(3) {
+                let mut bad = jls.clone();
+                bad[at] ^= 0x5A;
+                if decode(&bad, 1 << 20).is_err() {
+                    errors += 1;
+                }
+            }
+        }
+        // A cut stream loses its end: most cuts are refused as cut short.
+        assert!(errors > decoded, "{errors} errors, {decoded} decoded");
+    }
 }
