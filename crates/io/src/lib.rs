@@ -41,6 +41,7 @@
 //! | GIFTI `.gii`, `.gii.gz` (+ per-vertex data: [`read_surface_data`]) | [`gifti`] | ASCII, Base64, GZipBase64, external file | ASCII, Base64, GZipBase64 |
 
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod affine;
 mod clock;

@@ -143,17 +143,19 @@ impl Params {
 
 /// T.87 C.2.4.1.1: the default thresholds for MAXVAL and NEAR.
 fn default_thresholds(maxval: i32, near: i32) -> (i32, i32, i32) {
+    // BASIC_T1, BASIC_T2, BASIC_T3: the thresholds for MAXVAL 255, NEAR 0 (Table C.3).
+    const BASIC: [i32; 3] = [3, 7, 21];
     let clamp = |i: i32, j: i32| if i > maxval || i < j { j } else { i };
     if maxval >= 128 {
         let f = (maxval.min(4095) + 128) / 256;
-        let t1 = clamp(f * (3 - 2) + 2 + 3 * near, near + 1);
-        let t2 = clamp(f * (7 - 3) + 3 + 5 * near, t1);
-        (t1, t2, clamp(f * (21 - 4) + 4 + 7 * near, t2))
+        let t1 = clamp(f * (BASIC[0] - 2) + 2 + 3 * near, near + 1);
+        let t2 = clamp(f * (BASIC[1] - 3) + 3 + 5 * near, t1);
+        (t1, t2, clamp(f * (BASIC[2] - 4) + 4 + 7 * near, t2))
     } else {
         let f = 256 / (maxval + 1);
-        let t1 = clamp((3 / f + 3 * near).max(2), near + 1);
-        let t2 = clamp((7 / f + 5 * near).max(3), t1);
-        (t1, t2, clamp((21 / f + 7 * near).max(4), t2))
+        let t1 = clamp((BASIC[0] / f + 3 * near).max(2), near + 1);
+        let t2 = clamp((BASIC[1] / f + 5 * near).max(3), t1);
+        (t1, t2, clamp((BASIC[2] / f + 7 * near).max(4), t2))
     }
 }
 
