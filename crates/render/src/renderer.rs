@@ -662,3 +662,14 @@ fn derived(camera: &Camera) -> Derived {
         transfer_function: None,
     }
 }
+
+/// The one-shot resolve, here rather than beside the scene's other rules so that the
+/// scene does not depend on the renderer (no module cycle).
+impl Scene {
+    /// Reads the input and the meshes and resolves the scene against them (one-shot;
+    /// a [`Renderer`] keeps the volume, the meshes and the classification across
+    /// scenes).
+    pub fn resolve(&self) -> Result<Resolved, RenderError> {
+        Renderer::open_scene(self)?.resolve(self)
+    }
+}

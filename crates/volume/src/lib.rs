@@ -38,6 +38,7 @@
 #![warn(missing_docs)]
 
 mod field;
+mod frames;
 mod lut;
 pub mod phantom;
 mod preint;
@@ -50,6 +51,7 @@ pub use field::{
     memory_limit, open_zarr, set_memory_limit, Field, Prefilter, Source, MACRO_CELL,
     MAX_FIELD_VOXELS, MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
 };
+pub use frames::PathTarget;
 pub use lut::{Lut, LUT_SIZE};
 pub use phantom::Phantom;
 pub use preint::Sampling;
@@ -60,6 +62,6 @@ pub use raycast::{
 };
 pub use tf::{TransferFunction, TransferFunctionFile};
 pub use transport::{
-    check_spp, LightingModel, Occluders, PathImage, PathSettings, PathTarget, ShadowField,
-    ShadowSettings, MAX_BOUNCES, MAX_SPP,
+    check_spp, LightingModel, Occluders, PathImage, PathSettings, ShadowField, ShadowSettings,
+    MAX_BOUNCES, MAX_SPP,
 };

@@ -16,7 +16,6 @@ use glint_volume::{
 use super::{Input, Scene, Transport, DEFAULT_SHININESS};
 use crate::hwlobe::HwCache;
 use crate::meshes::{MeshSet, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
-use crate::Renderer;
 
 /// A scene with every default chosen, and what the ray caster or the rasterizer
 /// needs to render it.
@@ -166,13 +165,6 @@ fn check_lights(lights: &[Light]) -> Result<(), RenderError> {
 }
 
 impl Scene {
-    /// Reads the input and the meshes and resolves the scene against them (one-shot;
-    /// a [`Renderer`] keeps the volume, the meshes and the classification across
-    /// scenes).
-    pub fn resolve(&self) -> Result<Resolved, RenderError> {
-        Renderer::open_scene(self)?.resolve(self)
-    }
-
     /// Resolves a surface scene: `field` the volume (if any), `set` its meshes and
     /// isosurface as read for this scene.
     pub(crate) fn resolve_surface(

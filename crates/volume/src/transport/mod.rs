@@ -19,7 +19,6 @@
 
 use glint_core::RenderError;
 
-mod frames;
 mod medium;
 mod occluders;
 mod path;
@@ -30,10 +29,10 @@ mod tracking;
 #[cfg(test)]
 mod tests;
 
-pub use frames::PathTarget;
 pub(crate) use medium::Medium;
 pub use occluders::Occluders;
 pub use path::PathImage;
+pub(crate) use path::PathTracer;
 pub(crate) use shadows::{occlusion_grid, DensityGrid};
 pub use shadows::{ShadowField, ShadowSettings};
 

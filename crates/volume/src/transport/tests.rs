@@ -15,7 +15,7 @@ use super::*;
 use crate::field::Field;
 use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel};
 use crate::tf::TransferFunction;
-use crate::Sampling;
+use crate::{PathTarget, Sampling};
 
 /// A volume of `dims` and `spacing` whose value at voxel `(i, j, k)` is `f`.
 fn volume(dims: [usize; 3], spacing: [f64; 3], f: impl Fn(f32, f32, f32) -> f32) -> Volume {
@@ -290,7 +290,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
         field,
         medium: class.medium(),
     };
-    let l_index = super::frames::direction_to_index(field, up);
+    let l_index = crate::frames::direction_to_index(field, up);
     // Points on the floor's top face (z = 8): under the ball (r < 4) dark, clear of
     // its shadow (r > 9) lit, both in the light volume and by ratio tracking.
     let mut checked = 0;
@@ -490,10 +490,7 @@ fn path_images_depend_on_the_seed_and_sample_count_alone() {
 fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
     // On x86-64 CI and strict runs the AVX2 loop must really run, or this would
     // compare the scalar loop with itself.
-    let strict = ["CI", "GLINT_STRICT"]
-        .iter()
-        .any(|k| std::env::var(k).is_ok_and(|v| !matches!(v.as_str(), "" | "0" | "false" | "no")));
-    if strict && cfg!(target_arch = "x86_64") {
+    if glint_testkit::strict() && cfg!(target_arch = "x86_64") {
         assert!(
             Kernel::simd_available(),
             "no AVX2+FMA: the SIMD loop is not tested"

@@ -1,4 +1,5 @@
-//! Frames of a classification under the `shadows` and `path` models.
+//! Frames of a classification under the `shadows` and `path` models: above both the
+//! ray caster (`raycast`) and the light transport (`transport`), which it joins.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -6,12 +7,11 @@ use rayon::prelude::*;
 
 use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
 
-use super::occluders::Occluders;
-use super::path::{PathImage, PathTracer};
-use super::shadows::{ShadowField, ShadowSettings};
-use super::{check_spp, PathSettings};
 use crate::field::Field;
 use crate::raycast::{Classification, FrameSettings};
+use crate::transport::{
+    check_spp, Occluders, PathImage, PathSettings, PathTracer, ShadowField, ShadowSettings,
+};
 
 /// The index-space direction (index units per mm) of the world direction `v`.
 pub(crate) fn direction_to_index(field: &Field, v: Vec3) -> Vec3 {
