@@ -1,21 +1,19 @@
 //! `glint batch` as a user runs it: a directory of good and broken volumes, the exit
 //! status counting the failures, a rerun that does nothing.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use glint_io::{nifti, Endian};
 use glint_render::Phantom;
 
-/// Runs `glint batch ARGS`.
+/// `glint batch ARGS`.
 fn glint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .arg("batch")
-        .args(args)
-        .output()
-        .unwrap()
+    common::glint(&[&["batch"], args].concat())
 }
 
 /// Every file below `dir` and its inode (an atomic rewrite gives a new one).

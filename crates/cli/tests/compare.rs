@@ -3,29 +3,22 @@
 //! grows (K_v converges to cos^n), the picture and the sweep files are written, and bad
 //! input gives one line and no file.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
+
+/// `glint compare ARGS`.
+fn glint(args: &[&str]) -> std::process::Output {
+    common::glint(&[&["compare"], args].concat())
+}
+
+/// `glint compare ARGS`, which must succeed; its stdout.
+fn ok(args: &[&str]) -> String {
+    common::ok(&[&["compare"], args].concat())
+}
 
 /// A small, quick scene: the phantom on a 32^3 grid, 48x40 pixels.
 const SMALL: [&str; 4] = ["--phantom-size", "32", "--size", "48x40"];
-
-fn glint(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .arg("compare")
-        .args(args)
-        .output()
-        .expect("run glint")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = glint(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
 
 /// Width and height from a PNG's IHDR.
 fn png_size(path: &Path) -> (u32, u32) {

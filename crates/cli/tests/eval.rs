@@ -1,14 +1,9 @@
 //! `glint eval` end to end: values against the formulas written out by hand, JSON shape,
 //! and one-line errors for bad arguments.
 
-use std::process::Command;
+mod common;
 
-fn glint(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(args)
-        .output()
-        .expect("run glint")
-}
+use common::glint;
 
 fn json(args: &[&str]) -> serde_json::Value {
     let out = glint(args);

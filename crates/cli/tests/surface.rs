@@ -3,25 +3,10 @@
 //! for bit, compare on a mesh, an isosurface of a volume, and bad overlays refused with
 //! one line and no file.
 
+mod common;
+
+use common::{glint, ok};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn glint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_glint"))
-        .args(args)
-        .output()
-        .expect("run glint")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = glint(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
 
 /// `glint ARGS -q -o OUT --dump-scene SCENE`, which must succeed; the dumped scene.
 fn render_dumped(args: &[&str], out: &Path, scene: &Path) -> serde_json::Value {
