@@ -12,11 +12,60 @@ use std::time::{Duration, Instant};
 use glint_analysis::image::{compare, ImageMetrics};
 use glint_render::{LightingModel, Renderer, Scene};
 
-use crate::{exact_scene, shoot, CompareError, Comparison, Experiment, Reference, Shot};
+use crate::{shoot, CompareError, Comparison, Experiment, Reference, Shot};
 
 /// Added (wrapping) to the scene's seed for the converged reference: the 64-bit golden
 /// ratio constant (Knuth's multiplicative hashing), any value but 0 would do.
 pub const REFERENCE_SEED_OFFSET: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// Image size of a `path` comparison whose caller gives none (no size, no scene
+/// file): small, so the converged reference takes tens of seconds.
+pub const PATH_SIZE: [u32; 2] = [128, 128];
+
+/// Samples per pixel of a `path` comparison's images when the scene sets none.
+pub const PATH_SPP: u32 = 16;
+
+/// The converged reference's samples per pixel when none is asked for: this many times
+/// the images'.
+pub const REFERENCE_SPP_FACTOR: u32 = 16;
+
+/// Applies a comparison's `path` defaults to `scene`: [`PATH_SPP`] samples per pixel
+/// unless it sets them, and [`PATH_SIZE`] unless `size_given`. Scenes of other lighting
+/// models are left as they are. `glint compare`, `glint.compare` and the viewer's split
+/// view share it, so their numbers agree.
+pub fn path_defaults(scene: &mut Scene, size_given: bool) {
+    if scene.lighting.model != LightingModel::Path {
+        return;
+    }
+    if !size_given {
+        scene.size = PATH_SIZE;
+    }
+    scene.lighting.spp.get_or_insert(PATH_SPP);
+}
+
+/// The converged reference's samples per pixel for `scene`: `requested` (0: none),
+/// else [`REFERENCE_SPP_FACTOR`] times the images'; `None` for scenes not lit by
+/// `path`. An error when the request does not exceed the images' samples.
+pub fn reference_spp(scene: &Scene, requested: Option<u32>) -> Result<Option<u32>, CompareError> {
+    let l = &scene.lighting;
+    if l.model != LightingModel::Path {
+        if requested.is_some_and(|s| s > 0) {
+            return Err(CompareError::Invalid(
+                "a converged reference needs path lighting".into(),
+            ));
+        }
+        return Ok(None);
+    }
+    let own = l.spp.unwrap_or(PATH_SPP);
+    match requested {
+        Some(0) => Ok(None),
+        Some(s) if s <= own => Err(CompareError::Invalid(format!(
+            "the reference's {s} samples per pixel must exceed the images' {own}"
+        ))),
+        Some(s) => Ok(Some(s)),
+        None => Ok(Some(own.saturating_mul(REFERENCE_SPP_FACTOR))),
+    }
+}
 
 /// One image's distance to the converged reference.
 #[derive(Clone, Debug)]
@@ -46,7 +95,7 @@ pub struct Converged {
 /// the reference's seed; an error when the scene is not `path` or already has `spp`
 /// samples or more.
 fn reference_scene(scene: &Scene, spp: u32) -> Result<(Scene, u64), CompareError> {
-    let mut s = exact_scene(scene);
+    let mut s = scene.with_exact_lobe();
     s.derived = None;
     let l = &mut s.lighting;
     if l.model != LightingModel::Path {

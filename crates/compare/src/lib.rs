@@ -37,12 +37,11 @@ use std::time::Duration;
 
 use glint_analysis::image::{compare, delta_e_map, highlight_mask, ImageMetrics, Srgb8Image};
 use glint_analysis::AnalysisError;
-use glint_lobe::LobeKind;
 use glint_render::{luminance_f32, Depth, RenderError, Rendered, Renderer, Scene, SceneLobe};
 
 pub use converged::{
-    convergence, convergence_schedule, Converged, ConvergedRow, Convergence, ConvergenceStep,
-    REFERENCE_SEED_OFFSET,
+    convergence, convergence_schedule, path_defaults, reference_spp, Converged, ConvergedRow,
+    Convergence, ConvergenceStep, PATH_SIZE, PATH_SPP, REFERENCE_SEED_OFFSET, REFERENCE_SPP_FACTOR,
 };
 pub use glint_analysis::image::{DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION};
 pub use sweep::{sweep, Sweep, SweepRow, SweepSpec, SWEEP_LOBES, SWEEP_N, SWEEP_V};
@@ -129,13 +128,6 @@ pub struct Experiment {
     dark: Rendered,
 }
 
-/// `scene` with the exact lobe.
-pub fn exact_scene(scene: &Scene) -> Scene {
-    let mut s = scene.clone();
-    s.lobe.kind = LobeKind::Exact.into();
-    s
-}
-
 /// `scene` without specular light.
 fn dark_scene(scene: &Scene) -> Scene {
     let mut s = scene.clone();
@@ -166,7 +158,7 @@ impl Experiment {
     /// Starts the experiment on `renderer` (which holds `scene`'s volume and meshes):
     /// renders the scene without specular light.
     pub fn new(mut renderer: Renderer, scene: &Scene) -> Result<Experiment, CompareError> {
-        let dark = renderer.render(&dark_scene(&exact_scene(scene)), &|_| {})?;
+        let dark = renderer.render(&dark_scene(&scene.with_exact_lobe()), &|_| {})?;
         Ok(Experiment { renderer, dark })
     }
 
@@ -177,7 +169,7 @@ impl Experiment {
 
     /// The exact render of `scene` (its lobe made exact) and its highlight mask.
     pub fn reference(&mut self, scene: &Scene) -> Result<Reference, CompareError> {
-        let shot = shoot(&mut self.renderer, &exact_scene(scene))?;
+        let shot = shoot(&mut self.renderer, &scene.with_exact_lobe())?;
         let mask = highlight_mask(&specular_term(&shot.rendered, &self.dark));
         Ok(Reference { shot, mask })
     }
@@ -270,6 +262,7 @@ pub fn run_against(
 
 #[cfg(test)]
 mod tests {
+    use glint_lobe::LobeKind;
     use glint_render::{Input, LobeSpec, Phantom};
 
     use super::*;

@@ -40,9 +40,12 @@
 mod accuracy;
 mod arith;
 mod config;
+#[cfg(feature = "tools")]
 mod design;
 mod fixed;
+#[cfg(feature = "tools")]
 pub mod hdl;
+#[cfg(feature = "tools")]
 pub mod pareto;
 mod pipeline;
 mod report;
@@ -57,6 +60,7 @@ pub use config::{
     CoefSource, Coefficients, Config, Rounding, Squarer, MAX_COS_BITS, MAX_N_BITS,
     MAX_REGISTER_BITS, MAX_V,
 };
+#[cfg(feature = "tools")]
 pub use design::{Design, DesignErrors, DESIGN_COS_BITS, DESIGN_N_BITS, N_RANGES};
 pub use fixed::requantize;
 pub use pipeline::{BaseReg, MulReg, Pipeline, Registers, RomSm1Reg, SquareReg, Trace};

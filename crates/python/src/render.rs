@@ -156,17 +156,28 @@ pub fn render<'py>(
 /// with the same keys and the same numbers (the resolved scene, the highlight, per
 /// lobe PSNR, SSIM, CIEDE2000 ΔE and ꟻLIP over the image and the highlight). The volume
 /// and scene are taken as by `glint.render`; the GIL is released throughout.
+///
+/// A `path` scene gets the command's defaults (16 samples per pixel unless it sets
+/// them; 128x128 unless a scene or a `size` is given) and, as there, each image's
+/// distance to the exact lobe traced with `reference_spp` samples per pixel (16 times
+/// the images' by default, 0 for none).
 #[pyfunction]
-#[pyo3(signature = (volume=None, scene=None, lobes=vec!["k".to_string()], **fields))]
+#[pyo3(signature = (volume=None, scene=None, lobes=vec!["k".to_string()], reference_spp=None, **fields))]
 pub fn compare<'py>(
     py: Python<'py>,
     volume: Option<&Bound<'py, PyAny>>,
     scene: Option<&Bound<'py, Scene>>,
     lobes: Vec<String>,
+    reference_spp: Option<u32>,
     fields: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
-    let mut scene = glint_compare::exact_scene(&with_fields(&base, fields)?);
+    let mut own = with_fields(&base, fields)?;
+    let size_given = scene.is_some() || fields.is_some_and(|f| f.contains("size").unwrap_or(false));
+    glint_compare::path_defaults(&mut own, size_given);
+    let reference =
+        glint_compare::reference_spp(&own, reference_spp).map_err(|e| errors::value_error(&e))?;
+    let mut scene = own.with_exact_lobe();
     let lobes = lobes
         .iter()
         .map(|l| l.parse::<SceneLobe>())
@@ -181,7 +192,7 @@ pub fn compare<'py>(
         .into_inner()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
     let report = crate::pool::detach(py, || {
-        glint_compare::run(inner, &scene, &lobes, None)?.to_json()
+        glint_compare::run_against(inner, &scene, &lobes, None, reference)?.to_json()
     })?
     .map_err(|e| match e {
         glint_compare::CompareError::Render(e) => render_error(py, e),

@@ -40,6 +40,28 @@ def test_compare_equals_the_cli_json(glint_bin, mni_path, tmp_path):
     assert got["scene"]["lobe"]["kind"] == "exact"
 
 
+def test_compare_on_a_path_scene_equals_the_cli_json(glint_bin, mni_path, tmp_path):
+    # The command's path defaults (16 spp unless set, 128x128 unless a size or scene is
+    # given) and its converged reference (16x the images' spp) come from glint-compare,
+    # so glint.compare gives the command's report, the reference's rows included.
+    scene = glint.Scene(input=str(mni_path), preset="mr-t2-brain", size=(40, 32),
+                        camera={"view": "left"}, lighting={"model": "path", "spp": 2})
+    got = glint.compare(mni_path, scene, lobes=["k"])
+    scene_file = tmp_path / "scene.json"
+    scene_file.write_text(scene.to_json())
+    want = glint_json(glint_bin, "compare", "--scene", str(scene_file), "--lobe", "k",
+                      "--json", "--quiet", "-o", str(tmp_path / "cmp.png"))
+    assert without_times(got) == without_times(want)
+    assert got["converged"]["spp"] == 32
+    assert [r["lobe"] for r in got["converged"]["rows"]] == ["exact", "k"]
+    # An explicit reference, and none.
+    got = glint.compare(mni_path, scene, lobes=["k"], reference_spp=4)
+    assert got["converged"]["spp"] == 4
+    assert "converged" not in glint.compare(mni_path, scene, lobes=["k"], reference_spp=0)
+    with pytest.raises(ValueError, match="must exceed"):
+        glint.compare(mni_path, scene, lobes=["k"], reference_spp=2)
+
+
 def test_compare_refuses_unknown_lobes(mni_path):
     with pytest.raises(ValueError, match="unknown lobe"):
         glint.compare(mni_path, glint.Scene(size=(16, 16)), lobes=["phongish"])

@@ -123,7 +123,7 @@ pub fn render_frame(
         Split::Off => main.image,
         Split::Side | Split::Diff => {
             let reference = renderer
-                .render(&glint_compare::exact_scene(&main.scene), &|_| {})?
+                .render(&main.scene.with_exact_lobe(), &|_| {})?
                 .image;
             if split == Split::Side {
                 side_by_side(&reference, &main.image)

@@ -62,9 +62,7 @@ fn frame(r: &mut Renderer, split: Split) -> (usize, usize, Vec<[u8; 3]>) {
 fn side_by_side_is_exact_left_and_the_lobe_right() {
     let mut r = Renderer::open(&scene().input).unwrap();
     let main = r.render(&scene(), &|_| {}).unwrap();
-    let exact = r
-        .render(&glint_compare::exact_scene(&main.scene), &|_| {})
-        .unwrap();
+    let exact = r.render(&main.scene.with_exact_lobe(), &|_| {}).unwrap();
     let (_, _, left) = decode(&exact.image.encode_png(glint_render::Depth::Eight).unwrap());
     let (_, _, right) = decode(&main.image.encode_png(glint_render::Depth::Eight).unwrap());
     assert_ne!(
@@ -85,9 +83,7 @@ fn side_by_side_is_exact_left_and_the_lobe_right() {
 fn difference_is_the_heat_map_of_the_two_renders() {
     let mut r = Renderer::open(&scene().input).unwrap();
     let main = r.render(&scene(), &|_| {}).unwrap();
-    let exact = r
-        .render(&glint_compare::exact_scene(&main.scene), &|_| {})
-        .unwrap();
+    let exact = r.render(&main.scene.with_exact_lobe(), &|_| {}).unwrap();
     let (w, h, px) = frame(&mut r, Split::Diff);
     assert_eq!((w, h), (40, 32));
     // Rec. 709 luminance of linear RGB (ITU-R BT.709 item 3.2).

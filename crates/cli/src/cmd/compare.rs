@@ -86,25 +86,20 @@ struct Options {
     quiet: bool,
 }
 
-/// Image size of a `path` comparison that gives no --size and no --scene: small, so
-/// the converged reference takes tens of seconds.
-const PATH_SIZE: [u32; 2] = [128, 128];
-
-/// Samples per pixel of a `path` comparison's images that give no --spp.
-const PATH_SPP: u32 = 16;
-
-/// The scene of the flags (its own lobe); under `path` lighting, [`PATH_SIZE`] and
-/// [`PATH_SPP`] unless given.
+/// The scene of the flags (its own lobe); under `path` lighting with the comparison's
+/// defaults ([`glint_compare::path_defaults`]: its size unless --size or --scene gives
+/// one, its samples per pixel unless --spp does).
 fn flag_scene(o: &Options) -> anyhow::Result<Scene> {
     if o.sweep && (o.scene.n.is_some() || o.scene.v.is_some()) {
         bail!("--sweep chooses n and v itself: drop --n and --v (or use --sweep-n, --sweep-v)");
     }
     let mut scene = o.scene.scene()?;
+    glint_compare::path_defaults(
+        &mut scene,
+        o.scene.size.is_some() || o.scene.scene.is_some(),
+    );
     if scene.lighting.model == LightingModel::Path {
-        if o.scene.size.is_none() && o.scene.scene.is_none() {
-            scene.size = PATH_SIZE;
-        }
-        let spp = *scene.lighting.spp.get_or_insert(PATH_SPP);
+        let spp = scene.lighting.spp.unwrap_or(glint_compare::PATH_SPP);
         if let Some(r) = o.reference_spp.filter(|&r| r > 0 && r <= spp) {
             bail!("--reference-spp {r}: the reference's samples per pixel must exceed --spp {spp}");
         }
@@ -114,18 +109,10 @@ fn flag_scene(o: &Options) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
-/// The converged reference's samples per pixel, if any.
-fn reference_spp(o: &Options, scene: &Scene) -> Option<u32> {
-    let l = &scene.lighting;
-    if l.model != LightingModel::Path {
-        return None;
-    }
-    let own = l.spp.unwrap_or(PATH_SPP);
-    match o.reference_spp {
-        Some(0) => None,
-        Some(s) => Some(s),
-        None => Some(own.saturating_mul(16)),
-    }
+/// The converged reference's samples per pixel, if any
+/// ([`glint_compare::reference_spp`]).
+fn reference_spp(o: &Options, scene: &Scene) -> anyhow::Result<Option<u32>> {
+    Ok(glint_compare::reference_spp(scene, o.reference_spp)?)
 }
 
 /// Runs `glint compare`.
@@ -138,7 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if o.convergence {
         return run_convergence(&o, own);
     }
-    let scene = glint_compare::exact_scene(&own);
+    let scene = own.with_exact_lobe();
     if o.sweep {
         return run_sweep(&o, scene);
     }
@@ -155,7 +142,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &scene,
         &lobes,
         o.scene.v,
-        reference_spp(&o, &scene),
+        reference_spp(&o, &scene)?,
     )?;
     let png = report.figure_png(o.scale_max)?;
     glint_io::write_atomic(&output, |w| w.write_all(&png))?;
@@ -226,8 +213,8 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
 /// `--convergence`: the scene traced progressively up to its --spp, each step's time
 /// and distance to the converged reference.
 fn run_convergence(o: &Options, scene: Scene) -> anyhow::Result<()> {
-    let max = scene.lighting.spp.unwrap_or(PATH_SPP);
-    let Some(reference) = reference_spp(o, &scene) else {
+    let max = scene.lighting.spp.unwrap_or(glint_compare::PATH_SPP);
+    let Some(reference) = reference_spp(o, &scene)? else {
         bail!("--convergence needs a reference: --reference-spp above 0");
     };
     if let Some(t) = o.flip_below {

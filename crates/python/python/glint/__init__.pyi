@@ -166,6 +166,8 @@ def compare(
     volume: Union[Volume, _Path, None] = None,
     scene: Optional[Scene] = None,
     lobes: Sequence[str] = ("k",),
+    reference_spp: Optional[int] = None,
     **fields: Any,
 ) -> Dict[str, Any]:
-    """Exact cos^n against each lobe, as ``glint compare --json`` reports it."""
+    """Exact cos^n against each lobe, as ``glint compare --json`` reports it (a path
+    scene with the command's defaults and its converged reference)."""

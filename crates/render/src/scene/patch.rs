@@ -10,6 +10,15 @@ use super::Scene;
 pub const MERGED_FIELDS: [&str; 4] = ["camera", "lobe", "material", "lighting"];
 
 impl Scene {
+    /// The scene with the exact lobe (`cos^n`) and everything else as it is: the
+    /// reference the other lobes are compared with (`glint compare`, the viewer's split
+    /// view, Python's `compare`).
+    pub fn with_exact_lobe(&self) -> Scene {
+        let mut s = self.clone();
+        s.lobe.kind = glint_lobe::LobeKind::Exact.into();
+        s
+    }
+
     /// The scene with the fields of `patch` (scene JSON's field names and values)
     /// applied: the objects of [`MERGED_FIELDS`] (`camera`, `lobe`, `material`,
     /// `lighting`) merged field by field, every other field replaced; `null` gives a field its default
