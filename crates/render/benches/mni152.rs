@@ -5,7 +5,7 @@
 //! The template comes from scripts/fetch-samples (path in `GLINT_MNI152`, default
 //! `~/.cache/glint/samples/mni152_t1_09a.nii.gz`); without it the bench uses the
 //! built-in phantom at 192^3 so it still runs. The comparison with VTK in the same run
-//! is scripts/bench-vtk.
+//! is scripts/bench/bench-vtk.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glint_lobe::LobeKind;

@@ -120,7 +120,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// A surface file written in another format (e.g. GIFTI to PLY for VTK, in
-/// scripts/bench-vtk-surface), with vertex normals (the file's, else area-weighted
+/// scripts/bench/bench-vtk-surface), with vertex normals (the file's, else area-weighted
 /// ones from the triangles, as `glint render` shades it), optionally smoothed.
 fn convert(args: &Args, taubin: &Taubin, write: MeshWriter) -> anyhow::Result<()> {
     if args.iso.is_some() {

@@ -128,7 +128,7 @@ pub struct Scene {
     pub opacity_unit: Option<f64>,
     /// Background colour, linear RGB.
     pub background: [f32; 3],
-    /// Written by a render for other tools (e.g. scripts/bench_vtk.py): the camera
+    /// Written by a render for other tools (e.g. scripts/bench/bench-vtk.py): the camera
     /// and transfer function that were used, in world units. Ignored on input.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub derived: Option<Derived>,
@@ -234,7 +234,7 @@ pub struct OpenedVolume {
 }
 
 /// What a render used, in world units, for tools that rebuild the scene elsewhere
-/// (VTK in scripts/bench_vtk.py). Written by [`Renderer::render`](crate::Renderer::render); ignored on input.
+/// (VTK in scripts/bench/bench-vtk.py). Written by [`Renderer::render`](crate::Renderer::render); ignored on input.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Derived {
     /// Eye position, mm (RAS+).

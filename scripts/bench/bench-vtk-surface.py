@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""VTK's side of scripts/bench-vtk-surface: surface rendering and isosurface extraction.
+"""VTK's side of scripts/bench/bench-vtk-surface: surface rendering and isosurface extraction.
 
 Modes:
   render SCENE.json FRAMES OUT.png|- [MESH.ply ...]
@@ -40,9 +40,9 @@ def nifti_image(path):
         for r in range(3):
             for c in range(3):
                 if r != c and abs(m.GetElement(r, c)) > 1e-6:
-                    sys.exit("bench_vtk_surface: only axis-aligned affines are supported")
+                    sys.exit("bench-vtk-surface.py: only axis-aligned affines are supported")
             if m.GetElement(r, r) <= 0:
-                sys.exit("bench_vtk_surface: only positive-diagonal affines are supported")
+                sys.exit("bench-vtk-surface.py: only positive-diagonal affines are supported")
         image.SetOrigin(m.GetElement(0, 3), m.GetElement(1, 3), m.GetElement(2, 3))
     return image
 
@@ -72,7 +72,7 @@ def render(scene_path, frames, out_png, plys):
         sources.append(reader.GetOutput())
         colors.append(mesh["color"])
     if len(sources) != len(scene.get("meshes", [])):
-        sys.exit("bench_vtk_surface: give one PLY per mesh of the scene")
+        sys.exit("bench-vtk-surface.py: give one PLY per mesh of the scene")
     if scene.get("mode") == "surface" and isinstance(scene.get("input"), dict):
         fe = flying_edges(nifti_image(scene["input"]["path"]), scene["iso"])
         fe.Update()

@@ -1,6 +1,6 @@
-"""Study throughput of glint against nilearn, in one run (scripts/bench-batch runs it).
+"""Study throughput of glint against nilearn, in one run (scripts/bench/bench-batch runs it).
 
-    python bench_batch.py MNI152.nii.gz GLINT_BIN OUT_DIR SUBJECTS SURFACE_SUBJECTS
+    python bench-batch.py MNI152.nii.gz GLINT_BIN OUT_DIR SUBJECTS SURFACE_SUBJECTS
 
 Makes a BIDS study of SUBJECTS variants of the MNI152 template in OUT_DIR/study, then
 times, on this machine's cores:

@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""Writes an N^3 int16 NIfTI-1 file for scripts/bench-big: a sphere of value
+"""Writes an N^3 int16 NIfTI-1 file for scripts/bench/bench-big: a sphere of value
 1000 * (1 - r) inside r < 0.8 and -1000 outside (r from the centre, 1 at a face's
 centre), 1 mm voxels, written slice by slice (numpy only; the 348-byte header by hand
 after the NIfTI-1 standard, nifti1.h).
 
-Usage: bench_big.py N OUT.nii
+Usage: bench-big.py N OUT.nii
 """
 import os
 import struct

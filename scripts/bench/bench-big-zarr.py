@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the 2048 x 2048 x 1024 uint16 OME-Zarr stack of issue 31 (x y z; 8 GiB
 uncompressed) with a five-level pyramid, slab by slab (64 planes of level 0 at a time,
-never the whole volume in memory), for scripts/bench-big.
+never the whole volume in memory), for scripts/bench/bench-big.
 
 A synthetic light-sheet-like picture on a dark background (0): a lattice of nuclei
 (balls of radius 14 voxels every 96, brightness varying with position), a thin
@@ -10,7 +10,7 @@ shows structure; mostly background, so Blosc (zstd, bit shuffle) stores it small
 Levels halve x, y and z (means of 2x2x2 blocks), NGFF 0.5 on Zarr v3, written by the
 Python `zarr` and `ome-zarr` packages (pinned as in scripts/make-zarr-fixtures.py).
 
-Usage: python bench_big_zarr.py OUT.zarr [X Y Z]
+Usage: python bench-big-zarr.py OUT.zarr [X Y Z]
   (venv: pip install zarr==3.1.3 ome-zarr==0.12.2 numcodecs==0.16.6 numpy==2.4.6)
 """
 import os

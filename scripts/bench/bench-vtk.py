@@ -2,7 +2,7 @@
 """Render the scene glint dumped (--dump-scene) with VTK's CPU ray caster,
 vtkFixedPointVolumeRayCastMapper, and print ms per frame.
 
-Used by scripts/bench-vtk; run it through that script. The scene JSON is glint's
+Used by scripts/bench/bench-vtk; run it through that script. The scene JSON is glint's
 resolved scene (schema version 1): the volume path, image size, projection and
 material from the scene itself, and from its "derived" block the camera (eye, focal
 point, view up, view angle), the transfer function points (already scaled the way
@@ -11,7 +11,7 @@ world mm (VTK's unit), ImageSampleDistance 1, linear interpolation, shading on,
 ScalarOpacityUnitDistance = the smallest spacing (glint's opacity unit is one voxel),
 the renderer's default headlight, offscreen rendering (EGL with the PyPI wheel).
 
-Usage: bench_vtk.py SCENE.json FRAMES [OUT.png]
+Usage: bench-vtk.py SCENE.json FRAMES [OUT.png]
 
 FRAMES 0 is the end-to-end mode: read the file, render the first frame, write the PNG
 and exit, printing "vtk-e2e: MS ms", the time from the start of main() (after the
@@ -33,7 +33,7 @@ def main():
     with open(scene_path) as f:
         scene = json.load(f)
     if scene.get("version") != 1:
-        sys.exit(f"bench_vtk: scene version {scene.get('version')} is not supported (1 is)")
+        sys.exit(f"bench-vtk.py: scene version {scene.get('version')} is not supported (1 is)")
     derived = scene["derived"]
     tf = derived["transfer_function"]
     material = scene["material"]
@@ -51,9 +51,9 @@ def main():
         for r in range(3):
             for c in range(3):
                 if r != c and abs(m.GetElement(r, c)) > 1e-6:
-                    sys.exit("bench_vtk: only axis-aligned affines are supported")
+                    sys.exit("bench-vtk.py: only axis-aligned affines are supported")
             if m.GetElement(r, r) <= 0:
-                sys.exit("bench_vtk: only positive-diagonal affines are supported")
+                sys.exit("bench-vtk.py: only positive-diagonal affines are supported")
         image.SetOrigin(m.GetElement(0, 3), m.GetElement(1, 3), m.GetElement(2, 3))
 
     ctf = vtk.vtkColorTransferFunction()
