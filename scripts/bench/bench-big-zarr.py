@@ -8,7 +8,7 @@ A synthetic light-sheet-like picture on a dark background (0): a lattice of nucl
 spherical shell (an "embryo" membrane) and a torus (a "gut"), so that every level
 shows structure; mostly background, so Blosc (zstd, bit shuffle) stores it small.
 Levels halve x, y and z (means of 2x2x2 blocks), NGFF 0.5 on Zarr v3, written by the
-Python `zarr` and `ome-zarr` packages (pinned as in scripts/make-zarr-fixtures.py).
+Python `zarr` and `ome-zarr` packages (pinned as in scripts/fixtures/zarr-fixtures.py).
 
 Usage: python bench-big-zarr.py OUT.zarr [X Y Z]
   (venv: pip install zarr==3.1.3 ome-zarr==0.12.2 numcodecs==0.16.6 numpy==2.4.6)

@@ -98,7 +98,7 @@ fn fsaverage5_hemispheres_with_a_sulcal_depth_overlay() {
     let ((w, h, ch, lit), scene) = render("lit.png", &[]);
     assert_eq!((w, h), (160, 160));
     // The resolved scene: no volume, two meshes, the overlay's range inside the
-    // sulcal depth's (-1.4937 .. 1.8069, nibabel 5.4.2 via scripts/gifti-reference.py)
+    // sulcal depth's (-1.4937 .. 1.8069, nibabel 5.4.2 via scripts/fixtures/gifti-reference.py)
     // and spanning zero (sulci and gyri).
     assert_eq!(scene["input"], "none");
     assert_eq!(scene["mode"], "surface");

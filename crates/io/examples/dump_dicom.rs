@@ -1,7 +1,7 @@
 //! Reads a DICOM file or directory and writes its samples as raw little-endian values
 //! (colour: R G B interleaved, one value each) in glint's order (x fastest, slices along
 //! the normal): the command the lossy-JPEG differences in docs/formats.md were measured
-//! with, against pydicom's decode of the same file (scripts/pydicom-table.py's venv).
+//! with, against pydicom's decode of the same file (scripts/fixtures/pydicom-table.py's venv).
 //!
 //! Usage: dump_dicom FILE OUT.raw   (prints dims, type and whether it is colour)
 use glint_io::{ReadOptions, Samples};

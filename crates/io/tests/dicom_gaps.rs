@@ -1,5 +1,5 @@
 //! The DICOM gaps of issue 33, each against pydicom's decode: fixtures made from
-//! pydicom's test files by scripts/dicom-gap-fixtures.py (tests/data/dicom-gaps, with
+//! pydicom's test files by scripts/fixtures/dicom-gap-fixtures.py (tests/data/dicom-gaps, with
 //! pydicom's decode in reference.tsv), and colour files of the pydicom corpus read with
 //! each grey choice.
 

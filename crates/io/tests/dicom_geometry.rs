@@ -2,7 +2,7 @@
 //! orientation, a gantry tilt (a sheared affine), slices whose file names and
 //! InstanceNumbers are shuffled, and the even-step tolerance probed just inside and
 //! just outside its 5% limit. The series and the expected affines come from
-//! scripts/dicom-geometry-fixtures.py: the affine computed with numpy directly from the
+//! scripts/fixtures/dicom-geometry-fixtures.py: the affine computed with numpy directly from the
 //! header values (PS3.3 C.7.6.2.1.1), not by glint.
 
 use std::path::{Path, PathBuf};

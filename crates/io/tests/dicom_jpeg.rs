@@ -1,7 +1,7 @@
 //! JPEG-compressed DICOM (baseline .50, extended .51, lossless .57 and .70) read by glint
 //! (dicom-pixeldata 0.10, jpeg-decoder 0.3) and compared with pydicom's decode
 //! (pylibjpeg, Thomas Richter's libjpeg) of the same files. The fixtures in
-//! tests/data/jpeg/ and their reference.tsv were written by scripts/jpeg-fixtures
+//! tests/data/jpeg/ and their reference.tsv were written by scripts/fixtures/jpeg-fixtures
 //! (libjpeg-turbo 3 encoding, pydicom encapsulation and decode): lossless files must
 //! match exactly (dims, spacing, min, max, sum, position-weighted checksum); lossy ones
 //! (8-bit by jpeg-decoder, 12-bit by libjpeg-turbo 3) voxel by voxel within

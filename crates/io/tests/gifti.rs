@@ -203,7 +203,7 @@ fn label_and_time_series_arrays() {
 }
 
 /// fsaverage5 left sulcal depth: a shape-only GIFTI (GZipBase64Binary). Reference
-/// values from nibabel 5.4.2 via scripts/gifti-reference.py.
+/// values from nibabel 5.4.2 via scripts/fixtures/gifti-reference.py.
 #[test]
 fn fsaverage5_sulcal_depth_matches_nibabel() {
     let Some(path) = common::sample("fsaverage5_sulc_left.gii.gz") else {

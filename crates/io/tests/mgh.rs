@@ -1,5 +1,5 @@
 //! FreeSurfer MGH/MGZ against nibabel 5.4.2: the fixtures in tests/data/mgh were written
-//! by nibabel (scripts/make-mgh-fixtures.py), which also recorded in reference.tsv what
+//! by nibabel (scripts/fixtures/mgh-fixtures.py), which also recorded in reference.tsv what
 //! nibabel reads back from each (shape, dtype, affine, the first frame's values, the
 //! footer's scan parameters). glint must read the same. Then the bad inputs: truncated
 //! files, absurd or zero sizes, unknown types, each one typed error on one line.
@@ -29,7 +29,7 @@ fn references() -> Vec<Reference> {
     let path = data_dir().join("reference.tsv");
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
         panic!(
-            "{}: {e}; run scripts/make-mgh-fixtures.py (nibabel)",
+            "{}: {e}; run scripts/fixtures/mgh-fixtures.py (nibabel)",
             path.display()
         )
     });

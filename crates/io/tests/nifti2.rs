@@ -1,5 +1,5 @@
 //! NIfTI-2 and `.hdr`/`.img` pairs, against fixtures written by nibabel 5.4.2
-//! (scripts/make-nifti-fixtures.py): 4 x 3 x 2 int16, value(i, j, k) = i + 10 j + 100 k - 50.
+//! (scripts/fixtures/nifti-fixtures.py): 4 x 3 x 2 int16, value(i, j, k) = i + 10 j + 100 k - 50.
 
 mod common;
 

@@ -2,7 +2,7 @@
 //! pydicom-data 1.0.0 wheel (both fetched by scripts/fetch-samples into samples/pydicom
 //! and samples/pydicom-data) through the DICOM reader, checked against
 //! tests/data/pydicom-corpus.tsv and pydicom-data-corpus.tsv, which
-//! scripts/pydicom-table.py recorded with pydicom (and its pylibjpeg, openjpeg, rle and
+//! scripts/fixtures/pydicom-table.py recorded with pydicom (and its pylibjpeg, openjpeg, rle and
 //! pyjpegls decoders): read with pydicom's dims, spacing and stored values (min, max,
 //! sum, a position-weighted checksum; colour over the RGB channels; within a stated
 //! tolerance for lossy DCT JPEG), or refused with the expected reason. Fails in CI when

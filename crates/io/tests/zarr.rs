@@ -1,5 +1,5 @@
 //! OME-Zarr stores written by the Python `ome-zarr` and `zarr` packages
-//! (scripts/make-zarr-fixtures.py): every level of each read as zarr-python read it
+//! (scripts/fixtures/zarr-fixtures.py): every level of each read as zarr-python read it
 //! (tests/data/zarr/reference.tsv), the pyramid listed, `Level::Auto` picking the
 //! coarsest level with enough voxels, and bad stores refused with one line.
 

@@ -707,7 +707,7 @@ mod tests {
 
     /// Issue 17: `glint info` lists a GIFTI's per-vertex arrays, also for a file that
     /// has no surface (fsaverage5 sulcal depth; range from nibabel 5.4.2 via
-    /// scripts/gifti-reference.py: -1.4937248 .. 1.8069096).
+    /// scripts/fixtures/gifti-reference.py: -1.4937248 .. 1.8069096).
     #[test]
     fn gifti_overlays_listed() {
         let Some(p) = glint_testkit::sample("fsaverage5_sulc_left.gii.gz") else {

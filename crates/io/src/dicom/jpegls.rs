@@ -708,7 +708,7 @@ pub(super) fn decode(data: &[u8], max_samples: usize) -> Result<Decoded, String>
 mod tests {
     use super::*;
 
-    /// The CharLS-made cases of scripts/jpegls-fixtures.py: (name, codestream, CharLS's
+    /// The CharLS-made cases of scripts/fixtures/jpegls-fixtures.py: (name, codestream, CharLS's
     /// decode).
     fn fixtures() -> Vec<(String, Vec<u8>, Vec<u8>)> {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/jpegls");

@@ -112,7 +112,7 @@ pub fn assert_affine_eq(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4], tol: f64) {
     }
 }
 
-/// A Zarr test store written by scripts/make-zarr-fixtures.py (tests/data/zarr).
+/// A Zarr test store written by scripts/fixtures/zarr-fixtures.py (tests/data/zarr).
 pub fn zarr_data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data/zarr")

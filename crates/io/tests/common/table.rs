@@ -1,5 +1,5 @@
 //! Tables of what pydicom reports for DICOM files (tests/data/pydicom-corpus.tsv from
-//! scripts/pydicom-table.py, tests/data/jpeg/reference.tsv from scripts/jpeg-fixtures.py)
+//! scripts/fixtures/pydicom-table.py, tests/data/jpeg/reference.tsv from scripts/fixtures/jpeg-fixtures.py)
 //! and the check of glint's reader against one line of them.
 
 use std::path::Path;
