@@ -142,21 +142,12 @@ fn read_options(args: &Args) -> anyhow::Result<ReadOptions> {
 /// The report of a mesh or a GIFTI of per-vertex data.
 fn mesh_report(args: &Args) -> anyhow::Result<String> {
     let mut out = String::new();
-    let overlays = if Format::guess(&args.file) == Some(Format::Gifti) {
-        glint_io::read_surface_data(&args.file)?
+    // A GIFTI file is read once for its surface and its overlays; one of per-vertex data
+    // only (sulcal depth, a parcellation) has no surface, just the overlays.
+    let (file, overlays) = if Format::guess(&args.file) == Some(Format::Gifti) {
+        glint_io::gifti::read_with_data(&args.file)?
     } else {
-        Vec::new()
-    };
-    let file = match glint_io::open_mesh(&args.file) {
-        Ok(f) => Some(f),
-        // A GIFTI of per-vertex data only (sulcal depth, a parcellation): no surface,
-        // just the overlays.
-        Err(glint_io::IoError::Invalid { what, .. })
-            if !overlays.is_empty() && what.contains("no NIFTI_INTENT_POINTSET") =>
-        {
-            None
-        }
-        Err(e) => return Err(e.into()),
+        (Some(glint_io::open_mesh(&args.file)?), Vec::new())
     };
     if args.json {
         let mut v = match &file {

@@ -134,6 +134,30 @@ pub fn read(path: &Path) -> Result<MeshFile, IoError> {
 /// ```
 pub fn read_surface_data(path: &Path) -> Result<Vec<VertexData>, IoError> {
     let (arrays, table) = load(path)?;
+    vertex_data(path, &arrays, &table)
+}
+
+/// A GIFTI file's surface and its per-vertex data ([`read`] and
+/// [`read_surface_data`]) from one read of the file. The surface is `None` for a file of
+/// per-vertex data alone (a sulcal depth map, a parcellation: arrays but no POINTSET);
+/// a file with neither is an error, as [`read`] gives it.
+pub fn read_with_data(path: &Path) -> Result<(Option<MeshFile>, Vec<VertexData>), IoError> {
+    let (arrays, table) = load(path)?;
+    let data = vertex_data(path, &arrays, &table)?;
+    let has_surface = arrays.iter().any(|a| a.intent == "NIFTI_INTENT_POINTSET");
+    if !has_surface && !data.is_empty() {
+        return Ok((None, data));
+    }
+    Ok((Some(surface(path, &arrays)?), data))
+}
+
+/// The per-vertex arrays of [`read_surface_data`], from the file's arrays and label
+/// table.
+fn vertex_data(
+    path: &Path,
+    arrays: &[DataArray],
+    table: &[Label],
+) -> Result<Vec<VertexData>, IoError> {
     let geometry = |a: &DataArray| {
         matches!(
             a.intent.as_str(),
@@ -170,7 +194,7 @@ pub fn read_surface_data(path: &Path) -> Result<Vec<VertexData>, IoError> {
             let values = if a.intent == "NIFTI_INTENT_LABEL" {
                 VertexValues::Labels {
                     keys: column.map(|x| x as i32).collect(),
-                    table: table.clone(),
+                    table: table.to_vec(),
                 }
             } else {
                 VertexValues::Scalars(column.map(|x| x as f32).collect())
