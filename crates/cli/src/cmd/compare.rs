@@ -109,12 +109,6 @@ fn flag_scene(o: &Options) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
-/// The converged reference's samples per pixel, if any
-/// ([`glint_compare::reference_spp`]).
-fn reference_spp(o: &Options, scene: &Scene) -> anyhow::Result<Option<u32>> {
-    Ok(glint_compare::reference_spp(scene, o.reference_spp)?)
-}
-
 /// Runs `glint compare`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let o = *args.opts;
@@ -142,7 +136,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &scene,
         &lobes,
         o.scene.v,
-        reference_spp(&o, &scene)?,
+        glint_compare::reference_spp(&scene, o.reference_spp)?,
     )?;
     let png = report.figure_png(o.scale_max)?;
     glint_io::write_atomic(&output, |w| w.write_all(&png))?;
@@ -214,7 +208,7 @@ fn run_sweep(o: &Options, scene: Scene) -> anyhow::Result<()> {
 /// and distance to the converged reference.
 fn run_convergence(o: &Options, scene: Scene) -> anyhow::Result<()> {
     let max = scene.lighting.spp.unwrap_or(glint_compare::PATH_SPP);
-    let Some(reference) = reference_spp(o, &scene)? else {
+    let Some(reference) = glint_compare::reference_spp(&scene, o.reference_spp)? else {
         bail!("--convergence needs a reference: --reference-spp above 0");
     };
     if let Some(t) = o.flip_below {

@@ -107,7 +107,7 @@ pub(super) fn check_codestream(
     let b = Bound { path, limit };
     if ts.starts_with("1.2.840.10008.1.2.4.5") || ts.starts_with("1.2.840.10008.1.2.4.7") {
         check_jpeg(&b, ts, data)
-    } else if ts == "1.2.840.10008.1.2.4.80" || ts == "1.2.840.10008.1.2.4.81" {
+    } else if super::jpegls::is_jpeg_ls(ts) {
         check_jpeg_ls(&b, data)
     } else if ts.starts_with("1.2.840.10008.1.2.4.9") || ts.starts_with("1.2.840.10008.1.2.4.20") {
         check_j2k(&b, data, samples_per_pixel)

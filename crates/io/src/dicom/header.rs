@@ -306,8 +306,7 @@ fn check_transfer_syntax(path: &Path, ts: &str) -> Result<bool, IoError> {
         )));
     };
     // JPEG-LS has no decoder in the registry (CharLS needed CMake); `jpegls` decodes it.
-    let jpeg_ls = ts == "1.2.840.10008.1.2.4.80" || ts == "1.2.840.10008.1.2.4.81";
-    if !syntax.can_decode_all() && !jpeg_ls {
+    if !syntax.can_decode_all() && !super::jpegls::is_jpeg_ls(ts) {
         return Err(unsupported(format!(
             "transfer syntax {} has no pixel data decoder in this build; convert to an \
              uncompressed syntax, e.g. with gdcmconv --raw",

@@ -16,11 +16,9 @@
 //! little-endian bytes above), so its samples equal CharLS's bit for bit
 //! (`crates/io/tests/pydicom_corpus.rs` checks them against pydicom with CharLS).
 
-/// A decoded frame: samples as CharLS writes them.
-#[derive(Debug)]
-pub(super) struct Decoded {
-    /// One byte a sample for precision <= 8, else two (little-endian).
-    pub bytes: Vec<u8>,
+/// Whether a transfer syntax is JPEG-LS (lossless .80 or near-lossless .81).
+pub(super) fn is_jpeg_ls(ts: &str) -> bool {
+    ts == "1.2.840.10008.1.2.4.80" || ts == "1.2.840.10008.1.2.4.81"
 }
 
 /// T.87 Table A.1 / CharLS: the run-length order J[RUNindex].
@@ -624,8 +622,9 @@ fn preset(f: &mut Frame, seg: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-/// Decodes a JPEG-LS codestream of at most `max_samples` samples.
-pub(super) fn decode(data: &[u8], max_samples: usize) -> Result<Decoded, String> {
+/// Decodes a JPEG-LS codestream of at most `max_samples` samples into the bytes CharLS
+/// writes: one a sample for precision <= 8, else two (little-endian).
+pub(super) fn decode(data: &[u8], max_samples: usize) -> Result<Vec<u8>, String> {
     if !data.starts_with(&[0xFF, 0xD8]) {
         return Err("a JPEG-LS frame without SOI".into());
     }
@@ -696,12 +695,11 @@ pub(super) fn decode(data: &[u8], max_samples: usize) -> Result<Decoded, String>
     if next_comp != f.components {
         return Err("a JPEG-LS frame missing scans".into());
     }
-    let bytes = if f.precision <= 8 {
+    Ok(if f.precision <= 8 {
         out.iter().map(|&v| v as u8).collect()
     } else {
         out.iter().flat_map(|v| v.to_le_bytes()).collect()
-    };
-    Ok(Decoded { bytes })
+    })
 }
 
 #[cfg(test)]
@@ -732,8 +730,8 @@ mod tests {
     fn every_fixture_decodes_to_charls_bytes() {
         for (name, jls, raw) in fixtures() {
             let got = decode(&jls, 1 << 20).unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert_eq!(got.bytes.len(), raw.len(), "{name}");
-            let differing = got.bytes.iter().zip(&raw).filter(|(a, b)| a != b).count();
+            assert_eq!(got.len(), raw.len(), "{name}");
+            let differing = got.iter().zip(&raw).filter(|(a, b)| a != b).count();
             assert_eq!(
                 differing, 0,
                 "{name}: {differing} bytes differ from CharLS's"
@@ -760,12 +758,12 @@ mod tests {
             .unwrap();
         // MAXVAL 255, NEAR 0: T1 3, T2 7, T3 21, RESET 64 (T.87 C.2.4.1.1.1).
         let explicit = with_preset(&jls, [255, 3, 7, 21, 64]);
-        assert_eq!(decode(&explicit, 1 << 20).unwrap().bytes, raw);
+        assert_eq!(decode(&explicit, 1 << 20).unwrap(), raw);
         let zeros = with_preset(&jls, [0; 5]);
-        assert_eq!(decode(&zeros, 1 << 20).unwrap().bytes, raw);
+        assert_eq!(decode(&zeros, 1 << 20).unwrap(), raw);
         // Other thresholds change the contexts: the same bits decode to other samples.
         let other = with_preset(&jls, [255, 4, 9, 30, 32]);
-        assert_ne!(decode(&other, 1 << 20).map(|d| d.bytes).ok(), Some(raw));
+        assert_ne!(decode(&other, 1 << 20).ok(), Some(raw));
         let disordered = with_preset(&jls, [255, 9, 4, 30, 64]);
         assert!(decode(&disordered, 1 << 20).is_err());
     }
@@ -798,7 +796,7 @@ mod tests {
                 match decode(&jls[..cut], 1 << 20) {
                     Ok(d) => {
                         decoded += 1;
-                        assert_eq!(d.bytes.len(), raw.len());
+                        assert_eq!(d.len(), raw.len());
                     }
                     Err(_) => errors += 1,
                 }

@@ -251,11 +251,6 @@ fn split_frames(h: &Header, words: &[u32], frame_len: usize) -> Vec<Samples> {
         .collect()
 }
 
-/// Whether a transfer syntax is JPEG-LS (lossless or near-lossless).
-fn is_jpeg_ls(ts: &str) -> bool {
-    ts == "1.2.840.10008.1.2.4.80" || ts == "1.2.840.10008.1.2.4.81"
-}
-
 /// Decodes JPEG-LS frames with [`jpegls`] into what dicom-pixeldata made of CharLS's
 /// output (the decoder it used before): the frames' bytes in turn, read as words of
 /// BitsAllocated, RGB for three samples a pixel, planar configuration 0.
@@ -281,11 +276,7 @@ fn decode_jpeg_ls(
     let frames = jpeg::frames(path, fragments, offsets, h.frames)?;
     let mut data = Vec::new();
     for f in &frames {
-        data.extend(
-            jpegls::decode(f, h.rows * h.cols * spp)
-                .map_err(fail)?
-                .bytes,
-        );
+        data.extend(jpegls::decode(f, h.rows * h.cols * spp).map_err(fail)?);
     }
     let layout = Layout {
         photometric: if spp == 3 { "RGB" } else { &h.photometric }.to_string(),
@@ -358,7 +349,7 @@ fn decode(
         // empty ones), so the headers are looked for in all of them together.
         let all: Vec<u8> = seq.fragments().iter().flatten().copied().collect();
         check_codestream(path, &h.ts, &all, pixels * spp, h.samples_per_pixel)?;
-        if is_jpeg_ls(&h.ts) {
+        if jpegls::is_jpeg_ls(&h.ts) {
             return decode_jpeg_ls(h, seq.fragments(), seq.offset_table(), total);
         }
     }
