@@ -44,8 +44,8 @@ pub use image::{
 };
 pub use legend::Legend;
 pub use lighting::{
-    phase_hg, Light, Material, MaterialOverrides, RayLighting, ShadeBatch, Shader, SurfacePart,
-    MAX_ANISOTROPY, MAX_LIGHTS,
+    phase_hg, Bsdf, BsdfSample, Light, Material, MaterialOverrides, RayLighting, Scattering,
+    ShadeBatch, Shader, SurfacePart, MAX_ANISOTROPY, MAX_LIGHTS,
 };
 pub use math::Vec3;
 pub use mode::RenderMode;

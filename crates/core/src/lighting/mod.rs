@@ -10,11 +10,17 @@
 //! gradient and blend towards the flat colour `c · (ambient + diffuse)` where the
 //! gradient is weak (the gate); surface samples have a normal and no gate.
 //!
+//! Every lighting model reads one scattering model, built per shaded sample
+//! ([`Scattering`]: the surface part and the medium, with `f`, `sample` and `pdf` on
+//! each component, [`Bsdf`]): `local` is `ambient + Σ I·f`, `shadows` the same with
+//! each light's transmittance and the ambient occlusion, `path` samples it.
+//!
 //! The model has a scalar form ([`Shader::shade`] for a gradient, [`Shader::shade_normal`]
-//! for a unit normal) and a batch form over columns of samples ([`ShadeBatch`], on
-//! AVX2 where the CPU has it), which gives the scalar form's results bit for bit (the
-//! same operations in the same order, no FMA contraction; tested). The ray caster and
-//! the rasterizer use these and nothing else to light a sample.
+//! for a unit normal, [`Shader::shade_shadowed`]; each a [`Scattering`]) and a batch
+//! form over columns of samples ([`ShadeBatch`], on AVX2 where the CPU has it), which
+//! gives the scalar form's results bit for bit (the same operations in the same order,
+//! no FMA contraction; tested). The ray caster, the rasterizer and the path tracer use
+//! these and nothing else to light a sample.
 
 use glint_lobe::{Geometry, Lobe, LobeKind, Specular};
 use serde::{Deserialize, Serialize};
@@ -30,12 +36,14 @@ mod dispatch;
 #[cfg(test)]
 mod fixtures;
 mod material;
+mod scatter;
 mod scratch;
 mod shadowed;
 mod transport;
 
 pub use batch::ShadeBatch;
 pub use material::{Material, MaterialOverrides};
+pub use scatter::{cosine_hemisphere, sample_phase, Bsdf, BsdfSample, Scattering};
 pub use transport::{phase_hg, SurfacePart, MAX_ANISOTROPY};
 
 /// A directional light given relative to the camera: `azimuth` degrees towards the
@@ -117,6 +125,9 @@ pub struct Shader {
     /// Henyey-Greenstein anisotropy of the medium's phase function (light transport
     /// only: [`Shader::shade_shadowed`]).
     anisotropy: f32,
+    /// The specular lobe's sampler for path tracing ([`Bsdf::sample`]), built on first
+    /// use and shared by the shader's clones.
+    sampler: scatter::SamplerCell,
 }
 
 /// Per-ray constants of the lighting: the view vector and, per light, `L·V`
@@ -183,6 +194,7 @@ impl Shader {
             lights: Vec::new(),
             gate,
             anisotropy: 0.0,
+            sampler: Default::default(),
         })
     }
 
@@ -212,6 +224,7 @@ impl Shader {
     /// keeping the geometry, material, lights and gate.
     pub fn set_specular(&mut self, specular: Specular) {
         self.specular = specular;
+        self.sampler = Default::default();
     }
 
     /// The material.
@@ -257,21 +270,10 @@ impl Shader {
 
     /// Lit linear colour of a volume sample with transfer-function colour `base` and
     /// world gradient `grad` (the normal points down the gradient: out of dense
-    /// structures), under the gradient gate.
+    /// structures), under the gradient gate: [`Scattering::local`].
     #[inline(always)]
     pub fn shade(&self, base: [f32; 3], grad: Vec3, ray: &RayLighting) -> [f32; 3] {
-        let m = &self.material;
-        if !m.shade {
-            return base;
-        }
-        let gm2 = grad.dot(grad);
-        let g0 = self.gate;
-        if gm2 <= g0 * g0 || !gm2.is_finite() {
-            return base.map(|c| c * flat(m));
-        }
-        let gm = gm2.sqrt();
-        let (diffuse, specular) = self.sums(grad * (-1.0 / gm), ray);
-        gated(m, base, diffuse, specular, self.gate_weight(gm))
+        self.scattering(base, grad).local(ray)
     }
 
     /// Lit linear colour of a surface point of colour `base`, unit `normal` and unit
@@ -280,31 +282,11 @@ impl Shader {
     /// is seen.
     #[inline(always)]
     pub fn shade_normal(&self, base: [f32; 3], normal: Vec3, view: Vec3) -> [f32; 3] {
-        let m = &self.material;
-        if !m.shade {
+        if !self.material.shade {
             return base;
         }
-        let (diffuse, specular) = self.sums(normal, &self.for_ray(view));
-        ungated(m, base, diffuse, specular)
-    }
-
-    /// The diffuse and specular sums over the lights, `Σ I·N·L` and `Σ I·lobe(cos γ)`
-    /// over the lights with `N·L > 0`, for the unit normal `n` turned to face the
-    /// viewer.
-    #[inline(always)]
-    fn sums(&self, n: Vec3, ray: &RayLighting) -> (f32, f32) {
-        let (n, n_dot_v) = facing(n, ray.view);
-        let mut diffuse = 0.0f32;
-        let mut specular = 0.0f32;
-        for &(l, intensity, l_dot_v, h) in &ray.lights[..ray.count] {
-            let n_dot_l = n.dot(l);
-            if n_dot_l > 0.0 {
-                diffuse += intensity * n_dot_l;
-                let c = self.cos(n_dot_l, n_dot_v, l_dot_v, n, h);
-                specular += intensity * self.specular.eval(c);
-            }
-        }
-        (diffuse, specular)
+        self.scattering_normal(base, normal)
+            .local(&self.for_ray(view))
     }
 
     /// The gate's blend weight for gradient magnitude `gm` (above the gate): from 0 at

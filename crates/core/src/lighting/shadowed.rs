@@ -108,7 +108,7 @@ impl Shader {
 
     /// [`Shader`]'s `light_columns` with each light's intensity scaled by its
     /// transmittance, and the phase sum of every sample (the scalar form's
-    /// `phase_sum` and `sums_shadowed`, in the same order).
+    /// `Shader::phase_sum` and `Shader::light_sums`, in the same order).
     #[inline(always)]
     fn light_columns_shadowed(&self, b: &mut ShadeBatch) {
         let n = b.len;

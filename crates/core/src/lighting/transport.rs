@@ -74,9 +74,10 @@ impl Shader {
     /// Lit linear colour of a volume sample as [`Shader::shade`] lights it, with the
     /// light of light `i` scaled by `transmittance[i]` (what reaches the sample through
     /// the volume; one per placed light) and the ambient term by `occlusion`, and the
-    /// flat part of the hybrid a scattering medium (see the module docs): with one
-    /// light of intensity 1, every factor 1 and `g = 0` it is [`Shader::shade`] up to
-    /// rounding. [`Shader::shade_gradients_shadowed`] is its batch form, bit for bit.
+    /// flat part of the hybrid a scattering medium (see the module docs):
+    /// [`Scattering::shadowed`](super::Scattering::shadowed). With one light of
+    /// intensity 1, every factor 1 and `g = 0` it is [`Shader::shade`] up to rounding.
+    /// [`Shader::shade_gradients_shadowed`] is its batch form, bit for bit.
     #[inline(always)]
     pub fn shade_shadowed(
         &self,
@@ -86,56 +87,14 @@ impl Shader {
         transmittance: &[f32],
         occlusion: f32,
     ) -> [f32; 3] {
-        let m = &self.material;
-        if !m.shade {
-            return base;
-        }
-        let gm2 = grad.dot(grad);
-        let g0 = self.gate;
-        let phase = self.phase_sum(ray, transmittance);
-        if !(gm2 > g0 * g0 && gm2 < f32::INFINITY) {
-            return base.map(|c| c * medium_factor(m, occlusion, phase));
-        }
-        let gm = gm2.sqrt();
-        let (diffuse, specular) = self.sums_shadowed(grad * (-1.0 / gm), ray, transmittance);
-        let w = self.gate_weight(gm);
-        hybrid(m, base, [diffuse, specular, phase], occlusion, w)
-    }
-
-    /// `Σ_i I_i·T_i·4π·p(L_i, V)` over the ray's lights, in light order.
-    #[inline(always)]
-    fn phase_sum(&self, ray: &RayLighting, transmittance: &[f32]) -> f32 {
-        let g = self.anisotropy;
-        let mut phase = 0.0f32;
-        for (&(_, intensity, l_dot_v, _), &t) in ray.lights[..ray.count].iter().zip(transmittance) {
-            phase += (intensity * t) * phase_hg(g, l_dot_v);
-        }
-        phase
-    }
-
-    /// [`Shader`]'s diffuse and specular sums with each light's intensity scaled by
-    /// its transmittance.
-    #[inline(always)]
-    fn sums_shadowed(&self, n: Vec3, ray: &RayLighting, transmittance: &[f32]) -> (f32, f32) {
-        let (n, n_dot_v) = facing(n, ray.view);
-        let mut diffuse = 0.0f32;
-        let mut specular = 0.0f32;
-        for (&(l, intensity, l_dot_v, h), &t) in ray.lights[..ray.count].iter().zip(transmittance) {
-            let n_dot_l = n.dot(l);
-            if n_dot_l > 0.0 {
-                let it = intensity * t;
-                diffuse += it * n_dot_l;
-                let c = self.cos(n_dot_l, n_dot_v, l_dot_v, n, h);
-                specular += it * self.specular.eval(c);
-            }
-        }
-        (diffuse, specular)
+        self.scattering(base, grad)
+            .shadowed(ray, transmittance, occlusion)
     }
 
     /// The surface part of a volume sample with world gradient `grad`: its unit normal
     /// and weight, `None` where the gradient is below the gate (or not finite) or the
     /// material is unshaded (then the sample is all medium).
-    #[inline]
+    #[inline(always)]
     pub fn surface_at(&self, grad: Vec3) -> Option<SurfacePart> {
         if !self.material.shade {
             return None;
@@ -161,14 +120,14 @@ impl Shader {
     pub fn surface_response(&self, base: [f32; 3], normal: Vec3, wo: Vec3, wi: Vec3) -> [f32; 3] {
         let m = &self.material;
         let (n, n_dot_v) = facing(normal, wo);
-        let n_dot_l = n.dot(wi);
-        if n_dot_l <= 0.0 {
-            return [0.0; 3];
-        }
         let h = (wi + wo).normalize_or_zero();
-        let c = self.cos(n_dot_l, n_dot_v, wi.dot(wo), n, h);
-        let spec = m.specular * self.specular.eval(c);
-        base.map(|b| b * m.diffuse * n_dot_l + spec)
+        match self.surface_terms(n, n_dot_v, wi, wi.dot(wo), h) {
+            Some((n_dot_l, lobe)) => {
+                let spec = m.specular * lobe;
+                base.map(|b| b * m.diffuse * n_dot_l + spec)
+            }
+            None => [0.0; 3],
+        }
     }
 
     /// What a scattering medium of colour `base` sends towards unit `wo` per unit of
@@ -209,13 +168,6 @@ pub(super) fn hybrid_terms(
     let lit = m.ambient * occlusion + m.diffuse * (w * diffuse + (1.0 - w) * phase);
     let spec = w * (m.specular * specular);
     (lit, spec)
-}
-
-/// A volume sample's colour from [`hybrid_terms`].
-#[inline(always)]
-fn hybrid(m: &Material, base: [f32; 3], sums: [f32; 3], occlusion: f32, w: f32) -> [f32; 3] {
-    let (lit, spec) = hybrid_terms(m, sums, occlusion, w);
-    base.map(|c| c * lit + spec)
 }
 
 #[cfg(test)]

@@ -1,18 +1,16 @@
 //! Progressive Monte Carlo volume path tracing of a classified field, with the
-//! lighting model's hybrid response (glint-core's `Shader::surface_response` and
-//! `Shader::medium_response`): free paths by delta tracking, the lights by next-event
-//! estimation with ratio-tracked transmittance, a uniform environment reached by the
-//! paths that leave the volume, scattering directions importance-sampled (the
-//! surface's diffuse cosine and its specular lobe through glint-lobe's samplers, the
-//! medium's Henyey-Greenstein phase function exactly), Russian roulette, and at most
-//! `bounces` scattering events. The surface is chosen at a collision with the
-//! probability of its weight, as Exposure Render chooses its BRDF (Kroes et al. 2012).
-
-use std::f32::consts::PI;
+//! lighting model's one scattering model (glint-core's `Scattering` and `Bsdf`): free
+//! paths by delta tracking, the lights by next-event estimation with ratio-tracked
+//! transmittance (`Bsdf::f`), a uniform environment reached by the paths that leave
+//! the volume, scattering directions importance-sampled (`Bsdf::sample`: the surface's
+//! diffuse cosine and its specular lobe through glint-lobe's samplers, the medium's
+//! Henyey-Greenstein phase function exactly), Russian roulette, and at most `bounces`
+//! scattering events. The surface is chosen at a collision with the probability of
+//! its weight (`Scattering::choose`), as Exposure Render chooses its BRDF (Kroes et
+//! al. 2012).
 
 use glint_core::camera::Camera;
-use glint_core::{luminance_f32, Image, RenderStats, Shader, SurfacePart, Vec3};
-use glint_lobe::{Frame, Scatter, SpecularSampler};
+use glint_core::{Bsdf, Image, RenderStats, Shader, Vec3};
 
 use super::medium::Medium;
 use super::occluders::Occluders;
@@ -103,12 +101,9 @@ impl PathImage {
 /// Everything a path needs that does not change during a frame.
 pub(crate) struct PathTracer<'a> {
     pub(crate) track: Tracker<'a>,
-    /// The shader, its lights placed for the camera.
+    /// The shader, its lights placed for the camera (its sampler built:
+    /// [`Shader::check_sampling`]).
     pub(crate) shader: &'a Shader,
-    pub(crate) lobe: SpecularSampler,
-    /// `specular · ∫lobe dω / π`: the specular term's share of a surface's albedo,
-    /// for choosing between the lobe and the diffuse cosine.
-    pub(crate) lobe_albedo: f32,
     pub(crate) camera: Camera,
     pub(crate) size: [u32; 2],
     pub(crate) settings: PathSettings,
@@ -140,9 +135,7 @@ impl<'a> PathTracer<'a> {
         size: [u32; 2],
         settings: PathSettings,
     ) -> Result<PathTracer<'a>, glint_core::RenderError> {
-        let lobe = SpecularSampler::new(shader.specular())
-            .map_err(|e| glint_core::RenderError::Parameter(e.to_string()))?;
-        let lobe_albedo = shader.material().specular * lobe.sampler().integral() as f32 / PI;
+        shader.check_sampling()?;
         let origin = field.world_to_index([0.0; 3]);
         let axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| {
             let p = field.world_to_index(e);
@@ -161,8 +154,6 @@ impl<'a> PathTracer<'a> {
         Ok(PathTracer {
             track: Tracker { field, medium },
             shader,
-            lobe,
-            lobe_albedo,
             camera,
             size,
             settings,
@@ -243,22 +234,16 @@ impl<'a> PathTracer<'a> {
             let value = field.value(p);
             let color = self.track.medium.color(value);
             let wo = -wdir;
-            let surface = self
+            let bsdf = self
                 .shader
-                .surface_at(field.gradient(p))
-                .filter(|s| rng.uniform() < s.weight);
-            self.direct(
-                p,
-                color,
-                wo,
-                surface.as_ref(),
-                &mut rng,
-                beta,
-                &mut radiance,
-            );
-            let Some((wi, weight)) = self.scatter(color, wo, surface.as_ref(), &mut rng) else {
+                .scattering(color, field.gradient(p))
+                .choose(|| rng.uniform());
+            self.direct(p, &bsdf, wo, &mut rng, beta, &mut radiance);
+            let u = [rng.uniform(), rng.uniform(), rng.uniform()];
+            let Some(sample) = bsdf.sample(wo, u) else {
                 break;
             };
+            let (wi, weight) = (sample.wi, sample.weight);
             for c in 0..3 {
                 beta[c] *= weight[c];
             }
@@ -276,7 +261,7 @@ impl<'a> PathTracer<'a> {
                 d: self.to_index(wi),
             };
             wdir = wi;
-            t0 = if surface.is_some() {
+            t0 = if bsdf.is_surface() {
                 self.surface_bias
             } else {
                 0.0
@@ -290,28 +275,26 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// Adds the lights' direct contribution at `p` (next-event estimation), each
-    /// light's transmittance estimated by ratio tracking.
-    #[allow(clippy::too_many_arguments)]
+    /// Adds the lights' direct contribution at `p` through `bsdf` towards `wo`
+    /// (next-event estimation), each light's transmittance estimated by ratio
+    /// tracking.
     #[inline]
     fn direct(
         &self,
         p: Vec3,
-        color: [f32; 3],
+        bsdf: &Bsdf<'_>,
         wo: Vec3,
-        surface: Option<&SurfacePart>,
         rng: &mut Rng,
         beta: [f32; 3],
         radiance: &mut [f32; 3],
     ) {
+        let t0 = if bsdf.is_surface() {
+            self.surface_bias
+        } else {
+            0.0
+        };
         for &(l, l_index, intensity) in &self.lights {
-            let (response, t0) = match surface {
-                Some(s) => (
-                    self.shader.surface_response(color, s.normal, wo, l),
-                    self.surface_bias,
-                ),
-                None => (self.shader.medium_response(color, wo, l), 0.0),
-            };
+            let response = bsdf.f(wo, l);
             if response == [0.0; 3] || intensity == 0.0 {
                 continue;
             }
@@ -326,136 +309,5 @@ impl<'a> PathTracer<'a> {
                 }
             }
         }
-    }
-
-    /// The next direction from a scattering event, and the path's weight `f cos / pdf`;
-    /// `None` ends the path (a direction the surface does not reflect into).
-    #[inline]
-    fn scatter(
-        &self,
-        color: [f32; 3],
-        wo: Vec3,
-        surface: Option<&SurfacePart>,
-        rng: &mut Rng,
-    ) -> Option<(Vec3, [f32; 3])> {
-        let (u0, u1, u2) = (rng.uniform(), rng.uniform(), rng.uniform());
-        let Some(s) = surface else {
-            let wi = sample_phase(self.shader.anisotropy(), wo, u1, u2);
-            return Some((wi, self.shader.medium_albedo(color)));
-        };
-        let n = if s.normal.dot(wo) < 0.0 {
-            -s.normal
-        } else {
-            s.normal
-        };
-        let diffuse = luminance_f32(color) * self.shader.material().diffuse;
-        let total = diffuse + self.lobe_albedo;
-        if total.is_nan() || total <= 0.0 {
-            return None;
-        }
-        let p_lobe = self.lobe_albedo / total;
-        let at = Scatter::new(self.shader.geometry(), n.to_array(), wo.to_array())?;
-        let wi = if u0 < p_lobe {
-            let s = at.sample(&self.lobe, u1, u2)?;
-            Vec3::new(s.wi[0], s.wi[1], s.wi[2])
-        } else {
-            let local = cosine_hemisphere(u1, u2);
-            let w = Frame::from_z(n.to_array()).to_world(local);
-            Vec3::new(w[0], w[1], w[2])
-        };
-        let response = self.shader.surface_response(color, n, wo, wi);
-        if response == [0.0; 3] {
-            return None;
-        }
-        let pdf =
-            (1.0 - p_lobe) * n.dot(wi).max(0.0) / PI + p_lobe * at.pdf(&self.lobe, wi.to_array());
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let k = 1.0 / (PI * pdf);
-        Some((wi, response.map(|r| r * k)))
-    }
-}
-
-/// A unit direction about `z` with density `cos θ / π` (Malley's method).
-#[inline]
-pub(crate) fn cosine_hemisphere(u1: f32, u2: f32) -> [f32; 3] {
-    let r = u1.sqrt();
-    let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
-    [r * c, r * s, (1.0 - u1).max(0.0).sqrt()]
-}
-
-/// An incident direction `wi` for the outgoing `wo` drawn with the density of the
-/// Henyey-Greenstein phase function `p(wi·wo)` (glint-core's `phase_hg` over 4π):
-/// pbrt-v4's `SampleHenyeyGreenstein` (src/pbrt/util/scattering.h), whose `wo` and
-/// `wi` both point away from the event as here.
-#[inline]
-pub(crate) fn sample_phase(g: f32, wo: Vec3, u1: f32, u2: f32) -> Vec3 {
-    let cos = if g.abs() < 1e-3 {
-        1.0 - 2.0 * u1
-    } else {
-        let sq = (1.0 - g * g) / (1.0 + g - 2.0 * g * u1);
-        -(1.0 + g * g - sq * sq) / (2.0 * g)
-    }
-    .clamp(-1.0, 1.0);
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let (sp, cp) = (std::f32::consts::TAU * u2).sin_cos();
-    let w = Frame::from_z(wo.to_array()).to_world([sin * cp, sin * sp, cos]);
-    Vec3::new(w[0], w[1], w[2])
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use glint_core::phase_hg;
-
-    #[test]
-    fn phase_samples_follow_the_phase_function() {
-        // E[wi·wo] under p(wi·wo) = (1/2)∫ μ (4π p)(μ)/(4π)·2π dμ... = -g for HG in
-        // this convention; and a histogram of wi·wo against the density.
-        let wo = Vec3::new(0.0, 0.6, 0.8);
-        for g in [-0.7f32, 0.0, 0.4, 0.85] {
-            let n = 400_000;
-            let mut rng = Rng::new(3, 1, 0);
-            let bins = 20;
-            let mut hist = vec![0u32; bins];
-            let mut mean = 0.0f64;
-            for _ in 0..n {
-                let wi = sample_phase(g, wo, rng.uniform(), rng.uniform());
-                assert!((wi.length() - 1.0).abs() < 1e-4);
-                let mu = wi.dot(wo).clamp(-1.0, 1.0);
-                mean += f64::from(mu);
-                hist[(((mu + 1.0) / 2.0 * bins as f32) as usize).min(bins - 1)] += 1;
-            }
-            mean /= n as f64;
-            assert!((mean + f64::from(g)).abs() < 0.005, "g = {g}: mean {mean}");
-            for (b, &count) in hist.iter().enumerate() {
-                // The density of μ is (4π p)(μ)/2; its integral over the bin by the
-                // midpoint rule on 50 points.
-                let (lo, w) = (-1.0 + 2.0 * b as f64 / bins as f64, 2.0 / bins as f64);
-                let want: f64 = (0..50)
-                    .map(|i| {
-                        let mu = lo + (i as f64 + 0.5) * w / 50.0;
-                        f64::from(phase_hg(g, mu as f32)) / 2.0 * w / 50.0
-                    })
-                    .sum();
-                let got = f64::from(count) / n as f64;
-                assert!(
-                    (got - want).abs() < 0.003 + 0.03 * want,
-                    "g = {g}, bin {b}: {got} vs {want}"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn cosine_samples_have_mean_cosine_two_thirds() {
-        let mut rng = Rng::new(5, 0, 0);
-        let n = 200_000;
-        let mean: f64 = (0..n)
-            .map(|_| f64::from(cosine_hemisphere(rng.uniform(), rng.uniform())[2]))
-            .sum::<f64>()
-            / n as f64;
-        assert!((mean - 2.0 / 3.0).abs() < 0.003, "{mean}");
     }
 }
