@@ -87,6 +87,16 @@ impl Design {
         }
     }
 
+    /// The design with its output `out_bits` wide (every family): `glint hw check
+    /// --out-bits`.
+    pub fn with_out_bits(self, out_bits: u32) -> Design {
+        match self {
+            Design::Kv(config) => Design::Kv(Config { out_bits, ..config }),
+            Design::Pow { params, .. } => Design::Pow { out_bits, params },
+            Design::Schlick { params, .. } => Design::Schlick { out_bits, params },
+        }
+    }
+
     /// Output width.
     pub fn out_bits(&self) -> u32 {
         match self {
@@ -201,6 +211,26 @@ fn errors_on_unit_interval(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn with_out_bits_sets_every_familys_width() {
+        let designs = [
+            Design::Kv(Config::default()),
+            Design::Pow {
+                out_bits: 10,
+                params: PowParams::default(),
+            },
+            Design::Schlick {
+                out_bits: 10,
+                params: SchlickParams::default(),
+            },
+        ];
+        for d in designs {
+            let family = d.family();
+            let d = d.with_out_bits(7);
+            assert_eq!((d.family(), d.out_bits()), (family, 7));
+        }
+    }
 
     #[test]
     fn plain_configs_and_tagged_designs_parse() {

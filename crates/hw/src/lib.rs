@@ -39,6 +39,7 @@
 
 mod accuracy;
 mod arith;
+mod check;
 mod config;
 #[cfg(feature = "tools")]
 mod design;
@@ -56,6 +57,9 @@ mod unit;
 
 pub use accuracy::{measure, within, ErrorsAtN, Measurement, Reference, Worst, BOUND_SLACK_LSB};
 pub use arith::{csd_digits, CoefCircuit, TruncatedSquare, MAX_TRUNCATED_COLUMNS};
+pub use check::{
+    check_exhaustive_size, check_ranges, full_scale, MAX_CHECK_POINTS, MAX_SWEEP_POINTS,
+};
 pub use config::{
     CoefSource, Coefficients, Config, Rounding, Squarer, MAX_COS_BITS, MAX_N_BITS,
     MAX_REGISTER_BITS, MAX_V,

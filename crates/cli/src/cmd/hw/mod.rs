@@ -28,8 +28,9 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use glint_hw::{
-    format_ranges, markdown_table, mask_ranges, measure, sweep_row, Coefficients, Config, Design,
-    HwError, Input, Reference, Rom, Rounding, Target, Unit, MAX_COS_BITS, MAX_V,
+    check_exhaustive_size, check_ranges, format_ranges, full_scale, markdown_table, mask_ranges,
+    measure, sweep_row, Coefficients, Config, Design, HwError, Input, Reference, Rom, Rounding,
+    Target, Unit, MAX_CHECK_POINTS, MAX_SWEEP_POINTS, MAX_V,
 };
 
 /// Subcommands of `glint hw`.
@@ -359,44 +360,6 @@ fn build_unit(config: Config, path: Option<&Path>) -> anyhow::Result<Unit> {
     in_file(path, || Unit::new(config))
 }
 
-/// Largest exhaustive check `glint hw check` runs (~1 min of CPU at ~25 ns a point).
-const MAX_CHECK_POINTS: u64 = 1 << 32;
-/// Largest exhaustive check per step of `glint hw sweep` (it runs ~30-40 of them).
-const MAX_SWEEP_POINTS: u64 = 1 << 28;
-
-/// Refuses configurations whose exhaustive check (every cos code in [-1, 1] × every
-/// n) would run for too long, with the numbers and the largest `cos_bits` that fits in
-/// the message. `cfg` must be validated; the count is exact (u128), so no width can
-/// wrap it below the limit.
-fn check_exhaustive_size(cfg: &Config, max: u64) -> anyhow::Result<()> {
-    let limit = u128::from(max);
-    let fits = |c: &Config| c.exhaustive_points().is_some_and(|p| p <= limit);
-    if fits(cfg) {
-        return Ok(());
-    }
-    let points = cfg
-        .exhaustive_points()
-        .map_or_else(|| "too many".to_string(), |p| p.to_string());
-    let hint = (2..=MAX_COS_BITS)
-        .rev()
-        .find(|&cos_bits| {
-            fits(&Config {
-                cos_bits,
-                ..cfg.clone()
-            })
-        })
-        .map_or_else(
-            || "use a smaller n_bits".to_string(),
-            |c| format!("at n_bits = {} use cos_bits <= {c}", cfg.n_bits),
-        );
-    bail!(
-        "an exhaustive check of cos_bits = {} and n_bits = {} is {points} points per pass, \
-         more than the {max} this command runs; {hint}",
-        cfg.cos_bits,
-        cfg.n_bits
-    )
-}
-
 fn rom(args: RomArgs) -> anyhow::Result<()> {
     let rom = Rom::new(args.coef, args.v, args.n_bits, args.coef_bits, args.round)?;
     glint_io::write_atomic(&args.output, |w| w.write_all(rom.to_readmemh().as_bytes()))?;
@@ -559,16 +522,9 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
     let mut config = match design {
         Design::Kv(c) => c,
         other => {
-            let other = match (other, args.out_bits) {
-                (Design::Pow { params, .. }, Some(o)) => Design::Pow {
-                    out_bits: o,
-                    params,
-                },
-                (Design::Schlick { params, .. }, Some(o)) => Design::Schlick {
-                    out_bits: o,
-                    params,
-                },
-                (d, _) => d,
+            let other = match args.out_bits {
+                Some(o) => other.with_out_bits(o),
+                None => other,
             };
             in_file(args.config.as_deref(), || other.hdl().map(|_| ()))?;
             outln!("# glint hw check: {}", other.to_json())?;
@@ -613,13 +569,7 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
         "vs cos^n (unit)",
         "vs cos^n (ideal)"
     )?;
-    let mut ranges = vec![(0u32, 15u32), (16, 63), (64, 255), (256, last)];
-    ranges.retain(|&(a, _)| a <= last);
-    if let Some(r) = ranges.last_mut() {
-        r.1 = r.1.min(last);
-    }
-    ranges.push((0, last));
-    for (a, b) in ranges {
+    for (a, b) in check_ranges(last) {
         outln!(
             "{:<12} {:>14.4} {:>22.4} {:>22.4}",
             format!("{a}-{b}"),
@@ -648,13 +598,6 @@ fn check(args: CheckArgs) -> anyhow::Result<()> {
         )?;
     }
     Ok(())
-}
-
-/// `2^bits - 1` (all ones), for any width up to 64.
-fn full_scale(bits: u32) -> u64 {
-    u64::MAX
-        .checked_shr(64u32.saturating_sub(bits))
-        .unwrap_or(0)
 }
 
 fn serde_json_line(cfg: &Config) -> String {
@@ -689,32 +632,6 @@ mod tests {
         assert!(!out.exists());
         // Only the temporary files' directory entries could remain; there are none.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-    }
-
-    #[test]
-    fn oversized_exhaustive_checks_are_refused() {
-        let cfg = |cos_bits, n_bits| Config {
-            cos_bits,
-            n_bits,
-            ..Config::default()
-        };
-        // (2^29 + 1) · 2^10 > 2^32.
-        assert!(check_exhaustive_size(&cfg(30, 10), MAX_CHECK_POINTS).is_err());
-        assert!(check_exhaustive_size(&Config::default(), MAX_SWEEP_POINTS).is_ok());
-        // The reviewer's case: (2^59 + 1) << 13 wrapped to 8192 in u64 and passed.
-        // Every cos_bits up to the maximum must be refused at n_bits = 13 beyond the
-        // limit: (2^(c-1) + 1) · 2^13 <= 2^32 only for c <= 19 (2^18 · 2^13 = 2^31).
-        for c in 2..=MAX_COS_BITS {
-            let ok = check_exhaustive_size(&cfg(c, 13), MAX_CHECK_POINTS).is_ok();
-            assert_eq!(ok, c <= 19, "cos_bits = {c}");
-        }
-        let e = check_exhaustive_size(&cfg(60, 13), MAX_CHECK_POINTS).unwrap_err();
-        let msg = format!("{e:#}");
-        // (2^59 + 1) · 2^13, by hand.
-        let points = ((1u128 << 59) + 1) * 8192;
-        assert!(msg.contains(&points.to_string()), "{msg}");
-        assert!(msg.contains("cos_bits <= 19"), "{msg}");
-        assert!(!msg.contains('\n'), "{msg}");
     }
 
     fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
@@ -817,15 +734,5 @@ mod tests {
         // v = u32::MAX would size a 16 GiB square_frac list before validation.
         let e = run(Command::Sweep(sweep_args(vec![u32::MAX], 16, 10))).unwrap_err();
         assert!(format!("{e:#}").contains("v = 4294967295"), "{e:#}");
-    }
-
-    #[test]
-    fn full_scale_by_hand() {
-        assert_eq!(full_scale(0), 0);
-        assert_eq!(full_scale(1), 1);
-        assert_eq!(full_scale(8), 255);
-        assert_eq!(full_scale(63), (1u64 << 63) - 1);
-        assert_eq!(full_scale(64), u64::MAX);
-        assert_eq!(full_scale(65), u64::MAX);
     }
 }
