@@ -99,11 +99,55 @@ impl LabelTable {
             Err(e) => Err(e.into()),
         }
     }
+
+    /// The built-in table a label map file defaults to by its name: FreeSurfer's for
+    /// `aseg`, `aparc` and `wmparc` files.
+    pub fn default_for(path: &Path) -> Option<&'static str> {
+        let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+        ["aseg", "aparc", "wmparc"]
+            .iter()
+            .any(|k| name.contains(k))
+            .then_some("freesurfer")
+    }
+
+    /// The table that names the labels of the map at `path`, the one rule the
+    /// renderer, the viewer's legend and `glint info` share: the table asked for (a
+    /// built-in name or a file), else the one its file name implies
+    /// ([`LabelTable::default_for`]), else the one the file carries
+    /// ([`LabelTable::embedded`]), else an empty table whose names and colours are
+    /// generated (source `generated`).
+    pub fn for_map(path: &Path, table: Option<&str>) -> Result<LabelTable, LabelError> {
+        match table.or_else(|| LabelTable::default_for(path)) {
+            Some(t) => LabelTable::open(t),
+            None => Ok(LabelTable::embedded(path)?.unwrap_or_else(|| LabelTable::new("generated"))),
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_maps_table_is_the_one_asked_for_then_its_names_then_generated() {
+        let dir = tempfile::tempdir().unwrap();
+        let map = dir.path().join("mask.nii");
+        std::fs::write(&map, b"not read: a NIfTI carries no table").unwrap();
+        let aseg = dir.path().join("sub-01_aseg.nii.gz");
+        std::fs::write(&aseg, b"").unwrap();
+        assert_eq!(LabelTable::default_for(&aseg), Some("freesurfer"));
+        assert_eq!(LabelTable::default_for(&map), None);
+        let generated = LabelTable::for_map(&map, None).unwrap();
+        assert_eq!(
+            (generated.source.as_str(), generated.len()),
+            ("generated", 0)
+        );
+        let by_name = LabelTable::for_map(&aseg, None).unwrap();
+        assert_eq!(by_name.name_of(17), LabelTable::freesurfer().name_of(17));
+        let asked = LabelTable::for_map(&aseg, Some("totalsegmentator")).unwrap();
+        assert_eq!(asked.name_of(1), LabelTable::totalsegmentator().name_of(1));
+        assert!(LabelTable::for_map(&map, Some("no-such-table")).is_err());
+    }
 
     /// The stored DICOM value of a CIELab colour (PS3.3 C.10.7.1.1 scaling).
     fn stored(l: f64, a: f64, b: f64) -> [u16; 3] {

@@ -138,11 +138,7 @@ impl LabelSpec {
 
     /// The table a file of this name defaults to.
     pub fn default_table(path: &Path) -> Option<String> {
-        let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
-        ["aseg", "aparc", "wmparc"]
-            .iter()
-            .any(|k| name.contains(k))
-            .then(|| "freesurfer".to_string())
+        LabelTable::default_for(path).map(str::to_string)
     }
 
     /// Writes the defaults (table, smoothing) into the spec.
@@ -183,12 +179,8 @@ impl LabelMeshes {
         let volume = read_volume(&spec.path, &ReadOptions::default())?;
         let grid = LabelGrid::from_volume(&volume).map_err(|e| spec.error(e))?;
         drop(volume);
-        let table = match &spec.table {
-            Some(t) => LabelTable::open(t).map_err(|e| spec.error(e))?,
-            None => LabelTable::embedded(&spec.path)
-                .map_err(|e| spec.error(e))?
-                .unwrap_or_else(|| LabelTable::new("generated")),
-        };
+        let table =
+            LabelTable::for_map(&spec.path, spec.table.as_deref()).map_err(|e| spec.error(e))?;
         let summary = grid.summary();
         let lookup = |names: &[String]| -> Result<Vec<u32>, RenderError> {
             names

@@ -53,14 +53,10 @@ impl LabelList {
         let volume = read_volume(&spec.path, &ReadOptions::default())?;
         let grid = LabelGrid::from_volume(&volume).map_err(|e| error(Box::new(e)))?;
         drop(volume);
-        let table = match spec
-            .table
-            .clone()
-            .or_else(|| LabelSpec::default_table(&spec.path))
-        {
-            Some(t) => LabelTable::open(&t).map_err(|e| error(Box::new(e)))?,
-            None => LabelTable::new("generated"),
-        };
+        // The renderer's rule, so the legend names and colours what the image shows
+        // (a DICOM SEG's own segment table included).
+        let table = LabelTable::for_map(&spec.path, spec.table.as_deref())
+            .map_err(|e| error(Box::new(e)))?;
         let entries = grid
             .summary()
             .into_iter()

@@ -7,7 +7,6 @@ use std::path::Path;
 use anyhow::Context;
 use glint_io::Volume;
 use glint_render::label_maps::{LabelGrid, LabelTable};
-use glint_render::LabelSpec;
 use serde_json::{json, Value};
 
 /// One label of a map (or, listing all, of its table).
@@ -36,16 +35,9 @@ pub struct Listing<'a> {
 /// The labels of `volume` (read from `path`) named by the listing's table, in value
 /// order.
 fn rows(path: &Path, volume: &Volume, listing: &Listing) -> anyhow::Result<(LabelTable, Vec<Row>)> {
-    let table = listing.table;
     let grid = LabelGrid::from_volume(volume)
         .with_context(|| format!("{}: cannot list labels", path.display()))?;
-    let table = match table
-        .map(str::to_string)
-        .or_else(|| LabelSpec::default_table(path))
-    {
-        Some(t) => LabelTable::open(&t)?,
-        None => LabelTable::embedded(path)?.unwrap_or_else(|| LabelTable::new("none")),
-    };
+    let table = LabelTable::for_map(path, listing.table)?;
     let ml = grid.voxel_ml();
     let summary = grid.summary();
     let row = |value: u32, voxels: u64, present: bool| Row {
