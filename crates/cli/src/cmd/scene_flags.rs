@@ -328,13 +328,11 @@ impl SceneFlags {
     fn apply_classification(&self, scene: &mut Scene) -> anyhow::Result<()> {
         if let Some(p) = &self.preset {
             glint_render::preset(p)?; // fail before reading the volume
-            scene.preset = Some(p.clone());
-            scene.transfer_function = None;
+            scene.set_preset(p.clone());
         }
         if let Some(path) = &self.tf {
             let file = TransferFunction::from_json_file(path)?;
-            scene.transfer_function = Some(file.tf);
-            scene.preset = None;
+            scene.set_transfer_function(file.tf);
             let m = &mut scene.material;
             set(&mut m.ambient, file.material.ambient.map(Some));
             set(&mut m.diffuse, file.material.diffuse.map(Some));
@@ -344,14 +342,11 @@ impl SceneFlags {
                 scene.lobe.n = file.power;
             }
         }
-        set(&mut scene.mode, self.mode);
+        if let Some(mode) = self.mode {
+            scene.set_mode(mode);
+        }
         if self.iso.is_some() {
             scene.iso = self.iso;
-        } else if self
-            .mode
-            .is_some_and(|m| m != RenderMode::Iso && m != RenderMode::Surface)
-        {
-            scene.iso = None;
         }
         let m = &mut scene.material;
         set(&mut m.ambient, self.ambient.map(Some));

@@ -2,7 +2,8 @@
 
 use serde_json::{Map, Value};
 
-use glint_core::RenderError;
+use glint_core::{RenderError, RenderMode};
+use glint_volume::TransferFunction;
 
 use super::Scene;
 
@@ -60,7 +61,49 @@ impl Scene {
                 }
             }
         }
-        Scene::from_value(doc)
+        let mut next = Scene::from_value(doc)?;
+        let sets = |k: &str| patch.get(k).is_some_and(|v| !v.is_null());
+        for key in patch.keys().filter(|k| sets(k)) {
+            next.follow_edit(key, &sets);
+        }
+        Ok(next)
+    }
+
+    /// Classifies the scene with the preset `name`: its transfer function replaces
+    /// the scene's own (the rule of `glint render --preset`, the viewer's preset menu
+    /// and a `preset` patch).
+    pub fn set_preset(&mut self, name: impl Into<String>) {
+        self.preset = Some(name.into());
+        self.follow_edit("preset", &|_| false);
+    }
+
+    /// Classifies the scene with `tf`, which replaces its preset's.
+    pub fn set_transfer_function(&mut self, tf: TransferFunction) {
+        self.transfer_function = Some(tf);
+        self.follow_edit("transfer_function", &|_| false);
+    }
+
+    /// Renders the scene in `mode`; a mode that draws no isosurface (not `iso` or
+    /// `surface`) forgets the iso value, so the next iso scene takes its default.
+    pub fn set_mode(&mut self, mode: RenderMode) {
+        self.mode = mode;
+        self.follow_edit("mode", &|_| false);
+    }
+
+    /// The scene-editing rules, written once: what setting `field` clears, unless
+    /// the same edit sets that too (`also_set`).
+    fn follow_edit(&mut self, field: &str, also_set: &dyn Fn(&str) -> bool) {
+        match field {
+            "preset" if !also_set("transfer_function") => self.transfer_function = None,
+            "transfer_function" if !also_set("preset") => self.preset = None,
+            "mode"
+                if !also_set("iso")
+                    && !matches!(self.mode, RenderMode::Iso | RenderMode::Surface) =>
+            {
+                self.iso = None
+            }
+            _ => {}
+        }
     }
 }
 
@@ -102,6 +145,53 @@ mod tests {
         .unwrap();
         assert_eq!(next.lights.len(), 1);
         assert_eq!(next.lights[0].azimuth, 30.0);
+    }
+
+    #[test]
+    fn a_preset_replaces_the_transfer_function_and_a_flat_mode_the_iso_value() {
+        let tf = TransferFunction::from_flat(&[0.0, 0.0, 1.0, 1.0], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+        let mut scene = Scene {
+            iso: Some(0.4),
+            mode: RenderMode::Iso,
+            ..Scene::default()
+        };
+        scene.set_transfer_function(tf.clone());
+        scene.preset = Some("ct-bone".into());
+        // Patches and the typed edits follow the same rules.
+        let next = patched(&scene, json!({"preset": "mr-default"})).unwrap();
+        assert_eq!(
+            (next.preset.as_deref(), next.transfer_function.is_none()),
+            (Some("mr-default"), true)
+        );
+        let mut edited = scene.clone();
+        edited.set_preset("mr-default");
+        assert_eq!(edited, next);
+        let tf_json = serde_json::to_value(&tf).unwrap();
+        let next = patched(&scene, json!({"transfer_function": tf_json})).unwrap();
+        assert_eq!(
+            (next.preset.is_none(), next.transfer_function.is_some()),
+            (true, true)
+        );
+        // Setting both in one edit keeps both.
+        let both = patched(
+            &scene,
+            json!({"preset": "mr-default", "transfer_function": tf_json}),
+        )
+        .unwrap();
+        assert!(both.preset.is_some() && both.transfer_function.is_some());
+        // Surface keeps the iso value, composite forgets it unless the edit sets it.
+        for (mode, iso) in [("surface", Some(0.4)), ("composite", None), ("mip", None)] {
+            let next = patched(&scene, json!({ "mode": mode })).unwrap();
+            assert_eq!(next.iso, iso, "{mode}");
+            let mut edited = scene.clone();
+            edited.set_mode(next.mode);
+            assert_eq!(edited.iso, iso, "{mode}");
+        }
+        let next = patched(&scene, json!({"mode": "composite", "iso": 0.7})).unwrap();
+        assert_eq!(next.iso, Some(0.7));
+        // A null preset clears only the preset.
+        let next = patched(&scene, json!({"preset": null})).unwrap();
+        assert!(next.preset.is_none() && next.transfer_function.is_some());
     }
 
     #[test]

@@ -190,9 +190,12 @@ canvas.addEventListener("wheel", (e) => {
   update({ camera: { zoom: scene.camera.zoom } }, true);
 }, { passive: false });
 
-$("preset").onchange = (e) => update({ preset: e.target.value, transfer_function: null });
+// The server applies the scene-editing rules (a preset replaces the transfer function,
+// a mode without an isosurface forgets the iso value): Scene::patch.
+$("preset").onchange = (e) => update({ preset: e.target.value });
 $("mode").onchange = (e) => {
-  const patch = { mode: e.target.value, iso: e.target.value === "iso" ? Number($("iso").value) : null };
+  const mode = e.target.value;
+  const patch = mode === "iso" ? { mode, iso: Number($("iso").value) } : { mode };
   update(patch);
 };
 $("iso").oninput = (e) => { if ($("mode").value === "iso") update({ iso: Number(e.target.value) }, true); };
