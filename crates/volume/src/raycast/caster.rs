@@ -6,9 +6,7 @@ use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3, MAX_LIGHTS}
 
 use super::settings::FrameSettings;
 use super::{ISO_REFINE_STEPS, TERMINATION_OPACITY, TILE};
-use crate::classification::ColourVolume;
-use crate::classification::Lut;
-use crate::classification::{Last, Sampling};
+use crate::classification::{ColourVolume, Last, Lut, Sampling};
 use crate::field::{clip_ray, Field, Loc, MACRO_CELL};
 use crate::light::ShadowField;
 
