@@ -338,7 +338,7 @@ impl Surfaces {
     /// surface it shows, along the pixel's ray from the eye (from the image plane for
     /// orthographic cameras), `f32::INFINITY` where it shows none: what a volume drawn
     /// with the same camera is hidden behind
-    /// (glint-volume's `Classification::render_in_front`).
+    /// (glint-volume's `Classification::frame`, its `far`).
     pub fn render_layer(
         &self,
         camera: &Camera,

@@ -8,9 +8,10 @@ use std::time::Instant;
 use glint_core::camera::{Camera, Projection};
 use glint_core::{Image, Legend, RenderError, RenderMode, ScalarColors, Shader, Timings};
 use glint_io::{ReadOptions, Volume};
+use glint_volume::Transport as VolumeTransport;
 use glint_volume::{
     Classification, ClassifySettings, ColourVolume, Field, FrameSettings, Kernel, Occluders,
-    PathImage, PathTarget, Prefilter, ShadowField, ShadowSettings, Source, TransferFunction,
+    PathImage, Prefilter, ShadowField, ShadowSettings, Source, TransferFunction,
 };
 
 use crate::hwlobe::HwCache;
@@ -504,13 +505,18 @@ impl Renderer {
         let (class, shader, frame) = (v.class, v.shader, v.frame);
         let mut volume = |far: Option<&[f32]>| -> Result<Image, RenderError> {
             match transport {
-                Transport::Local => match far {
-                    None => class.render(shader, frame, progress),
-                    Some(far) => class.render_in_front(shader, frame, progress, far),
-                },
+                Transport::Local => {
+                    class.frame(shader, frame, far, VolumeTransport::Local, progress)
+                }
                 Transport::Shadows(settings) => {
                     let lights = self.shadow_field(class, v, settings)?;
-                    class.render_shadowed(shader, frame, progress, far, &lights)
+                    class.frame(
+                        shader,
+                        frame,
+                        far,
+                        VolumeTransport::Shadows(&lights),
+                        progress,
+                    )
                 }
                 Transport::Path { spp, settings } => {
                     let mut key = scene.clone();
@@ -525,30 +531,22 @@ impl Renderer {
                             image: PathImage::new(size[0], size[1]),
                         },
                     };
-                    let never = AtomicBool::new(false);
                     let cancel = self.cancel.clone();
                     let acc = self.paths.insert(acc);
-                    let target = PathTarget {
+                    let light = VolumeTransport::Path {
                         image: &mut acc.image,
                         spp,
-                        far,
+                        settings,
                         occluders: v.occluders.map(|o| &**o),
+                        cancel: cancel.as_deref(),
                     };
-                    let traced = class.trace_paths_into(
-                        shader,
-                        frame,
-                        &settings,
-                        target,
-                        progress,
-                        cancel.as_deref().unwrap_or(&never),
-                    );
-                    if let Err(e) = traced {
+                    let traced = class.frame(shader, frame, far, light, progress);
+                    if traced.is_err() {
                         // A cancelled batch left some rows with more samples than
                         // others: the image cannot be continued.
                         self.paths = None;
-                        return Err(e);
                     }
-                    Ok(acc.image.image(frame.background))
+                    traced
                 }
             }
         };
@@ -582,7 +580,7 @@ impl Renderer {
             }
         }
         let occluders = v.occluders.map(|o| &**o);
-        let field = Arc::new(class.shadow_field_occluded(v.shader, v.frame, &settings, occluders)?);
+        let field = Arc::new(class.shadow_field(v.shader, v.frame, &settings, occluders)?);
         self.shadows = Some(ShadowCache {
             class: class.clone(),
             settings,

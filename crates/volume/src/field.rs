@@ -382,6 +382,26 @@ impl Field {
         mul3(&self.to_index, d)
     }
 
+    /// The index-space vector, in f32, from the index position `from` to the world
+    /// point `to`: the difference of two index positions. Light transport turns its
+    /// world directions into index units per mm so ([`Field::index_direction`], and a
+    /// ray's direction from its origin).
+    pub(crate) fn index_offset(&self, from: [f64; 3], to: [f64; 3]) -> Vec3 {
+        let e = self.world_to_index(to);
+        Vec3::new(
+            (e[0] - from[0]) as f32,
+            (e[1] - from[1]) as f32,
+            (e[2] - from[2]) as f32,
+        )
+    }
+
+    /// The index-space direction (index units per mm, f32) of the world direction
+    /// `v`: [`Field::index_offset`] from the world origin's index position to `v`.
+    pub(crate) fn index_direction(&self, v: Vec3) -> Vec3 {
+        let origin = self.world_to_index([0.0; 3]);
+        self.index_offset(origin, [v.x as f64, v.y as f64, v.z as f64])
+    }
+
     /// The trilinear cell holding `p` (index units, inside `[0, dims-1]`; outside
     /// points are clamped to the border cells).
     #[inline(always)]
@@ -628,4 +648,33 @@ fn placement(affine: &[[f64; 4]; 4]) -> Result<(Mat3, [f64; 3], Mat3, f64), Rend
         .collect();
     let min_spacing = spacing.iter().cloned().fold(f64::INFINITY, f64::min);
     Ok((to_world, origin, to_index, min_spacing))
+}
+
+/// The slab test of the index-space ray `o + t d` (t in mm, `d` in index units per mm)
+/// against the box `lo..=hi`, from `[t0, t1]`: where the ray is inside the box along
+/// every axis it moves along (entry, exit; the exit may come before the entry, a miss
+/// the caller tells), or `None` when it does not move along an axis and lies outside
+/// the box's extent there. The ray caster and light transport clip their rays here.
+#[inline(always)]
+pub(crate) fn clip_ray(
+    o: Vec3,
+    d: Vec3,
+    (lo, hi): ([f32; 3], [f32; 3]),
+    (t0, t1): (f32, f32),
+) -> Option<(f32, f32)> {
+    let (mut a, mut b) = (t0, t1);
+    for axis in 0..3 {
+        let (oa, da) = (o.get(axis), d.get(axis));
+        if da.abs() < 1e-12 {
+            if oa < lo[axis] || oa > hi[axis] {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / da;
+        let (ta, tb) = ((lo[axis] - oa) * inv, (hi[axis] - oa) * inv);
+        a = a.max(ta.min(tb));
+        b = b.min(ta.max(tb));
+    }
+    Some((a, b))
 }

@@ -1,27 +1,53 @@
-//! Frames of a classification under the `shadows` and `path` models: above both the
-//! ray caster (`raycast`) and the light transport (`transport`), which it joins.
+//! A classification's one frame entry ([`Classification::frame`]) under each lighting
+//! model ([`Transport`]), and the `shadows` model's light volumes it reads
+//! ([`Classification::shadow_field`]): above both the ray caster (`raycast`) and the
+//! light transport (`transport`), which it joins.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
-use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
+use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader};
 
-use crate::field::Field;
-use crate::raycast::{Classification, FrameSettings};
+use crate::classification::Classification;
+use crate::raycast::FrameSettings;
 use crate::transport::{
     check_spp, Occluders, PathImage, PathSettings, PathTracer, ShadowField, ShadowSettings,
 };
 
-/// The index-space direction (index units per mm) of the world direction `v`.
-pub(crate) fn direction_to_index(field: &Field, v: Vec3) -> Vec3 {
-    let o = field.world_to_index([0.0; 3]);
-    let e = field.world_to_index([v.x as f64, v.y as f64, v.z as f64]);
-    Vec3::new(
-        (e[0] - o[0]) as f32,
-        (e[1] - o[1]) as f32,
-        (e[2] - o[2]) as f32,
-    )
+/// How the light of a frame is computed, with what each lighting model
+/// ([`LightingModel`](crate::LightingModel)) reads and writes.
+pub enum Transport<'a> {
+    /// `local`: every light reaches every sample. Every mode.
+    Local,
+    /// `shadows`: each light at each shaded sample scaled by its transmittance from
+    /// these light volumes (built by [`Classification::shadow_field`] for the same
+    /// shader and camera), the ambient term by their occlusion, the flat part of each
+    /// sample a scattering medium ([`Shader::shade_shadowed`]). Composite and iso
+    /// modes.
+    Shadows(&'a ShadowField),
+    /// `path`: samples added to a progressive path-traced image until it holds `spp`
+    /// per pixel (nothing when it already does). Composite mode only.
+    ///
+    /// Each pixel's samples are added in sample order, each from its own generator
+    /// (seed, pixel, sample index), so the image is the same bit for bit for a seed
+    /// and sample count on any thread count, in one batch or many.
+    Path {
+        /// The image the samples are added to (its size is the frame's).
+        image: &'a mut PathImage,
+        /// Samples per pixel it holds when the frame returns.
+        spp: u32,
+        /// Bounces, seed and environment.
+        settings: PathSettings,
+        /// Meshes voxelised on this classification's field ([`Occluders::new`]):
+        /// shadow rays and scattered paths end where they enter an occupied cell.
+        occluders: Option<&'a Occluders>,
+        /// When set (by another thread: a viewer whose user moved while samples were
+        /// being added), rows not yet begun are left and the frame returns
+        /// [`RenderError::Cancelled`]; the image then holds part of a batch and must be
+        /// dropped, not continued.
+        cancel: Option<&'a AtomicBool>,
+    },
 }
 
 /// Checks that `far`, when given, has one entry per pixel of `frame`.
@@ -36,39 +62,69 @@ fn check_far(frame: &FrameSettings, far: Option<&[f32]>) -> Result<(), RenderErr
     }
 }
 
-/// What [`Classification::trace_paths_into`] adds samples to, and what stops its
-/// rays besides the volume.
-pub struct PathTarget<'a> {
-    /// The image the samples are added to.
-    pub image: &'a mut PathImage,
-    /// Samples per pixel it holds when the call returns.
-    pub spp: u32,
-    /// Per pixel, where the camera ray stops (mm; the meshes' depth), when given.
-    pub far: Option<&'a [f32]>,
-    /// Meshes voxelised on this classification's field ([`Occluders::new`]): shadow
-    /// rays and scattered paths end where they enter an occupied cell.
-    pub occluders: Option<&'a Occluders>,
-}
-
 impl Classification {
-    /// The `shadows` model's light volumes for the lights of `shader` placed for the
-    /// camera of `frame` ([`ShadowField`]), with ambient occlusion when `settings`
-    /// asks. The averaged extinction and the occlusion are built on first use and kept
-    /// with the classification; the light volumes are built here.
-    pub fn shadow_field(
+    /// Renders the classified field lit by `shader` (its lights placed relative to the
+    /// camera of `frame`, [`Classification::camera`]) with the size, background and
+    /// kernel of `frame`, the light computed as `transport` says.
+    ///
+    /// `far`, when given, stops each ray at a per-pixel distance: `far[y * width + x]`
+    /// is the distance (mm, along the pixel's ray from the camera's eye, or from the
+    /// image plane for orthographic cameras) past which the volume is hidden (e.g. by
+    /// an opaque surface drawn with the same camera); `f32::INFINITY` where nothing
+    /// hides it. `progress` is called (from worker threads) with the number of pixels
+    /// finished after each tile or row.
+    ///
+    /// Returns the frame's image; under [`Transport::Path`], the path image's
+    /// ([`PathImage::image`] on the frame's background) once the samples are added.
+    pub fn frame(
         &self,
         shader: &Shader,
         frame: &FrameSettings,
-        settings: &ShadowSettings,
-    ) -> Result<ShadowField, RenderError> {
-        self.shadow_field_occluded(shader, frame, settings, None)
+        far: Option<&[f32]>,
+        transport: Transport<'_>,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Image, RenderError> {
+        check_far(frame, far)?;
+        match transport {
+            Transport::Local => self.render_jittered(shader, frame, progress, true, far, None),
+            Transport::Shadows(shadows) => {
+                if self.settings().mode == RenderMode::Mip {
+                    return Err(RenderError::Parameter(
+                        "shadows lighting needs composite or iso mode (MIP is not lit)".into(),
+                    ));
+                }
+                self.render_jittered(shader, frame, progress, true, far, Some(shadows))
+            }
+            Transport::Path {
+                image,
+                spp,
+                settings,
+                occluders,
+                cancel,
+            } => {
+                let never = AtomicBool::new(false);
+                let paths = Paths {
+                    settings,
+                    spp,
+                    far,
+                    occluders,
+                    cancel: cancel.unwrap_or(&never),
+                };
+                self.trace_paths(shader, frame, image, &paths, progress)?;
+                Ok(image.image(frame.background))
+            }
+        }
     }
 
-    /// [`Classification::shadow_field`] with the grid points `occluders` occupy
-    /// (meshes voxelised by [`Occluders::new`] on this classification's field) opaque:
-    /// the meshes cast their shadows into the volume. `None` gives the light volumes
-    /// of [`Classification::shadow_field`], bit for bit.
-    pub fn shadow_field_occluded(
+    /// The `shadows` model's light volumes for the lights of `shader` placed for the
+    /// camera of `frame` ([`ShadowField`], for [`Transport::Shadows`]), with ambient
+    /// occlusion when `settings` asks, and the grid points `occluders` occupy (meshes
+    /// voxelised by [`Occluders::new`] on this classification's field) opaque when
+    /// given: the meshes cast their shadows into the volume. The averaged extinction
+    /// and the occlusion are built on first use and kept with the classification; the
+    /// light volumes are built here (a cache a viewer keeps while the lights point the
+    /// same way, [`ShadowField::is_for`]).
+    pub fn shadow_field(
         &self,
         shader: &Shader,
         frame: &FrameSettings,
@@ -78,10 +134,10 @@ impl Classification {
         let camera = self.camera(frame)?;
         let placed = shader.placed(&camera);
         let field = &**self.field();
-        let dirs: Vec<Vec3> = placed
+        let dirs: Vec<_> = placed
             .world_lights()
             .iter()
-            .map(|&(l, _)| direction_to_index(field, l))
+            .map(|&(l, _)| field.index_direction(l))
             .collect();
         let occlusion = settings.occlusion.then(|| self.occlusion());
         ShadowField::new(
@@ -93,99 +149,25 @@ impl Classification {
         )
     }
 
-    /// [`Classification::render`] (or, with `far`,
-    /// [`Classification::render_in_front`]) under the `shadows` model: each light at
-    /// each shaded sample scaled by its transmittance from `shadows` (built by
-    /// [`Classification::shadow_field`] for the same shader and camera), the ambient
-    /// term by the occlusion, the flat part of each sample a scattering medium
-    /// ([`Shader::shade_shadowed`]). Composite and iso modes.
-    pub fn render_shadowed(
+    /// Adds samples to the path-traced `image` as `paths` says ([`Transport::Path`]).
+    fn trace_paths(
         &self,
         shader: &Shader,
         frame: &FrameSettings,
-        progress: &(dyn Fn(u64) + Sync),
-        far: Option<&[f32]>,
-        shadows: &ShadowField,
-    ) -> Result<Image, RenderError> {
-        if self.settings().mode == RenderMode::Mip {
-            return Err(RenderError::Parameter(
-                "shadows lighting needs composite or iso mode (MIP is not lit)".into(),
-            ));
-        }
-        check_far(frame, far)?;
-        self.render_jittered(shader, frame, progress, true, far, Some(shadows))
-    }
-
-    /// Adds samples to the path-traced `image` of this classification lit by
-    /// `shader`, for the camera and size of `frame`, until it holds `spp` samples per
-    /// pixel (nothing when it already does). Camera rays stop at `far` when given (mm
-    /// per pixel, as [`Classification::render_in_front`]). `progress` is called with
-    /// the pixels of each finished row. Composite mode only.
-    ///
-    /// Each pixel's samples are added in sample order, each from its own generator
-    /// (seed, pixel, sample index), so the image is the same bit for bit for a seed
-    /// and sample count on any thread count, in one batch or many.
-    #[allow(clippy::too_many_arguments)]
-    pub fn trace_paths(
-        &self,
-        shader: &Shader,
-        frame: &FrameSettings,
-        settings: &PathSettings,
         image: &mut PathImage,
-        spp: u32,
-        far: Option<&[f32]>,
+        paths: &Paths,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<(), RenderError> {
-        let never = AtomicBool::new(false);
-        self.trace_paths_until(shader, frame, settings, image, spp, far, progress, &never)
-    }
-
-    /// [`Classification::trace_paths`] that stops early when `cancel` is set (by
-    /// another thread: a viewer whose user moved while samples were being added): rows
-    /// not yet begun are left, and the call returns [`RenderError::Cancelled`]. The
-    /// image then holds part of a batch and must be dropped, not continued.
-    #[allow(clippy::too_many_arguments)]
-    pub fn trace_paths_until(
-        &self,
-        shader: &Shader,
-        frame: &FrameSettings,
-        settings: &PathSettings,
-        image: &mut PathImage,
-        spp: u32,
-        far: Option<&[f32]>,
-        progress: &(dyn Fn(u64) + Sync),
-        cancel: &AtomicBool,
-    ) -> Result<(), RenderError> {
-        let target = PathTarget {
-            image,
-            spp,
-            far,
-            occluders: None,
-        };
-        self.trace_paths_into(shader, frame, settings, target, progress, cancel)
-    }
-
-    /// [`Classification::trace_paths_until`] into `target`, which may hold meshes as
-    /// occluders: then shadow rays and scattered paths end where they meet them.
-    pub fn trace_paths_into(
-        &self,
-        shader: &Shader,
-        frame: &FrameSettings,
-        settings: &PathSettings,
-        target: PathTarget,
-        progress: &(dyn Fn(u64) + Sync),
-        cancel: &AtomicBool,
-    ) -> Result<(), RenderError> {
-        let PathTarget {
-            image,
+        let Paths {
+            settings,
             spp,
             far,
             occluders,
-        } = target;
+            cancel,
+        } = *paths;
         settings.validate()?;
         check_spp(spp)?;
         frame.validate()?;
-        check_far(frame, far)?;
         if self.settings().mode != RenderMode::Composite {
             return Err(RenderError::Parameter(format!(
                 "path lighting needs composite mode, not {}",
@@ -213,15 +195,8 @@ impl Classification {
         }
         let camera = self.camera(frame)?;
         let placed = shader.placed(&camera);
-        let tracer = PathTracer::new(
-            self.field(),
-            self.medium(),
-            &placed,
-            camera,
-            size,
-            *settings,
-        )?
-        .occluded_by(occluders)?;
+        let tracer = PathTracer::new(self.field(), self.medium(), &placed, camera, size, settings)?
+            .occluded_by(occluders)?;
         let w = frame.width as usize;
         let stats = image
             .sums_mut()
@@ -258,4 +233,15 @@ impl Classification {
         image.finish_batch(spp, stats);
         Ok(())
     }
+}
+
+/// What a path-traced frame adds and what stops its rays besides the volume
+/// ([`Transport::Path`] less its image, and the frame's ray limits).
+#[derive(Clone, Copy)]
+struct Paths<'a> {
+    settings: PathSettings,
+    spp: u32,
+    far: Option<&'a [f32]>,
+    occluders: Option<&'a Occluders>,
+    cancel: &'a AtomicBool,
 }

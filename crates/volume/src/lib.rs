@@ -11,7 +11,9 @@
 //! use glint_core::{Light, Material, RenderMode, Shader};
 //! use glint_io::{Samples, Volume};
 //! use glint_lobe::{Geometry, LobeKind};
-//! use glint_volume::{Classification, ClassifySettings, Field, FrameSettings, TransferFunction};
+//! use glint_volume::{
+//!     Classification, ClassifySettings, Field, FrameSettings, TransferFunction, Transport,
+//! };
 //!
 //! // A ball of value 1 in a 16^3 volume of 0.
 //! let n = 16;
@@ -29,7 +31,7 @@
 //! let shader = Shader::new(LobeKind::EnergyFit, 40.0, 4, Geometry::Phong,
 //!     Material::default(), vec![Light::HEADLIGHT], 0.0).unwrap();
 //! let frame = FrameSettings { width: 32, height: 32, ..Default::default() };
-//! let image = class.render(&shader, &frame, &|_| {}).unwrap();
+//! let image = class.frame(&shader, &frame, None, Transport::Local, &|_| {}).unwrap();
 //! // The ball covers the image's centre, not its corner.
 //! assert!(image.alpha[16 * 32 + 16] > 0.9);
 //! assert_eq!(image.alpha[0], 0.0);
@@ -37,30 +39,27 @@
 
 #![warn(missing_docs)]
 
+mod classification;
 mod field;
 mod frames;
-mod lut;
+mod light;
 pub mod phantom;
-mod preint;
-pub mod presets;
 mod raycast;
-mod tf;
 pub mod transport;
 
+pub use classification::presets;
+pub use classification::{
+    Classification, ClassifySettings, ColourVolume, Lut, Sampling, TransferFunction,
+    TransferFunctionFile, LUT_SIZE,
+};
 pub use field::{
     memory_limit, open_zarr, set_memory_limit, Field, Prefilter, Source, MACRO_CELL,
     MAX_FIELD_VOXELS, MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
 };
-pub use frames::PathTarget;
-pub use lut::{Lut, LUT_SIZE};
+pub use frames::Transport;
 pub use phantom::Phantom;
-pub use preint::Sampling;
 pub use presets::{preset, Preset, PRESETS};
-pub use raycast::{
-    Classification, ClassifySettings, ColourVolume, FrameSettings, Kernel, LabelLook, LabelVolume,
-    TERMINATION_OPACITY,
-};
-pub use tf::{TransferFunction, TransferFunctionFile};
+pub use raycast::{FrameSettings, Kernel, LabelLook, LabelVolume, TERMINATION_OPACITY};
 pub use transport::{
     check_spp, LightingModel, Occluders, PathImage, PathSettings, ShadowField, ShadowSettings,
     MAX_BOUNCES, MAX_SPP,

@@ -471,7 +471,7 @@ fn a_frame_under_memory_pressure_is_the_same_frame() {
         let render = |field: &Arc<Field>| {
             Classification::new(field.clone(), &tf, &settings)
                 .unwrap()
-                .render(&shader, &frame, &|_| {})
+                .frame(&shader, &frame, None, crate::Transport::Local, &|_| {})
                 .unwrap()
         };
         let (a, b) = (render(&roomy), render(&tight));

@@ -5,12 +5,10 @@ use glint_core::camera::Camera;
 use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3, MAX_LIGHTS};
 
 use super::settings::FrameSettings;
-use super::ColourVolume;
 use super::{ISO_REFINE_STEPS, TERMINATION_OPACITY, TILE};
-use crate::field::{Field, Loc, MACRO_CELL};
-use crate::lut::Lut;
-use crate::preint::{Last, Sampling};
-use crate::transport::ShadowField;
+use crate::classification::{ColourVolume, Last, Lut, Sampling};
+use crate::field::{clip_ray, Field, Loc, MACRO_CELL};
+use crate::light::ShadowField;
 
 /// Per-render state shared by all rays.
 pub(super) struct Caster<'a> {
@@ -108,25 +106,16 @@ impl Caster<'_> {
         // Slab test against the box of voxel centres [0, dims-1], or the box of the
         // cells that can show a sample (samples outside it lie in inactive cells), t in
         // mm.
-        let (lo_box, hi_box) = self.clip_box;
-        let mut t0 = 0.0f32;
-        let mut t1 = f32::INFINITY;
+        let (t0, t1) = clip_ray(o, d, self.clip_box, (0.0, f32::INFINITY))?;
         let mut inv_dk = [f32::INFINITY; 3];
         let mut face_up = [true; 3];
         for a in 0..3 {
-            let (lo, hi, oa, da) = (lo_box[a], hi_box[a], o.get(a), d.get(a));
+            let da = d.get(a);
             if da.abs() < 1e-12 {
-                if oa < lo || oa > hi {
-                    return None;
-                }
-            } else {
-                let inv = 1.0 / da;
-                let (ta, tb) = ((lo - oa) * inv, (hi - oa) * inv);
-                t0 = t0.max(ta.min(tb));
-                t1 = t1.min(ta.max(tb));
-                inv_dk[a] = inv / self.dt;
-                face_up[a] = da > 0.0;
+                continue;
             }
+            inv_dk[a] = (1.0 / da) / self.dt;
+            face_up[a] = da > 0.0;
         }
         let t_entry = t0;
         let t0 = t0.max(start);
@@ -197,7 +186,7 @@ impl Caster<'_> {
 
     /// Front-to-back compositing, one sample at a time (the reference loop). Each
     /// sample composites the pre-integrated segment from the previous sample
-    /// ([`crate::preint`]); after a leap, or at the ray's first sample, the previous
+    /// ([`crate::classification::preint`]); after a leap, or at the ray's first sample, the previous
     /// sample is read for that alone ([`Caster::before`]).
     pub(super) fn composite(
         &self,
@@ -495,7 +484,7 @@ pub(super) struct Pixels<'a> {
     /// Row-major over the tile: [`StartBounds::tile`].
     pub(super) start: &'a [f32; TILE * TILE],
     /// Row-major over the tile: where each ray stops (mm; infinite unless a surface
-    /// hides what lies behind, [`Classification::render_in_front`]).
+    /// hides what lies behind, [`Classification::frame`]'s `far`).
     pub(super) end: &'a [f32; TILE * TILE],
 }
 

@@ -2,9 +2,7 @@
 //! step, empty-space skipping over macro cells, early ray termination.
 
 mod caster;
-mod cells;
-mod classify;
-mod colour;
+mod frame;
 mod labels;
 mod settings;
 mod start;
@@ -18,10 +16,8 @@ use avx2::Scratch;
 #[cfg(not(target_arch = "x86_64"))]
 type Scratch = ();
 
-pub use classify::Classification;
-pub use colour::ColourVolume;
 pub use labels::{LabelLook, LabelVolume};
-pub use settings::{ClassifySettings, FrameSettings, Kernel};
+pub use settings::{FrameSettings, Kernel};
 
 /// Accumulated opacity at which a ray stops (early ray termination, Levoy 1990).
 pub const TERMINATION_OPACITY: f32 = 0.99;
@@ -32,11 +28,6 @@ const ISO_REFINE_STEPS: u32 = 8;
 /// Edge of the square image tiles rendered as parallel tasks (a tile's rays read a
 /// compact block of the volume that stays in the core's L2 cache).
 const TILE: usize = 16;
-
-/// Edge, in macro cells, of the blocks whose projections bound where rays start (2:
-/// 8 voxels; on the MNI152 scene 1 and 4 were 2% and 10% slower single-threaded,
-/// from more splats to project and looser bounds respectively).
-const START_BLOCK: usize = 2;
 
 /// Whether the CPU runs the SIMD compositing loop.
 fn simd_supported() -> bool {

@@ -158,8 +158,8 @@ mod start_tests {
     use std::sync::Arc;
 
     use super::*;
+    use crate::classification::START_BLOCK;
     use crate::field::MACRO_CELL;
-    use crate::raycast::START_BLOCK;
     use crate::{Classification, ClassifySettings, Field, FrameSettings};
     use glint_core::camera::{CameraSpec, Projection, View};
 

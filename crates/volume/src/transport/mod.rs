@@ -11,7 +11,7 @@
 //!   flat part of each sample scatters by the Henyey-Greenstein phase function.
 //!   Deterministic: the same scene gives the same image bit for bit;
 //! - `path`: progressive Monte Carlo volume path tracing ([`PathImage`],
-//!   [`Classification::trace_paths`](crate::Classification::trace_paths)): delta
+//!   [`Transport::Path`](crate::Transport::Path)): delta
 //!   tracking against the macro cells' majorants, the lights by next-event estimation
 //!   with ratio tracking, a uniform environment, importance-sampled lobe and phase
 //!   function, Russian roulette. The same seed and sample count give the same image
@@ -19,7 +19,6 @@
 
 use glint_core::RenderError;
 
-mod medium;
 mod occluders;
 mod path;
 mod rng;
@@ -29,22 +28,13 @@ mod tracking;
 #[cfg(test)]
 mod tests;
 
-pub(crate) use medium::Medium;
+pub(crate) use crate::classification::grid_len;
+pub use crate::classification::LIGHT_CELL;
+pub use crate::light::ShadowField;
 pub use occluders::Occluders;
 pub use path::PathImage;
 pub(crate) use path::PathTracer;
-pub(crate) use shadows::{occlusion_grid, DensityGrid};
-pub use shadows::{ShadowField, ShadowSettings};
-
-/// Edge of the light volume's cells, in voxels (the grid's spacing). Two voxels: an
-/// eighth of the field's points, which one core sweeps in a few milliseconds on the
-/// MNI152 scene; docs/lighting.md gives the measured cost and error.
-pub const LIGHT_CELL: usize = 2;
-
-/// Grid points along an axis of `d` voxels: `0, h, 2h, ...` up to the last voxel.
-pub(crate) fn grid_len(d: usize) -> usize {
-    (d - 1).div_ceil(LIGHT_CELL) + 1
-}
+pub use shadows::ShadowSettings;
 
 /// Most samples per pixel a path-traced image takes.
 pub const MAX_SPP: u32 = 1 << 16;

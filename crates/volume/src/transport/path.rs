@@ -12,11 +12,11 @@
 use glint_core::camera::Camera;
 use glint_core::{Bsdf, Image, RenderStats, Shader, Vec3};
 
-use super::medium::Medium;
 use super::occluders::Occluders;
 use super::rng::Rng;
 use super::tracking::{IndexRay, Tracker};
 use super::PathSettings;
+use crate::classification::Medium;
 use crate::field::Field;
 
 /// Russian roulette starts after this many scattering events.
@@ -136,15 +136,12 @@ impl<'a> PathTracer<'a> {
         settings: PathSettings,
     ) -> Result<PathTracer<'a>, glint_core::RenderError> {
         shader.check_sampling()?;
-        let origin = field.world_to_index([0.0; 3]);
-        let axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| {
-            let p = field.world_to_index(e);
-            Vec3::new(
-                (p[0] - origin[0]) as f32,
-                (p[1] - origin[1]) as f32,
-                (p[2] - origin[2]) as f32,
-            )
-        });
+        let axes = [
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ]
+        .map(|e| field.index_direction(e));
         let to_index = |v: Vec3| axes[0] * v.x + axes[1] * v.y + axes[2] * v.z;
         let lights = shader
             .world_lights()

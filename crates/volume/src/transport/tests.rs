@@ -12,10 +12,50 @@ use glint_lobe::{Geometry, LobeKind};
 use super::rng::Rng;
 use super::tracking::{IndexRay, Tracker};
 use super::*;
+use crate::classification::{Classification, ClassifySettings, Sampling, TransferFunction};
 use crate::field::Field;
-use crate::raycast::{Classification, ClassifySettings, FrameSettings, Kernel};
-use crate::tf::TransferFunction;
-use crate::{PathTarget, Sampling};
+use crate::raycast::{FrameSettings, Kernel};
+use crate::Transport;
+
+/// The `path` model's frame: samples added to `img` until it holds `spp` (no meshes).
+fn path_frame(
+    class: &Classification,
+    shader: &Shader,
+    frame: &FrameSettings,
+    settings: &PathSettings,
+    img: &mut PathImage,
+    spp: u32,
+) -> Result<glint_core::Image, glint_core::RenderError> {
+    let transport = Transport::Path {
+        image: img,
+        spp,
+        settings: *settings,
+        occluders: None,
+        cancel: None,
+    };
+    class.frame(shader, frame, None, transport, &|_| {})
+}
+
+/// The `shadows` model's frame lit through `sf`.
+fn shadows_frame(
+    class: &Classification,
+    shader: &Shader,
+    frame: &FrameSettings,
+    sf: &ShadowField,
+) -> Result<glint_core::Image, glint_core::RenderError> {
+    class.frame(shader, frame, None, Transport::Shadows(sf), &|_| {})
+}
+
+/// The `local` model's frame.
+fn local_frame(
+    class: &Classification,
+    shader: &Shader,
+    frame: &FrameSettings,
+) -> glint_core::Image {
+    class
+        .frame(shader, frame, None, Transport::Local, &|_| {})
+        .unwrap()
+}
 
 /// A volume of `dims` and `spacing` whose value at voxel `(i, j, k)` is `f`.
 fn volume(dims: [usize; 3], spacing: [f64; 3], f: impl Fn(f32, f32, f32) -> f32) -> Volume {
@@ -211,9 +251,7 @@ fn a_white_furnace_shows_the_environment() {
             environment: env,
         };
         let mut img = PathImage::new(12, 12);
-        class
-            .trace_paths(&shader, &frame, &settings, &mut img, 256, None, &|_| {})
-            .unwrap();
+        path_frame(&class, &shader, &frame, &settings, &mut img, 256).unwrap();
         let image = img.image(frame.background);
         // The radiance of the paths that met the matter, the background (the
         // environment, exactly) taken out: Σ(rgb - (1 - α) env) / Σα.
@@ -276,7 +314,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
     };
     let shader = albedo_one(vec![Light::HEADLIGHT], 0.0);
     let shadows = class
-        .shadow_field(&shader, &frame, &ShadowSettings::default())
+        .shadow_field(&shader, &frame, &ShadowSettings::default(), None)
         .unwrap();
     let cam = class.camera(&frame).unwrap();
     let placed = shader.placed(&cam);
@@ -290,7 +328,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
         field,
         medium: class.medium(),
     };
-    let l_index = crate::frames::direction_to_index(field, up);
+    let l_index = field.index_direction(up);
     // Points on the floor's top face (z = 8): under the ball (r < 4) dark, clear of
     // its shadow (r > 9) lit, both in the light volume and by ratio tracking.
     let mut checked = 0;
@@ -347,12 +385,10 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
         ..frame
     };
     let sf = class
-        .shadow_field(&side, &frame, &ShadowSettings::default())
+        .shadow_field(&side, &frame, &ShadowSettings::default(), None)
         .unwrap();
-    let lit = class
-        .render_shadowed(&side, &frame, &|_| {}, None, &sf)
-        .unwrap();
-    let local = class.render(&side, &frame, &|_| {}).unwrap();
+    let lit = shadows_frame(&class, &side, &frame, &sf).unwrap();
+    let local = local_frame(&class, &side, &frame);
     let lum = |img: &glint_core::Image, x: usize, y: usize| img.rgb[y * 48 + x][1];
     // Where the shadow falls in the image: the floor point under the light's ray
     // through the ball's centre, projected by the camera.
@@ -442,9 +478,7 @@ fn path_images_depend_on_the_seed_and_sample_count_alone() {
         on_threads(threads, || {
             let mut img = PathImage::new(20, 16);
             for &spp in batches {
-                class
-                    .trace_paths(&shader, &frame, &settings, &mut img, spp, None, &|_| {})
-                    .unwrap();
+                path_frame(&class, &shader, &frame, &settings, &mut img, spp).unwrap();
             }
             img.image(frame.background)
         })
@@ -470,20 +504,14 @@ fn path_images_depend_on_the_seed_and_sample_count_alone() {
             seed: 4,
             ..settings
         };
-        class
-            .trace_paths(&shader, &frame, &s, &mut img, 4, None, &|_| {})
-            .unwrap();
+        path_frame(&class, &shader, &frame, &s, &mut img, 4).unwrap();
         img.image(frame.background)
     });
     assert_ne!(bits(&one), bits(&other));
     // Fewer samples than held is refused.
     let mut img = PathImage::new(20, 16);
-    class
-        .trace_paths(&shader, &frame, &settings, &mut img, 2, None, &|_| {})
-        .unwrap();
-    assert!(class
-        .trace_paths(&shader, &frame, &settings, &mut img, 1, None, &|_| {})
-        .is_err());
+    path_frame(&class, &shader, &frame, &settings, &mut img, 2).unwrap();
+    assert!(path_frame(&class, &shader, &frame, &settings, &mut img, 1).is_err());
 }
 
 #[test]
@@ -502,15 +530,13 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
     assert!(class.field().brick_dims.iter().all(|&b| b >= 3));
     for occlusion in [false, true] {
         let sf = class
-            .shadow_field(&shader, &frame, &ShadowSettings { occlusion })
+            .shadow_field(&shader, &frame, &ShadowSettings { occlusion }, None)
             .unwrap();
         assert_eq!(sf.has_occlusion(), occlusion);
         let render = |threads: usize, kernel: Kernel| {
             on_threads(threads, || {
                 let f = FrameSettings { kernel, ..frame };
-                class
-                    .render_shadowed(&shader, &f, &|_| {}, None, &sf)
-                    .unwrap()
+                shadows_frame(&class, &shader, &f, &sf).unwrap()
             })
         };
         let a = render(1, Kernel::Auto);
@@ -519,7 +545,7 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
         assert_eq!(a.rgb, b.rgb);
         assert_eq!(a.rgb, c.rgb, "SIMD against scalar");
         assert_eq!(a.alpha, c.alpha);
-        let local = class.render(&shader, &frame, &|_| {}).unwrap();
+        let local = local_frame(&class, &shader, &frame);
         assert_ne!(a.rgb, local.rgb, "shadows changed nothing");
     }
     // Pre-integrated sampling too.
@@ -535,18 +561,14 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
     )
     .unwrap();
     let sf = pre
-        .shadow_field(&shader, &frame, &ShadowSettings::default())
+        .shadow_field(&shader, &frame, &ShadowSettings::default(), None)
         .unwrap();
-    let a = pre
-        .render_shadowed(&shader, &frame, &|_| {}, None, &sf)
-        .unwrap();
+    let a = shadows_frame(&pre, &shader, &frame, &sf).unwrap();
     let scalar = FrameSettings {
         kernel: Kernel::Scalar,
         ..frame
     };
-    let b = pre
-        .render_shadowed(&shader, &scalar, &|_| {}, None, &sf)
-        .unwrap();
+    let b = shadows_frame(&pre, &shader, &scalar, &sf).unwrap();
     assert_eq!(a.rgb, b.rgb, "pre-integrated: SIMD against scalar");
 }
 
@@ -554,7 +576,7 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
 fn light_volumes_refuse_other_lights_and_mip() {
     let (class, shader, frame) = small_scene();
     let sf = class
-        .shadow_field(&shader, &frame, &ShadowSettings::default())
+        .shadow_field(&shader, &frame, &ShadowSettings::default(), None)
         .unwrap();
     let moved = FrameSettings {
         camera: glint_core::CameraSpec {
@@ -563,9 +585,7 @@ fn light_volumes_refuse_other_lights_and_mip() {
         },
         ..frame
     };
-    assert!(class
-        .render_shadowed(&shader, &moved, &|_| {}, None, &sf)
-        .is_err());
+    assert!(shadows_frame(&class, &shader, &moved, &sf).is_err());
     let mip = Classification::new(
         class.field().clone(),
         &white(&[(0.0, 0.0), (2.0, 1.0)]),
@@ -575,18 +595,14 @@ fn light_volumes_refuse_other_lights_and_mip() {
         },
     )
     .unwrap();
-    assert!(mip
-        .render_shadowed(&shader, &frame, &|_| {}, None, &sf)
-        .is_err());
+    assert!(shadows_frame(&mip, &shader, &frame, &sf).is_err());
     let mut img = PathImage::new(20, 16);
     let settings = PathSettings {
         bounces: 2,
         seed: 0,
         environment: 1.0,
     };
-    assert!(mip
-        .trace_paths(&shader, &frame, &settings, &mut img, 1, None, &|_| {})
-        .is_err());
+    assert!(path_frame(&mip, &shader, &frame, &settings, &mut img, 1).is_err());
 }
 
 /// A uniform slab (32^3 voxels of 1 mm, matter of opacity `alpha` per voxel up to
@@ -646,12 +662,14 @@ fn a_mesh_casts_its_shadow_into_the_light_volume() {
         };
         let shader = albedo_one(vec![light], 0.0);
         let settings = ShadowSettings::default();
-        let bare = class.shadow_field(&shader, &frame, &settings).unwrap();
+        let bare = class
+            .shadow_field(&shader, &frame, &settings, None)
+            .unwrap();
         let none = class
-            .shadow_field_occluded(&shader, &frame, &settings, None)
+            .shadow_field(&shader, &frame, &settings, None)
             .unwrap();
         let shaded = class
-            .shadow_field_occluded(&shader, &frame, &settings, Some(&occ))
+            .shadow_field(&shader, &frame, &settings, Some(&occ))
             .unwrap();
         let l = shader.placed(&class.camera(&frame).unwrap()).world_lights()[0].0;
         assert!(l.z > 0.8, "{l:?}");
@@ -722,16 +740,14 @@ fn a_mesh_shadows_the_path_traced_volume() {
         };
         on_threads(threads, || {
             let mut img = PathImage::new(24, 24);
-            let target = PathTarget {
+            let target = Transport::Path {
                 image: &mut img,
                 spp: 24,
-                far: None,
+                settings,
                 occluders,
+                cancel: None,
             };
-            let never = std::sync::atomic::AtomicBool::new(false);
-            class
-                .trace_paths_into(&shader, &frame, &settings, target, &|_| {}, &never)
-                .unwrap();
+            class.frame(&shader, &frame, None, target, &|_| {}).unwrap();
             img.image([0.0; 3])
         })
     };

@@ -10,9 +10,9 @@
 
 use glint_core::Vec3;
 
-use super::medium::Medium;
 use super::rng::Rng;
-use crate::field::{Field, MACRO_CELL};
+use crate::classification::Medium;
+use crate::field::{clip_ray, Field, MACRO_CELL};
 
 /// A ray in the field's index space: `o + d t`, `t` in mm (`d` is in index units per
 /// mm, as the ray caster's rays are).
@@ -27,15 +27,9 @@ impl IndexRay {
     pub(crate) fn from_world(field: &Field, origin: Vec3, dir: Vec3) -> IndexRay {
         let w = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
         let o = field.world_to_index(w(origin));
-        let e = field.world_to_index(w(origin + dir));
-        let f = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
         IndexRay {
-            o: f(o),
-            d: Vec3::new(
-                (e[0] - o[0]) as f32,
-                (e[1] - o[1]) as f32,
-                (e[2] - o[2]) as f32,
-            ),
+            o: Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32),
+            d: field.index_offset(o, w(origin + dir)),
         }
     }
 
@@ -48,22 +42,8 @@ impl IndexRay {
     /// Where the ray is inside the box of voxel centres `[0, dims-1]`, clipped to
     /// `[t0, t1]`: `None` when it misses.
     pub(crate) fn clip(&self, dims: [usize; 3], t0: f32, t1: f32) -> Option<(f32, f32)> {
-        let (mut a, mut b) = (t0, t1);
-        for (axis, &n) in dims.iter().enumerate() {
-            let (o, d) = (self.o.get(axis), self.d.get(axis));
-            let hi = (n - 1) as f32;
-            if d.abs() < 1e-12 {
-                if o < 0.0 || o > hi {
-                    return None;
-                }
-                continue;
-            }
-            let inv = 1.0 / d;
-            let (ta, tb) = ((0.0 - o) * inv, (hi - o) * inv);
-            a = a.max(ta.min(tb));
-            b = b.min(ta.max(tb));
-        }
-        (a < b).then_some((a, b))
+        let hi = dims.map(|n| (n - 1) as f32);
+        clip_ray(self.o, self.d, ([0.0; 3], hi), (t0, t1)).filter(|(a, b)| a < b)
     }
 }
 

@@ -160,7 +160,7 @@ impl Lanes {
 
     /// [`Lanes::step`] for pre-integrated sampling, the reference loop's step with
     /// segments (`Caster::composite`): each sample composites the segment from the
-    /// sample before ([`crate::preint`]). Where sample k lies in a visible cell, the
+    /// sample before ([`crate::classification::preint`]). Where sample k lies in a visible cell, the
     /// segment ending at k, its front read first as sample k - 1 when that was not
     /// read (after a leap, or at the ray's start: `Caster::before`), and when the
     /// front was known the segment ending at k + 1 too (as [`Lanes::step`] takes a
@@ -309,7 +309,7 @@ impl Lanes {
     #[inline(always)]
     pub(super) unsafe fn keep_hits(
         &mut self,
-        lut: &crate::lut::Lut,
+        lut: &crate::classification::Lut,
         kept: &mut Kept,
         mut hits: u8,
         probe: &Probe,

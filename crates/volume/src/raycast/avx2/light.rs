@@ -6,7 +6,7 @@ use glint_core::MAX_LIGHTS;
 
 use super::*;
 use crate::field::brick::{BRICK, BRICK_ROW, BRICK_SLICE, BRICK_VOXELS};
-use crate::transport::ShadowField;
+use crate::light::ShadowField;
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
 /// `Field::gradient_at` computes them, in component order.

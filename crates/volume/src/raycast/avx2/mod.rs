@@ -3,7 +3,7 @@
 //! March ([`composite_lanes`]): eight rays at a time, one per lane, each lane taking
 //! its own ray's next step of the reference loop (`Caster::composite`): a leap out of
 //! an empty macro cell or samples (position, cell, trilinear value, transfer-function
-//! entry; pre-integrated, the segments ending at them, [`crate::preint`], each lane
+//! entry; pre-integrated, the segments ending at them, [`crate::classification::preint`], each lane
 //! carrying its ray's last sample as the next segment's front). A vector's loads then
 //! belong to eight independent chains, where marching one ray eight samples at a time
 //! made each step wait on the one before (and evaluated samples past the ray's end);
@@ -38,8 +38,8 @@ use crossbeam_epoch::Guard;
 
 use super::caster::{Caster, Pixels};
 use super::TERMINATION_OPACITY;
+use crate::classification::{Last, Sampling};
 use crate::field::MACRO_CELL;
-use crate::preint::{Last, Sampling};
 use glint_core::ShadeBatch;
 use glint_core::Vec3;
 use glint_core::{RenderMode, RenderStats};
@@ -142,7 +142,7 @@ pub(super) unsafe fn row(p: [*const f32; LANES], off: usize) -> (__m256, __m256)
 #[derive(Clone, Copy)]
 #[repr(C)]
 pub(super) struct Sample {
-    /// The sample's segment ([`crate::preint`]): linear colour and opacity (first, so
+    /// The sample's segment ([`crate::classification::preint`]): linear colour and opacity (first, so
     /// [`light`] loads it as one vector).
     pub(super) rgba: [f32; 4],
     /// Fractions inside the trilinear cell, per axis.

@@ -367,7 +367,7 @@ impl Invariants {
                 lut_lo: _mm256_set1_ps(c.lut.lo),
                 lut_scale: _mm256_set1_ps(c.lut.scale),
                 half: _mm256_set1_ps(0.5),
-                lut_max: _mm256_set1_ps((crate::preint::LUT_SIZE - 1) as f32),
+                lut_max: _mm256_set1_ps((crate::classification::LUT_SIZE - 1) as f32),
                 values: f.cache.values(),
             }
         }

@@ -181,7 +181,9 @@ mod tests {
             background: [0.0; 3],
             ..FrameSettings::default()
         };
-        class.render(&shader, &frame, &|_| {}).unwrap()
+        class
+            .frame(&shader, &frame, None, crate::Transport::Local, &|_| {})
+            .unwrap()
     }
 
     /// Pixels shown (alpha > 0.5) whose colour is within 1% of pure red, of pure blue,

@@ -13,7 +13,7 @@
 //! presets are *relative*: their values are scaled so the preset's last point lands on
 //! the volume's maximum.
 
-use crate::tf::TransferFunction;
+use super::tf::TransferFunction;
 use glint_core::Material;
 use glint_core::RenderError;
 

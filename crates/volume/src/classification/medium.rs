@@ -5,9 +5,9 @@
 use glint_core::color::srgb_to_linear;
 use glint_core::Vec3;
 
+use super::lut::LUT_SIZE;
+use super::tf::TransferFunction;
 use crate::field::Field;
-use crate::lut::LUT_SIZE;
-use crate::tf::TransferFunction;
 
 /// Largest opacity per unit length the extinction is taken from (`alpha = 1` would be
 /// an infinite extinction): one unit of it lets one part in a million through, as the

@@ -1,9 +1,9 @@
 //! The transfer function tabulated for one render ([`Lut`]): the per-sample lookup of
 //! the ray caster, with its pre-integrated form for segments between samples.
 
-use crate::preint::PreIntegrated;
-pub use crate::preint::LUT_SIZE;
-use crate::tf::TransferFunction;
+use super::preint::PreIntegrated;
+pub use super::preint::LUT_SIZE;
+use super::tf::TransferFunction;
 use glint_core::color::srgb_to_linear;
 
 /// The transfer function tabulated for one render: linear colour and opacity

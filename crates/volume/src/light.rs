@@ -1,0 +1,133 @@
+//! The `shadows` model's light volumes as frames read them ([`ShadowField`]): per
+//! light, the transmittance on a coarse grid, looked up trilinearly at each shaded
+//! sample, and the ambient occlusion. The light transport (`transport`) builds them;
+//! the ray caster (`raycast`) reads them.
+
+use std::sync::Arc;
+
+use glint_core::{RenderError, Shader, Vec3, MAX_LIGHTS};
+
+use crate::classification::LIGHT_CELL;
+
+/// One light's transmittance grid, stored plane by plane along its sweep axis.
+pub(crate) struct LightGrid {
+    /// The sweep axis, then the two others: storage is `[m][v][u]` with `m` along
+    /// `axes[0]`, `v` along `axes[2]`, `u` along `axes[1]`.
+    pub(crate) axes: [usize; 3],
+    /// Grid extents along `axes`.
+    pub(crate) len: [usize; 3],
+    pub(crate) t: Vec<f32>,
+    /// Added to a sample's grid position before the lookup: the shadow bias, towards
+    /// the light.
+    pub(crate) offset: Vec3,
+}
+
+impl LightGrid {
+    /// Transmittance at grid position `g` (grid units, before the bias).
+    #[inline(always)]
+    fn at(&self, g: Vec3) -> f32 {
+        let g = g + self.offset;
+        let q = [
+            g.get(self.axes[0]),
+            g.get(self.axes[1]),
+            g.get(self.axes[2]),
+        ];
+        trilinear(&self.t, self.len, q)
+    }
+}
+
+/// Trilinear interpolation of `grid` (extents `len`, storage `[q0][q2][q1]`) at `q`,
+/// clamped to the grid.
+#[inline(always)]
+fn trilinear(grid: &[f32], len: [usize; 3], q: [f32; 3]) -> f32 {
+    let mut i = [0usize; 3];
+    let mut f = [0.0f32; 3];
+    for a in 0..3 {
+        let top = (len[a] - 1) as f32;
+        let x = q[a].max(0.0).min(top);
+        let lo = (x as usize).min(len[a].saturating_sub(2));
+        i[a] = lo;
+        f[a] = if len[a] > 1 { x - lo as f32 } else { 0.0 };
+    }
+    let (s1, s0) = (len[1], len[1] * len[2]);
+    let o1 = if len[1] > 1 { 1 } else { 0 };
+    let o2 = if len[2] > 1 { s1 } else { 0 };
+    let o0 = if len[0] > 1 { s0 } else { 0 };
+    let base = i[0] * s0 + i[2] * s1 + i[1];
+    let at = |o: usize| grid[base + o];
+    let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+    let c00 = lerp(at(0), at(o1), f[1]);
+    let c01 = lerp(at(o2), at(o2 + o1), f[1]);
+    let c10 = lerp(at(o0), at(o0 + o1), f[1]);
+    let c11 = lerp(at(o0 + o2), at(o0 + o2 + o1), f[1]);
+    lerp(lerp(c00, c01, f[2]), lerp(c10, c11, f[2]), f[0])
+}
+
+/// The light volumes of one frame: each placed light's transmittance grid, and the
+/// classification's ambient occlusion when asked for. Built by
+/// [`Classification::shadow_field`](crate::Classification::shadow_field) for a shader
+/// placed for a camera, and valid for every frame whose lights point the same way
+/// (a viewer keeps it while only the lobe, the material or the size change).
+pub struct ShadowField {
+    /// The world directions it was built for (bit patterns), in light order.
+    pub(crate) dirs: Vec<[u32; 3]>,
+    pub(crate) lights: Vec<LightGrid>,
+    pub(crate) occlusion: Option<(Arc<Vec<f32>>, [usize; 3])>,
+}
+
+impl ShadowField {
+    /// The world directions of `shader`'s placed lights, as [`ShadowField`] keeps them.
+    pub(crate) fn light_bits(shader: &Shader) -> Vec<[u32; 3]> {
+        shader
+            .world_lights()
+            .iter()
+            .map(|(l, _)| [l.x.to_bits(), l.y.to_bits(), l.z.to_bits()])
+            .collect()
+    }
+
+    /// Errors unless it was built for the lights of `shader` (placed).
+    pub(crate) fn check_lights(&self, shader: &Shader) -> Result<(), RenderError> {
+        if ShadowField::light_bits(shader) != self.dirs {
+            return Err(RenderError::Parameter(
+                "the light volumes were built for other lights (or another camera)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether it was built for the lights of `shader` placed for `camera`.
+    pub fn is_for(&self, shader: &Shader, camera: &glint_core::Camera) -> bool {
+        ShadowField::light_bits(&shader.placed(camera)) == self.dirs
+    }
+
+    /// How many lights it holds.
+    pub fn lights(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// Whether it holds ambient occlusion.
+    pub fn has_occlusion(&self) -> bool {
+        self.occlusion.is_some()
+    }
+
+    /// The transmittance of each light to index-space point `p` into `out` (the
+    /// first [`ShadowField::lights`] entries), and the ambient occlusion there (1
+    /// without it).
+    #[inline(always)]
+    pub(crate) fn at(&self, p: Vec3, out: &mut [f32; MAX_LIGHTS]) -> f32 {
+        let g = p * (1.0 / LIGHT_CELL as f32);
+        for (o, l) in out.iter_mut().zip(&self.lights) {
+            *o = l.at(g);
+        }
+        match &self.occlusion {
+            Some((ao, d)) => trilinear(ao, [d[2], d[0], d[1]], [g.z, g.x, g.y]),
+            None => 1.0,
+        }
+    }
+
+    /// The transmittance of light `i` at index-space point `p` (tests and reports).
+    pub fn transmittance(&self, i: usize, p: [f32; 3]) -> Option<f32> {
+        let l = self.lights.get(i)?;
+        Some(l.at(Vec3::new(p[0], p[1], p[2]) * (1.0 / LIGHT_CELL as f32)))
+    }
+}
