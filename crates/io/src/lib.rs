@@ -48,6 +48,7 @@ mod clock;
 mod common;
 pub mod dicom;
 pub mod gifti;
+pub mod info;
 pub mod mesh;
 mod message;
 pub mod mgh;

@@ -5,12 +5,9 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::bail;
+use glint_io::info::FileInfo;
 use glint_io::zarr::Level;
-use glint_io::{
-    Endian, Format, MeshFile, RawParams, ReadOptions, ScalarType, VertexData, VertexValues,
-    VolumeFile,
-};
-use serde_json::{json, Value};
+use glint_io::{Endian, Format, RawParams, ReadOptions, ScalarType};
 
 /// Arguments of `glint info`.
 #[derive(clap::Args)]
@@ -149,28 +146,11 @@ fn mesh_report(args: &Args) -> anyhow::Result<String> {
     } else {
         (Some(glint_io::open_mesh(&args.file)?), Vec::new())
     };
+    let info = FileInfo::mesh(&args.file, file.as_ref(), &overlays);
     if args.json {
-        let mut v = match &file {
-            Some(f) => mesh_json(args, f),
-            None => json!({
-                "file": args.file.display().to_string(),
-                "kind": "vertex data",
-                "format": "GIFTI",
-            }),
-        };
-        v["overlays"] = overlays.iter().map(overlay_json).collect();
-        out = serde_json::to_string_pretty(&v)? + "\n";
+        out = serde_json::to_string_pretty(&info.to_json())? + "\n";
     } else {
-        match &file {
-            Some(f) => print_mesh(&mut out, args, f)?,
-            None => {
-                writeln!(out, "file:      {}", args.file.display())?;
-                writeln!(out, "format:    GIFTI per-vertex data (no surface)")?;
-            }
-        }
-        for o in &overlays {
-            writeln!(out, "overlay:   {}", overlay_line(o))?;
-        }
+        write!(out, "{info}")?;
     }
     Ok(out)
 }
@@ -194,311 +174,29 @@ fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
         true => Some(glint_io::dicom::list(&args.file, options)?),
         false => None,
     };
+    let info = FileInfo::volume(&args.file, &file, listing.as_ref());
+    let labels = super::info_labels::Listing {
+        table: args.label_table.as_deref(),
+        all: args.all_labels,
+    };
     if args.json {
-        let mut v = volume_json(args, &file);
-        if let Some(l) = &listing {
-            listing_json(&mut v, l);
-        }
+        let mut v = info.to_json();
         if args.labels {
-            super::info_labels::add_json(
-                &mut v,
-                &args.file,
-                &file.volume,
-                &super::info_labels::Listing {
-                    table: args.label_table.as_deref(),
-                    all: args.all_labels,
-                },
-            )?;
+            super::info_labels::add_json(&mut v, &args.file, &file.volume, &labels)?;
         }
         out = serde_json::to_string_pretty(&v)? + "\n";
     } else {
-        print_volume(&mut out, args, &file)?;
-        if let Some(l) = &listing {
-            print_listing(&mut out, l)?;
-        }
+        write!(out, "{info}")?;
         if args.labels {
-            super::info_labels::print(
-                &mut out,
-                &args.file,
-                &file.volume,
-                &super::info_labels::Listing {
-                    table: args.label_table.as_deref(),
-                    all: args.all_labels,
-                },
-            )?;
+            super::info_labels::print(&mut out, &args.file, &file.volume, &labels)?;
         }
     }
     Ok(out)
 }
 
-fn volume_json(args: &Args, f: &VolumeFile) -> Value {
-    let v = &f.volume;
-    let (lo, hi) = v.range();
-    json!({
-        "file": args.file.display().to_string(),
-        "kind": "volume",
-        "format": f.format.name(),
-        "dims": v.dims,
-        "voxels": v.len(),
-        "spacing_mm": v.spacing,
-        "type": v.samples.type_name(),
-        "slope": v.slope,
-        "intercept": v.intercept,
-        "range": [finite_or_null(lo), finite_or_null(hi)],
-        "units": v.units,
-        "colour": v.is_colour(),
-        "affine_voxel_to_ras_mm": v.affine,
-        "notes": f.notes,
-    })
-}
-
-/// The series and skipped objects of a DICOM directory, into `glint info --json`.
-fn listing_json(v: &mut Value, l: &glint_io::dicom::Listing) {
-    v["series"] = l
-        .series
-        .iter()
-        .map(|s| {
-            json!({
-                "uid": s.uid, "modality": s.modality, "description": s.description,
-                "files": s.files, "slices": s.slices, "dims": [s.columns, s.rows, s.slices],
-                "photometric": s.photometric,
-            })
-        })
-        .collect();
-    v["skipped"] = l
-        .skipped
-        .iter()
-        .map(|k| {
-            json!({
-                "file": k.path.display().to_string(), "reason": k.reason,
-                "class": k.class, "modality": k.modality, "series": k.series,
-            })
-        })
-        .collect();
-}
-
-/// One line per series and per skipped object of a DICOM directory.
-fn print_listing(out: &mut String, l: &glint_io::dicom::Listing) -> std::fmt::Result {
-    for s in &l.series {
-        let m = s.modality.as_deref().unwrap_or("?");
-        let d = s
-            .description
-            .as_deref()
-            .map(|d| format!(" '{d}'"))
-            .unwrap_or_default();
-        let (c, r, n) = (s.columns, s.rows, s.slices);
-        writeln!(
-            out,
-            "series:   {} {m}{d}: {c} x {r} x {n} ({} files)",
-            s.uid, s.files
-        )?;
-    }
-    for k in &l.skipped {
-        writeln!(out, "skipped:  {}: {}", k.path.display(), k.reason)?;
-    }
-    Ok(())
-}
-
-fn finite_or_null(x: f64) -> Value {
-    if x.is_finite() {
-        json!(x)
-    } else {
-        Value::Null
-    }
-}
-
-fn print_volume(out: &mut String, args: &Args, f: &VolumeFile) -> std::fmt::Result {
-    let v = &f.volume;
-    let (lo, hi) = v.range();
-    writeln!(out, "file:     {}", args.file.display())?;
-    writeln!(out, "format:   {} volume", f.format.name())?;
-    writeln!(
-        out,
-        "dims:     {} x {} x {} ({} voxels)",
-        v.dims[0],
-        v.dims[1],
-        v.dims[2],
-        v.len()
-    )?;
-    writeln!(
-        out,
-        "spacing:  {} x {} x {} mm",
-        num(v.spacing[0]),
-        num(v.spacing[1]),
-        num(v.spacing[2])
-    )?;
-    writeln!(out, "type:     {}", v.samples.type_name())?;
-    if v.is_colour() {
-        writeln!(
-            out,
-            "colour:   RGB (the range below is of the grey samples)"
-        )?;
-    }
-    if v.slope != 1.0 || v.intercept != 0.0 {
-        writeln!(
-            out,
-            "scaling:  value = {} * stored + {}",
-            num(v.slope),
-            num(v.intercept)
-        )?;
-    }
-    let units = v
-        .units
-        .as_deref()
-        .map(|u| format!(" {u}"))
-        .unwrap_or_default();
-    writeln!(out, "range:    {} .. {}{units}", num(lo), num(hi))?;
-    writeln!(out, "affine (voxel -> RAS+ mm):")?;
-    for row in &v.affine {
-        writeln!(
-            out,
-            "  {:>12} {:>12} {:>12} {:>12}",
-            num(row[0]),
-            num(row[1]),
-            num(row[2]),
-            num(row[3])
-        )?;
-    }
-    for n in &f.notes {
-        writeln!(out, "note:     {n}")?;
-    }
-    Ok(())
-}
-
-fn mesh_json(args: &Args, f: &MeshFile) -> Value {
-    let m = &f.mesh;
-    let bounds = m.bounds().map(|(lo, hi)| json!({"min": lo, "max": hi}));
-    json!({
-        "file": args.file.display().to_string(),
-        "kind": "mesh",
-        "format": f.format.name(),
-        "vertices": m.positions.len(),
-        "triangles": m.triangles.len(),
-        "normals": m.normals.is_some(),
-        "scalars": m.scalars.is_some(),
-        "bounds_mm": bounds,
-        "coordinate_system": f.coordinate_system,
-        "notes": f.notes,
-    })
-}
-
-fn print_mesh(out: &mut String, args: &Args, f: &MeshFile) -> std::fmt::Result {
-    let m = &f.mesh;
-    writeln!(out, "file:      {}", args.file.display())?;
-    writeln!(out, "format:    {} surface", f.format.name())?;
-    writeln!(out, "vertices:  {}", m.positions.len())?;
-    writeln!(out, "triangles: {}", m.triangles.len())?;
-    writeln!(
-        out,
-        "normals:   {}",
-        if m.normals.is_some() { "yes" } else { "no" }
-    )?;
-    if let Some(s) = &m.scalars {
-        let (lo, hi) = s
-            .iter()
-            .filter(|x| x.is_finite())
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        writeln!(out, "scalars:   {} .. {}", num(lo.into()), num(hi.into()))?;
-    }
-    if let Some((lo, hi)) = m.bounds() {
-        let fmt = |p: [f32; 3]| {
-            format!(
-                "({}, {}, {})",
-                num(p[0].into()),
-                num(p[1].into()),
-                num(p[2].into())
-            )
-        };
-        writeln!(out, "bounds:    {} .. {} mm", fmt(lo), fmt(hi))?;
-    }
-    if let Some(cs) = &f.coordinate_system {
-        writeln!(out, "space:     {cs}")?;
-    }
-    for n in &f.notes {
-        writeln!(out, "note:      {n}")?;
-    }
-    Ok(())
-}
-
-/// The finite range of some values, `None` if there are none.
-fn finite_range(v: &[f32]) -> Option<(f32, f32)> {
-    v.iter()
-        .filter(|x| x.is_finite())
-        .fold(None, |r, &x| match r {
-            None => Some((x, x)),
-            Some((a, b)) => Some((a.min(x), b.max(x))),
-        })
-}
-
-/// The distinct label keys in use.
-fn keys_used(keys: &[i32]) -> usize {
-    keys.iter().collect::<std::collections::BTreeSet<_>>().len()
-}
-
-/// One line about a per-vertex array: name, intent, count and range or labels.
-fn overlay_line(o: &VertexData) -> String {
-    match &o.values {
-        VertexValues::Scalars(v) => {
-            let range = finite_range(v)
-                .map(|(lo, hi)| format!(", {} .. {}", num(lo.into()), num(hi.into())))
-                .unwrap_or_default();
-            format!("{} ({}): {} values{range}", o.name, o.intent, v.len())
-        }
-        VertexValues::Labels { keys, table } => format!(
-            "{} ({}): {} values, {} labels used of {} in the table",
-            o.name,
-            o.intent,
-            keys.len(),
-            keys_used(keys),
-            table.len()
-        ),
-    }
-}
-
-fn overlay_json(o: &VertexData) -> Value {
-    match &o.values {
-        VertexValues::Scalars(v) => json!({
-            "name": o.name,
-            "intent": o.intent,
-            "values": v.len(),
-            "range": finite_range(v).map(|(lo, hi)| json!([lo, hi])),
-        }),
-        VertexValues::Labels { keys, table } => json!({
-            "name": o.name,
-            "intent": o.intent,
-            "values": keys.len(),
-            "labels_used": keys_used(keys),
-            "label_table": table.iter().map(|l| json!({"key": l.key, "name": l.name, "rgba": l.rgba})).collect::<Vec<_>>(),
-        }),
-    }
-}
-
-/// A number with at most 4 decimals and no trailing zeros.
-fn num(x: f64) -> String {
-    if !x.is_finite() {
-        return format!("{x}");
-    }
-    if x != 0.0 && x.abs() < 5e-5 {
-        // Too small for four decimals: four significant digits instead of "0".
-        let s = format!("{x:.3e}");
-        let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
-        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
-        return format!("{mantissa}e{exp}");
-    }
-    let s = format!("{x:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".into()
-    } else {
-        s.into()
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{listing_json, num, print_listing, report, Args};
+    use super::{report, Args};
     use clap::Parser;
     use glint_io::{Endian, Mesh, Samples, Volume};
     use serde_json::Value;
@@ -518,19 +216,6 @@ mod tests {
         let mut a = argv.to_vec();
         a.push("--json");
         serde_json::from_str(&run(&a).unwrap()).unwrap()
-    }
-
-    #[test]
-    fn numbers_drop_trailing_zeros() {
-        assert_eq!(num(1.0), "1");
-        assert_eq!(num(-98.0), "-98");
-        assert_eq!(num(0.5), "0.5");
-        assert_eq!(num(-0.0), "0");
-        assert_eq!(num(1.23456), "1.2346");
-        // Review defect 9: tiny values keep their significant digits instead of "0".
-        assert_eq!(num(1e-300), "1e-300");
-        assert_eq!(num(-2.5e-6), "-2.5e-6");
-        assert_eq!(num(1.23456e-5), "1.235e-5");
     }
 
     #[test]
@@ -728,42 +413,5 @@ mod tests {
             err.contains("broken.nii") && err.contains("truncated"),
             "{err}"
         );
-    }
-
-    /// A DICOM directory's listing: one line per series and per skipped object, and
-    /// the same in JSON.
-    #[test]
-    fn dicom_listing_lines_and_json() {
-        use glint_io::dicom::{Listing, Series, Skipped};
-        let l = Listing {
-            series: vec![Series {
-                uid: "1.2.3".into(),
-                modality: Some("CT".into()),
-                description: Some("chest".into()),
-                files: 64,
-                slices: 64,
-                columns: 512,
-                rows: 512,
-                photometric: "MONOCHROME2".into(),
-            }],
-            skipped: vec![Skipped {
-                path: "x/rs.dcm".into(),
-                reason: "no PixelData: not an image (RT Structure Set Storage)".into(),
-                class: Some("RT Structure Set Storage".into()),
-                modality: Some("RTSTRUCT".into()),
-                series: Some("1.2.4".into()),
-            }],
-        };
-        let mut out = String::new();
-        print_listing(&mut out, &l).unwrap();
-        assert_eq!(
-            out,
-            "series:   1.2.3 CT 'chest': 512 x 512 x 64 (64 files)\n\
-             skipped:  x/rs.dcm: no PixelData: not an image (RT Structure Set Storage)\n"
-        );
-        let mut v = serde_json::json!({});
-        listing_json(&mut v, &l);
-        assert_eq!(v["series"][0]["dims"], serde_json::json!([512, 512, 64]));
-        assert_eq!(v["skipped"][0]["class"], "RT Structure Set Storage");
     }
 }

@@ -74,7 +74,7 @@ pub enum VertexValues {
 }
 
 /// An entry of a GIFTI `LabelTable`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Label {
     /// The key vertices carry.
     pub key: i32,
