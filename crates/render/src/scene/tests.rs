@@ -30,7 +30,7 @@ fn small() -> Scene {
 fn the_field_follows_the_scenes_prefilter() {
     let scene = small();
     assert_eq!(scene.prefilter, Prefilter::Binomial);
-    let mut r = Renderer::open(&scene.input).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let smooth = r.render(&scene, &|_| {}).unwrap();
     assert_eq!(r.field().unwrap().prefilter(), Prefilter::Binomial);
     let raw_scene = Scene {
@@ -42,12 +42,15 @@ fn the_field_follows_the_scenes_prefilter() {
     assert_ne!(smooth.image.rgb, raw.image.rgb);
     assert_eq!(raw.scene.prefilter, Prefilter::None);
     let volume = scene.input.open().unwrap();
-    let mut fixed = Renderer::from_field(Arc::new(Field::new(&volume).unwrap()));
+    let mut fixed = Renderer::from_source(Field::new(&volume).unwrap(), None).unwrap();
     let err = fixed.render(&scene, &|_| {}).unwrap_err();
     assert!(matches!(err, RenderError::Parameter(_)), "{err}");
     assert!(fixed.render(&raw_scene, &|_| {}).is_ok());
+    assert!(
+        Renderer::from_source(Field::new(&volume).unwrap(), Some(Prefilter::Binomial)).is_err()
+    );
     // Opened for the scene, the field is built once, with its prefilter.
-    let opened = Renderer::open_for(&raw_scene, &ReadOptions::default()).unwrap();
+    let opened = Renderer::open(&raw_scene, &ReadOptions::default()).unwrap();
     assert_eq!(opened.field().unwrap().prefilter(), Prefilter::None);
 }
 
@@ -251,7 +254,7 @@ fn a_renderer_builds_a_units_table_once_per_configuration_and_n() {
         },
         ..small()
     };
-    let mut r = Renderer::open(&scene.input).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let mut table = |s: &Scene| match r.resolve(s).unwrap().shader.specular() {
         Specular::Table(t) => t.clone(),
         Specular::Lobe(l) => panic!("a hw scene resolved to {l:?}"),
@@ -343,7 +346,7 @@ fn bad_scenes_are_refused_with_the_reason() {
 #[test]
 fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
     let scene = small();
-    let mut r = Renderer::open(&scene.input).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let classified = |t: &Timings| t.stages().iter().any(|(s, _)| *s == "classify");
     let first = r.render(&scene, &|_| {}).unwrap();
     assert!(classified(&first.timings));
@@ -369,7 +372,7 @@ fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
     };
     let third = r.render(&finer, &|_| {}).unwrap();
     assert!(classified(&third.timings));
-    let fresh = Renderer::open(&scene.input)
+    let fresh = Renderer::open(&scene, &ReadOptions::default())
         .unwrap()
         .render(&finer, &|_| {})
         .unwrap();
@@ -402,7 +405,7 @@ fn a_mesh_scene_resolves_once_and_reads_its_meshes_once() {
     // Meshes without an input key: no volume.
     let scene = Scene::from_json(&json).unwrap();
     assert_eq!(scene.input, Input::None);
-    let mut r = Renderer::open_scene(&scene).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     assert!(r.field().is_none());
     let first = r.render(&scene, &|_| {}).unwrap();
     let s = &first.scene;
@@ -473,7 +476,7 @@ fn a_volume_with_meshes_composites_the_volume_over_them() {
         ))],
         ..base.clone()
     };
-    let mut r = Renderer::open_scene(&scene).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let resolved = r.resolve(&scene).unwrap();
     let Plan::Volume {
         meshes: Some(layer),
@@ -529,7 +532,7 @@ fn a_volume_with_meshes_composites_the_volume_over_them() {
     assert_eq!(again.mode, RenderMode::Composite);
     let text = again.to_json().unwrap();
     let reread = Scene::from_json(&text).unwrap();
-    let fresh = Renderer::open_scene(&reread)
+    let fresh = Renderer::open(&reread, &ReadOptions::default())
         .unwrap()
         .render(&reread, &|_| {})
         .unwrap();
@@ -544,7 +547,7 @@ fn a_volume_with_meshes_in_surface_mode_joins_its_isosurface() {
         mode: RenderMode::Surface,
         ..small()
     };
-    let mut r = Renderer::open_scene(&scene).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     // The phantom's isosurface joins the octahedron.
     let resolved = r.resolve(&scene).unwrap();
     assert!(resolved.scene.iso.is_some());
@@ -596,7 +599,7 @@ fn meshes_shadow_the_volume_in_shadows_and_path() {
         },
         ..s.clone()
     };
-    let mut r = Renderer::open_scene(&with).unwrap();
+    let mut r = Renderer::open(&with, &ReadOptions::default()).unwrap();
     let stage = |t: &Timings| t.stages().iter().any(|(s, _)| *s == "occluders");
     let local_with = r
         .render(&lit(&with, LightingModel::Local), &|_| {})
@@ -614,7 +617,7 @@ fn meshes_shadow_the_volume_in_shadows_and_path() {
     let mut moved = lit(&with, LightingModel::Shadows);
     moved.camera.azimuth = 20.0;
     assert!(!stage(&r.render(&moved, &|_| {}).unwrap().timings), "kept");
-    let mut alone = Renderer::open_scene(&base).unwrap();
+    let mut alone = Renderer::open(&base, &ReadOptions::default()).unwrap();
     let local_alone = alone
         .render(&lit(&base, LightingModel::Local), &|_| {})
         .unwrap();
