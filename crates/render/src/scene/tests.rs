@@ -54,6 +54,58 @@ fn the_field_follows_the_scenes_prefilter() {
     assert_eq!(opened.field().unwrap().prefilter(), Prefilter::None);
 }
 
+/// How many times `timings` built a field.
+fn fields_built(timings: &Timings) -> usize {
+    let stages = timings.stages().iter();
+    stages.filter(|(s, _)| *s == "field: prepare").count()
+}
+
+/// A renderer opened with a scene of another prefilter than the default, with
+/// meshes, builds one field and reads the meshes once (issue 40): rendering the
+/// scene builds and reads nothing more.
+#[test]
+fn opened_with_its_scene_a_renderer_builds_one_field_and_reads_meshes_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Scene {
+        meshes: vec![MeshSpec::new(octahedron(dir.path()))],
+        prefilter: Prefilter::None,
+        ..small()
+    };
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+    let read = r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m));
+    assert!(read.is_some());
+    let rendered = r.render(&scene, &|_| {}).unwrap();
+    assert_eq!(r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m)), read);
+    assert_eq!(fields_built(&rendered.timings), 1);
+    let meshes = rendered.timings.stages().iter();
+    assert_eq!(meshes.filter(|(s, _)| *s == "meshes").count(), 1);
+    assert_eq!(r.field().unwrap().prefilter(), Prefilter::None);
+}
+
+/// A renderer of a shared volume keeps the caller's volume (no copy) and builds its
+/// field at the first scene's prefilter, once; given a prefilter, it builds it now.
+#[test]
+fn a_renderer_of_a_shared_volume_builds_its_field_for_the_first_scene() {
+    let scene = Scene {
+        prefilter: Prefilter::None,
+        ..small()
+    };
+    let volume = Arc::new(scene.input.open().unwrap());
+    let mut r = Renderer::from_source(volume.clone(), None).unwrap();
+    assert_eq!(Arc::strong_count(&volume), 2);
+    assert!(r.field().is_none());
+    let lazy = r.render(&scene, &|_| {}).unwrap();
+    assert_eq!(r.field().unwrap().prefilter(), Prefilter::None);
+    assert_eq!(fields_built(&lazy.timings), 1);
+    let mut eager = Renderer::from_source(volume.clone(), Some(Prefilter::None)).unwrap();
+    assert_eq!(eager.field().unwrap().prefilter(), Prefilter::None);
+    let now = eager.render(&scene, &|_| {}).unwrap();
+    assert_eq!(fields_built(&now.timings), 1);
+    assert_eq!(now.image, lazy.image);
+    let mut opened = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+    assert_eq!(opened.render(&scene, &|_| {}).unwrap().image, lazy.image);
+}
+
 #[test]
 fn json_round_trip_keeps_every_field() {
     let mut scene = small();
