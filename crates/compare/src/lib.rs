@@ -356,7 +356,7 @@ mod tests {
 
     fn sweep_is_refused(s: &Scene, spec: &SweepSpec) -> bool {
         sweep(
-            Renderer::open(&s, &ReadOptions::default()).unwrap(),
+            Renderer::open(s, &ReadOptions::default()).unwrap(),
             s,
             spec,
             &|_| {},
