@@ -129,7 +129,7 @@ fn make(
     seconds.read = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let volume = Arc::new(opened.volume);
-    let mut renderer = Renderer::from_shared_volume(volume.clone(), spec.scene.prefilter)
+    let mut renderer = Renderer::from_source(volume.clone(), Some(spec.scene.prefilter))
         .map_err(|e| fail(&sum)(e.into()))?;
     seconds.field = t.elapsed().as_secs_f64();
     let (tiles, scene) =

@@ -9,7 +9,7 @@ use glint_batch::{
     RESULTS_FILE, ROW_FILE,
 };
 use glint_io::{nifti, Endian};
-use glint_render::{Phantom, Renderer, Scene, View};
+use glint_render::{Phantom, ReadOptions, Renderer, Scene, View};
 
 /// Writes `n` small phantom volumes (of growing size, so they differ) and a broken
 /// file into `dir`.
@@ -145,7 +145,7 @@ fn a_mosaic_tile_is_the_render_of_its_view() {
     assert_eq!(row.status, Status::Ok, "{:?}", row.error);
     // The superior view rendered on its own, as `glint render --view superior` does.
     let scene = spec.scene_for(&items[0].path, View::Superior).unwrap();
-    let mut renderer = Renderer::open(&scene.input).unwrap();
+    let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let alone = renderer.render(&scene, &|_| {}).unwrap().image;
     let mosaic = std::fs::read(out.path().join(row.outputs.unwrap().mosaic)).unwrap();
     let decoder = png::Decoder::new(std::io::Cursor::new(mosaic));

@@ -257,7 +257,7 @@ pub fn convergence(
 
 #[cfg(test)]
 mod tests {
-    use glint_render::{Input, Lighting, LobeSpec, Phantom};
+    use glint_render::{Input, Lighting, LobeSpec, Phantom, ReadOptions};
 
     use super::*;
     use crate::run_against;
@@ -292,7 +292,7 @@ mod tests {
         let report = |spp: u32| {
             let s = path_scene(spp);
             run_against(
-                Renderer::open(&s.input).unwrap(),
+                Renderer::open(&s, &ReadOptions::default()).unwrap(),
                 &s,
                 &[LobeKind::EnergyFit.into()],
                 None,
@@ -330,7 +330,7 @@ mod tests {
         };
         assert!(matches!(
             run_against(
-                Renderer::open(&local.input).unwrap(),
+                Renderer::open(&local, &ReadOptions::default()).unwrap(),
                 &local,
                 &[LobeKind::EnergyFit.into()],
                 None,
@@ -345,7 +345,7 @@ mod tests {
         assert_eq!(convergence_schedule(20), [1, 2, 3, 4, 6, 8, 11, 16, 20]);
         assert_eq!(convergence_schedule(1), [1]);
         let s = path_scene(1);
-        let renderer = Renderer::open(&s.input).unwrap();
+        let renderer = Renderer::open(&s, &ReadOptions::default()).unwrap();
         let seen = std::cell::Cell::new(0);
         let conv = convergence(renderer, &s, 32, &[1, 4, 16], None, &|_| {
             seen.set(seen.get() + 1)
@@ -362,7 +362,7 @@ mod tests {
         let t = (flips[0] + flips[2]) / 2.0;
         let want = conv.first_below(t).unwrap().spp;
         let stopped = convergence(
-            Renderer::open(&s.input).unwrap(),
+            Renderer::open(&s, &ReadOptions::default()).unwrap(),
             &s,
             32,
             &[1, 4, 16],
@@ -372,7 +372,7 @@ mod tests {
         .unwrap();
         assert_eq!(stopped.steps.last().unwrap().spp, want);
         assert!(convergence(
-            Renderer::open(&s.input).unwrap(),
+            Renderer::open(&s, &ReadOptions::default()).unwrap(),
             &s,
             32,
             &[4, 4],

@@ -7,7 +7,7 @@
 //! Python module (`glint.compare`) all run this code, so they report the same numbers.
 //!
 //! ```
-//! use glint_render::{Input, LobeSpec, Phantom, Renderer, Scene, SceneLobe};
+//! use glint_render::{Input, LobeSpec, Phantom, ReadOptions, Renderer, Scene, SceneLobe};
 //! use glint_lobe::LobeKind;
 //!
 //! let scene = Scene {
@@ -16,7 +16,7 @@
 //!     lobe: LobeSpec { n: Some(60.0), ..LobeSpec::default() },
 //!     ..Scene::default()
 //! };
-//! let renderer = Renderer::open(&scene.input).unwrap();
+//! let renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
 //! let report = glint_compare::run(renderer, &scene, &[LobeKind::EnergyFit.into()], None).unwrap();
 //! let row = &report.rows[0];
 //! assert_eq!(row.lobe, SceneLobe::Float(LobeKind::EnergyFit));
@@ -263,7 +263,7 @@ pub fn run_against(
 #[cfg(test)]
 mod tests {
     use glint_lobe::LobeKind;
-    use glint_render::{Input, LobeSpec, Phantom};
+    use glint_render::{Input, LobeSpec, Phantom, ReadOptions};
 
     use super::*;
 
@@ -286,7 +286,7 @@ mod tests {
     fn exact_against_itself_is_identical_and_the_highlight_is_where_the_specular_is() {
         let s = scene();
         let report = run(
-            Renderer::open(&s.input).unwrap(),
+            Renderer::open(&s, &ReadOptions::default()).unwrap(),
             &s,
             &[LobeKind::Exact.into()],
             None,
@@ -313,7 +313,12 @@ mod tests {
     fn no_lobe_is_an_error_and_a_sweep_covers_every_point() {
         let s = scene();
         assert!(matches!(
-            run(Renderer::open(&s.input).unwrap(), &s, &[], None),
+            run(
+                Renderer::open(&s, &ReadOptions::default()).unwrap(),
+                &s,
+                &[],
+                None
+            ),
             Err(CompareError::Invalid(_))
         ));
         let spec = SweepSpec {
@@ -322,9 +327,12 @@ mod tests {
             lobes: vec![LobeKind::EnergyFit, LobeKind::Schlick],
         };
         let done = std::cell::Cell::new(0);
-        let sweep = sweep(Renderer::open(&s.input).unwrap(), &s, &spec, &|_| {
-            done.set(done.get() + 1)
-        })
+        let sweep = sweep(
+            Renderer::open(&s, &ReadOptions::default()).unwrap(),
+            &s,
+            &spec,
+            &|_| done.set(done.get() + 1),
+        )
         .unwrap();
         // Per n: K_v at each v, Schlick once.
         assert_eq!(sweep.rows.len(), 2 * (2 + 1));
@@ -347,6 +355,12 @@ mod tests {
     }
 
     fn sweep_is_refused(s: &Scene, spec: &SweepSpec) -> bool {
-        sweep(Renderer::open(&s.input).unwrap(), s, spec, &|_| {}).is_err()
+        sweep(
+            Renderer::open(s, &ReadOptions::default()).unwrap(),
+            s,
+            spec,
+            &|_| {},
+        )
+        .is_err()
     }
 }

@@ -8,7 +8,9 @@ use numpy::{PyArray1, PyArrayMethods as _};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
-use glint_render::{Depth, Input, RenderError, Rendered, Renderer as RRenderer, SceneLobe};
+use glint_render::{
+    Depth, Input, ReadOptions, RenderError, Rendered, Renderer as RRenderer, SceneLobe,
+};
 
 use crate::errors::{self, render_error};
 use crate::scene::{with_fields, Scene};
@@ -49,17 +51,25 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    /// Opens `source` with the GIL released.
-    fn open(py: Python<'_>, source: Source) -> PyResult<Renderer> {
+    /// Opens `source` with the GIL released. A volume is shared, not copied, and its
+    /// field is built at the first scene's prefilter; a file is read now, its field
+    /// built with `scene`'s prefilter and its meshes read (the file replaces the
+    /// scene's input).
+    fn open(py: Python<'_>, source: Source, scene: &glint_render::Scene) -> PyResult<Renderer> {
         let (result, path) = match source {
             Source::Volume(v, path) => (
-                crate::pool::detach(py, move || RRenderer::from_volume(&v))?,
+                crate::pool::detach(py, move || RRenderer::from_source(v, None))?,
                 path,
             ),
             Source::Path(p) => {
-                let input = Input::Path(p.clone());
+                let scene = glint_render::Scene {
+                    input: Input::Path(p.clone()),
+                    ..scene.clone()
+                };
                 (
-                    crate::pool::detach(py, move || RRenderer::open(&input))?,
+                    crate::pool::detach(py, move || {
+                        RRenderer::open(&scene, &ReadOptions::default())
+                    })?,
                     Some(p),
                 )
             }
@@ -71,19 +81,22 @@ impl Renderer {
         })
     }
 
-    /// The renderer of `volume` (a `glint.Volume` or a path), else of `scene`'s own
-    /// input.
+    /// The renderer of `scene`, of `volume` (a `glint.Volume` or a path) when it is
+    /// given, else of the scene's own input: its field built once, with the scene's
+    /// prefilter, and its meshes read once.
     fn for_scene(
         py: Python<'_>,
         volume: Option<&Bound<'_, PyAny>>,
         scene: &glint_render::Scene,
     ) -> PyResult<Renderer> {
         match volume {
-            Some(v) => Renderer::open(py, source_of(v)?),
+            Some(v) => Renderer::open(py, source_of(v)?, scene),
             None => {
-                let input = scene.input.clone();
-                let inner = crate::pool::detach(py, move || RRenderer::open(&input))?
-                    .map_err(|e| render_error(py, e))?;
+                let scene = scene.clone();
+                let inner = crate::pool::detach(py, move || {
+                    RRenderer::open(&scene, &ReadOptions::default())
+                })?
+                .map_err(|e| render_error(py, e))?;
                 Ok(Renderer {
                     inner: Mutex::new(inner),
                     path: None,
@@ -112,11 +125,12 @@ impl Renderer {
 
 #[pymethods]
 impl Renderer {
-    /// A renderer of a `glint.Volume` or of the volume file at a path (read now).
+    /// A renderer of a `glint.Volume` (shared, not copied; its field is built for
+    /// the first scene rendered) or of the volume file at a path (read now).
     #[new]
     fn new(py: Python<'_>, volume: &Bound<'_, PyAny>) -> PyResult<Renderer> {
         let source = source_of(volume)?;
-        Renderer::open(py, source)
+        Renderer::open(py, source, &glint_render::Scene::default())
     }
 
     /// Renders `scene` (default: `glint.Scene()`), with keyword arguments replacing

@@ -9,7 +9,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glint_lobe::LobeKind;
-use glint_render::{LobeSpec, Renderer, Scene, SceneLobe};
+use glint_render::{LobeSpec, ReadOptions, Renderer, Scene, SceneLobe};
 
 #[path = "common/mni152_scene.rs"]
 mod common;
@@ -21,7 +21,7 @@ fn scene() -> Scene {
 
 fn bench(c: &mut Criterion) {
     let scene = scene();
-    let mut renderer = Renderer::open(&scene.input).unwrap();
+    let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let mut group = c.benchmark_group("render_mni152_512");
     group.sample_size(10);
     // `hw`: the default unit's table (glint_hw::Config::default(), v = 4).

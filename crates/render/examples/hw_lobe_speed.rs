@@ -11,7 +11,7 @@
 use std::time::Instant;
 
 use glint_hw::{Config, Unit};
-use glint_render::{LobeSpec, Renderer, Scene};
+use glint_render::{LobeSpec, ReadOptions, Renderer, Scene};
 
 #[path = "../benches/common/mni152_scene.rs"]
 mod common;
@@ -36,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut scene = scene();
     let unit = Unit::new(config.clone())?;
     scene.lobe.v = unit.config().v;
-    let mut renderer = Renderer::open(&scene.input)?;
+    let mut renderer = Renderer::open(&scene, &ReadOptions::default())?;
     let k = renderer.resolve(&scene)?;
     let n = unit.n_code(k.scene.lobe.n.unwrap_or_default())?;
     // K_v at the unit's integer n, so both lobes have the same shininess.

@@ -15,7 +15,7 @@
 use glint_analysis::image::{DeltaEStats, Srgb8Image};
 use glint_hw::{Coefficients, Config};
 use glint_lobe::LobeKind;
-use glint_render::{CameraSpec, Depth, Image, Input, LobeSpec, Renderer, Scene, View};
+use glint_render::{CameraSpec, Depth, Image, Input, LobeSpec, ReadOptions, Renderer, Scene, View};
 
 /// Output widths of the sweep (issue 19).
 const OUT_BITS: [u32; 3] = [8, 10, 12];
@@ -63,7 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| volume | n | ROM | output | vs float lobe (same ROM): mean / p99 / ΔE>1 | vs exact: mean / p99 / ΔE>1 |");
     println!("|---|---|---|---|---|---|");
     for (name, mut scene) in scenes() {
-        let mut renderer = Renderer::open(&scene.input)?;
+        let mut renderer = Renderer::open(&scene, &ReadOptions::default())?;
         let n = renderer
             .resolve(&scene)?
             .scene

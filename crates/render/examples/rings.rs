@@ -13,7 +13,9 @@
 
 use std::time::Instant;
 
-use glint_render::{phantom::Phantom, Depth, Input, Light, Projection, Renderer, Scene};
+use glint_render::{
+    phantom::Phantom, Depth, Input, Light, Projection, ReadOptions, Renderer, Scene,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -69,15 +71,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut renderer = match (&scene.input, ramp_grid) {
         (Input::Phantom { name, size }, Some(g)) => {
             use glint_render::phantom;
-            Renderer::from_volume(&match name {
+            let volume = match name {
                 Phantom::SheppLogan => phantom::shepp_logan_with_ramp(*size, 2.0 * 2.0 / g)?,
                 Phantom::Head => phantom::head_with_ramp(
                     *size,
                     phantom::HEAD_RAMP_VOXELS * 2.0 * phantom::MM_PER_UNIT / g,
                 )?,
-            })?
+            };
+            Renderer::from_source(volume, None)?
         }
-        _ => Renderer::open(&scene.input)?,
+        _ => Renderer::open(&scene, &ReadOptions::default())?,
     };
     let first = renderer.render(&scene, &|_| {})?;
     let resolved = renderer.resolve(&scene)?;

@@ -3,7 +3,7 @@
 //!
 //! ```
 //! use glint_lobe::LobeKind;
-//! use glint_render::{Input, LobeSpec, Phantom, Renderer, Scene};
+//! use glint_render::{Input, LobeSpec, Phantom, ReadOptions, Renderer, Scene};
 //!
 //! // The built-in Shepp-Logan head on a small grid; every other choice is a default
 //! // that the resolved scene names.
@@ -13,7 +13,7 @@
 //!     size: [32, 32],
 //!     ..Scene::default()
 //! };
-//! let mut renderer = Renderer::open(&scene.input).unwrap();
+//! let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
 //! let rendered = renderer.render(&scene, &|_| {}).unwrap();
 //! let image = &rendered.image;
 //! assert_eq!(image.rgb.len(), 32 * 32);
@@ -67,6 +67,7 @@ pub use glint_core::{
     ScalarColors, Shader, Timings, View, COLORMAP_TABLE, MAX_IMAGE_SIDE, MAX_LIGHTS,
     RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
+pub use glint_io::ReadOptions;
 pub use glint_labels as label_maps;
 pub use glint_mesh as mesh;
 pub use glint_mesh::vertex_normals;
@@ -75,7 +76,7 @@ pub use glint_volume::{memory_limit, set_memory_limit};
 pub use glint_volume::{phantom, presets};
 pub use glint_volume::{
     preset, Classification, ClassifySettings, Field, FrameSettings, Kernel, Phantom, Prefilter,
-    Preset, Sampling, TransferFunction, TransferFunctionFile, MACRO_CELL, MAX_FIELD_VOXELS,
+    Preset, Sampling, Source, TransferFunction, TransferFunctionFile, MACRO_CELL, MAX_FIELD_VOXELS,
     PRESETS, TERMINATION_OPACITY,
 };
 pub use glint_volume::{
@@ -83,7 +84,7 @@ pub use glint_volume::{
 };
 pub use labels::{LabelSpec, LabelsAs, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
-pub use renderer::{Rendered, Renderer};
+pub use renderer::{InMemory, Rendered, Renderer};
 pub use scene::{
     Derived, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,
     Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS, DEFAULT_SPP,

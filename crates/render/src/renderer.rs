@@ -47,6 +47,68 @@ struct PathAccumulation {
     image: PathImage,
 }
 
+/// Data in memory a renderer can be made of ([`Renderer::from_source`]); each is
+/// shared, never copied.
+#[derive(Clone)]
+pub enum InMemory {
+    /// A volume: the renderer builds its field, and its colours when it is a colour
+    /// volume.
+    Volume(Arc<Volume>),
+    /// Any [`Source`] of samples (e.g. an OME-Zarr level streamed from disk,
+    /// [`glint_volume::open_zarr`]): the renderer builds its field.
+    Source(Arc<dyn Source>),
+    /// A field already built (one per viewer, shared by its clients' renderers).
+    Field(Arc<Field>),
+}
+
+impl From<Arc<Volume>> for InMemory {
+    fn from(volume: Arc<Volume>) -> InMemory {
+        InMemory::Volume(volume)
+    }
+}
+
+impl From<Volume> for InMemory {
+    /// The volume moved into an [`Arc`] (not copied).
+    fn from(volume: Volume) -> InMemory {
+        InMemory::Volume(Arc::new(volume))
+    }
+}
+
+impl From<Arc<dyn Source>> for InMemory {
+    fn from(source: Arc<dyn Source>) -> InMemory {
+        InMemory::Source(source)
+    }
+}
+
+impl From<Arc<Field>> for InMemory {
+    fn from(field: Arc<Field>) -> InMemory {
+        InMemory::Field(field)
+    }
+}
+
+impl From<Field> for InMemory {
+    fn from(field: Field) -> InMemory {
+        InMemory::Field(Arc::new(field))
+    }
+}
+
+/// What a renderer keeps to build its field (again, for another [`Prefilter`]).
+#[derive(Clone)]
+enum Kept {
+    Volume(Arc<Volume>),
+    Source(Arc<dyn Source>),
+}
+
+impl Kept {
+    /// The field with `prefilter`.
+    fn field(&self, prefilter: Prefilter) -> Result<Field, RenderError> {
+        match self {
+            Kept::Volume(volume) => Field::shared(volume.clone(), prefilter),
+            Kept::Source(source) => Field::from_source(source.clone(), prefilter, &|_, _| {}),
+        }
+    }
+}
+
 /// A rendered image and the resolved scene that made it.
 #[derive(Clone, Debug)]
 pub struct Rendered {
@@ -82,10 +144,11 @@ pub struct Renderer {
     pub kernel: Kernel,
     opened: Timings,
     notes: Vec<String>,
-    /// The source the field was built from (a volume, a streamed OME-Zarr level),
-    /// kept to rebuild the field when a scene asks for another [`Prefilter`]; `None`
-    /// for a renderer made from a field.
-    source: Option<Arc<dyn Source>>,
+    /// The source the field is built from (a volume, a streamed OME-Zarr level),
+    /// kept to build the field when a scene asks for another [`Prefilter`] (or for
+    /// the first time, when no prefilter was given); `None` for a renderer made from
+    /// a field, or of meshes only.
+    source: Option<Kept>,
     /// The last light volumes (`shadows` scenes).
     shadows: Option<ShadowCache>,
     /// The meshes as occluders of the volume's light (`shadows` and `path` scenes
@@ -104,165 +167,72 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    /// Reads `input` and builds its field (nothing for [`Input::None`]).
-    pub fn open(input: &Input) -> Result<Renderer, RenderError> {
-        Renderer::open_with(input, &ReadOptions::default())
-    }
-
-    /// [`Renderer::open`] with reader options (e.g. `strict`); the reader's notes are
-    /// kept ([`Renderer::notes`]).
-    pub fn open_with(input: &Input, options: &ReadOptions) -> Result<Renderer, RenderError> {
-        Renderer::open_prefiltered(input, options, Prefilter::default())
-    }
-
-    /// [`Renderer::open_with`] for `scene`: its input, its field built with the scene's
-    /// prefilter (so rendering it builds no second field).
-    pub fn open_for(scene: &Scene, options: &ReadOptions) -> Result<Renderer, RenderError> {
-        Renderer::open_prefiltered(&scene.input, options, scene.prefilter)
-    }
-
-    fn open_prefiltered(
-        input: &Input,
-        options: &ReadOptions,
-        prefilter: Prefilter,
-    ) -> Result<Renderer, RenderError> {
-        if *input == Input::None {
-            return Ok(Renderer {
-                field: None,
-                classification: None,
-                meshes: None,
-                hw: HwCache::default(),
-                kernel: Kernel::Auto,
-                opened: Timings::default(),
-                notes: Vec::new(),
-                source: None,
-                shadows: None,
-                occluders: None,
-                paths: None,
-                cancel: None,
-                colours: None,
-            });
-        }
-        let start = Instant::now();
-        if let Input::Path(path) = input {
-            if options.raw.is_none() && glint_io::zarr::is_store(path) {
-                // An OME-Zarr level is streamed: its chunks are decoded into the bricks
-                // as they are built, through a bounded cache, never read whole.
-                let stream = glint_volume::open_zarr(path, options)?;
-                let mut read = Timings::default();
-                read.record("read", start.elapsed());
-                let notes = stream.notes().to_vec();
-                let mut renderer = Renderer::from_source(Arc::new(stream), prefilter)?;
-                read.extend(&renderer.opened);
-                renderer.opened = read;
-                renderer.notes = notes;
-                return Ok(renderer);
-            }
-        }
-        let opened = input.open_with(options)?;
-        let mut read = Timings::default();
-        // Inflating is reported apart from reading and parsing (issue 12).
-        let inflate = opened.inflate.unwrap_or_default();
-        read.record("read", start.elapsed().saturating_sub(inflate));
-        if let Some(inflate) = opened.inflate {
-            read.record("read: inflate", inflate);
-        }
-        let mut renderer = Renderer::from_shared_volume(Arc::new(opened.volume), prefilter)?;
-        read.extend(&renderer.opened);
-        renderer.opened = read;
-        renderer.notes = opened.notes;
-        Ok(renderer)
-    }
-
-    /// What the reader said about the input: where the affine came from, what it
-    /// assumed (lines starting "geometry assumed:"), dropped dimensions.
-    pub fn notes(&self) -> &[String] {
-        &self.notes
-    }
-
-    /// Reads `scene`'s input and its meshes (with their overlays, and the volume's
-    /// isosurface in surface mode).
-    pub fn open_scene(scene: &Scene) -> Result<Renderer, RenderError> {
-        Renderer::open_scene_with(scene, &ReadOptions::default())
-    }
-
-    /// [`Renderer::open_scene`] with reader options (e.g. an OME-Zarr pyramid's level).
-    pub fn open_scene_with(scene: &Scene, options: &ReadOptions) -> Result<Renderer, RenderError> {
-        let mut renderer = Renderer::open_with(&scene.input, options)?;
+    /// Reads `scene`'s input with `options` and builds its field with the scene's
+    /// prefilter (so rendering the scene builds no second field), then reads its
+    /// meshes (with their overlays and label map, and the volume's isosurface in
+    /// surface mode) when it has them. An OME-Zarr store is streamed: its chunks are
+    /// decoded into the field's bricks as they are built, never read whole; any other
+    /// input is read whole ([`Input::open_with`]). A scene without a volume
+    /// ([`Input::None`]) reads only its meshes. The reader's notes are kept
+    /// ([`Renderer::notes`]).
+    pub fn open(scene: &Scene, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        let mut renderer = Renderer::read(&scene.input, options)?;
+        renderer.use_prefilter(scene.prefilter)?;
+        renderer.keep_colours()?;
         if scene.has_meshes() || scene.is_surface() {
             renderer.mesh_set(scene)?;
         }
         Ok(renderer)
     }
 
-    /// A renderer of a volume already in memory (copied: the renderer keeps it to
-    /// rebuild the field for another [`Prefilter`]).
-    pub fn from_volume(volume: &Volume) -> Result<Renderer, RenderError> {
-        Renderer::from_shared_volume(Arc::new(volume.clone()), Prefilter::default())
-    }
-
-    /// A renderer of a shared volume, its field built with `prefilter` (a scene asking
-    /// for another one rebuilds it).
-    pub fn from_shared_volume(
-        volume: Arc<Volume>,
-        prefilter: Prefilter,
-    ) -> Result<Renderer, RenderError> {
-        let field = Field::shared(volume.clone(), prefilter)?;
-        let mut renderer = Renderer::from_field(Arc::new(field));
-        renderer.colours = ColourVolume::from_volume(&volume)?.map(Arc::new);
-        renderer.source = Some(volume);
-        Ok(renderer)
-    }
-
-    /// A renderer of any [`Source`] (e.g. an OME-Zarr level streamed from disk,
-    /// [`glint_volume::open_zarr`]), its field built with `prefilter`; the source is
-    /// kept to rebuild the field for another one.
+    /// A renderer of data already in memory, without reading anything: a volume or
+    /// another [`Source`] (shared, not copied: the renderer keeps it to build the
+    /// field, and to build it again when a scene asks for another [`Prefilter`]), or a
+    /// field already built (several renderers can share one field, each with its own
+    /// classification; such a renderer renders only scenes of the field's
+    /// prefilter).
+    ///
+    /// The field of a volume or source is built now with `prefilter` when it is
+    /// given, else with the prefilter of the first scene resolved (so that scene
+    /// builds one field, not two; [`Renderer::field`] is `None` until then). A
+    /// `prefilter` other than a given field's is refused.
     pub fn from_source(
-        source: Arc<dyn Source>,
-        prefilter: Prefilter,
+        source: impl Into<InMemory>,
+        prefilter: Option<Prefilter>,
     ) -> Result<Renderer, RenderError> {
-        let field = Field::from_source(source.clone(), prefilter, &|_, _| {})?;
-        let mut renderer = Renderer::from_field(Arc::new(field));
-        renderer.source = Some(source);
+        let mut renderer = Renderer::empty();
+        match source.into() {
+            InMemory::Volume(volume) => renderer.source = Some(Kept::Volume(volume)),
+            InMemory::Source(source) => renderer.source = Some(Kept::Source(source)),
+            InMemory::Field(field) => {
+                renderer.opened = field.timings().clone();
+                renderer.field = Some(field);
+            }
+        }
+        if let Some(prefilter) = prefilter {
+            renderer.use_prefilter(prefilter)?;
+        }
+        renderer.keep_colours()?;
         Ok(renderer)
     }
 
-    /// Rebuilds the field when `prefilter` is not the one it was built with (and
-    /// forgets what depended on it).
-    fn use_prefilter(&mut self, prefilter: Prefilter) -> Result<(), RenderError> {
-        let Some(field) = &self.field else {
-            return Ok(());
-        };
-        if field.prefilter() == prefilter {
-            return Ok(());
+    /// The colours of a colour volume ([`ColourVolume`]), for its classifications.
+    fn keep_colours(&mut self) -> Result<(), RenderError> {
+        if let Some(Kept::Volume(volume)) = &self.source {
+            self.colours = ColourVolume::from_volume(volume)?.map(Arc::new);
         }
-        let Some(source) = &self.source else {
-            return Err(RenderError::Parameter(format!(
-                "prefilter {}: this renderer was given a field built with prefilter {}",
-                prefilter.name(),
-                field.prefilter().name()
-            )));
-        };
-        let field = Field::from_source(source.clone(), prefilter, &|_, _| {})?;
-        self.opened.extend(field.timings());
-        self.field = Some(Arc::new(field));
-        self.classification = None;
-        self.meshes = None;
-        self.shadows = None;
-        self.paths = None;
         Ok(())
     }
 
-    /// A renderer of a field already built (several renderers, each with its own
-    /// classification, can share one field: one per viewer client).
-    pub fn from_field(field: Arc<Field>) -> Renderer {
+    /// A renderer with nothing in it yet.
+    fn empty() -> Renderer {
         Renderer {
-            opened: field.timings().clone(),
-            field: Some(field),
+            field: None,
             classification: None,
             meshes: None,
             hw: HwCache::default(),
             kernel: Kernel::Auto,
+            opened: Timings::default(),
             notes: Vec::new(),
             source: None,
             shadows: None,
@@ -273,7 +243,76 @@ impl Renderer {
         }
     }
 
-    /// The field every scene is rendered from; `None` for a renderer of meshes only.
+    /// A renderer of `input` read with `options`, its field not built yet (the
+    /// reading's times and notes kept); an empty one for [`Input::None`].
+    fn read(input: &Input, options: &ReadOptions) -> Result<Renderer, RenderError> {
+        let mut renderer = Renderer::empty();
+        if *input == Input::None {
+            return Ok(renderer);
+        }
+        let start = Instant::now();
+        if let Input::Path(path) = input {
+            if options.raw.is_none() && glint_io::zarr::is_store(path) {
+                // An OME-Zarr level is streamed: its chunks are decoded into the bricks
+                // as they are built, through a bounded cache, never read whole.
+                let stream = glint_volume::open_zarr(path, options)?;
+                renderer.opened.record("read", start.elapsed());
+                renderer.notes = stream.notes().to_vec();
+                renderer.source = Some(Kept::Source(Arc::new(stream)));
+                return Ok(renderer);
+            }
+        }
+        let opened = input.open_with(options)?;
+        // Inflating is reported apart from reading and parsing (issue 12).
+        let inflate = opened.inflate.unwrap_or_default();
+        let read = &mut renderer.opened;
+        read.record("read", start.elapsed().saturating_sub(inflate));
+        if let Some(inflate) = opened.inflate {
+            read.record("read: inflate", inflate);
+        }
+        renderer.source = Some(Kept::Volume(Arc::new(opened.volume)));
+        renderer.notes = opened.notes;
+        Ok(renderer)
+    }
+
+    /// What the reader said about the input: where the affine came from, what it
+    /// assumed (lines starting "geometry assumed:"), dropped dimensions.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    /// Builds the field with `prefilter` when it is not built yet or was built with
+    /// another one (and forgets what depended on it); nothing without a volume.
+    fn use_prefilter(&mut self, prefilter: Prefilter) -> Result<(), RenderError> {
+        if let Some(field) = &self.field {
+            if field.prefilter() == prefilter {
+                return Ok(());
+            }
+        }
+        let source = match (&self.source, &self.field) {
+            (Some(source), _) => source,
+            (None, None) => return Ok(()),
+            (None, Some(field)) => {
+                return Err(RenderError::Parameter(format!(
+                    "prefilter {}: this renderer was given a field built with prefilter {}",
+                    prefilter.name(),
+                    field.prefilter().name()
+                )))
+            }
+        };
+        let field = source.field(prefilter)?;
+        self.opened.extend(field.timings());
+        self.field = Some(Arc::new(field));
+        self.classification = None;
+        self.meshes = None;
+        self.shadows = None;
+        self.paths = None;
+        Ok(())
+    }
+
+    /// The field every scene is rendered from; `None` for a renderer of meshes only, or
+    /// one made from a volume or source ([`Renderer::from_source`]) before its first
+    /// scene.
     pub fn field(&self) -> Option<&Arc<Field>> {
         self.field.as_ref()
     }
@@ -668,6 +707,6 @@ impl Scene {
     /// a [`Renderer`] keeps the volume, the meshes and the classification across
     /// scenes).
     pub fn resolve(&self) -> Result<Resolved, RenderError> {
-        Renderer::open_scene(self)?.resolve(self)
+        Renderer::open(self, &ReadOptions::default())?.resolve(self)
     }
 }

@@ -7,7 +7,8 @@
 use glint_hw::{Config, Input as HwInput, Unit};
 use glint_lobe::{Geometry, LobeKind};
 use glint_render::{
-    CameraSpec, Image, Input, Kernel, Light, LobeSpec, Phantom, Renderer, Scene, SceneLobe,
+    CameraSpec, Image, Input, Kernel, Light, LobeSpec, Phantom, ReadOptions, Renderer, Scene,
+    SceneLobe,
 };
 
 /// Shininess of the scenes (an integer: the unit's n input takes it exactly).
@@ -95,8 +96,11 @@ fn simd_loop_gives_the_scalar_loops_image_with_a_units_table() {
         );
     }
     let config = Config::default();
-    let mut renderer =
-        Renderer::open(&scene(Geometry::Phong, SceneLobe::Hw, &config).input).unwrap();
+    let mut renderer = Renderer::open(
+        &scene(Geometry::Phong, SceneLobe::Hw, &config),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     for out_bits in [8, 12] {
         let config = Config {
             out_bits,
@@ -118,8 +122,11 @@ fn simd_loop_gives_the_scalar_loops_image_with_a_units_table() {
 
 #[test]
 fn a_hw_render_differs_from_float_k_by_at_most_the_quantisation() {
-    let mut renderer =
-        Renderer::open(&scene(Geometry::Phong, SceneLobe::Hw, &Config::default()).input).unwrap();
+    let mut renderer = Renderer::open(
+        &scene(Geometry::Phong, SceneLobe::Hw, &Config::default()),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     for out_bits in [8, 10, 12] {
         let config = Config {
             out_bits,

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use glint_io::{nifti, Endian, Samples, Volume};
 use glint_render::{
-    CameraSpec, Input, LabelSpec, MaterialOverrides, Projection, RenderError, Renderer, Scene, View,
+    CameraSpec, Input, LabelSpec, MaterialOverrides, Projection, ReadOptions, RenderError,
+    Renderer, Scene, View,
 };
 
 /// Two 6-voxel cubes side by side along x, labels `a` then `b`, in a 16^3 grid of
@@ -57,7 +58,7 @@ fn scene(labels: LabelSpec) -> Scene {
 }
 
 fn render(scene: &Scene) -> Result<glint_render::Rendered, RenderError> {
-    Renderer::open_scene(scene)?.render(scene, &|_| {})
+    Renderer::open(scene, &ReadOptions::default())?.render(scene, &|_| {})
 }
 
 /// sRGB 0-255 to linear, as the renderer converts table colours.

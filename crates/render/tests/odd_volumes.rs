@@ -28,7 +28,7 @@ fn covered(volume: &Volume) -> (usize, [u32; 4]) {
         size: [96, 96],
         ..Scene::default()
     };
-    let image = Renderer::from_volume(volume)
+    let image = Renderer::from_source(volume.clone(), None)
         .unwrap()
         .render(&scene, &|_| {})
         .unwrap()

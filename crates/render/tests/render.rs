@@ -6,7 +6,8 @@ use glint_io::{Samples, Volume};
 use glint_lobe::{Geometry, Lobe, LobeKind};
 use glint_render::{
     phantom, Camera, CameraSpec, Depth, Input, Kernel, Light, LobeSpec, MaterialOverrides,
-    Projection, RenderMode, Rendered, Renderer, Sampling, Scene, TransferFunction, View,
+    Projection, ReadOptions, RenderMode, Rendered, Renderer, Sampling, Scene, TransferFunction,
+    View,
 };
 
 fn ortho(view: View) -> CameraSpec {
@@ -48,7 +49,7 @@ fn lobe(kind: LobeKind, n: f64, geometry: Geometry) -> LobeSpec {
 
 /// Renders `scene` of `volume` with a fresh renderer.
 fn render(volume: &Volume, scene: &Scene) -> Rendered {
-    Renderer::from_volume(volume)
+    Renderer::from_source(volume.clone(), None)
         .unwrap()
         .render(scene, &|_| {})
         .unwrap()
@@ -56,7 +57,7 @@ fn render(volume: &Volume, scene: &Scene) -> Rendered {
 
 /// The camera a render of `scene` of `volume` uses.
 fn camera(volume: &Volume, scene: &Scene) -> Camera {
-    Renderer::from_volume(volume)
+    Renderer::from_source(volume.clone(), None)
         .unwrap()
         .camera(scene)
         .unwrap()
@@ -145,7 +146,7 @@ fn the_opacity_unit_sets_the_length_the_opacity_is_for() {
     assert_eq!(png, png2);
     assert_eq!(by_voxel, per_two_mm);
     // Nonsense units are refused.
-    let mut renderer = Renderer::from_volume(&volume).unwrap();
+    let mut renderer = Renderer::from_source(volume.clone(), None).unwrap();
     for bad in [0.0, -1.0, f64::NAN, 1e9] {
         let scene = Scene {
             opacity_unit: Some(bad),
@@ -191,7 +192,7 @@ fn a_shell_thinner_than_a_step_is_integrated_not_sampled() {
         sampling: Sampling::PreIntegrated,
         ..scene(48, 48)
     };
-    let mut renderer = Renderer::from_volume(&volume).unwrap();
+    let mut renderer = Renderer::from_source(volume.clone(), None).unwrap();
     let mut centre_alpha = |scene: &Scene| {
         let img = renderer.render(scene, &|_| {}).unwrap().image;
         (12..36)
@@ -381,7 +382,7 @@ fn sphere_highlight_matches_the_analytic_answer_for_each_geometry() {
 
 #[test]
 fn no_lobe_gives_nan_pixels() {
-    let mut renderer = Renderer::from_volume(&shepp_logan(40)).unwrap();
+    let mut renderer = Renderer::from_source(shepp_logan(40), None).unwrap();
     for (mode, iso) in [(RenderMode::Composite, None), (RenderMode::Iso, Some(0.5))] {
         let lights = vec![
             Light::HEADLIGHT,
@@ -446,7 +447,7 @@ fn empty_space_skipping_never_changes_the_image() {
     // the projected non-empty blocks; with it off, every sample inside the volume is
     // taken. Off-centre, zoomed views put block footprints across tile borders and
     // partly off the image.
-    let mut renderer = Renderer::from_volume(&shepp_logan(48)).unwrap();
+    let mut renderer = Renderer::from_source(shepp_logan(48), None).unwrap();
     for (projection, sampling) in [
         (Projection::Perspective, Sampling::Point),
         (Projection::Orthographic, Sampling::Point),
@@ -496,7 +497,7 @@ fn progress_reports_every_pixel() {
     use std::sync::atomic::{AtomicU64, Ordering};
     let scene = scene(37, 23);
     let done = AtomicU64::new(0);
-    Renderer::from_volume(&shepp_logan(16))
+    Renderer::from_source(shepp_logan(16), None)
         .unwrap()
         .render(&scene, &|n| {
             done.fetch_add(n, Ordering::Relaxed);
@@ -515,7 +516,7 @@ fn simd_loop_gives_the_scalar_loops_image() {
             "no AVX2+FMA: the SIMD loop is not tested"
         );
     }
-    let mut renderer = Renderer::from_volume(&shepp_logan(48)).unwrap();
+    let mut renderer = Renderer::from_source(shepp_logan(48), None).unwrap();
     for projection in [Projection::Perspective, Projection::Orthographic] {
         let lights = vec![
             Light::HEADLIGHT,
@@ -580,7 +581,7 @@ fn simd_rays_are_the_scalar_rays_on_axis_aligned_views() {
     // The SIMD loop sets up eight rays at once; the scalar loop one at a time. Views
     // along the axes give rays that do not move along two axes (orthographic: every
     // ray; perspective: the central ones), and 37x23 pixels leave partial tiles.
-    let mut renderer = Renderer::from_volume(&shepp_logan(40)).unwrap();
+    let mut renderer = Renderer::from_source(shepp_logan(40), None).unwrap();
     for view in [View::Left, View::Anterior, View::Superior] {
         for projection in [Projection::Orthographic, Projection::Perspective] {
             let scene = Scene {
@@ -628,7 +629,7 @@ fn mni152_brain_renders_the_same_with_every_shortcut_off() {
         gate: 0.0,
         ..scene(80, 80)
     };
-    let mut renderer = Renderer::from_volume(&volume).unwrap();
+    let mut renderer = Renderer::from_source(volume.clone(), None).unwrap();
     let fast = renderer.render(&scene, &|_| {}).unwrap().image;
     renderer.kernel = Kernel::Scalar;
     let reference = renderer.render(&scene, &|_| {}).unwrap().image;
@@ -681,7 +682,7 @@ fn pre_integration_takes_the_slicing_rings_off_the_shepp_logan_phantom() {
         sampling: Sampling::PreIntegrated,
         ..Scene::default()
     };
-    let mut renderer = Renderer::open(&scene.input).unwrap();
+    let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let rendered = renderer.render(&scene, &|_| {}).unwrap();
     assert_eq!(rendered.scene.preset.as_deref(), Some("phantom"));
     assert_eq!(rendered.scene.step, 0.5);
@@ -707,7 +708,7 @@ fn default_image() -> glint_render::Image {
             size: phantom::Phantom::DEFAULT_SIZE
         }
     );
-    Renderer::open(&scene.input)
+    Renderer::open(&scene, &ReadOptions::default())
         .unwrap()
         .render(&scene, &|_| {})
         .unwrap()

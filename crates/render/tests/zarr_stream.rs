@@ -1,11 +1,10 @@
 //! A render of an OME-Zarr store streamed into the field's bricks (what
-//! `Renderer::open_for` does with a store) equals the render of the same level read
+//! `Renderer::open` does with a store) equals the render of the same level read
 //! whole into memory, pixel for pixel, on one thread and on two, in the composite,
 //! isosurface and surface modes and after a prefilter change (the field rebuilt from
 //! the stream).
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use glint_io::zarr::Level;
 use glint_io::{open_volume, ReadOptions};
@@ -38,9 +37,9 @@ fn both(scene: &Scene, options: &ReadOptions, threads: usize) -> (Vec<u32>, Vec<
         let Input::Path(path) = &scene.input else {
             unreachable!()
         };
-        let mut streamed = Renderer::open_for(scene, options).unwrap();
+        let mut streamed = Renderer::open(scene, options).unwrap();
         let volume = open_volume(path, options).unwrap().volume;
-        let mut whole = Renderer::from_shared_volume(Arc::new(volume), scene.prefilter).unwrap();
+        let mut whole = Renderer::from_source(volume, Some(scene.prefilter)).unwrap();
         let a = streamed.render(scene, &|_| {}).unwrap().image;
         let b = whole.render(scene, &|_| {}).unwrap().image;
         (bits(&a), bits(&b))
@@ -103,13 +102,13 @@ fn a_prefilter_change_rebuilds_the_field_from_the_stream() {
         ..Scene::default()
     };
     let options = ReadOptions::default();
-    let mut renderer = Renderer::open_for(&scene, &options).unwrap();
+    let mut renderer = Renderer::open(&scene, &options).unwrap();
     let other = Scene {
         prefilter: Prefilter::None,
         ..scene.clone()
     };
     let a = renderer.render(&other, &|_| {}).unwrap().image;
-    let mut fresh = Renderer::open_for(&other, &options).unwrap();
+    let mut fresh = Renderer::open(&other, &options).unwrap();
     let b = fresh.render(&other, &|_| {}).unwrap().image;
     assert_eq!(bits(&a), bits(&b));
     assert_eq!(renderer.field().unwrap().prefilter(), Prefilter::None);

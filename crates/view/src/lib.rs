@@ -179,7 +179,7 @@ impl Viewer {
         options: &glint_io::ReadOptions,
     ) -> Result<Viewer, RenderError> {
         let plan = levels::plan(&scene.input, options)?;
-        let mut renderer = Renderer::open_scene_with(&scene, &plan.first)?;
+        let mut renderer = Renderer::open(&scene, &plan.first)?;
         let scene = renderer.resolve(&scene)?.scene;
         // A scene of meshes only has no value range (the page's iso slider).
         let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
@@ -210,7 +210,7 @@ impl Viewer {
         if self.refined.borrow().is_some() {
             return Ok(None);
         }
-        let mut renderer = Renderer::open_scene_with(&self.scene, options)?;
+        let mut renderer = Renderer::open(&self.scene, options)?;
         renderer.resolve(&self.scene)?;
         let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
         self.refined.send_replace(Some(Arc::new(Stage {

@@ -232,7 +232,7 @@ fn difference(a: &Image, b: &Image) -> Image {
 mod tests {
     use super::*;
     use glint_lobe::LobeKind;
-    use glint_render::{Input, Phantom};
+    use glint_render::{Input, Phantom, ReadOptions};
 
     fn scene() -> Scene {
         Scene {
@@ -247,7 +247,7 @@ mod tests {
 
     #[test]
     fn patches_merge_nested_fields_and_refuse_bad_ones() {
-        let r = Renderer::open(&scene().input).unwrap();
+        let r = Renderer::open(&scene(), &ReadOptions::default()).unwrap();
         let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
         let s = apply_patch(&r, &scene(), &patch(r#"{"camera": {"azimuth": 30}}"#), None).unwrap();
         assert_eq!(s.camera.azimuth, 30.0);
@@ -270,7 +270,7 @@ mod tests {
 
     #[test]
     fn a_patch_can_make_the_lobe_the_hardware_unit() {
-        let mut r = Renderer::open(&scene().input).unwrap();
+        let mut r = Renderer::open(&scene(), &ReadOptions::default()).unwrap();
         let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
         let hw = r#"{"lobe": {"kind": "hw", "n": 30, "hw": {"out_bits": 10}}}"#;
         let s = apply_patch(&r, &scene(), &patch(hw), None).unwrap();
@@ -303,7 +303,7 @@ mod tests {
 
     #[test]
     fn split_frames_have_the_right_shape() {
-        let mut r = Renderer::open(&scene().input).unwrap();
+        let mut r = Renderer::open(&scene(), &ReadOptions::default()).unwrap();
         for (split, width) in [(Split::Off, 24), (Split::Side, 48), (Split::Diff, 24)] {
             let f = render_frame(&mut r, &scene(), split, Purpose::Full, 5).unwrap();
             let (h, jpeg) = FrameHeader::decode(&f.message).unwrap();
@@ -325,7 +325,7 @@ mod tests {
             bounces: Some(3),
             ..Default::default()
         };
-        let mut r = Renderer::open(&s.input).unwrap();
+        let mut r = Renderer::open(&s, &ReadOptions::default()).unwrap();
         let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 1).unwrap();
         assert_eq!(
             (
@@ -353,7 +353,7 @@ mod tests {
 
     #[test]
     fn the_diff_of_an_image_with_itself_is_black() {
-        let mut r = Renderer::open(&scene().input).unwrap();
+        let mut r = Renderer::open(&scene(), &ReadOptions::default()).unwrap();
         let img = r.render(&scene(), &|_| {}).unwrap().image;
         let d = difference(&img, &img);
         assert!(d.rgb.iter().flatten().all(|&c| c == 0.0));

@@ -7,7 +7,7 @@
 //! lossless PNG the viewer saves (`Purpose::Save`).
 
 use glint_lobe::LobeKind;
-use glint_render::{Input, LobeSpec, Phantom, Renderer, Scene};
+use glint_render::{Input, LobeSpec, Phantom, ReadOptions, Renderer, Scene};
 use glint_view::protocol::{FrameHeader, Purpose, Split};
 use glint_view::render_frame;
 
@@ -60,7 +60,7 @@ fn frame(r: &mut Renderer, split: Split) -> (usize, usize, Vec<[u8; 3]>) {
 
 #[test]
 fn side_by_side_is_exact_left_and_the_lobe_right() {
-    let mut r = Renderer::open(&scene().input).unwrap();
+    let mut r = Renderer::open(&scene(), &ReadOptions::default()).unwrap();
     let main = r.render(&scene(), &|_| {}).unwrap();
     let exact = r.render(&main.scene.with_exact_lobe(), &|_| {}).unwrap();
     let (_, _, left) = decode(&exact.image.encode_png(glint_render::Depth::Eight).unwrap());
@@ -81,7 +81,7 @@ fn side_by_side_is_exact_left_and_the_lobe_right() {
 
 #[test]
 fn difference_is_the_heat_map_of_the_two_renders() {
-    let mut r = Renderer::open(&scene().input).unwrap();
+    let mut r = Renderer::open(&scene(), &ReadOptions::default()).unwrap();
     let main = r.render(&scene(), &|_| {}).unwrap();
     let exact = r.render(&main.scene.with_exact_lobe(), &|_| {}).unwrap();
     let (w, h, px) = frame(&mut r, Split::Diff);

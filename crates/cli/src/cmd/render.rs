@@ -156,11 +156,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A renderer of the scene's input, with an error that names it; prints what the
-/// reader assumed (e.g. DICOM frames without positions) to stderr. Meshes are read
-/// when the scene is resolved (their errors name the file).
+/// A renderer of the scene's input, its field built with the scene's prefilter, with
+/// an error that names the input; prints what the reader assumed (e.g. DICOM frames
+/// without positions) to stderr. Meshes are read when the scene is resolved (their
+/// errors name the file, not the volume).
 pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Result<Renderer> {
-    let renderer = Renderer::open_for(scene, options).with_context(|| match &scene.input {
+    let volume = Scene {
+        input: scene.input.clone(),
+        prefilter: scene.prefilter,
+        ..Scene::default()
+    };
+    let renderer = Renderer::open(&volume, options).with_context(|| match &scene.input {
         Input::Path(p) => format!("cannot read volume {}", p.display()),
         Input::Phantom { name, .. } => format!("cannot build the {name} phantom"),
         Input::None => "cannot open the scene".into(),

@@ -23,7 +23,7 @@ pub const DEFAULT_ENVIRONMENT: f32 = 0.5;
 /// settings another model uses are refused, so a scene says nothing it does not do.
 ///
 /// ```
-/// use glint_render::{Input, Lighting, LightingModel, Phantom, Renderer, Scene};
+/// use glint_render::{Input, Lighting, LightingModel, Phantom, ReadOptions, Renderer, Scene};
 ///
 /// let scene = Scene {
 ///     input: Input::Phantom { name: Phantom::SheppLogan, size: 24 },
@@ -31,7 +31,7 @@ pub const DEFAULT_ENVIRONMENT: f32 = 0.5;
 ///     lighting: Lighting { model: LightingModel::Path, spp: Some(2), ..Lighting::default() },
 ///     ..Scene::default()
 /// };
-/// let mut renderer = Renderer::open(&scene.input).unwrap();
+/// let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
 /// let rendered = renderer.render(&scene, &|_| {}).unwrap();
 /// // The resolved scene names the defaults it used.
 /// assert_eq!(rendered.scene.lighting.bounces, Some(glint_render::DEFAULT_BOUNCES));
@@ -189,7 +189,7 @@ mod tests {
     use serde_json::json;
 
     use super::*;
-    use crate::{Input, Renderer, Scene};
+    use crate::{Input, ReadOptions, Renderer, Scene};
 
     fn small(lighting: Lighting) -> Scene {
         Scene {
@@ -216,7 +216,7 @@ mod tests {
         let scene = small(Lighting::default());
         let text = scene.to_json().unwrap();
         assert!(!text.contains("lighting"), "{text}");
-        let mut r = Renderer::open(&scene.input).unwrap();
+        let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
         let done = r.render(&scene, &|_| {}).unwrap();
         assert!(done.scene.lighting.is_default());
         assert!(!done.scene.to_json().unwrap().contains("lighting"));
@@ -224,7 +224,7 @@ mod tests {
 
     #[test]
     fn resolving_writes_each_models_defaults_back() {
-        let mut r = Renderer::open(&small(Lighting::default()).input).unwrap();
+        let mut r = Renderer::open(&small(Lighting::default()), &ReadOptions::default()).unwrap();
         let shadows = Lighting {
             model: LightingModel::Shadows,
             ..Lighting::default()
@@ -251,7 +251,7 @@ mod tests {
 
     #[test]
     fn settings_of_another_model_and_unlit_modes_are_refused() {
-        let mut r = Renderer::open(&small(Lighting::default()).input).unwrap();
+        let mut r = Renderer::open(&small(Lighting::default()), &ReadOptions::default()).unwrap();
         let bad = [
             (
                 small(Lighting {
@@ -320,12 +320,12 @@ mod tests {
     #[test]
     fn samples_accumulate_while_only_the_count_changes() {
         let scene = small(path(4));
-        let fresh = Renderer::open(&scene.input)
+        let fresh = Renderer::open(&scene, &ReadOptions::default())
             .unwrap()
             .render(&scene, &|_| {})
             .unwrap();
         assert_eq!(fresh.scene.lighting.spp, Some(4));
-        let mut r = Renderer::open(&scene.input).unwrap();
+        let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
         for spp in [1, 2, 4] {
             let step = r.render(&small(path(spp)), &|_| {}).unwrap();
             assert_eq!(r.path_samples(), spp);
@@ -349,7 +349,7 @@ mod tests {
         assert_eq!(r.path_samples(), 2);
         // The dumped scene renders the same image again.
         let again = Scene::from_json(&fresh.scene.to_json().unwrap()).unwrap();
-        let re = Renderer::open(&again.input)
+        let re = Renderer::open(&again, &ReadOptions::default())
             .unwrap()
             .render(&again, &|_| {})
             .unwrap();
@@ -361,12 +361,12 @@ mod tests {
         use std::sync::atomic::{AtomicBool, Ordering};
         use std::sync::Arc;
         let scene = small(path(4));
-        let fresh = Renderer::open(&scene.input)
+        let fresh = Renderer::open(&scene, &ReadOptions::default())
             .unwrap()
             .render(&scene, &|_| {})
             .unwrap();
         let flag = Arc::new(AtomicBool::new(false));
-        let mut r = Renderer::open(&scene.input).unwrap();
+        let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
         r.set_cancel(Some(flag.clone()));
         r.render(&small(path(2)), &|_| {}).unwrap();
         assert_eq!(r.path_samples(), 2);
@@ -396,7 +396,7 @@ mod tests {
             elevation: 30.0,
             intensity: 1.0,
         }];
-        let mut r = Renderer::open(&scene.input).unwrap();
+        let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
         let a = r.render(&scene, &|_| {}).unwrap();
         let again = r.render(&scene, &|_| {}).unwrap();
         assert_eq!(a.image, again.image);

@@ -45,7 +45,7 @@ pub const DEFAULT_SHININESS: f64 = 10.0;
 /// view it, and the image size. Fields left unset are chosen by [`Scene::resolve`].
 ///
 /// ```
-/// use glint_render::{Input, Phantom, Renderer, Scene};
+/// use glint_render::{Input, Phantom, ReadOptions, Renderer, Scene};
 ///
 /// let scene = Scene {
 ///     input: Input::Phantom { name: Phantom::SheppLogan, size: 32 },
@@ -54,7 +54,7 @@ pub const DEFAULT_SHININESS: f64 = 10.0;
 /// };
 /// let json = scene.to_json().unwrap();
 /// assert_eq!(Scene::from_json(&json).unwrap(), scene);
-/// let mut renderer = Renderer::open(&scene.input).unwrap();
+/// let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
 /// let rendered = renderer.render(&scene, &|_| {}).unwrap();
 /// assert_eq!(rendered.image.rgb.len(), 32 * 32);
 /// // The resolved scene names what was chosen: the phantom's preset and its power.

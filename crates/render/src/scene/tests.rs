@@ -30,7 +30,7 @@ fn small() -> Scene {
 fn the_field_follows_the_scenes_prefilter() {
     let scene = small();
     assert_eq!(scene.prefilter, Prefilter::Binomial);
-    let mut r = Renderer::open(&scene.input).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let smooth = r.render(&scene, &|_| {}).unwrap();
     assert_eq!(r.field().unwrap().prefilter(), Prefilter::Binomial);
     let raw_scene = Scene {
@@ -42,13 +42,68 @@ fn the_field_follows_the_scenes_prefilter() {
     assert_ne!(smooth.image.rgb, raw.image.rgb);
     assert_eq!(raw.scene.prefilter, Prefilter::None);
     let volume = scene.input.open().unwrap();
-    let mut fixed = Renderer::from_field(Arc::new(Field::new(&volume).unwrap()));
+    let mut fixed = Renderer::from_source(Field::new(&volume).unwrap(), None).unwrap();
     let err = fixed.render(&scene, &|_| {}).unwrap_err();
     assert!(matches!(err, RenderError::Parameter(_)), "{err}");
     assert!(fixed.render(&raw_scene, &|_| {}).is_ok());
+    assert!(
+        Renderer::from_source(Field::new(&volume).unwrap(), Some(Prefilter::Binomial)).is_err()
+    );
     // Opened for the scene, the field is built once, with its prefilter.
-    let opened = Renderer::open_for(&raw_scene, &ReadOptions::default()).unwrap();
+    let opened = Renderer::open(&raw_scene, &ReadOptions::default()).unwrap();
     assert_eq!(opened.field().unwrap().prefilter(), Prefilter::None);
+}
+
+/// How many times `timings` built a field.
+fn fields_built(timings: &Timings) -> usize {
+    let stages = timings.stages().iter();
+    stages.filter(|(s, _)| *s == "field: prepare").count()
+}
+
+/// A renderer opened with a scene of another prefilter than the default, with
+/// meshes, builds one field and reads the meshes once (issue 40): rendering the
+/// scene builds and reads nothing more.
+#[test]
+fn opened_with_its_scene_a_renderer_builds_one_field_and_reads_meshes_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Scene {
+        meshes: vec![MeshSpec::new(octahedron(dir.path()))],
+        prefilter: Prefilter::None,
+        ..small()
+    };
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+    let read = r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m));
+    assert!(read.is_some());
+    let rendered = r.render(&scene, &|_| {}).unwrap();
+    assert_eq!(r.meshes.as_ref().map(|(_, m)| Arc::as_ptr(m)), read);
+    assert_eq!(fields_built(&rendered.timings), 1);
+    let meshes = rendered.timings.stages().iter();
+    assert_eq!(meshes.filter(|(s, _)| *s == "meshes").count(), 1);
+    assert_eq!(r.field().unwrap().prefilter(), Prefilter::None);
+}
+
+/// A renderer of a shared volume keeps the caller's volume (no copy) and builds its
+/// field at the first scene's prefilter, once; given a prefilter, it builds it now.
+#[test]
+fn a_renderer_of_a_shared_volume_builds_its_field_for_the_first_scene() {
+    let scene = Scene {
+        prefilter: Prefilter::None,
+        ..small()
+    };
+    let volume = Arc::new(scene.input.open().unwrap());
+    let mut r = Renderer::from_source(volume.clone(), None).unwrap();
+    assert_eq!(Arc::strong_count(&volume), 2);
+    assert!(r.field().is_none());
+    let lazy = r.render(&scene, &|_| {}).unwrap();
+    assert_eq!(r.field().unwrap().prefilter(), Prefilter::None);
+    assert_eq!(fields_built(&lazy.timings), 1);
+    let mut eager = Renderer::from_source(volume.clone(), Some(Prefilter::None)).unwrap();
+    assert_eq!(eager.field().unwrap().prefilter(), Prefilter::None);
+    let now = eager.render(&scene, &|_| {}).unwrap();
+    assert_eq!(fields_built(&now.timings), 1);
+    assert_eq!(now.image, lazy.image);
+    let mut opened = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+    assert_eq!(opened.render(&scene, &|_| {}).unwrap().image, lazy.image);
 }
 
 #[test]
@@ -251,7 +306,7 @@ fn a_renderer_builds_a_units_table_once_per_configuration_and_n() {
         },
         ..small()
     };
-    let mut r = Renderer::open(&scene.input).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let mut table = |s: &Scene| match r.resolve(s).unwrap().shader.specular() {
         Specular::Table(t) => t.clone(),
         Specular::Lobe(l) => panic!("a hw scene resolved to {l:?}"),
@@ -343,7 +398,7 @@ fn bad_scenes_are_refused_with_the_reason() {
 #[test]
 fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
     let scene = small();
-    let mut r = Renderer::open(&scene.input).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let classified = |t: &Timings| t.stages().iter().any(|(s, _)| *s == "classify");
     let first = r.render(&scene, &|_| {}).unwrap();
     assert!(classified(&first.timings));
@@ -369,7 +424,7 @@ fn a_renderer_reuses_its_classification_only_when_it_still_applies() {
     };
     let third = r.render(&finer, &|_| {}).unwrap();
     assert!(classified(&third.timings));
-    let fresh = Renderer::open(&scene.input)
+    let fresh = Renderer::open(&scene, &ReadOptions::default())
         .unwrap()
         .render(&finer, &|_| {})
         .unwrap();
@@ -402,7 +457,7 @@ fn a_mesh_scene_resolves_once_and_reads_its_meshes_once() {
     // Meshes without an input key: no volume.
     let scene = Scene::from_json(&json).unwrap();
     assert_eq!(scene.input, Input::None);
-    let mut r = Renderer::open_scene(&scene).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     assert!(r.field().is_none());
     let first = r.render(&scene, &|_| {}).unwrap();
     let s = &first.scene;
@@ -473,7 +528,7 @@ fn a_volume_with_meshes_composites_the_volume_over_them() {
         ))],
         ..base.clone()
     };
-    let mut r = Renderer::open_scene(&scene).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let resolved = r.resolve(&scene).unwrap();
     let Plan::Volume {
         meshes: Some(layer),
@@ -529,7 +584,7 @@ fn a_volume_with_meshes_composites_the_volume_over_them() {
     assert_eq!(again.mode, RenderMode::Composite);
     let text = again.to_json().unwrap();
     let reread = Scene::from_json(&text).unwrap();
-    let fresh = Renderer::open_scene(&reread)
+    let fresh = Renderer::open(&reread, &ReadOptions::default())
         .unwrap()
         .render(&reread, &|_| {})
         .unwrap();
@@ -544,7 +599,7 @@ fn a_volume_with_meshes_in_surface_mode_joins_its_isosurface() {
         mode: RenderMode::Surface,
         ..small()
     };
-    let mut r = Renderer::open_scene(&scene).unwrap();
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     // The phantom's isosurface joins the octahedron.
     let resolved = r.resolve(&scene).unwrap();
     assert!(resolved.scene.iso.is_some());
@@ -596,7 +651,7 @@ fn meshes_shadow_the_volume_in_shadows_and_path() {
         },
         ..s.clone()
     };
-    let mut r = Renderer::open_scene(&with).unwrap();
+    let mut r = Renderer::open(&with, &ReadOptions::default()).unwrap();
     let stage = |t: &Timings| t.stages().iter().any(|(s, _)| *s == "occluders");
     let local_with = r
         .render(&lit(&with, LightingModel::Local), &|_| {})
@@ -614,7 +669,7 @@ fn meshes_shadow_the_volume_in_shadows_and_path() {
     let mut moved = lit(&with, LightingModel::Shadows);
     moved.camera.azimuth = 20.0;
     assert!(!stage(&r.render(&moved, &|_| {}).unwrap().timings), "kept");
-    let mut alone = Renderer::open_scene(&base).unwrap();
+    let mut alone = Renderer::open(&base, &ReadOptions::default()).unwrap();
     let local_alone = alone
         .render(&lit(&base, LightingModel::Local), &|_| {})
         .unwrap();
