@@ -1,6 +1,6 @@
 //! What a file holds, as `glint info` reports it: one value per file ([`FileInfo`]),
-//! serialised for `--json` and written as text by its [`Display`](std::fmt::Display)
-//! form, so both outputs come from the same facts.
+//! serialised for `--json` and written as text by its [`Display`] form, so both
+//! outputs come from the same facts.
 
 use std::fmt::{self, Display, Formatter};
 use std::path::Path;

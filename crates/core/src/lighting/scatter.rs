@@ -3,7 +3,7 @@
 //! point with `f`, `sample` and `pdf`, which every integrator calls).
 //!
 //! A shaded sample's [`Scattering`] ([`Shader::scattering`]) is the hybrid of the
-//! module docs of [`transport`](super::transport): a surface part (unit normal and
+//! module docs of `lighting/transport.rs`: a surface part (unit normal and
 //! weight, from the gradient gate) and a scattering medium. The three lighting models
 //! read it the same way:
 //!
@@ -227,7 +227,7 @@ impl<'s> Scattering<'s> {
     /// light of light `i` scaled by `transmittance[i]` (what reaches the sample through
     /// the volume; one per placed light) and the ambient term by `occlusion`, and the
     /// part of the sample that is not surface a medium lit through the phase function
-    /// (see [`transport`](super::transport)).
+    /// (see [`Shader::shade_shadowed`]).
     #[inline(always)]
     pub fn shadowed(&self, ray: &RayLighting, transmittance: &[f32], occlusion: f32) -> [f32; 3] {
         let m = &self.shader.material;
