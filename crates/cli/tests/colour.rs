@@ -5,13 +5,10 @@ use std::path::Path;
 use std::process::Command;
 
 use dicom_core::value::PrimitiveValue;
-use dicom_core::{dicom_value, DataElement, Tag, VR};
+use dicom_core::VR;
 use dicom_dictionary_std::tags;
-use dicom_object::{FileMetaTableBuilder, InMemDicomObject};
+use glint_testkit::dicom::{ds, put, write, ImageHeader, EXPLICIT_LE, SC_TRUE_COLOR};
 
-/// Multi-frame True Color Secondary Capture Image Storage (PS3.4 B.5).
-const SC_TRUE_COLOR: &str = "1.2.840.10008.5.1.4.1.1.7.4";
-const EXPLICIT_LE: &str = "1.2.840.10008.1.2.1";
 const SIDE: usize = 16;
 const FRAMES: usize = 8;
 
@@ -19,36 +16,24 @@ const FRAMES: usize = 8;
 /// frames 1..7, pure red where the column is below 8 and pure blue from 8 on, black
 /// elsewhere.
 fn write_halves(path: &Path) {
-    let mut o = InMemDicomObject::new_empty();
-    let mut put = |tag: Tag, vr: VR, v: PrimitiveValue| o.put(DataElement::new(tag, vr, v));
+    let mut o = ImageHeader {
+        class: SC_TRUE_COLOR,
+        modality: "OT",
+        frames: Some(FRAMES as u32),
+        samples: 3,
+        photometric: "RGB",
+        bits: 8,
+        ..ImageHeader::ct(SIDE as u16, SIDE as u16)
+    }
+    .object();
     put(
-        tags::SOP_CLASS_UID,
-        VR::UI,
-        dicom_value!(Str, SC_TRUE_COLOR),
+        &mut o,
+        tags::PLANAR_CONFIGURATION,
+        VR::US,
+        PrimitiveValue::from(0u16),
     );
-    put(tags::SOP_INSTANCE_UID, VR::UI, dicom_value!(Str, "1.2.3.4"));
-    put(
-        tags::SERIES_INSTANCE_UID,
-        VR::UI,
-        dicom_value!(Str, "1.2.3"),
-    );
-    put(tags::MODALITY, VR::CS, dicom_value!(Str, "OT"));
-    put(tags::ROWS, VR::US, dicom_value!(U16, [SIDE as u16]));
-    put(tags::COLUMNS, VR::US, dicom_value!(U16, [SIDE as u16]));
-    put(tags::NUMBER_OF_FRAMES, VR::IS, dicom_value!(Str, "8"));
-    put(tags::SAMPLES_PER_PIXEL, VR::US, dicom_value!(U16, [3]));
-    put(tags::PLANAR_CONFIGURATION, VR::US, dicom_value!(U16, [0]));
-    put(
-        tags::PHOTOMETRIC_INTERPRETATION,
-        VR::CS,
-        dicom_value!(Str, "RGB"),
-    );
-    put(tags::BITS_ALLOCATED, VR::US, dicom_value!(U16, [8]));
-    put(tags::BITS_STORED, VR::US, dicom_value!(U16, [8]));
-    put(tags::HIGH_BIT, VR::US, dicom_value!(U16, [7]));
-    put(tags::PIXEL_REPRESENTATION, VR::US, dicom_value!(U16, [0]));
-    put(tags::PIXEL_SPACING, VR::DS, dicom_value!(Strs, ["1", "1"]));
-    put(tags::SPACING_BETWEEN_SLICES, VR::DS, dicom_value!(Str, "1"));
+    put(&mut o, tags::PIXEL_SPACING, VR::DS, ds(&[1.0, 1.0]));
+    put(&mut o, tags::SPACING_BETWEEN_SLICES, VR::DS, ds(&[1.0]));
     let mut px = Vec::with_capacity(SIDE * SIDE * FRAMES * 3);
     for f in 0..FRAMES {
         for y in 0..SIDE {
@@ -62,11 +47,13 @@ fn write_halves(path: &Path) {
             }
         }
     }
-    put(tags::PIXEL_DATA, VR::OB, PrimitiveValue::U8(px.into()));
-    let meta = FileMetaTableBuilder::new()
-        .transfer_syntax(EXPLICIT_LE)
-        .media_storage_sop_class_uid(SC_TRUE_COLOR);
-    o.with_meta(meta).unwrap().write_to_file(path).unwrap();
+    put(
+        &mut o,
+        tags::PIXEL_DATA,
+        VR::OB,
+        PrimitiveValue::U8(px.into()),
+    );
+    write(path, o, SC_TRUE_COLOR, EXPLICIT_LE);
 }
 
 /// A white transfer function, opaque above luma 20 (the box's red is 76, its blue

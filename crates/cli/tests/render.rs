@@ -4,42 +4,21 @@ use std::path::Path;
 use std::process::Command;
 
 use dicom_core::value::PrimitiveValue;
-use dicom_core::{dicom_value, DataElement, Tag, VR};
+use dicom_core::VR;
 use dicom_dictionary_std::tags;
-use dicom_object::{FileMetaTableBuilder, InMemDicomObject};
-
-const CT_STORAGE: &str = "1.2.840.10008.5.1.4.1.1.2";
-const EXPLICIT_LE: &str = "1.2.840.10008.1.2.1";
+use glint_testkit::dicom::{ds, put, write, ImageHeader, CT_STORAGE, EXPLICIT_LE};
 
 /// An 8x8, 4-frame, 16-bit CT image with PixelSpacing and SpacingBetweenSlices but no
 /// ImagePositionPatient or ImageOrientationPatient: a stack in frame order whose
 /// geometry the reader must assume.
 fn write_frames_without_positions(path: &Path) {
-    let mut o = InMemDicomObject::new_empty();
-    let mut put = |tag: Tag, vr: VR, v: PrimitiveValue| o.put(DataElement::new(tag, vr, v));
-    put(tags::SOP_CLASS_UID, VR::UI, dicom_value!(Str, CT_STORAGE));
-    put(tags::SOP_INSTANCE_UID, VR::UI, dicom_value!(Str, "1.2.3.4"));
-    put(
-        tags::SERIES_INSTANCE_UID,
-        VR::UI,
-        dicom_value!(Str, "1.2.3"),
-    );
-    put(tags::MODALITY, VR::CS, dicom_value!(Str, "CT"));
-    put(tags::ROWS, VR::US, dicom_value!(U16, [8]));
-    put(tags::COLUMNS, VR::US, dicom_value!(U16, [8]));
-    put(tags::NUMBER_OF_FRAMES, VR::IS, dicom_value!(Str, "4"));
-    put(tags::SAMPLES_PER_PIXEL, VR::US, dicom_value!(U16, [1]));
-    put(
-        tags::PHOTOMETRIC_INTERPRETATION,
-        VR::CS,
-        dicom_value!(Str, "MONOCHROME2"),
-    );
-    put(tags::BITS_ALLOCATED, VR::US, dicom_value!(U16, [16]));
-    put(tags::BITS_STORED, VR::US, dicom_value!(U16, [16]));
-    put(tags::HIGH_BIT, VR::US, dicom_value!(U16, [15]));
-    put(tags::PIXEL_REPRESENTATION, VR::US, dicom_value!(U16, [0]));
-    put(tags::PIXEL_SPACING, VR::DS, dicom_value!(Strs, ["1", "1"]));
-    put(tags::SPACING_BETWEEN_SLICES, VR::DS, dicom_value!(Str, "2"));
+    let mut o = ImageHeader {
+        frames: Some(4),
+        ..ImageHeader::ct(8, 8)
+    }
+    .object();
+    put(&mut o, tags::PIXEL_SPACING, VR::DS, ds(&[1.0, 1.0]));
+    put(&mut o, tags::SPACING_BETWEEN_SLICES, VR::DS, ds(&[2.0]));
     // A bright block in the middle, so the render has something to show.
     let px: Vec<u16> = (0..8 * 8 * 4)
         .map(|i| {
@@ -51,11 +30,13 @@ fn write_frames_without_positions(path: &Path) {
             }
         })
         .collect();
-    put(tags::PIXEL_DATA, VR::OW, PrimitiveValue::U16(px.into()));
-    let meta = FileMetaTableBuilder::new()
-        .transfer_syntax(EXPLICIT_LE)
-        .media_storage_sop_class_uid(CT_STORAGE);
-    o.with_meta(meta).unwrap().write_to_file(path).unwrap();
+    put(
+        &mut o,
+        tags::PIXEL_DATA,
+        VR::OW,
+        PrimitiveValue::U16(px.into()),
+    );
+    write(path, o, CT_STORAGE, EXPLICIT_LE);
 }
 
 fn render(args: &[&str], input: &Path, out: &Path) -> std::process::Output {

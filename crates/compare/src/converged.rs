@@ -257,7 +257,7 @@ pub fn convergence(
 
 #[cfg(test)]
 mod tests {
-    use glint_render::{Input, Lighting, LobeSpec, Phantom, ReadOptions};
+    use glint_render::{Lighting, LobeSpec, Phantom, ReadOptions};
 
     use super::*;
     use crate::run_against;
@@ -265,11 +265,6 @@ mod tests {
 
     fn path_scene(spp: u32) -> Scene {
         Scene {
-            input: Input::Phantom {
-                name: Phantom::SheppLogan,
-                size: 24,
-            },
-            size: [24, 20],
             lobe: LobeSpec {
                 n: Some(40.0),
                 ..LobeSpec::default()
@@ -279,7 +274,7 @@ mod tests {
                 spp: Some(spp),
                 ..Lighting::default()
             },
-            ..Scene::default()
+            ..Scene::phantom(Phantom::SheppLogan, 24, [24, 20])
         }
     }
 

@@ -263,22 +263,17 @@ pub fn run_against(
 #[cfg(test)]
 mod tests {
     use glint_lobe::LobeKind;
-    use glint_render::{Input, LobeSpec, Phantom, ReadOptions};
+    use glint_render::{LobeSpec, Phantom, ReadOptions};
 
     use super::*;
 
     fn scene() -> Scene {
         Scene {
-            input: Input::Phantom {
-                name: Phantom::SheppLogan,
-                size: 24,
-            },
-            size: [32, 28],
             lobe: LobeSpec {
                 n: Some(80.0),
                 ..LobeSpec::default()
             },
-            ..Scene::default()
+            ..Scene::phantom(Phantom::SheppLogan, 24, [32, 28])
         }
     }
 

@@ -8,72 +8,22 @@ use std::path::Path;
 use dicom_core::value::{DataSetSequence, PixelFragmentSequence, PrimitiveValue, Value};
 use dicom_core::{dicom_value, DataElement, Tag, VR};
 use dicom_dictionary_std::tags;
-use dicom_object::{FileMetaTableBuilder, InMemDicomObject};
+use dicom_object::InMemDicomObject;
 use glint_io::{IoError, ReadOptions, Samples};
+use glint_testkit::dicom::{
+    ds, put, ImageHeader, CT_STORAGE, EXPLICIT_BE, EXPLICIT_LE, IMPLICIT_LE,
+};
 
-const EXPLICIT_LE: &str = "1.2.840.10008.1.2.1";
-const IMPLICIT_LE: &str = "1.2.840.10008.1.2";
-const EXPLICIT_BE: &str = "1.2.840.10008.1.2.2";
-const CT_STORAGE: &str = "1.2.840.10008.5.1.4.1.1.2";
-
-fn ds(v: &[f64]) -> PrimitiveValue {
-    PrimitiveValue::Strs(v.iter().map(|x| format!("{x}")).collect())
-}
-
-fn put(obj: &mut InMemDicomObject, tag: Tag, vr: VR, v: PrimitiveValue) {
-    obj.put(DataElement::new(tag, vr, v));
-}
-
-/// A grayscale image header: `cols` x `rows`, 16-bit, with pixel spacing (row, column).
+/// A grayscale CT image header: `cols` x `rows`, 16-bit, with pixel spacing (row,
+/// column) 0.5 x 0.75 mm and the axial orientation.
 fn image(rows: u16, cols: u16, series: &str, instance: u32, signed: bool) -> InMemDicomObject {
-    let mut o = InMemDicomObject::new_empty();
-    put(
-        &mut o,
-        tags::SOP_CLASS_UID,
-        VR::UI,
-        dicom_value!(Str, CT_STORAGE),
-    );
-    put(
-        &mut o,
-        tags::SOP_INSTANCE_UID,
-        VR::UI,
-        PrimitiveValue::from(format!("1.2.3.4.{instance}")),
-    );
-    put(
-        &mut o,
-        tags::SERIES_INSTANCE_UID,
-        VR::UI,
-        PrimitiveValue::from(series.to_string()),
-    );
-    put(&mut o, tags::MODALITY, VR::CS, dicom_value!(Str, "CT"));
-    put(&mut o, tags::ROWS, VR::US, dicom_value!(U16, [rows]));
-    put(&mut o, tags::COLUMNS, VR::US, dicom_value!(U16, [cols]));
-    put(
-        &mut o,
-        tags::SAMPLES_PER_PIXEL,
-        VR::US,
-        dicom_value!(U16, [1]),
-    );
-    put(
-        &mut o,
-        tags::PHOTOMETRIC_INTERPRETATION,
-        VR::CS,
-        dicom_value!(Str, "MONOCHROME2"),
-    );
-    put(
-        &mut o,
-        tags::BITS_ALLOCATED,
-        VR::US,
-        dicom_value!(U16, [16]),
-    );
-    put(&mut o, tags::BITS_STORED, VR::US, dicom_value!(U16, [16]));
-    put(&mut o, tags::HIGH_BIT, VR::US, dicom_value!(U16, [15]));
-    put(
-        &mut o,
-        tags::PIXEL_REPRESENTATION,
-        VR::US,
-        dicom_value!(U16, [u16::from(signed)]),
-    );
+    let mut o = ImageHeader {
+        instance: format!("1.2.3.4.{instance}"),
+        series: series.to_string(),
+        signed,
+        ..ImageHeader::ct(rows, cols)
+    }
+    .object();
     put(&mut o, tags::PIXEL_SPACING, VR::DS, ds(&[0.5, 0.75]));
     put(
         &mut o,
@@ -85,10 +35,7 @@ fn image(rows: u16, cols: u16, series: &str, instance: u32, signed: bool) -> InM
 }
 
 fn write(path: &Path, obj: InMemDicomObject, ts: &str) {
-    let meta = FileMetaTableBuilder::new()
-        .transfer_syntax(ts)
-        .media_storage_sop_class_uid(CT_STORAGE);
-    obj.with_meta(meta).unwrap().write_to_file(path).unwrap();
+    glint_testkit::dicom::write(path, obj, CT_STORAGE, ts);
 }
 
 /// Pixel value of CT slice `k` at column `i`, row `j`: negative and positive.

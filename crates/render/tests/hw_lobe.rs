@@ -7,8 +7,7 @@
 use glint_hw::{Config, Input as HwInput, Unit};
 use glint_lobe::{Geometry, LobeKind};
 use glint_render::{
-    CameraSpec, Image, Input, Kernel, Light, LobeSpec, Phantom, ReadOptions, Renderer, Scene,
-    SceneLobe,
+    CameraSpec, Image, Kernel, Light, LobeSpec, Phantom, ReadOptions, Renderer, Scene, SceneLobe,
 };
 
 /// Shininess of the scenes (an integer: the unit's n input takes it exactly).
@@ -16,11 +15,6 @@ const N: f64 = 60.0;
 
 fn scene(geometry: Geometry, lobe: SceneLobe, unit: &Config) -> Scene {
     Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 48,
-        },
-        size: [48, 40],
         camera: CameraSpec {
             azimuth: 33.0,
             elevation: -21.0,
@@ -41,7 +35,7 @@ fn scene(geometry: Geometry, lobe: SceneLobe, unit: &Config) -> Scene {
             ..LobeSpec::hw(unit.clone())
         },
         gate: 0.0,
-        ..Scene::default()
+        ..Scene::phantom(Phantom::SheppLogan, 48, [48, 40])
     }
 }
 

@@ -675,12 +675,12 @@ const SHEPP_LOGAN_RING_BOUND: f64 = 1.0;
 #[test]
 fn pre_integration_takes_the_slicing_rings_off_the_shepp_logan_phantom() {
     let mut scene = Scene {
-        input: Input::Phantom {
-            name: phantom::Phantom::SheppLogan,
-            size: phantom::Phantom::DEFAULT_SIZE,
-        },
         sampling: Sampling::PreIntegrated,
-        ..Scene::default()
+        ..Scene::phantom(
+            phantom::Phantom::SheppLogan,
+            phantom::Phantom::DEFAULT_SIZE,
+            Scene::default().size,
+        )
     };
     let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let rendered = renderer.render(&scene, &|_| {}).unwrap();

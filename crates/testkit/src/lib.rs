@@ -14,8 +14,13 @@
 //!   reader sees that nothing was skipped.
 //! - **The browser** ([`browser_tools`]): the headless Chromium, node and
 //!   playwright-core that the browser tests of glint-view and glint-batch drive.
+//! - **DICOM objects** (`dicom`, with the `dicom` feature): the image header and the
+//!   writer the DICOM tests of glint-io and the CLI build their files with.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
+
+#[cfg(feature = "dicom")]
+pub mod dicom;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -232,17 +232,10 @@ fn difference(a: &Image, b: &Image) -> Image {
 mod tests {
     use super::*;
     use glint_lobe::LobeKind;
-    use glint_render::{Input, Phantom, ReadOptions};
+    use glint_render::{Phantom, ReadOptions};
 
     fn scene() -> Scene {
-        Scene {
-            input: Input::Phantom {
-                name: Phantom::SheppLogan,
-                size: 24,
-            },
-            size: [24, 24],
-            ..Scene::default()
-        }
+        Scene::phantom(Phantom::SheppLogan, 24, [24, 24])
     }
 
     #[test]

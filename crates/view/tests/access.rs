@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use futures_util::StreamExt;
-use glint_render::{Input, Phantom, Scene};
+use glint_render::{Phantom, Scene};
 use glint_view::{Access, Token, Viewer, ViewerConfig};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
@@ -19,14 +19,7 @@ use tokio_tungstenite::tungstenite::{Error, Message};
 /// A viewer of a small phantom bound to `bind` (port 0: a free one), with `token`;
 /// returns its policy and the loopback address to reach it at.
 async fn start(bind: &str, token: Option<Token>) -> (Arc<Access>, SocketAddr) {
-    let scene = Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 32,
-        },
-        size: [48, 40],
-        ..Scene::default()
-    };
+    let scene = Scene::phantom(Phantom::SheppLogan, 32, [48, 40]);
     let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
     let listener = tokio::net::TcpListener::bind(bind).await.unwrap();
     let bound = listener.local_addr().unwrap();
@@ -253,13 +246,7 @@ async fn a_viewer_on_a_non_loopback_address_needs_its_token() {
 
 #[tokio::test]
 async fn serve_refuses_a_policy_made_for_another_address() {
-    let scene = Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 16,
-        },
-        ..Scene::default()
-    };
+    let scene = Scene::phantom(Phantom::SheppLogan, 16, Scene::default().size);
     let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let mut elsewhere = listener.local_addr().unwrap();

@@ -23,14 +23,7 @@ fn the_page_shows_frames_and_dragging_turns_the_volume() {
         return;
     }
     let runtime = tokio::runtime::Runtime::new().unwrap();
-    let scene = Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 64,
-        },
-        size: [256, 256],
-        ..Scene::default()
-    };
+    let scene = Scene::phantom(Phantom::SheppLogan, 64, [256, 256]);
     let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
     let listener = runtime
         .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
@@ -97,17 +90,12 @@ fn a_path_scene_refines_while_the_mouse_is_still_and_a_drag_restarts_it() {
     }
     let runtime = tokio::runtime::Runtime::new().unwrap();
     let scene = Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 48,
-        },
-        size: [128, 128],
         lighting: Lighting {
             model: LightingModel::Path,
             spp: Some(64),
             ..Lighting::default()
         },
-        ..Scene::default()
+        ..Scene::phantom(Phantom::SheppLogan, 48, [128, 128])
     };
     let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
     let listener = runtime

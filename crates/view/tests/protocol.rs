@@ -16,14 +16,7 @@ type Client = WebSocketStream<MaybeTlsStream<TcpStream>>;
 
 /// A viewer of a small phantom on a free loopback port; returns it and the ws URL.
 async fn start(max_clients: usize) -> (Arc<Viewer>, String) {
-    let scene = Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 32,
-        },
-        size: [48, 40],
-        ..Scene::default()
-    };
+    let scene = Scene::phantom(Phantom::SheppLogan, 32, [48, 40]);
     let config = ViewerConfig {
         max_clients,
         ..ViewerConfig::default()
@@ -419,19 +412,14 @@ async fn labels_are_listed_and_hiding_one_changes_only_its_pixels() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn input_stops_a_path_refinement_in_flight_and_the_samples_restart() {
     let scene = Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 48,
-        },
         // One sample of a frame takes about 0.17 s here (debug build, 2 cores): the
         // refinement the input meets is long beside the message's way to the server.
-        size: [256, 256],
         lighting: glint_render::Lighting {
             model: glint_render::LightingModel::Path,
             spp: Some(64),
             ..glint_render::Lighting::default()
         },
-        ..Scene::default()
+        ..Scene::phantom(Phantom::SheppLogan, 48, [256, 256])
     };
     let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();

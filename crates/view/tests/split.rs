@@ -7,7 +7,7 @@
 //! lossless PNG the viewer saves (`Purpose::Save`).
 
 use glint_lobe::LobeKind;
-use glint_render::{Input, LobeSpec, Phantom, ReadOptions, Renderer, Scene};
+use glint_render::{LobeSpec, Phantom, ReadOptions, Renderer, Scene};
 use glint_view::protocol::{FrameHeader, Purpose, Split};
 use glint_view::render_frame;
 
@@ -17,11 +17,6 @@ const FULL_SCALE: f64 = 0.05;
 
 fn scene() -> Scene {
     Scene {
-        input: Input::Phantom {
-            name: Phantom::SheppLogan,
-            size: 32,
-        },
-        size: [40, 32],
         // K_2 at n = 200 is far from cos^200, so the two renders differ.
         lobe: LobeSpec {
             kind: LobeKind::EnergyFit.into(),
@@ -29,7 +24,7 @@ fn scene() -> Scene {
             v: 2,
             ..LobeSpec::default()
         },
-        ..Scene::default()
+        ..Scene::phantom(Phantom::SheppLogan, 32, [40, 32])
     }
 }
 

@@ -259,6 +259,24 @@ pub struct Derived {
 }
 
 impl Scene {
+    /// The default scene of the built-in phantom `name` sampled on a `size`³ grid,
+    /// rendered at `image` (width, height) pixels: the scene tests, examples and
+    /// notebooks start from.
+    ///
+    /// ```
+    /// use glint_render::{Input, Phantom, Scene};
+    /// let s = Scene::phantom(Phantom::SheppLogan, 24, [32, 28]);
+    /// assert_eq!(s.input, Input::Phantom { name: Phantom::SheppLogan, size: 24 });
+    /// assert_eq!((s.size, s.step), ([32, 28], Scene::default().step));
+    /// ```
+    pub fn phantom(name: Phantom, size: usize, image: [u32; 2]) -> Scene {
+        Scene {
+            input: Input::Phantom { name, size },
+            size: image,
+            ..Scene::default()
+        }
+    }
+
     /// Whether the scene is rasterised (meshes without a volume, or the volume's
     /// isosurface asked for) rather than ray cast (a volume, with or without meshes
     /// drawn into its frame).
