@@ -1,5 +1,5 @@
 //! What a file holds, as `glint info` reports it: one value per file ([`FileInfo`]),
-//! serialised for `--json` and written as text by its [`Display`](std::fmt::Display)
+//! serialised for `--json` and written as text by its [`Display`]
 //! form, so both outputs come from the same facts.
 
 use std::fmt::{self, Display, Formatter};

@@ -227,7 +227,7 @@ impl<'s> Scattering<'s> {
     /// light of light `i` scaled by `transmittance[i]` (what reaches the sample through
     /// the volume; one per placed light) and the ambient term by `occlusion`, and the
     /// part of the sample that is not surface a medium lit through the phase function
-    /// (see [`transport`](super::transport)).
+    /// (see the `transport` module).
     #[inline(always)]
     pub fn shadowed(&self, ray: &RayLighting, transmittance: &[f32], occlusion: f32) -> [f32; 3] {
         let m = &self.shader.material;
