@@ -10,7 +10,7 @@ use pyo3::exceptions::{
 use pyo3::prelude::*;
 
 pub use glint_io::one_line;
-use glint_render::RenderError;
+use glint_render::{RenderError, TurntableError};
 
 /// A `ValueError` with the error's one-line message.
 pub fn value_error(err: &dyn Error) -> PyErr {
@@ -71,5 +71,19 @@ pub fn render_error(py: Python<'_>, err: RenderError) -> PyErr {
             }),
         },
         other => value_error(&other),
+    }
+}
+
+/// A turntable error as Python sees it: a frame's render error as [`render_error`]
+/// raises it, a file the system refused (or ffmpeg missing) `OSError`, a bad count,
+/// rate or path `ValueError`.
+pub fn turntable_error(py: Python<'_>, err: TurntableError) -> PyErr {
+    let message = one_line(&err);
+    match err {
+        TurntableError::Render(e) => render_error(py, e),
+        TurntableError::Io { source, .. } => os_error(py, message, source),
+        TurntableError::NoFfmpeg { .. } => PyFileNotFoundError::new_err(message),
+        TurntableError::Ffmpeg { .. } => PyOSError::new_err(message),
+        _ => PyValueError::new_err(message),
     }
 }

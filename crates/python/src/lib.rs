@@ -36,6 +36,7 @@ fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<render::Image>()?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(render::compare, m)?)?;
+    m.add_function(wrap_pyfunction!(render::turntable, m)?)?;
     m.add_function(wrap_pyfunction!(volume::read, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe_kinds, m)?)?;

@@ -165,6 +165,47 @@ pub fn render<'py>(
     renderer.render_scene(py, scene)?.array(py)
 }
 
+/// Renders a turntable of a scene: `frames` views whose camera azimuth steps
+/// 360/frames degrees from the scene's own (frame 0 is `glint.render`'s image), with
+/// one renderer (the volume read and classified once), written to `path` as
+/// `glint render --turntable` writes it: an animated GIF (`.gif`), an MP4 (`.mp4`,
+/// through ffmpeg) or PNG frames in a directory (a path ending in `/`, or an existing
+/// directory). The volume and scene are taken as by `glint.render`; nothing is left at
+/// `path` when it fails. The GIL is released throughout.
+#[pyfunction]
+#[pyo3(signature = (scene, frames, path, fps=glint_render::DEFAULT_TURNTABLE_FPS, volume=None, **fields))]
+pub fn turntable<'py>(
+    py: Python<'py>,
+    scene: Option<&Bound<'py, Scene>>,
+    frames: u32,
+    path: PathBuf,
+    fps: u32,
+    volume: Option<&Bound<'py, PyAny>>,
+    fields: Option<&Bound<'py, PyDict>>,
+) -> PyResult<()> {
+    let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
+    let mut scene = with_fields(&base, fields)?;
+    let turntable = glint_render::Turntable {
+        fps,
+        ..glint_render::Turntable::new(frames)
+    };
+    // The count, rate, format and ffmpeg are checked before the volume is read.
+    let writer = turntable
+        .writer(&path)
+        .map_err(|e| errors::turntable_error(py, e))?;
+    let renderer = Renderer::for_scene(py, volume, &scene)?;
+    if let Some(p) = &renderer.path {
+        scene.input = Input::Path(p.clone());
+    }
+    let mut inner = renderer
+        .inner
+        .into_inner()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    crate::pool::detach(py, || turntable.render(&mut inner, &scene, writer, &|_| {}))?
+        .map_err(|e| errors::turntable_error(py, e))?;
+    Ok(())
+}
+
 /// Compares a volume's rendering with the exact `cos^n` lobe and with each of `lobes`
 /// (names as `glint compare --lobe` takes them), as `glint compare --json` does: a dict
 /// with the same keys and the same numbers (the resolved scene, the highlight, per

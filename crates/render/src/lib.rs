@@ -33,7 +33,9 @@
 //! map), so frames that change only the camera, lights, lobe or size are cheap. A
 //! [`Shader`] lights samples (ambient + diffuse + lobe specular, Phong or Blinn
 //! geometry); the ray caster casts one ray per pixel, tiles in parallel, and returns a
-//! linear [`Image`] that [`Image::write_png`] writes as sRGB.
+//! linear [`Image`] that [`Image::write_png`] writes as sRGB. A [`Turntable`] renders a
+//! scene from cameras stepping round it with one renderer and writes the frames with an
+//! [`AnimationWriter`] (an animated GIF, an MP4 through ffmpeg, or PNG frames).
 //!
 //! This crate is the facade of the renderer crates, each with one job, whose
 //! dependencies point one way (front ends -> glint-render -> glint-volume,
@@ -53,12 +55,18 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod animation;
 mod hwlobe;
 mod labels;
 mod meshes;
 mod renderer;
 mod scene;
+mod turntable;
 
+pub use animation::{
+    AnimationFormat, AnimationWriter, TurntableError, ANIMATION_FORMATS, DEFAULT_TURNTABLE_FPS,
+    MAX_TURNTABLE_FPS, MAX_TURNTABLE_FRAMES,
+};
 pub use glint_core::Legend;
 pub use glint_core::{camera, math};
 pub use glint_core::{
@@ -90,6 +98,7 @@ pub use scene::{
     Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS, DEFAULT_SPP,
     MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
 };
+pub use turntable::{Turntable, TurntableWritten};
 
 /// A mesh-extraction error as the renderer's: the same variant and message.
 pub(crate) fn mesh_error(e: glint_mesh::MeshError) -> RenderError {

@@ -128,6 +128,19 @@ pub struct Rendered {
     pub legend: Option<Legend>,
 }
 
+impl Rendered {
+    /// Draws the colour bar ([`Rendered::colors`]) and the legend
+    /// ([`Rendered::legend`]) into the image, as `glint render` writes it.
+    pub fn draw_overlays(&mut self) {
+        if let Some(colors) = &self.colors {
+            colors.draw_bar(&mut self.image);
+        }
+        if let Some(legend) = &self.legend {
+            legend.draw(&mut self.image);
+        }
+    }
+}
+
 /// Renders scenes of one volume and one set of meshes, keeping the field, the meshes
 /// read (and the isosurface extracted) and the last classification, so frames that
 /// change only the camera, lights, lobe or size do not read, extract or classify again

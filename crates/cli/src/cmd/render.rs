@@ -1,6 +1,7 @@
 //! `glint render`: a scene (a volume or the built-in phantom, with flags or a scene
-//! file) to a shaded PNG. Parses flags into a [`Scene`], renders it with the library,
-//! writes the image.
+//! file) to a shaded PNG, or with `--turntable N` to an animated GIF, an MP4 or PNG
+//! frames of N views round it. Parses flags into a [`Scene`], renders it with the
+//! library, writes the image.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -8,7 +9,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
 use glint_io::ReadOptions;
-use glint_render::{Depth, Input, Kernel, Rendered, Renderer, Scene, SceneLobe};
+use glint_render::{
+    Depth, Input, Kernel, Rendered, Renderer, Scene, SceneLobe, Turntable, DEFAULT_TURNTABLE_FPS,
+};
 
 use super::choice::choice;
 use super::scene_flags::SceneFlags;
@@ -26,7 +29,10 @@ use super::spinner::Spinner;
 --colormap sulc --view left --ssaa 4 -o brain.png\n  \
     glint render mni152.nii.gz --mode surface --iso 60 --view left -o surface.png\n  \
     glint render brain.nii.gz --dump-scene brain.json -o a.png   # then:\n  \
-    glint render --scene brain.json --lobe exact -o b.png        # flags override the file\n\n\
+    glint render --scene brain.json --lobe exact -o b.png        # flags override the file\n  \
+    glint render --phantom shepp-logan --size 256x256 --turntable 36 -o spin.gif\n  \
+    glint render head.nii.gz --preset ct-bone --turntable 120 --fps 30 -o spin.mp4   # needs ffmpeg\n  \
+    glint render head.nii.gz --turntable 8 -o frames/   # frames/frame-0000.png ...\n\n\
 Presets (3D Slicer's volume rendering presets, MR ones scaled to the volume's maximum):\n  \
     phantom (glint's, the default for the phantom), ct-aaa, ct-aaa2, ct-bone, ct-bones,\n  \
     ct-cardiac, ct-cardiac2, ct-cardiac3, ct-chest-contrast-enhanced, ct-chest-vessels,\n  \
@@ -58,9 +64,19 @@ pub struct Args {
 struct Options {
     #[command(flatten)]
     scene: SceneFlags,
-    /// Output PNG (written atomically).
+    /// Output PNG (written atomically); with --turntable, an animated GIF (.gif), an MP4
+    /// (.mp4, through ffmpeg) or a directory of PNG frames (ending in '/', or an
+    /// existing directory).
     #[arg(short, long, default_value = "render.png")]
     output: PathBuf,
+    /// Render N views round the scene, the camera's azimuth stepping 360/N degrees
+    /// (about the view's up axis) from the scene's camera; frame 0 is the still
+    /// (2..=3600).
+    #[arg(long, value_name = "N", conflicts_with = "repeat")]
+    turntable: Option<u32>,
+    /// Frames per second of a --turntable GIF or MP4 (1..=120) [default: 24].
+    #[arg(long)]
+    fps: Option<u32>,
     /// Write the resolved scene (every default chosen, plus the camera and transfer
     /// function in world units) as JSON; `--scene` renders it again bit for bit.
     #[arg(long, value_name = "FILE")]
@@ -70,7 +86,8 @@ struct Options {
     /// [default: k].
     #[arg(long, value_parser = choice::<SceneLobe>(SceneLobe::ALL.map(|k| k.name())))]
     lobe: Option<SceneLobe>,
-    /// Bits per PNG channel.
+    /// Bits per PNG channel (of the still, or of --turntable's PNG frames; GIF and MP4
+    /// are 8-bit).
     #[arg(long, default_value = "8", value_parser = ["8", "16"])]
     depth: String,
     /// No progress bar.
@@ -93,17 +110,18 @@ struct Options {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let args = *args.opts;
     check_output_dir(&args.output)?;
-    let scene = build_scene(&args)?;
-    let reading = Spinner::start(reading_what(&scene), args.quiet);
-    let mut renderer = open_renderer(&scene, &args.scene.read_options())?;
-    drop(reading);
-    if args.scalar {
-        renderer.kernel = Kernel::Scalar;
+    if let Some(frames) = args.turntable {
+        return run_turntable(&args, frames);
     }
+    if args.fps.is_some() {
+        bail!("--fps is the frame rate of a --turntable; give --turntable N too");
+    }
+    let scene = build_scene(&args)?;
+    let mut renderer = open_for(&args, &scene)?;
     let building = Spinner::start("classifying the volume".into(), args.quiet);
     let resolved = renderer.resolve(&scene)?;
     drop(building);
-    let bar = progress_bar(&args, &resolved.scene);
+    let bar = progress_bar(&args, &resolved.scene, u64::from(args.repeat));
     let progress = |n: u64| {
         if let Some(b) = &bar {
             b.inc(n);
@@ -124,21 +142,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.repeat > 1 {
         print_repeat(&rendered, &mut frames);
     }
-    if let Some(colors) = &rendered.colors {
-        colors.draw_bar(&mut rendered.image);
-    }
-    if let Some(legend) = &rendered.legend {
-        legend.draw(&mut rendered.image);
-    }
-    let depth = if args.depth == "16" {
-        Depth::Sixteen
-    } else {
-        Depth::Eight
-    };
+    rendered.draw_overlays();
     let start = Instant::now();
     let png = rendered
         .image
-        .encode_png(depth)
+        .encode_png(depth(&args))
         .context("encoding the PNG")?;
     let encode = start.elapsed();
     let start = Instant::now();
@@ -154,6 +162,72 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         eprintln!("glint: wrote {}", args.output.display());
     }
     Ok(())
+}
+
+/// `--turntable N`: the frames round the scene, rendered with one renderer (read and
+/// classified once), written as the output's format asks. The format, the frame count
+/// and rate and (MP4) ffmpeg are checked before the volume is read.
+fn run_turntable(args: &Options, frames: u32) -> anyhow::Result<()> {
+    let turntable = Turntable {
+        frames,
+        fps: args.fps.unwrap_or(DEFAULT_TURNTABLE_FPS),
+        depth: depth(args),
+    };
+    let writer = turntable.writer(&args.output)?;
+    let scene = build_scene(args)?;
+    let mut renderer = open_for(args, &scene)?;
+    let bar = progress_bar(args, &scene, u64::from(frames));
+    let progress = |n: u64| {
+        if let Some(b) = &bar {
+            b.inc(n);
+        }
+    };
+    let written = turntable.render(&mut renderer, &scene, writer, &progress)?;
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    if let Some(path) = &args.dump_scene {
+        written.first.save(path)?;
+    }
+    if args.timings {
+        let per_frame = written.render / written.frames;
+        eprintln!(
+            "glint render: {} frames rendered in {:.2?} ({per_frame:.2?} per frame, the first \
+classifying), encoded and written in {:.2?}",
+            written.frames, written.render, written.encode
+        );
+    }
+    if !args.quiet {
+        eprintln!(
+            "glint: wrote {} ({} frames of {}x{})",
+            args.output.display(),
+            written.frames,
+            written.width,
+            written.height
+        );
+    }
+    Ok(())
+}
+
+/// The renderer of `scene` (the spinner turning while it reads), with the kernel the
+/// flags ask for.
+fn open_for(args: &Options, scene: &Scene) -> anyhow::Result<Renderer> {
+    let reading = Spinner::start(reading_what(scene), args.quiet);
+    let mut renderer = open_renderer(scene, &args.scene.read_options())?;
+    drop(reading);
+    if args.scalar {
+        renderer.kernel = Kernel::Scalar;
+    }
+    Ok(renderer)
+}
+
+/// The PNG depth of `--depth`.
+fn depth(args: &Options) -> Depth {
+    if args.depth == "16" {
+        Depth::Sixteen
+    } else {
+        Depth::Eight
+    }
 }
 
 /// A renderer of the scene's input, its field built with the scene's prefilter, with
@@ -211,12 +285,14 @@ fn build_scene(args: &Options) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
-fn progress_bar(args: &Options, scene: &Scene) -> Option<indicatif::ProgressBar> {
+/// The bar of `frames` renders of the scene's size; none when quiet or stderr is not a
+/// terminal.
+fn progress_bar(args: &Options, scene: &Scene, frames: u64) -> Option<indicatif::ProgressBar> {
     if args.quiet || !std::io::stderr().is_terminal() {
         return None;
     }
     let [w, h] = scene.size;
-    let bar = indicatif::ProgressBar::new(u64::from(w) * u64::from(h) * u64::from(args.repeat));
+    let bar = indicatif::ProgressBar::new(u64::from(w) * u64::from(h) * frames);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "{spinner} rendering [{bar:40}] {percent}% {elapsed_precise}",

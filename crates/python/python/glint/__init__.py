@@ -3,6 +3,7 @@
 ``glint.read(path)`` reads NIfTI, NRRD and DICOM volumes into a :class:`Volume`;
 ``Volume.from_array`` wraps data already in memory; ``glint.render(volume, scene)``
 renders a :class:`Scene` (a :class:`Renderer` keeps the classification across views);
+``glint.turntable(scene, n, path)`` writes n views round it as a GIF, an MP4 or PNG frames;
 ``glint.compare`` measures what a cheap lobe changes in the image; ``glint.lobe`` evaluates any
 specular lobe on a numpy array; ``glint.hw.Unit`` is the device model; ``glint.batch`` renders
 a whole study on Dask (``pip install glint[dask]``), as ``glint batch`` does on one machine. Every function
@@ -10,7 +11,18 @@ releases the GIL while it works and raises ``ValueError``/``OSError``/``TypeErro
 with the one-line messages of the ``glint`` command.
 """
 
-from glint._glint import Image, Renderer, Scene, Volume, compare, lobe, lobe_kinds, read, render
+from glint._glint import (
+    Image,
+    Renderer,
+    Scene,
+    Volume,
+    compare,
+    lobe,
+    lobe_kinds,
+    read,
+    render,
+    turntable,
+)
 from glint import hw
 
 
@@ -37,4 +49,5 @@ __all__ = [
     "lobe_kinds",
     "read",
     "render",
+    "turntable",
 ]

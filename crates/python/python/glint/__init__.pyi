@@ -162,6 +162,17 @@ def render(
 ) -> npt.NDArray[np.uint8]:
     """Renders volume (None: the scene's input) with scene: sRGB uint8 (H, W, 3)."""
 
+def turntable(
+    scene: Optional[Scene],
+    frames: int,
+    path: _Path,
+    fps: int = 24,
+    volume: Union[Volume, _Path, None] = None,
+    **fields: Any,
+) -> None:
+    """Writes frames views round scene (azimuth stepping 360/frames degrees; frame 0 is
+    glint.render's image) to path: .gif, .mp4 (through ffmpeg) or a directory of PNGs."""
+
 def compare(
     volume: Union[Volume, _Path, None] = None,
     scene: Optional[Scene] = None,
