@@ -67,10 +67,10 @@ impl AnimationFormat {
 #[non_exhaustive]
 pub enum TurntableError {
     /// The frame count is out of range.
-    #[error("a turntable of {0} frames: expected 2..={max}", max = MAX_TURNTABLE_FRAMES)]
+    #[error("turntable frame count {0}: expected 2..={max}", max = MAX_TURNTABLE_FRAMES)]
     Frames(u32),
     /// The frame rate is out of range.
-    #[error("{0} frames per second: expected 1..={max}", max = MAX_TURNTABLE_FPS)]
+    #[error("frame rate {0} per second: expected 1..={max}", max = MAX_TURNTABLE_FPS)]
     Fps(u32),
     /// The output path names no format an animation can be written in.
     #[error("cannot write an animation to {}: expected {formats}", path.display(), formats = ANIMATION_FORMATS)]
