@@ -57,6 +57,18 @@ def test_from_array_axis_order(order):
     assert vol.format is None and vol.path is None
 
 
+@pytest.mark.parametrize("dtype", ["uint8", "int16", "float32", "float64"])
+@pytest.mark.parametrize("shape", [(1, 1, 1), (33, 2, 65), (64, 3, 32), (1, 40, 70), (70, 1, 1), (37, 41, 43)])
+def test_from_array_c_order_tiles(shape, dtype):
+    # C-ordered arrays are reordered tile by tile (32 x 32): shapes that are and are not
+    # multiples of the tile, axes of one sample, every element width.
+    arr = np.arange(np.prod(shape), dtype=np.int64).reshape(shape).astype(dtype)
+    assert arr.flags.c_contiguous
+    vol = glint.Volume.from_array(arr)
+    np.testing.assert_array_equal(vol.samples, arr)
+    assert vol.samples.flags.f_contiguous
+
+
 def test_from_nibabel_image_round_trip(mni_path, tmp_path):
     img = nib.load(str(mni_path))
     data = img.get_fdata(dtype=np.float32)
@@ -89,7 +101,8 @@ def test_slope_and_intercept():
         (np.zeros((4, 4, 4), np.float32)[::2], {}, ValueError, "not contiguous"),
         (np.zeros((2, 2, 2, 3), np.float32), {}, ValueError, "3-D"),
         (np.zeros((2, 2), np.float32), {}, ValueError, "3-D"),
-        (np.zeros((0, 2, 2), np.float32), {}, ValueError, "need 0 samples"),
+        (np.zeros((0, 2, 2), np.float32), {}, ValueError, r"shape \(0, 2, 2\) is empty"),
+        (np.zeros((3, 2, 0), np.float32, order="F"), {}, ValueError, r"shape \(3, 2, 0\) is empty"),
         (np.zeros((2, 2, 2), np.float32), {"spacing": (1.0, float("nan"), 1.0)}, ValueError, "spacing"),
         (np.zeros((2, 2, 2), np.float32), {"spacing": (1.0, -1.0, 1.0)}, ValueError, "spacing"),
         (np.zeros((2, 2, 2), np.float32), {"affine": np.zeros((4, 4))}, ValueError, "last row"),
