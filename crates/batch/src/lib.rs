@@ -51,6 +51,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod bids;
 mod checksum;
 mod discover;
 mod job;
