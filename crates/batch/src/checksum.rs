@@ -10,7 +10,7 @@ use crate::{os_error, BatchError};
 
 /// `sha256:` and the hex SHA-256 of the input's bytes: of a file, what `sha256sum`
 /// prints for it; of a `.hdr` header, of the header followed by its `.img` data file
-/// when there is one; of a directory (a DICOM series), of its regular files in name
+/// when there is one; of a directory (a DICOM series), of its regular files (and links to them) in name
 /// order, each as its name, a NUL byte, its length as 8 little-endian bytes and its
 /// bytes (so renaming or moving bytes between files changes it). An `.nhdr`'s detached
 /// data file is not included.
@@ -21,8 +21,16 @@ pub fn checksum(path: &Path) -> Result<String, BatchError> {
         let mut files = Vec::new();
         for entry in std::fs::read_dir(path).map_err(|e| os_error(path, e))? {
             let entry = entry.map_err(|e| os_error(path, e))?;
-            if entry.file_type().map_err(|e| os_error(path, e))?.is_file() {
-                files.push(entry.path());
+            // Regular files and symbolic links to them (a DataLad dataset's files are
+            // links into its annex); a link to nothing is a file too, whose read fails
+            // with the error that names it.
+            let file = entry.path();
+            let regular = match std::fs::metadata(&file) {
+                Ok(meta) => meta.is_file(),
+                Err(_) => glint_io::broken_link(&file).is_some(),
+            };
+            if regular {
+                files.push(file);
             }
         }
         files.sort();

@@ -64,9 +64,15 @@ pub struct Item {
 /// - a BIDS dataset (a directory with `dataset_description.json`): every
 ///   `sub-*/[ses-*/]anat/*_<suffix>.nii[.gz]` of the suffixes asked for;
 /// - another directory: walked for files ending in one of [`VOLUME_SUFFIXES`] and for
-///   directories holding `.dcm` files (one DICOM series each), hidden entries skipped;
+///   directories holding `.dcm` files (one DICOM series each), hidden entries skipped,
+///   symbolic links followed (loops walked once);
 /// - anything else, a file: an input as it is, even if it does not exist (its row then
 ///   fails, and the others go on).
+///
+/// A symbolic link whose target is missing is an input too, in a walk and in a BIDS
+/// dataset: its row fails with what it is ("content not present (git-annex): run
+/// `datalad get PATH`" for a DataLad file never fetched, else "broken symbolic link to
+/// TARGET"). Two paths to the same file (links) are one input, the first found.
 pub fn discover(inputs: &[PathBuf], options: &Discover) -> Result<Vec<Item>, BatchError> {
     let exclude = match &options.exclude {
         Some(p) => Some(absolute(p)?),
@@ -90,7 +96,10 @@ pub fn discover(inputs: &[PathBuf], options: &Discover) -> Result<Vec<Item>, Bat
         }
     }
     let mut seen = HashSet::new();
-    found.retain(|item| seen.insert(item.path.clone()));
+    found.retain(|item| {
+        let same = std::fs::canonicalize(&item.path).unwrap_or_else(|_| item.path.clone());
+        seen.insert(same)
+    });
     if found.is_empty() {
         let names: Vec<String> = inputs.iter().map(|p| p.display().to_string()).collect();
         return Err(BatchError::NoInputs(if names.is_empty() {
@@ -167,7 +176,10 @@ fn bids(root: &Path, suffixes: &[String], exclude: Option<&Path>) -> Result<Vec<
                 continue;
             };
             let suffix = base.rsplit('_').next().unwrap_or_default();
-            if !file.is_file() || !suffixes.iter().any(|s| s == suffix) {
+            // A link to nothing (a DataLad file never fetched) is an input whose row
+            // says so, not a file to drop.
+            let present = file.is_file() || glint_io::broken_link(&file).is_some();
+            if !present || !suffixes.iter().any(|s| s == suffix) {
                 continue;
             }
             let (subject, session) = bids_labels(&file);
@@ -183,30 +195,42 @@ fn bids(root: &Path, suffixes: &[String], exclude: Option<&Path>) -> Result<Vec<
 }
 
 /// Volume files and DICOM series directories below `root`, sorted by path; ids are
-/// the paths below `root` with `/` as `__`.
+/// the paths below `root` with `/` as `__`. Symbolic links are followed (a DataLad
+/// dataset's files are links into its annex; a study often links subjects in from
+/// elsewhere); a link back to a directory being walked (a loop, which walkdir
+/// detects) is not walked again; a link to nothing is taken as a file, so that its
+/// row names it ([`glint_io::broken_link`]).
 fn walk(root: &Path, exclude: Option<&Path>) -> Result<Vec<Item>, BatchError> {
     let mut items = Vec::new();
+    let visible = |path: &Path, depth: usize| {
+        let hidden = depth > 0 && file_name(path).starts_with('.');
+        !hidden && exclude.is_none_or(|x| path != x)
+    };
     let walker = walkdir::WalkDir::new(root)
+        .follow_links(true)
         .sort_by_file_name()
         .into_iter()
-        .filter_entry(|e| {
-            let hidden = e.depth() > 0 && e.file_name().to_string_lossy().starts_with('.');
-            !hidden && exclude.is_none_or(|x| e.path() != x)
-        });
+        .filter_entry(|e| visible(e.path(), e.depth()));
     let mut dicom_dirs = HashSet::new();
     for entry in walker {
-        let entry = entry.map_err(|e| {
-            let path = e.path().unwrap_or(root).to_path_buf();
-            let io = e
-                .into_io_error()
-                .unwrap_or_else(|| std::io::Error::other("a file system loop"));
-            os_error(path, io)
-        })?;
-        let path = entry.path();
+        let path = match entry {
+            Ok(entry) if entry.file_type().is_file() => entry.into_path(),
+            Ok(_) => continue,
+            Err(e) if e.loop_ancestor().is_some() => continue,
+            Err(e) => match e.path().filter(|p| glint_io::broken_link(p).is_some()) {
+                Some(p) if visible(p, e.depth()) => p.to_path_buf(),
+                Some(_) => continue,
+                None => {
+                    let path = e.path().unwrap_or(root).to_path_buf();
+                    let io = e
+                        .into_io_error()
+                        .unwrap_or_else(|| std::io::Error::other("a file system loop"));
+                    return Err(os_error(path, io));
+                }
+            },
+        };
+        let path = path.as_path();
         let name = file_name(path);
-        if !entry.file_type().is_file() {
-            continue;
-        }
         let lower = name.to_ascii_lowercase();
         let (target, base) = if lower.ends_with(".dcm") {
             let dir = path.parent().unwrap_or(root).to_path_buf();

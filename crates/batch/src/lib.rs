@@ -51,6 +51,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod bids;
 mod checksum;
 mod discover;
 mod job;
@@ -115,10 +116,15 @@ pub enum BatchError {
     Panic(String),
 }
 
-/// A file system error as an [`IoError::Os`](glint_io::IoError::Os) naming `path`.
+/// A file system error as an [`IoError::Os`](glint_io::IoError::Os) naming `path`, or,
+/// when `path` is a symbolic link to nothing, the error that says so
+/// ([`glint_io::broken_link`]: a DataLad file whose content was never fetched).
 pub(crate) fn os_error(path: impl Into<PathBuf>, source: std::io::Error) -> BatchError {
-    BatchError::Io(glint_io::IoError::Os {
-        path: path.into(),
-        source,
-    })
+    let path = path.into();
+    if source.kind() == std::io::ErrorKind::NotFound {
+        if let Some(e) = glint_io::broken_link(&path) {
+            return BatchError::Io(e);
+        }
+    }
+    BatchError::Io(glint_io::IoError::Os { path, source })
 }

@@ -13,6 +13,15 @@ pub type Mat3 = [[f64; 3]; 3];
 /// voxel axes to span 3-D space: below it voxels collapse to a plane or a line.
 pub const SINGULAR_RTOL: f64 = 1e-6;
 
+/// Largest coordinate, in mm, of a volume's origin and of its voxel size that [`check`]
+/// accepts: 1 km. A scanner's world is its bore and table (within about 2 m of the
+/// isocentre), and atlas and microscopy frames are smaller still, so a larger
+/// position is a corrupt or mis-scaled header (the mutants of issue 47 put an NRRD
+/// origin at 3.5e38 mm, which renders black). The bound is also where the f32 the
+/// renderer places voxels with stops resolving them: at 2^20 mm (1.05e6) one f32 step
+/// is 0.125 mm, the size of a fine voxel.
+pub const MAX_COORDINATE_MM: f64 = 1e6;
+
 /// Why an affine cannot place voxels in the world ([`check`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum AffineError {
@@ -23,6 +32,19 @@ pub enum AffineError {
     /// The last row is not `[0, 0, 0, 1]`.
     #[error("the voxel-to-world affine's last row must be [0, 0, 0, 1], got {0:?}")]
     LastRow([f64; 4]),
+    /// The origin or a voxel axis lies beyond any scanner ([`MAX_COORDINATE_MM`]).
+    #[error(
+        "the volume's {what} ({:e}, {:e}, {:e}) mm lies beyond any scanner \
+         (a coordinate over {MAX_COORDINATE_MM:e} mm)",
+        // + 0.0: a negative zero (an LPS origin's 0 flipped) prints as 0.
+        value[0] + 0.0, value[1] + 0.0, value[2] + 0.0
+    )]
+    Far {
+        /// `origin`, or `voxel size`.
+        what: &'static str,
+        /// Its coordinates, or the voxel size along the three axes.
+        value: [f64; 3],
+    },
     /// The voxel axes do not span 3-D space.
     #[error("the voxel-to-world affine is singular (spacing {spacing:?}, determinant {det:e})")]
     Singular {
@@ -33,8 +55,9 @@ pub enum AffineError {
     },
 }
 
-/// Checks that `affine` is finite, has the last row `[0, 0, 0, 1]` and is non-singular
-/// relative to its column norms ([`SINGULAR_RTOL`]); returns its spacing.
+/// Checks that `affine` is finite, has the last row `[0, 0, 0, 1]`, places its origin
+/// and sizes its voxels within [`MAX_COORDINATE_MM`], and is non-singular relative to
+/// its column norms ([`SINGULAR_RTOL`]); returns its spacing.
 ///
 /// ```
 /// use glint_io::affine;
@@ -50,7 +73,13 @@ pub fn check(affine: &Affine) -> Result<[f64; 3], AffineError> {
     if affine[3] != [0.0, 0.0, 0.0, 1.0] {
         return Err(AffineError::LastRow(affine[3]));
     }
+    let origin = [affine[0][3], affine[1][3], affine[2][3]];
     let spacing = spacing(affine);
+    for (what, value) in [("origin", origin), ("voxel size", spacing)] {
+        if value.iter().any(|x| x.abs() > MAX_COORDINATE_MM) {
+            return Err(AffineError::Far { what, value });
+        }
+    }
     let scale = spacing[0] * spacing[1] * spacing[2];
     let det = det3(&linear_part(affine));
     if scale == 0.0 || det.abs() < SINGULAR_RTOL * scale {
@@ -170,5 +199,37 @@ mod tests {
         a[0][1] = 1.0;
         a[1][1] = 1e-7;
         assert!(matches!(check(&a), Err(AffineError::Singular { .. })));
+    }
+
+    #[test]
+    fn check_refuses_positions_beyond_any_scanner() {
+        let mut a = [
+            [1.0, 0.0, 0.0, -1e6],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ];
+        // 1 km is the bound, included.
+        assert_eq!(check(&a), Ok([1.0; 3]));
+        a[0][3] = 3.5e38;
+        let e = check(&a).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the volume's origin (3.5e38, 0e0, 0e0) mm lies beyond any scanner \
+             (a coordinate over 1e6 mm)"
+        );
+        a[0][3] = 0.0;
+        a[2][2] = 2e6;
+        assert!(
+            matches!(
+                check(&a),
+                Err(AffineError::Far {
+                    what: "voxel size",
+                    ..
+                })
+            ),
+            "{:?}",
+            check(&a)
+        );
     }
 }

@@ -334,10 +334,7 @@ pub(crate) fn os_or_invalid(path: &Path, e: std::io::Error) -> IoError {
 
 /// Opens a file for reading, naming it in the error.
 pub(crate) fn open(path: &Path) -> Result<std::fs::File, IoError> {
-    std::fs::File::open(path).map_err(|e| IoError::Os {
-        path: path.into(),
-        source: e,
-    })
+    std::fs::File::open(path).map_err(|e| crate::link::os_error(path, e))
 }
 
 /// Opens a file, gunzipping it when it starts with the gzip signature (the time spent
@@ -378,6 +375,66 @@ pub(crate) fn check_affine(path: &Path, affine: &[[f64; 4]; 4]) -> Result<[f64; 
     crate::affine::check(affine).map_err(|e| IoError::Geometry {
         path: path.into(),
         what: e.to_string(),
+    })
+}
+
+/// Refuses a scaling `slope * stored + intercept` (NIfTI's scl_slope and scl_inter,
+/// named in the error as `names`) that would make the volume render black without a
+/// word: values beyond f32 (the renderer's samples: they become infinite), a value
+/// range wider than f32 holds (the normalisation divides by it), or an intercept so
+/// large that distinct stored values all become one f32 (a constant image). Integer samples whose type
+/// cannot reach the bounds are not scanned.
+pub(crate) fn check_scaling(
+    path: &Path,
+    samples: &crate::Samples,
+    (slope, intercept): (f64, f64),
+    names: [&str; 2],
+) -> Result<(), IoError> {
+    let limit = f64::from(f32::MAX);
+    if slope == 1.0 && intercept == 0.0 {
+        return Ok(());
+    }
+    // Far below the limits, and coarse enough that f32 tells the stored steps apart
+    // (|slope| >= 2^-20 of the intercept's magnitude keeps one step above an f32 ulp).
+    let fast = samples.type_bound().is_some_and(|bound| {
+        slope.abs() * bound + intercept.abs() <= limit / 4.0
+            && slope.abs() >= intercept.abs() * f64::from(f32::EPSILON) * 4.0
+    });
+    if fast {
+        return Ok(());
+    }
+    let Some((lo, hi)) = samples.finite_range() else {
+        return Ok(());
+    };
+    let (a, b) = (slope * lo + intercept, slope * hi + intercept);
+    let (plo, phi) = (a.min(b), a.max(b));
+    let why = if !(plo.abs() <= limit && phi.abs() <= limit) {
+        "beyond f32's range (|value| <= 3.4e38)"
+    } else if phi - plo > limit {
+        "a range wider than f32 holds (3.4e38)"
+    } else if hi > lo && plo as f32 == phi as f32 && (slope * lo) as f32 != (slope * hi) as f32 {
+        "one f32 value: every distinction between the stored values is lost"
+    } else {
+        return Ok(());
+    };
+    // The header's numbers as it stores them (NIfTI's are f32: 1e38, not
+    // 9.999999680285692e37).
+    let short = |x: f64| match x as f32 {
+        y if f64::from(y) == x => format!("{y:e}"),
+        _ => format!("{x:e}"),
+    };
+    Err(IoError::Invalid {
+        path: path.into(),
+        what: format!(
+            "{} {} and {} {} scale the stored values {lo}..{hi} to {:e}..{:e}, {why}: \
+             refusing a scaling that renders black",
+            names[0],
+            short(slope),
+            names[1],
+            short(intercept),
+            plo as f32,
+            phi as f32,
+        ),
     })
 }
 

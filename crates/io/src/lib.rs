@@ -49,6 +49,7 @@ mod common;
 pub mod dicom;
 pub mod gifti;
 pub mod info;
+mod link;
 pub mod mesh;
 mod message;
 pub mod mgh;
@@ -61,6 +62,7 @@ pub mod zarr;
 
 pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
 pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
+pub use link::broken_link;
 pub use message::one_line;
 pub use robust::{robust_range, ROBUST_PERCENTILES, ROBUST_SAMPLES};
 pub use types::{IoError, Mesh, Rgb, Samples, Volume};
@@ -298,10 +300,7 @@ pub fn open_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoE
 /// [`open_volume`] before [`ReadOptions::colour`] is applied.
 fn open_any_volume(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     if let Err(e) = std::fs::metadata(path) {
-        return Err(IoError::Os {
-            path: path.into(),
-            source: e,
-        });
+        return Err(link::os_error(path, e));
     }
     if let Some(params) = &options.raw {
         return raw::read(path, params, options);
@@ -338,12 +337,7 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, IoError> {
 /// Reads a mesh like [`read_mesh`], with the format and coordinate system.
 pub fn open_mesh(path: &Path) -> Result<MeshFile, IoError> {
     match std::fs::metadata(path) {
-        Err(e) => {
-            return Err(IoError::Os {
-                path: path.into(),
-                source: e,
-            })
-        }
+        Err(e) => return Err(link::os_error(path, e)),
         Ok(m) if m.is_dir() => return unsupported(path, "a directory is not a surface file"),
         Ok(_) => {}
     }

@@ -150,22 +150,102 @@ pub fn write_stl(path: &Path, mesh: &Mesh) -> Result<(), IoError> {
     write_atomic(path, |mut w| stl_io::write_stl(&mut w, tris.iter()))
 }
 
+/// Longest line [`read_obj`] reads: 1 MiB.
+pub const OBJ_MAX_LINE: usize = 1 << 20;
+
+/// A reader that fails once a line grows past `limit` bytes, so that a line-by-line
+/// parser (tobj reads `lines()`, each a `String`) never holds a longer one. Hand-written:
+/// tobj takes any `BufRead` and has no line limit of its own, and no crate bounds
+/// `BufRead::lines`.
+struct LineBound<R> {
+    inner: R,
+    limit: usize,
+    /// Bytes consumed so far.
+    consumed: u64,
+    /// Bytes of the current line consumed so far.
+    run: usize,
+    /// Where the line that was too long starts, once one was.
+    over: Option<u64>,
+}
+
+impl<R: BufRead> LineBound<R> {
+    fn new(inner: R, limit: usize) -> Self {
+        LineBound {
+            inner,
+            limit,
+            consumed: 0,
+            run: 0,
+            over: None,
+        }
+    }
+}
+
+impl<R: BufRead> Read for LineBound<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = {
+            let avail = self.fill_buf()?;
+            let n = avail.len().min(buf.len());
+            buf[..n].copy_from_slice(&avail[..n]);
+            n
+        };
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for LineBound<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        if self.run > self.limit {
+            self.over = Some(self.consumed - self.run as u64);
+            return Err(std::io::Error::other("line too long"));
+        }
+        self.inner.fill_buf()
+    }
+
+    fn consume(&mut self, amt: usize) {
+        // The bytes consumed are those fill_buf returned (buffered: no I/O here).
+        if let Ok(buf) = self.inner.fill_buf() {
+            let done = &buf[..amt.min(buf.len())];
+            self.run = match done.iter().rposition(|&b| b == b'\n') {
+                Some(i) => done.len() - i - 1,
+                None => self.run + done.len(),
+            };
+        }
+        self.consumed += amt as u64;
+        self.inner.consume(amt);
+    }
+}
+
 /// Reads a Wavefront OBJ file; polygons are triangulated, all objects and groups merged.
 /// Vertex normals are kept when every vertex has one. Vertices are numbered in order of
 /// first use by a face (tobj's single-index layout); unused vertices are dropped.
+///
+/// A line longer than [`OBJ_MAX_LINE`] is refused as it is read: one polygon line of
+/// millions of vertices would otherwise be held, parsed and triangulated whole (a
+/// 25 MiB line peaked at 26-35 times the file).
 pub fn read_obj(path: &Path) -> Result<MeshFile, IoError> {
     let file = open(path)?;
-    let mut reader = BufReader::new(file);
+    let mut reader = LineBound::new(BufReader::new(file), OBJ_MAX_LINE);
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ..Default::default()
     };
     // Materials do not matter to geometry: never open .mtl files.
-    let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| {
+    let loaded = tobj::load_obj_buf(&mut reader, &options, |_| {
         Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| match e {
+    });
+    if let Some(at) = reader.over {
+        return Err(IoError::Invalid {
+            path: path.into(),
+            what: format!(
+                "the line at byte {at} is longer than {} MiB: not an OBJ line (a vertex \
+                 takes tens of bytes, a polygon of 100,000 vertices under 1 MiB)",
+                OBJ_MAX_LINE >> 20
+            ),
+        });
+    }
+    let (models, _) = loaded.map_err(|e| match e {
         tobj::LoadError::FaceVertexOutOfBounds | tobj::LoadError::FaceNormalOutOfBounds => {
             IoError::BadIndex {
                 path: path.into(),

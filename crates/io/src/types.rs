@@ -96,6 +96,22 @@ pub enum IoError {
         /// The face and the vertex count.
         what: String,
     },
+    /// The file is a symbolic link into a git-annex object store (a DataLad dataset)
+    /// whose content was never fetched ([`crate::broken_link`]).
+    #[error("{path}: content not present (git-annex): run `datalad get {path}`")]
+    AnnexMissing {
+        /// The link.
+        path: PathBuf,
+    },
+    /// The file is a symbolic link whose target does not exist
+    /// ([`crate::broken_link`]).
+    #[error("{path}: broken symbolic link to {target}")]
+    BrokenLink {
+        /// The link.
+        path: PathBuf,
+        /// Where it points (as the link says, relative or absolute).
+        target: PathBuf,
+    },
     /// An in-memory volume or mesh is inconsistent (not tied to a file).
     #[error("{0}")]
     Inconsistent(String),
@@ -114,7 +130,9 @@ impl IoError {
             | IoError::TooLarge { path, .. }
             | IoError::Geometry { path, .. }
             | IoError::MixedSeries { path, .. }
-            | IoError::BadIndex { path, .. } => Some(path),
+            | IoError::BadIndex { path, .. }
+            | IoError::AnnexMissing { path }
+            | IoError::BrokenLink { path, .. } => Some(path),
             IoError::Inconsistent(_) => None,
         }
     }
@@ -170,6 +188,33 @@ impl Samples {
     /// The stored sample `i` as f64 (unscaled).
     pub fn get(&self, i: usize) -> f64 {
         each_samples!(self, v => v[i] as f64)
+    }
+
+    /// The largest magnitude the type holds (`None` for floats, which hold any).
+    pub(crate) fn type_bound(&self) -> Option<f64> {
+        Some(match self {
+            Samples::U8(_) => 255.0,
+            Samples::I8(_) => 128.0,
+            Samples::U16(_) => 65535.0,
+            Samples::I16(_) => 32768.0,
+            Samples::U32(_) => 4_294_967_295.0,
+            Samples::I32(_) => 2_147_483_648.0,
+            Samples::F32(_) | Samples::F64(_) => return None,
+        })
+    }
+
+    /// The smallest and largest finite stored sample (unscaled); `None` when none is
+    /// finite.
+    pub(crate) fn finite_range(&self) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        each_samples!(self, v => for &x in v.iter() {
+            let x = x as f64;
+            if x.is_finite() {
+                lo = lo.min(x);
+                hi = hi.max(x);
+            }
+        });
+        (lo <= hi).then_some((lo, hi))
     }
 
     /// The type's name as NIfTI/NRRD users know it (`uint8`, `int16`, `float32`, ...).

@@ -221,6 +221,12 @@ impl Viewer {
         Ok(Some(level.clone()))
     }
 
+    /// What the reader said about the scene's input (the level first read): objects
+    /// of a DICOM directory skipped, where the affine came from, what it assumed.
+    pub fn notes(&self) -> &[String] {
+        self.renderer.notes()
+    }
+
     /// The pyramid level a new client starts from (`None`: not a pyramid).
     pub fn level(&self) -> Option<PyramidLevel> {
         match &*self.refined.borrow() {

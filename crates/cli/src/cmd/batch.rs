@@ -3,8 +3,9 @@
 //! progress bar.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
+use glint_batch::bids::{GeneratedBy, Selection};
 use glint_batch::{Discover, LocalOptions, Outcome, Spec, Status};
 use glint_render::{SceneLobe, View};
 
@@ -32,6 +33,7 @@ images)")),
     after_help = "Examples:\n  \
     glint batch scans/ -o qc/ --preset mr-t2-brain --size 256x256 --slices\n  \
     glint batch /data/bids -o qc/ --bids-suffix T1w,T2w --views left,superior\n  \
+    glint batch /data/bids -o /data/bids/derivatives/glint --participant-label 01,02 --suffix T1w\n  \
     glint batch 'site*/sub-*.nii.gz' --scene brain.json -o figures/ --jobs 2\n\n\
 Writes OUT/<id>/mosaic.png (the views side by side), OUT/<id>/slices.png (--slices:\n\
 sagittal, coronal and axial cuts through the centre, one intensity window),\n\
@@ -39,7 +41,10 @@ OUT/<id>/scene.json (the first view's resolved scene), OUT/<id>/row.json, then\n
 OUT/results.jsonl (a row per input: checksum, outputs, seconds, reader notes or the\n\
 error) and OUT/index.html (open it from the disk). Every file is written atomically.\n\
 A rerun skips inputs made from the same bytes with the same scene and views (--force\n\
-redoes them) and retries the failed ones.\n\n\
+redoes them) and retries the failed ones. With a BIDS dataset among the inputs, OUT is\n\
+a BIDS derivatives dataset: OUT/dataset_description.json (DatasetType derivative,\n\
+GeneratedBy glint, its version and this command). Symbolic links are followed; a link\n\
+to nothing (a DataLad file not fetched) is a failed row that says so.\n\n\
 Exit status: 0 when every input was made; otherwise the number of inputs that failed\n\
 (at most 100), after the table and report are written. An error that stops the whole\n\
 run (no input found, a bad scene or flag, an output directory that cannot be made)\n\
@@ -67,8 +72,20 @@ struct Options {
     slices: bool,
     /// BIDS datasets: the anat/ suffixes to take [default: T1w, T2w, PDw, T2starw,
     /// FLAIR, inplaneT1, inplaneT2, PDT2, angio].
-    #[arg(long, value_delimiter = ',', value_name = "SUFFIX")]
+    #[arg(
+        long,
+        visible_alias = "suffix",
+        value_delimiter = ',',
+        value_name = "SUFFIX"
+    )]
     bids_suffix: Vec<String>,
+    /// BIDS: only these participants (labels with or without sub-, e.g. 01,02); a
+    /// label no input has is an error.
+    #[arg(long, value_delimiter = ',', value_name = "LABEL")]
+    participant_label: Vec<String>,
+    /// BIDS: only these sessions (labels with or without ses-, e.g. pre).
+    #[arg(long, value_delimiter = ',', value_name = "LABEL")]
+    session_label: Vec<String>,
     /// Inputs made at once [default: one per core].
     #[arg(short, long, default_value_t = 0, hide_default_value = true)]
     jobs: usize,
@@ -96,6 +113,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             exclude: Some(args.output.clone()),
         },
     )?;
+    let selection = Selection {
+        participants: args.participant_label.clone(),
+        sessions: args.session_label.clone(),
+    };
+    let items = glint_batch::bids::select(items, &selection)?;
     let spec = spec(&args)?;
     let bar = progress_bar(&args, items.len());
     let progress = |o: &Outcome| {
@@ -122,6 +144,20 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let skipped = outcomes.iter().filter(|o| o.skipped).count();
     let rows: Vec<_> = outcomes.into_iter().map(|o| o.row).collect();
     let summary = glint_batch::finish(&args.output, &rows)?;
+    // Renders of BIDS datasets make a BIDS derivatives dataset, as BIDS apps write.
+    let datasets: Vec<&Path> = inputs
+        .iter()
+        .map(PathBuf::as_path)
+        .filter(|p| glint_batch::bids::is_dataset(p))
+        .collect();
+    if !datasets.is_empty() {
+        let by = GeneratedBy {
+            name: "glint".into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            command: command_line(),
+        };
+        glint_batch::bids::write_description(&args.output, &by, &datasets)?;
+    }
     if !args.quiet {
         eprintln!(
             "glint batch: {} inputs: {} made ({skipped} up to date), {} failed; report {}",
@@ -136,6 +172,21 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         rows.iter().filter(|r| r.status == Status::Failed).count()
     );
     Ok(summary.failed.min(MAX_FAILED_STATUS) as u8)
+}
+
+/// The command line that runs, each argument with whitespace or quotes in single
+/// quotes (as a shell would take it back).
+fn command_line() -> String {
+    std::env::args()
+        .map(|a| {
+            if a.is_empty() || a.contains(|c: char| c.is_whitespace() || "'\"\\$`".contains(c)) {
+                format!("'{}'", a.replace('\'', "'\\''"))
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// The spec of the flags (the inputs taken out): the scene (a scene file and flags,

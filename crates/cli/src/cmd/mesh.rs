@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use glint_io::mesh::{write_obj, write_ply, write_stl, PlyEncoding};
-use glint_io::{read_volume, Format, Mesh, ReadOptions};
+use glint_io::{open_volume, Format, Mesh, ReadOptions};
 use glint_render::mesh::{extract, taubin_smooth, Taubin};
 use glint_render::vertex_normals;
 
@@ -37,7 +37,7 @@ pub struct Args {
     /// Taubin's inflating factor μ (negative, |μ| > λ).
     #[arg(long, default_value_t = Taubin::default().mu, allow_negative_numbers = true)]
     mu: f32,
-    /// No summary line.
+    /// No summary line, and of the reader's notes only its warnings.
     #[arg(short, long)]
     quiet: bool,
     /// Benchmarking: extract this many times and print ms per extraction to stdout.
@@ -88,8 +88,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let Some(iso) = args.iso else {
         bail!("--iso is required to extract a surface from the volume");
     };
-    let volume = read_volume(&args.input, &ReadOptions::default())
+    let file = open_volume(&args.input, &ReadOptions::default())
         .with_context(|| format!("cannot read volume {}", args.input.display()))?;
+    super::render::print_notes(&args.input, &file.notes, args.quiet);
+    let volume = file.volume;
     let (lo, hi) = volume.range();
     if !(lo..=hi).contains(&f64::from(iso)) {
         bail!(
@@ -129,8 +131,10 @@ fn convert(args: &Args, taubin: &Taubin, write: MeshWriter) -> anyhow::Result<()
             args.input.display()
         );
     }
-    let mut mesh = glint_io::read_mesh(&args.input)
+    let file = glint_io::open_mesh(&args.input)
         .with_context(|| format!("cannot read surface {}", args.input.display()))?;
+    super::render::print_notes(&args.input, &file.notes, args.quiet);
+    let mut mesh = file.mesh;
     mesh.validate()
         .with_context(|| format!("cannot convert {}", args.input.display()))?;
     if taubin.iterations > 0 {

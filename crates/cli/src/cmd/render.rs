@@ -90,7 +90,8 @@ struct Options {
     /// are 8-bit).
     #[arg(long, default_value = "8", value_parser = ["8", "16"])]
     depth: String,
-    /// No progress bar.
+    /// No progress bar, and of the reader's notes (what a DICOM directory's read
+    /// skipped, where the affine came from) only its warnings.
     #[arg(short, long)]
     quiet: bool,
     /// Print the time of each stage (read, field, classify, frame, encode, write) to
@@ -213,7 +214,7 @@ classifying), encoded and written in {:.2?}",
 /// flags ask for.
 fn open_for(args: &Options, scene: &Scene) -> anyhow::Result<Renderer> {
     let reading = Spinner::start(reading_what(scene), args.quiet);
-    let mut renderer = open_renderer(scene, &args.scene.read_options())?;
+    let mut renderer = open_renderer_noting(scene, &args.scene.read_options(), args.quiet)?;
     drop(reading);
     if args.scalar {
         renderer.kernel = Kernel::Scalar;
@@ -235,6 +236,16 @@ fn depth(args: &Options) -> Depth {
 /// without positions) to stderr. Meshes are read when the scene is resolved (their
 /// errors name the file, not the volume).
 pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Result<Renderer> {
+    open_renderer_noting(scene, options, true)
+}
+
+/// [`open_renderer`] printing every note of the reader ([`print_notes`]), or with
+/// `quiet` only its warnings.
+pub(crate) fn open_renderer_noting(
+    scene: &Scene,
+    options: &ReadOptions,
+    quiet: bool,
+) -> anyhow::Result<Renderer> {
     let volume = Scene {
         input: scene.input.clone(),
         prefilter: scene.prefilter,
@@ -246,12 +257,21 @@ pub(crate) fn open_renderer(scene: &Scene, options: &ReadOptions) -> anyhow::Res
         Input::None => "cannot open the scene".into(),
     })?;
     if let Input::Path(path) = &scene.input {
-        let worth = |n: &&String| n.contains("assumed") || n.contains("missing");
-        for note in renderer.notes().iter().filter(worth) {
-            eprintln!("glint: {}: {note}", path.display());
-        }
+        print_notes(path, renderer.notes(), quiet);
     }
     Ok(renderer)
+}
+
+/// Prints a reader's notes about `path` to stderr, one `glint: PATH: NOTE` line each,
+/// as `glint info` lists them (objects of a DICOM directory skipped, slices and files
+/// read, where the affine came from, ...). With `quiet` (`-q`), only the warnings:
+/// geometry the reader assumed and data missing (chunks of a pyramid), which a script
+/// reading the output must still hear about.
+pub(crate) fn print_notes(path: &Path, notes: &[String], quiet: bool) {
+    let warning = |n: &&String| n.contains("assumed") || n.contains("missing");
+    for note in notes.iter().filter(|n| !quiet || warning(n)) {
+        eprintln!("glint: {}: {note}", path.display());
+    }
 }
 
 /// What the spinner says while the scene's input is read.

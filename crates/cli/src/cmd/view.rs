@@ -55,6 +55,10 @@ pub struct Args {
     /// Clients served at once.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=64))]
     max_clients: u64,
+    /// Of the reader's notes (what a DICOM directory's read skipped, where the affine
+    /// came from), only its warnings.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 /// Runs `glint view` until interrupted.
@@ -76,7 +80,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         options.level = Level::Auto(scene.size[0].max(scene.size[1]) as usize);
     }
     eprintln!("glint view: loading the volume");
+    let input = match &scene.input {
+        glint_render::Input::Path(p) => Some(p.clone()),
+        _ => None,
+    };
     let viewer = Arc::new(Viewer::with_options(scene, config, &options)?);
+    if let Some(path) = &input {
+        super::render::print_notes(path, viewer.notes(), args.quiet);
+    }
     if let Some(level) = viewer.level().filter(|l| l.coarse) {
         eprintln!(
             "glint view: showing level {} ({}x{}x{}) while the finer one is read",

@@ -111,10 +111,7 @@ fn open_error(path: &Path, e: dicom_object::ReadError) -> IoError {
             what: chain,
         }
     } else if let dicom_object::ReadError::OpenFile { source, .. } = e {
-        IoError::Os {
-            path: path.into(),
-            source,
-        }
+        crate::link::os_error(path, source)
     } else {
         IoError::Invalid {
             path: path.into(),

@@ -129,10 +129,7 @@ pub(crate) struct Loaded {
 /// TransferSyntaxUID, an implicit-VR data set under an explicit-VR syntax, a meta group
 /// dicom-rs cannot parse.
 pub(crate) fn load(path: &Path, pixels: bool, strict: bool) -> Result<Loaded, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::Os {
-        path: path.into(),
-        source: e,
-    })?;
+    let bytes = std::fs::read(path).map_err(|e| crate::link::os_error(path, e))?;
     let layout = layout(path, &bytes, strict)?;
     let mut notes = Vec::new();
     let lenient = |what: String, notes: &mut Vec<String>| {

@@ -74,16 +74,16 @@ struct Scan {
     not_dicom: Vec<PathBuf>,
 }
 
-/// The files of a directory worth opening: regular, not hidden, not DICOMDIR.
+/// The files of a directory worth opening: regular (or symbolic links to regular
+/// files), not hidden, not DICOMDIR. A link whose target is missing is one too: opening
+/// it fails with [`crate::broken_link`]'s error, which reading the directory reports
+/// (a slice whose content was never fetched must not go unnoticed).
 fn entries(path: &Path) -> Result<Vec<PathBuf>, IoError> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(path)
-        .map_err(|e| IoError::Os {
-            path: path.into(),
-            source: e,
-        })?
+        .map_err(|e| crate::link::os_error(path, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
-            p.is_file()
+            (p.is_file() || crate::broken_link(p).is_some())
                 && p.file_name().is_some_and(|n| {
                     let n = n.to_string_lossy();
                     !n.starts_with('.') && !n.eq_ignore_ascii_case("DICOMDIR")

@@ -22,8 +22,8 @@ use std::path::{Path, PathBuf};
 
 use crate::clock::Clock;
 use crate::common::{
-    can_inflate_to, check_affine, checked_voxels, open_maybe_gz, os_or_invalid, read_decoded,
-    read_exact_growing, ScalarType,
+    can_inflate_to, check_affine, check_scaling, checked_voxels, open_maybe_gz, os_or_invalid,
+    read_decoded, read_exact_growing, ScalarType,
 };
 use crate::{IoError, ReadOptions, Samples, Volume, VolumeFile};
 
@@ -97,6 +97,12 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     notes.push(format!("affine from {source}"));
     let spacing = check_affine(path, &affine)?;
     let (slope, intercept) = scaling(&h);
+    check_scaling(
+        path,
+        &samples,
+        (slope, intercept),
+        ["scl_slope", "scl_inter"],
+    )?;
     Ok(VolumeFile {
         volume: Volume {
             dims,
