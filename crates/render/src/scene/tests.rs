@@ -727,7 +727,10 @@ fn window_and_level_remap_the_transfer_function() {
     assert!(tf.opacity_at(0.3) > 1.0 - 1e-9 && tf.opacity_at(0.31) == 1.0);
     assert!((tf.opacity_at(0.275) - 0.75).abs() < 1e-9);
     let got = d.window_level.unwrap();
-    assert!((got.window - 0.1).abs() < 1e-9 && (got.level - 0.25).abs() < 1e-9, "{got:?}");
+    assert!(
+        (got.window - 0.1).abs() < 1e-9 && (got.level - 0.25).abs() < 1e-9,
+        "{got:?}"
+    );
     assert_ne!(out.image.rgb, plain.image.rgb);
     // The resolved scene keeps the ramp and the window: it renders the same again.
     assert_eq!(out.scene.window_level, Some(target));
@@ -737,14 +740,27 @@ fn window_and_level_remap_the_transfer_function() {
     // A preset starts from its own window; a bad width is refused.
     let next = out
         .scene
-        .patch(serde_json::json!({"preset": "ct-bone"}).as_object().unwrap())
+        .patch(
+            serde_json::json!({"preset": "ct-bone"})
+                .as_object()
+                .unwrap(),
+        )
         .unwrap();
     assert_eq!(next.window_level, None);
     let bad = out
         .scene
-        .patch(serde_json::json!({"window_level": {"window": 0, "level": 1}}).as_object().unwrap())
+        .patch(
+            serde_json::json!({"window_level": {"window": 0, "level": 1}})
+                .as_object()
+                .unwrap(),
+        )
         .unwrap();
     let err = r.render(&bad, &|_| {}).unwrap_err().to_string();
     assert!(err.contains("window 0"), "{err}");
-    assert!(windowed.set_window_level(Some(WindowLevel { window: -1.0, level: 0.0 })).is_err());
+    assert!(windowed
+        .set_window_level(Some(WindowLevel {
+            window: -1.0,
+            level: 0.0
+        }))
+        .is_err());
 }
