@@ -71,6 +71,13 @@ pub enum ServerMessage {
         /// The level.
         level: crate::levels::PyramidLevel,
     },
+    /// The volume's histogram, sent once after `hello` (not for a scene of meshes
+    /// only): the page's transfer-function editor draws it.
+    Histogram {
+        /// The histogram.
+        #[serde(flatten)]
+        histogram: crate::histogram::Histogram,
+    },
     /// The resolved scene a full frame was rendered from.
     Scene {
         /// The update it reflects.
