@@ -505,7 +505,6 @@ impl Renderer {
                 let mut d = derived(&camera);
                 d.step_mm = Some(step_mm);
                 d.min_spacing_mm = Some(field.min_spacing());
-                d.window_level = Some(tf.window_level());
                 d.transfer_function = Some(tf);
                 (image, d, None, legend)
             }
@@ -711,7 +710,6 @@ fn derived(camera: &Camera) -> Derived {
         step_mm: None,
         min_spacing_mm: None,
         transfer_function: None,
-        window_level: None,
     }
 }
 

@@ -532,12 +532,19 @@ async fn finished(
             if purpose == Purpose::Interactive {
                 return true;
             }
+            let window_level = frame
+                .scene
+                .derived
+                .as_ref()
+                .and_then(|d| d.transfer_function.as_ref())
+                .map(|tf| tf.window_level());
             let scene = serde_json::to_value(&frame.scene).expect("scenes serialise");
             return send_json(
                 socket,
                 &ServerMessage::Scene {
                     seq: frame.seq,
                     scene,
+                    window_level,
                 },
             )
             .await;

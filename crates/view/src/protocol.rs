@@ -84,6 +84,11 @@ pub enum ServerMessage {
         seq: u32,
         /// The scene.
         scene: serde_json::Value,
+        /// The window and level of the transfer function the frame used (its own,
+        /// `TransferFunction::window_level`: the scene's `window_level` when set),
+        /// where the page's window/level drag starts; absent without one (surfaces).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        window_level: Option<glint_render::WindowLevel>,
     },
     /// A message was refused; the previous state stays.
     Error {

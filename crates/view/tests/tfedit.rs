@@ -78,3 +78,91 @@ fn the_editor_adds_moves_and_deletes_points() {
     assert_eq!(report["restored"], true, "{report}");
     eprintln!("transfer-function editor browser test: {report}");
 }
+
+/// The protocol side, without a browser: the histogram follows `hello`; a
+/// `window_level` patch comes back in the frame's scene and as the scene message's
+/// `window_level`; a bad window is refused with one line and the session goes on.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn histogram_and_window_level_over_the_socket() {
+    use futures_util::{SinkExt, StreamExt};
+    use tokio_tungstenite::tungstenite::Message;
+    let scene = Scene {
+        mode: RenderMode::Mip,
+        ..Scene::phantom(Phantom::SheppLogan, 32, [48, 40])
+    };
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer, access));
+    let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    let mut texts = Vec::new();
+    // The JSON messages up to (and including) the first one of type `kind`.
+    async fn until(
+        c: &mut (impl StreamExt<Item = Result<Message, tokio_tungstenite::tungstenite::Error>> + Unpin),
+        kind: &str,
+        texts: &mut Vec<serde_json::Value>,
+    ) -> serde_json::Value {
+        loop {
+            let msg = tokio::time::timeout(std::time::Duration::from_secs(20), c.next())
+                .await
+                .expect("a message within 20 s")
+                .unwrap()
+                .unwrap();
+            if let Message::Text(t) = msg {
+                let v: serde_json::Value = serde_json::from_str(&t).unwrap();
+                texts.push(v.clone());
+                if v["type"] == kind {
+                    return v;
+                }
+            }
+        }
+    }
+    let h = until(&mut c, "histogram", &mut texts).await;
+    assert_eq!(texts[0]["type"], "hello", "the histogram follows hello");
+    let bins = h["log_counts"].as_array().unwrap();
+    assert_eq!(bins.len(), glint_view::HISTOGRAM_BINS);
+    assert_eq!(h["counted"], 32 * 32 * 32);
+    let total: f64 = bins.iter().map(|b| b.as_f64().unwrap().exp_m1()).sum();
+    assert!((total - 32768.0).abs() < 1.0, "{total}");
+    let first = until(&mut c, "scene", &mut texts).await;
+    let own = first["window_level"]["window"].as_f64().unwrap();
+    assert!(own > 0.0, "{first}");
+    let send = |text: &str| Message::Text(text.to_string().into());
+    c.send(send(
+        r#"{"type": "update", "seq": 1, "scene": {"window_level": {"window": 0.2, "level": 0.3}}}"#,
+    ))
+    .await
+    .unwrap();
+    let s = until(&mut c, "scene", &mut texts).await;
+    assert_eq!(s["seq"], 1);
+    assert_eq!(
+        s["scene"]["window_level"],
+        serde_json::json!({"window": 0.2, "level": 0.3})
+    );
+    let wl = &s["window_level"];
+    assert!((wl["window"].as_f64().unwrap() - 0.2).abs() < 1e-9, "{s}");
+    assert!((wl["level"].as_f64().unwrap() - 0.3).abs() < 1e-9, "{s}");
+    c.send(send(
+        r#"{"type": "update", "seq": 2, "scene": {"window_level": {"window": -1, "level": 0}}}"#,
+    ))
+    .await
+    .unwrap();
+    let e = until(&mut c, "error", &mut texts).await;
+    let message = e["message"].as_str().unwrap();
+    assert!(
+        message.contains("window -1") && !message.contains('\n'),
+        "{message}"
+    );
+    c.send(send(
+        r#"{"type": "update", "seq": 3, "scene": {"camera": {"azimuth": 10}}}"#,
+    ))
+    .await
+    .unwrap();
+    let s = until(&mut c, "scene", &mut texts).await;
+    assert_eq!(s["seq"], 3);
+    assert_eq!(
+        s["scene"]["window_level"]["window"], 0.2,
+        "the refused window changed nothing"
+    );
+}

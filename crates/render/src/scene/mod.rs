@@ -264,11 +264,6 @@ pub struct Derived {
     /// The transfer function used (ray-cast volumes).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub transfer_function: Option<TransferFunction>,
-    /// The window and level of the transfer function used (its own,
-    /// [`TransferFunction::window_level`]): the scene's `window_level` when it has one
-    /// (ray-cast volumes). The viewer starts its window/level drag from it.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub window_level: Option<WindowLevel>,
 }
 
 impl Scene {

@@ -710,7 +710,15 @@ fn window_and_level_remap_the_transfer_function() {
     let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
     let plain = r.render(&scene, &|_| {}).unwrap();
     let (lo, hi) = r.field().unwrap().robust_range();
-    let own = plain.scene.derived.as_ref().unwrap().window_level.unwrap();
+    let own = plain
+        .scene
+        .derived
+        .as_ref()
+        .unwrap()
+        .transfer_function
+        .as_ref()
+        .unwrap()
+        .window_level();
     assert!((own.window - (hi - lo) as f64).abs() < 1e-5, "{own:?}");
     assert!((own.level - (lo + hi) as f64 / 2.0).abs() < 1e-5, "{own:?}");
     let target = WindowLevel {
@@ -726,7 +734,7 @@ fn window_and_level_remap_the_transfer_function() {
     assert!(tf.opacity_at(0.2) < 1e-9 && tf.opacity_at(0.19) == 0.0);
     assert!(tf.opacity_at(0.3) > 1.0 - 1e-9 && tf.opacity_at(0.31) == 1.0);
     assert!((tf.opacity_at(0.275) - 0.75).abs() < 1e-9);
-    let got = d.window_level.unwrap();
+    let got = tf.window_level();
     assert!(
         (got.window - 0.1).abs() < 1e-9 && (got.level - 0.25).abs() < 1e-9,
         "{got:?}"

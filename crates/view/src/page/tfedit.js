@@ -8,7 +8,8 @@
 // histogram (x the value in the volume's units, y the opacity) and colour as stops on
 // the strip below. A click adds a point (a stop on the strip), a drag moves it, a
 // double click or a right click deletes it; every edit sends the whole function as
-// the scene's transfer_function (which replaces the preset and its window).
+// the scene's transfer_function (which replaces the preset and its window). The
+// scene message's window_level (the function's own window) starts the drag.
 "use strict";
 (() => {
   const $ = (id) => document.getElementById(id);
@@ -216,7 +217,7 @@
     } else if (msg.type === "scene" && msg.seq === seq && !s.drag && !s.wlDrag) {
       const d = msg.scene.derived || {};
       s.tf = d.transfer_function ? { opacity: d.transfer_function.opacity, color: d.transfer_function.color } : null;
-      s.wl = d.window_level || null;
+      s.wl = msg.window_level || null;
       if (s.selected && (!s.tf || !s.tf[s.selected.kind][s.selected.i])) s.selected = null;
       $("tf-box").hidden = !s.tf;
       showWl();
