@@ -127,8 +127,8 @@ impl TransferFunctionFile {
         };
         let flag = |i: usize| -> Result<bool, RenderError> {
             match scalar(i)? {
-                x if x == 0.0 => Ok(false),
-                x if x == 1.0 => Ok(true),
+                0.0 => Ok(false),
+                1.0 => Ok(true),
                 x => Err(bad(format!(
                     "line {} ({}): {x}, expected 0 or 1",
                     i + 1,
