@@ -60,6 +60,9 @@ enum Command {
     Batch(cmd::batch::Args),
     /// Interactive viewer in the browser: a local web server rendering frames.
     View(cmd::view::Args),
+    /// Transfer functions to and from 3D Slicer (.vp) and ParaView (.json).
+    #[command(subcommand)]
+    Tf(cmd::tf::Command),
     /// The specular unit: ROM contents, width sweeps, stage-by-stage evaluation.
     #[command(subcommand)]
     Hw(cmd::hw::Command),
@@ -80,6 +83,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => cmd::bench::run(args),
         Command::Info(args) => cmd::info::run(args),
         Command::Hw(args) => cmd::hw::run(args),
+        Command::Tf(args) => cmd::tf::run(args),
         Command::View(args) => cmd::view::run(args),
         // Its exit status counts the inputs that failed.
         Command::Batch(args) => match cmd::batch::run(args) {

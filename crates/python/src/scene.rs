@@ -13,10 +13,11 @@ use crate::json;
 
 /// Fields the scene JSON omits while they are unset (`Option` fields serialised with
 /// `skip_serializing_if`); reading them gives None.
-const OPTIONAL_FIELDS: [&str; 7] = [
+const OPTIONAL_FIELDS: [&str; 8] = [
     "iso",
     "preset",
     "transfer_function",
+    "window_level",
     "derived",
     "ssaa",
     "opacity_unit",

@@ -84,8 +84,8 @@ pub use glint_volume::{memory_limit, set_memory_limit};
 pub use glint_volume::{phantom, presets};
 pub use glint_volume::{
     preset, Classification, ClassifySettings, Field, FrameSettings, Kernel, Phantom, Prefilter,
-    Preset, Sampling, Source, TransferFunction, TransferFunctionFile, MACRO_CELL, MAX_FIELD_VOXELS,
-    PRESETS, TERMINATION_OPACITY,
+    Preset, Sampling, Source, TfFormat, TransferFunction, TransferFunctionFile, WindowLevel,
+    MACRO_CELL, MAX_FIELD_VOXELS, PRESETS, TERMINATION_OPACITY,
 };
 pub use glint_volume::{
     LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,

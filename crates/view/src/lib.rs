@@ -40,6 +40,7 @@
 #![forbid(unsafe_code)]
 
 pub mod access;
+pub mod histogram;
 pub mod labels;
 pub mod levels;
 pub mod protocol;
@@ -61,6 +62,7 @@ use glint_render::{
 };
 
 pub use access::{is_loopback, Access, Token};
+pub use histogram::{Histogram, HISTOGRAM_BINS};
 pub use labels::{LabelInfo, LabelList};
 pub use levels::PyramidLevel;
 pub use session::{apply_patch, next_samples, render_frame, Frame, MAX_VIEW_SIDE};
@@ -152,6 +154,8 @@ pub struct Viewer {
     range: [f32; 2],
     /// The labels of the scene's label map, if it has one (the page's legend).
     labels: Option<LabelList>,
+    /// The volume's histogram (`None`: a scene of meshes only).
+    histogram: Option<Histogram>,
     /// The pyramid level `renderer` reads (`None`: not a pyramid).
     level: Option<PyramidLevel>,
     /// The finer level to read when `renderer` reads a coarse stand-in.
@@ -184,11 +188,13 @@ impl Viewer {
         // A scene of meshes only has no value range (the page's iso slider).
         let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
         let labels = scene.labels.as_ref().map(LabelList::read).transpose()?;
+        let histogram = renderer.field().map(|f| Histogram::of(f, HISTOGRAM_BINS));
         Ok(Viewer {
             renderer,
             scene,
             range: [lo, hi],
             labels,
+            histogram,
             level: plan.level,
             finer: plan.finer,
             refined: watch::Sender::new(None),
@@ -272,7 +278,7 @@ pub async fn serve(
     axum::serve(listener, app).await
 }
 
-/// The viewer's routes: `/` (the page), `/app.js`, `/style.css`, `/ws`, behind the
+/// The viewer's routes: `/` (the page), `/app.js`, `/tfedit.js`, `/style.css`, `/ws`, behind the
 /// checks of `access`.
 pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
     Router::new()
@@ -283,6 +289,15 @@ pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
                 (
                     [(header::CONTENT_TYPE, "text/javascript")],
                     include_str!("page/app.js"),
+                )
+            }),
+        )
+        .route(
+            "/tfedit.js",
+            get(|| async {
+                (
+                    [(header::CONTENT_TYPE, "text/javascript")],
+                    include_str!("page/tfedit.js"),
                 )
             }),
         )
@@ -408,9 +423,18 @@ async fn admit(
         let _ = socket.send(Message::Close(None)).await;
         return None;
     };
-    send_json(socket, &hello(viewer, stage))
-        .await
-        .then_some(seat)
+    if !send_json(socket, &hello(viewer, stage)).await {
+        return None;
+    }
+    if let Some(histogram) = &viewer.histogram {
+        let msg = ServerMessage::Histogram {
+            histogram: histogram.clone(),
+        };
+        if !send_json(socket, &msg).await {
+            return None;
+        }
+    }
+    Some(seat)
 }
 
 /// A client's own renderer (sharing the viewer's data, or `stage`'s, the finer level)
@@ -514,12 +538,19 @@ async fn finished(
             if purpose == Purpose::Interactive {
                 return true;
             }
+            let window_level = frame
+                .scene
+                .derived
+                .as_ref()
+                .and_then(|d| d.transfer_function.as_ref())
+                .map(|tf| tf.window_level());
             let scene = serde_json::to_value(&frame.scene).expect("scenes serialise");
             return send_json(
                 socket,
                 &ServerMessage::Scene {
                     seq: frame.seq,
                     scene,
+                    window_level,
                 },
             )
             .await;

@@ -71,12 +71,24 @@ pub enum ServerMessage {
         /// The level.
         level: crate::levels::PyramidLevel,
     },
+    /// The volume's histogram, sent once after `hello` (not for a scene of meshes
+    /// only): the page's transfer-function editor draws it.
+    Histogram {
+        /// The histogram.
+        #[serde(flatten)]
+        histogram: crate::histogram::Histogram,
+    },
     /// The resolved scene a full frame was rendered from.
     Scene {
         /// The update it reflects.
         seq: u32,
         /// The scene.
         scene: serde_json::Value,
+        /// The window and level of the transfer function the frame used (its own,
+        /// `TransferFunction::window_level`: the scene's `window_level` when set),
+        /// where the page's window/level drag starts; absent without one (surfaces).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        window_level: Option<glint_render::WindowLevel>,
     },
     /// A message was refused; the previous state stays.
     Error {

@@ -49,8 +49,8 @@ pub mod transport;
 
 pub use classification::presets;
 pub use classification::{
-    Classification, ClassifySettings, ColourVolume, Lut, Sampling, TransferFunction,
-    TransferFunctionFile, LUT_SIZE,
+    Classification, ClassifySettings, ColourVolume, Lut, Sampling, TfFormat, TransferFunction,
+    TransferFunctionFile, WindowLevel, LUT_SIZE,
 };
 pub use field::{
     memory_limit, open_zarr, set_memory_limit, Field, Prefilter, Source, MACRO_CELL,

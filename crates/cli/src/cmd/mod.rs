@@ -14,4 +14,5 @@ pub mod mesh;
 pub mod render;
 pub mod scene_flags;
 mod spinner;
+pub mod tf;
 pub mod view;

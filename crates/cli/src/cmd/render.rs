@@ -42,7 +42,10 @@ Presets (3D Slicer's volume rendering presets, MR ones scaled to the volume's ma
     dti-fa-brain\n\n\
 Transfer-function JSON (--tf): {\"opacity\": [[value, alpha], ...], \"color\": [[value, r, g, b], ...],\n  \
     \"ambient\": 0.1, \"diffuse\": 0.9, \"specular\": 0.2, \"power\": 10, \"shade\": true}\n  \
-    (alpha per voxel of distance, colours sRGB in 0..1; the material fields are optional)\n\n\
+    (alpha per voxel of distance, colours sRGB in 0..1; the material fields are optional)\n  \
+    --tf also reads 3D Slicer volume property files (.vp) and ParaView colour maps (.json);\n  \
+    `glint tf export --preset ct-bone -o bone.vp|bone.json` writes them\n  \
+    --window 400 --window-level 40: the function's opacity ramp stretched to that window\n\n\
 Scene JSON (--scene, --dump-scene): every field below as a key, e.g.\n  \
     {\"version\": 1, \"input\": {\"path\": \"brain.nii.gz\"}, \"preset\": \"mr-t2-brain\",\n  \
     \"lobe\": {\"kind\": \"k\", \"n\": 40, \"v\": 4, \"geometry\": \"phong\"},\n  \

@@ -11,7 +11,7 @@ use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
     ColorMap, Input, Light, LightingModel, MeshSpec, Overlay, Phantom, Prefilter, Projection,
-    RenderMode, Sampling, Scene, SceneLobe, TransferFunction, View,
+    RenderMode, Sampling, Scene, SceneLobe, TransferFunctionFile, View, WindowLevel,
 };
 
 use super::choice::choice;
@@ -58,9 +58,26 @@ pub struct SceneFlags {
     /// ct-bone for CT-like volumes (robust minimum below -500), mr-t2-brain otherwise].
     #[arg(long, conflicts_with = "tf")]
     pub preset: Option<String>,
-    /// Custom transfer function from a JSON file (see `glint render --help`).
-    #[arg(long, value_name = "FILE")]
+    /// Custom transfer function from a file: glint's JSON (see `glint render --help`),
+    /// a ParaView colour map (.json) or a 3D Slicer volume property file (.vp), told
+    /// apart by extension and contents.
+    #[arg(long, visible_alias = "transfer-function", value_name = "FILE")]
     pub tf: Option<PathBuf>,
+    /// Window width, in the volume's units (HU for CT): the transfer function (the
+    /// preset's or --tf's) is stretched so that its opacity ramp spans this width,
+    /// centred on --window-level [default: the function's own].
+    #[arg(long, value_name = "WIDTH", requires = "window_level")]
+    pub window: Option<f64>,
+    /// Window level (centre), in the volume's units; with --window. (--level is the
+    /// OME-Zarr pyramid level.)
+    #[arg(
+        long,
+        value_name = "LEVEL",
+        visible_alias = "window-center",
+        requires = "window",
+        allow_negative_numbers = true
+    )]
+    pub window_level: Option<f64>,
     /// How a volume becomes a picture; surface: its isosurface at --iso, rasterised with
     /// the meshes [default: composite; surface for meshes].
     #[arg(long, value_parser = choice::<RenderMode>(RenderMode::NAMES.iter().copied()))]
@@ -331,7 +348,10 @@ impl SceneFlags {
             scene.set_preset(p.clone());
         }
         if let Some(path) = &self.tf {
-            let file = TransferFunction::from_json_file(path)?;
+            let file = TransferFunctionFile::read(path)?;
+            for note in &file.notes {
+                eprintln!("glint: note: {}: {note}", path.display());
+            }
             scene.set_transfer_function(file.tf);
             let m = &mut scene.material;
             set(&mut m.ambient, file.material.ambient.map(Some));
@@ -341,6 +361,9 @@ impl SceneFlags {
             if file.power.is_some() {
                 scene.lobe.n = file.power;
             }
+        }
+        if let (Some(window), Some(level)) = (self.window, self.window_level) {
+            scene.set_window_level(Some(WindowLevel { window, level }))?;
         }
         if let Some(mode) = self.mode {
             scene.set_mode(mode);

@@ -109,6 +109,9 @@ class Scene:
     iso: Optional[float]
     preset: Optional[str]
     transfer_function: Optional[Dict[str, Any]]
+    # {"window": width, "level": centre}: the transfer function's opacity ramp
+    # stretched to this window (None: the function as it is).
+    window_level: Optional[Dict[str, float]]
     material: Dict[str, Any]
     lobe: Dict[str, Any]
     lights: List[Dict[str, float]]

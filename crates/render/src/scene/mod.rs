@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use glint_core::{CameraSpec, Light, MaterialOverrides, RenderError, RenderMode};
 use glint_io::{open_volume, ReadOptions, Volume};
-use glint_volume::{Field, Phantom, Prefilter, Sampling, TransferFunction};
+use glint_volume::{Field, Phantom, Prefilter, Sampling, TransferFunction, WindowLevel};
 use serde::{Deserialize, Serialize};
 
 use crate::labels::LabelSpec;
@@ -94,6 +94,13 @@ pub struct Scene {
     /// An inline transfer function, which replaces the preset's.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub transfer_function: Option<TransferFunction>,
+    /// Window and level (radiology's width and centre, in the volume's units): the
+    /// transfer function (the preset's or the scene's own) remapped linearly along
+    /// the value axis so that its own window ([`TransferFunction::window_level`], its
+    /// opacity ramp) becomes this one; absent: the function as it is. Setting the
+    /// preset or the transfer function clears it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window_level: Option<WindowLevel>,
     /// Material coefficients that replace the preset's.
     pub material: MaterialOverrides,
     /// The specular lobe.
@@ -148,6 +155,7 @@ impl Default for Scene {
             iso: None,
             preset: None,
             transfer_function: None,
+            window_level: None,
             material: MaterialOverrides::default(),
             lobe: LobeSpec::default(),
             lights: vec![Light::HEADLIGHT],

@@ -3,7 +3,7 @@
 use serde_json::{Map, Value};
 
 use glint_core::{RenderError, RenderMode};
-use glint_volume::TransferFunction;
+use glint_volume::{TransferFunction, WindowLevel};
 
 use super::Scene;
 
@@ -77,6 +77,17 @@ impl Scene {
         self.follow_edit("preset", &|_| false);
     }
 
+    /// Windows the scene's transfer function (the preset's or its own) at `wl`
+    /// ([`Scene::window_level`](Scene#structfield.window_level)); `None` shows the
+    /// function as it is. Checked here: a width that is not positive is refused.
+    pub fn set_window_level(&mut self, wl: Option<WindowLevel>) -> Result<(), RenderError> {
+        if let Some(w) = &wl {
+            w.validate()?;
+        }
+        self.window_level = wl;
+        Ok(())
+    }
+
     /// Classifies the scene with `tf`, which replaces its preset's.
     pub fn set_transfer_function(&mut self, tf: TransferFunction) {
         self.transfer_function = Some(tf);
@@ -93,6 +104,10 @@ impl Scene {
     /// The scene-editing rules, written once: what setting `field` clears, unless
     /// the same edit sets that too (`also_set`).
     fn follow_edit(&mut self, field: &str, also_set: &dyn Fn(&str) -> bool) {
+        // A new classification starts from its own window.
+        if matches!(field, "preset" | "transfer_function") && !also_set("window_level") {
+            self.window_level = None;
+        }
         match field {
             "preset" if !also_set("transfer_function") => self.transfer_function = None,
             "transfer_function" if !also_set("preset") => self.preset = None,

@@ -386,10 +386,24 @@ impl Scene {
         })
     }
 
-    /// The transfer function, the material it comes with and the default shininess,
-    /// for a volume whose values span `lo..=hi`; writes the preset (or the MIP ramp)
-    /// that was chosen back into the scene.
+    /// The transfer function (windowed at the scene's window and level, when it has
+    /// them), the material it comes with and the default shininess, for a volume whose
+    /// values span `lo..=hi`; writes the preset (or the MIP ramp) that was chosen back
+    /// into the scene.
     fn resolve_classification(
+        &mut self,
+        lo: f32,
+        hi: f32,
+    ) -> Result<(TransferFunction, Material, f64), RenderError> {
+        let (tf, material, power) = self.resolve_function(lo, hi)?;
+        match self.window_level {
+            Some(wl) => Ok((tf.with_window_level(wl)?, material, power)),
+            None => Ok((tf, material, power)),
+        }
+    }
+
+    /// [`Scene::resolve_classification`] before the window and level.
+    fn resolve_function(
         &mut self,
         lo: f32,
         hi: f32,

@@ -696,3 +696,79 @@ fn meshes_shadow_the_volume_in_shadows_and_path() {
         "{darker} darker pixels, largest drop {drop}"
     );
 }
+
+/// Issue 43: window and level remap the transfer function's value axis: in MIP without
+/// a preset (the grey ramp over the robust range) the value at the level reads the
+/// ramp's centre, the window's ends its foot and top; the field is not rebuilt, only
+/// the classification; a preset clears the window.
+#[test]
+fn window_and_level_remap_the_transfer_function() {
+    let scene = Scene {
+        mode: RenderMode::Mip,
+        ..small()
+    };
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+    let plain = r.render(&scene, &|_| {}).unwrap();
+    let (lo, hi) = r.field().unwrap().robust_range();
+    let own = plain
+        .scene
+        .derived
+        .as_ref()
+        .unwrap()
+        .transfer_function
+        .as_ref()
+        .unwrap()
+        .window_level();
+    assert!((own.window - (hi - lo) as f64).abs() < 1e-5, "{own:?}");
+    assert!((own.level - (lo + hi) as f64 / 2.0).abs() < 1e-5, "{own:?}");
+    let target = WindowLevel {
+        window: 0.1,
+        level: 0.25,
+    };
+    let mut windowed = plain.scene.clone();
+    windowed.set_window_level(Some(target)).unwrap();
+    let out = r.render(&windowed, &|_| {}).unwrap();
+    let d = out.scene.derived.as_ref().unwrap();
+    let tf = d.transfer_function.as_ref().unwrap();
+    assert!((tf.opacity_at(0.25) - 0.5).abs() < 1e-9);
+    assert!(tf.opacity_at(0.2) < 1e-9 && tf.opacity_at(0.19) == 0.0);
+    assert!(tf.opacity_at(0.3) > 1.0 - 1e-9 && tf.opacity_at(0.31) == 1.0);
+    assert!((tf.opacity_at(0.275) - 0.75).abs() < 1e-9);
+    let got = tf.window_level();
+    assert!(
+        (got.window - 0.1).abs() < 1e-9 && (got.level - 0.25).abs() < 1e-9,
+        "{got:?}"
+    );
+    assert_ne!(out.image.rgb, plain.image.rgb);
+    // The resolved scene keeps the ramp and the window: it renders the same again.
+    assert_eq!(out.scene.window_level, Some(target));
+    let again = r.render(&out.scene, &|_| {}).unwrap();
+    assert_eq!(again.image.rgb, out.image.rgb);
+    assert_eq!(fields_built(&again.timings), 1, "the field is built once");
+    // A preset starts from its own window; a bad width is refused.
+    let next = out
+        .scene
+        .patch(
+            serde_json::json!({"preset": "ct-bone"})
+                .as_object()
+                .unwrap(),
+        )
+        .unwrap();
+    assert_eq!(next.window_level, None);
+    let bad = out
+        .scene
+        .patch(
+            serde_json::json!({"window_level": {"window": 0, "level": 1}})
+                .as_object()
+                .unwrap(),
+        )
+        .unwrap();
+    let err = r.render(&bad, &|_| {}).unwrap_err().to_string();
+    assert!(err.contains("window 0"), "{err}");
+    assert!(windowed
+        .set_window_level(Some(WindowLevel {
+            window: -1.0,
+            level: 0.0
+        }))
+        .is_err());
+}

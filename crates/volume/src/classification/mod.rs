@@ -14,6 +14,7 @@ use crate::field::Field;
 mod cells;
 mod colour;
 mod density;
+mod exchange;
 mod lut;
 mod medium;
 pub(crate) mod preint;
@@ -27,12 +28,13 @@ use cells::{active_bounds, chessboard_distance, visible_blocks, visible_cells};
 pub use colour::ColourVolume;
 pub use density::LIGHT_CELL;
 pub(crate) use density::{grid_len, occlusion_grid, DensityGrid};
+pub use exchange::TfFormat;
 pub use lut::{Lut, LUT_SIZE};
 pub(crate) use medium::Medium;
 pub(crate) use preint::Last;
 pub use preint::Sampling;
 pub use settings::ClassifySettings;
-pub use tf::{TransferFunction, TransferFunctionFile};
+pub use tf::{TransferFunction, TransferFunctionFile, WindowLevel};
 
 /// The transfer function tabulated for `settings` (MIP shows the function's own
 /// opacity, not a per-step one).

@@ -140,6 +140,62 @@ impl TransferFunction {
         }
     }
 
+    /// The function's own window: `level` the middle and `window` the width of its
+    /// opacity ramp, from the last point at the lowest opacity before the first point
+    /// at the highest opacity to that point (for a falling ramp, the other way round).
+    /// A grey MIP ramp from `lo` to `hi` has the window `hi - lo` at level
+    /// `(lo + hi) / 2`, a radiology viewer's window exactly; a Slicer CT preset's is
+    /// the rise of its opacity (ct-bone: -16.4 to 641.4 HU). A function of constant
+    /// opacity has the span of its points as its window (1 when that span is empty).
+    pub fn window_level(&self) -> WindowLevel {
+        let ops = &self.opacity;
+        let max = ops.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        let min = ops.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        let (lo, hi) = self.domain();
+        let whole = WindowLevel {
+            window: if hi > lo { hi - lo } else { 1.0 },
+            level: (lo + hi) / 2.0,
+        };
+        if max <= min {
+            return whole;
+        }
+        let top = ops
+            .iter()
+            .position(|p| p.1 == max)
+            .expect("a point has the maximum");
+        // The foot of the ramp: before the top if the ramp rises, else after it.
+        let foot = if top > 0 {
+            let low = ops[..top].iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+            ops[..top]
+                .iter()
+                .rposition(|p| p.1 == low)
+                .map(|i| ops[i].0)
+        } else {
+            let low = ops[1..].iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+            ops.iter().position(|p| p.1 == low).map(|i| ops[i].0)
+        };
+        match foot {
+            Some(x) if x != ops[top].0 => WindowLevel {
+                window: (ops[top].0 - x).abs(),
+                level: (ops[top].0 + x) / 2.0,
+            },
+            _ => whole,
+        }
+    }
+
+    /// The function remapped linearly along the value axis so that its own window
+    /// ([`TransferFunction::window_level`]) becomes `target`: a value `v` reads what
+    /// the function had at `own.level + (v - target.level) * own.window /
+    /// target.window`, so the value at `target.level` reads the function's centre.
+    pub fn with_window_level(&self, target: WindowLevel) -> Result<TransferFunction, RenderError> {
+        target.validate()?;
+        let own = self.window_level();
+        let scale = target.window / own.window;
+        let tf = self.remapped(scale, target.level - own.level * scale);
+        tf.validate()?;
+        Ok(tf)
+    }
+
     /// Reads the JSON form: `{"opacity": [[value, a], ...], "color": [[value, r, g, b],
     /// ...]}` plus optional material fields `ambient`, `diffuse`, `specular`, `shade`
     /// and the specular `power` (the lobe's n).
@@ -184,7 +240,38 @@ impl TransferFunction {
                 shade: doc.shade,
             },
             power: doc.power,
+            notes: Vec::new(),
         })
+    }
+}
+
+/// A window (width) and level (centre) on the value axis, in the volume's units (HU
+/// for CT), as radiology viewers set them. In JSON: `{"window": 400, "level": 40}`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindowLevel {
+    /// The width: positive and finite.
+    pub window: f64,
+    /// The centre: finite.
+    pub level: f64,
+}
+
+impl WindowLevel {
+    /// Checks the width is positive and both are finite.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if !(self.window.is_finite() && self.window > 0.0) {
+            return Err(RenderError::Parameter(format!(
+                "window {}: expected a positive width",
+                self.window
+            )));
+        }
+        if !self.level.is_finite() {
+            return Err(RenderError::Parameter(format!(
+                "level {}: expected a finite value",
+                self.level
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -197,6 +284,9 @@ pub struct TransferFunctionFile {
     pub material: MaterialOverrides,
     /// The specular power it sets (the lobe's n).
     pub power: Option<f64>,
+    /// What the file held that glint does not use (e.g. a Slicer gradient opacity),
+    /// one line each, for the user.
+    pub notes: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -261,6 +351,69 @@ mod tests {
         assert!((tf.opacity_at(2.5) - 0.25).abs() < 1e-12);
         assert_eq!(tf.opacity_at(50.0), 1.0);
         assert_eq!(tf.color_at(5.0), [0.5, 0.25, 0.0]);
+    }
+
+    #[test]
+    fn window_level_remaps_the_value_axis_linearly() {
+        // A ramp from 0 to 10: its window is 10 wide at level 5.
+        let tf = ramp();
+        assert_eq!(
+            tf.window_level(),
+            WindowLevel {
+                window: 10.0,
+                level: 5.0
+            }
+        );
+        let wl = tf
+            .with_window_level(WindowLevel {
+                window: 4.0,
+                level: 100.0,
+            })
+            .unwrap();
+        // The value at the level reads the function's centre; the window's ends its
+        // foot and top; a quarter of the way up, a quarter of the opacity.
+        assert!((wl.opacity_at(100.0) - 0.5).abs() < 1e-12);
+        assert_eq!(wl.opacity_at(98.0), 0.0);
+        assert_eq!(wl.opacity_at(102.0), 1.0);
+        assert!((wl.opacity_at(99.0) - 0.25).abs() < 1e-12);
+        assert_eq!(wl.color_at(100.0), tf.color_at(5.0));
+        assert_eq!(
+            wl.window_level(),
+            WindowLevel {
+                window: 4.0,
+                level: 100.0
+            }
+        );
+        // Slicer's ct-bone: the rise from -16.4458 to 641.385 HU.
+        let bone = crate::preset("ct-bone")
+            .unwrap()
+            .transfer_function(0.0)
+            .unwrap();
+        let own = bone.window_level();
+        assert!((own.window - 657.8308).abs() < 1e-9, "{own:?}");
+        assert!((own.level - 312.4696).abs() < 1e-9, "{own:?}");
+        // A falling ramp measures from its top to its foot.
+        let fall =
+            TransferFunction::from_flat(&[2.0, 1.0, 6.0, 0.0], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+        assert_eq!(
+            fall.window_level(),
+            WindowLevel {
+                window: 4.0,
+                level: 4.0
+            }
+        );
+        for bad in [
+            (0.0, 1.0),
+            (-3.0, 1.0),
+            (f64::NAN, 0.0),
+            (1.0, f64::INFINITY),
+        ] {
+            let target = WindowLevel {
+                window: bad.0,
+                level: bad.1,
+            };
+            assert!(tf.with_window_level(target).is_err(), "{bad:?}");
+        }
     }
 
     #[test]
