@@ -12,6 +12,8 @@ use glint_core::{srgb_to_linear, Legend, RenderError};
 use glint_io::{read_volume, Mesh, ReadOptions};
 use glint_labels::{label_surfaces, LabelGrid, LabelTable};
 use glint_volume::{LabelLook, LabelVolume};
+
+use crate::pick::LabelLookup;
 use serde::{Deserialize, Serialize};
 
 /// Smoothing of label surfaces when the scene gives none: a Gaussian of one voxel
@@ -164,12 +166,16 @@ pub(crate) struct LabelMeshes {
     pub(crate) meshes: Vec<Mesh>,
     /// Their colours, linear RGB.
     pub(crate) colors: Vec<[f32; 3]>,
+    /// Their label values.
+    pub(crate) values: Vec<u32>,
     /// The labels shown, in value order, when the scene asks for a legend.
     pub(crate) legend: Option<Legend>,
     /// The label grid's world box, voxel centres (min, max), mm.
     pub(crate) bounds: ([f64; 3], [f64; 3]),
     /// The labels shown as a label volume, when the spec asks for one.
     pub(crate) volume: Option<Arc<LabelVolume>>,
+    /// The label of every voxel and their names, for picks.
+    pub(crate) lookup: Arc<LabelLookup>,
 }
 
 impl LabelMeshes {
@@ -232,23 +238,27 @@ impl LabelMeshes {
             surfaces
                 .into_iter()
                 .filter(|(_, m)| !m.triangles.is_empty())
-                .map(|(v, m)| (m, linear(v)))
+                .map(|(v, m)| (m, (linear(v), v)))
                 .unzip()
         } else {
             (Vec::new(), Vec::new())
         };
+        let (colors, surface_values) = colors.into_iter().unzip();
         let legend = spec.legend.then(|| Legend {
             entries: values
                 .iter()
                 .map(|&v| (table.name_of(v), linear(v)))
                 .collect(),
         });
+        let bounds = grid.world_bounds();
         Ok(LabelMeshes {
             meshes,
             colors,
+            values: surface_values,
             legend,
-            bounds: grid.world_bounds(),
+            bounds,
             volume,
+            lookup: Arc::new(LabelLookup::new(grid, table)),
         })
     }
 

@@ -1,0 +1,349 @@
+//! Picking: the 3D point a pixel of a scene's image shows ([`Renderer::pick`]), with
+//! its voxel, value and label, traced as the frame traces that pixel's ray.
+
+use std::path::PathBuf;
+
+use glint_core::camera::Camera;
+use glint_core::{RenderError, Vec3};
+use glint_io::affine::{inverse3, linear_part, mul3};
+use glint_labels::{LabelGrid, LabelTable};
+use glint_volume::{Field, PICK_OPACITY};
+use serde::{Deserialize, Serialize};
+
+use crate::meshes::{MeshKind, MeshSet};
+use crate::renderer::Renderer;
+use crate::scene::{Plan, Scene};
+
+/// What a pick hit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum PickedObject {
+    /// The ray-cast volume (composite: where the accumulated opacity reached the
+    /// threshold; iso: the iso surface; MIP: the ray's maximum).
+    Volume,
+    /// A mesh of the scene.
+    Mesh {
+        /// Its position in [`Scene::meshes`].
+        index: usize,
+        /// Its file.
+        path: PathBuf,
+    },
+    /// The volume's isosurface (surface mode).
+    Isosurface,
+    /// The surface of a label of the scene's label map.
+    LabelSurface {
+        /// The label's value.
+        label: u32,
+    },
+    /// The scene's label map drawn as a label volume (its first drawn sample).
+    LabelVolume,
+}
+
+/// A label at a picked point.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PickLabel {
+    /// The label's value in the label map.
+    pub id: u32,
+    /// Its name in the scene's colour table (`label N` when the table has none).
+    pub name: String,
+}
+
+/// The point a pixel of a scene's image shows ([`Renderer::pick`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pick {
+    /// The image point picked, pixels from the image's left edge.
+    pub x: f64,
+    /// The image point picked, pixels from the image's top edge.
+    pub y: f64,
+    /// What was hit.
+    pub object: PickedObject,
+    /// The point, world mm (RAS+).
+    pub world_mm: [f64; 3],
+    /// Its distance along the ray, mm: from the eye (perspective) or from the image
+    /// plane (orthographic).
+    pub depth_mm: f64,
+    /// The point in the volume's voxel index space (continuous; `None` without a
+    /// volume).
+    pub voxel: Option<[f64; 3]>,
+    /// The voxel nearest the point (`None` off the volume's grid).
+    pub voxel_nearest: Option<[usize; 3]>,
+    /// The stored value of that voxel in the volume's units (after the file's
+    /// rescale: Hounsfield units for CT), as a radiology viewer shows it.
+    pub value: Option<f64>,
+    /// The value the renderer classified at the point: the reconstruction
+    /// (prefiltered, trilinear) value, same units.
+    pub interpolated: Option<f64>,
+    /// The volume's units, when the file names them (e.g. `HU`).
+    pub units: Option<String>,
+    /// The label at the point (`None` without a label map, off its grid, or in its
+    /// background, label 0).
+    pub label: Option<PickLabel>,
+    /// The ray's accumulated opacity at a volume hit (composite: the threshold; iso:
+    /// 1; MIP: the maximum's classified opacity); `None` for surfaces.
+    pub opacity: Option<f64>,
+}
+
+impl Pick {
+    /// The distance in mm between two picked points (a ruler).
+    pub fn distance_mm(&self, other: &Pick) -> f64 {
+        (0..3)
+            .map(|a| (self.world_mm[a] - other.world_mm[a]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+/// The label of every voxel of a scene's label map and the names of its table: what
+/// a pick reads its label from.
+#[derive(Clone, Debug)]
+pub(crate) struct LabelLookup {
+    dims: [usize; 3],
+    /// World mm to voxel index: the inverse of the grid's affine, linear part and
+    /// translation.
+    to_index: ([[f64; 3]; 3], [f64; 3]),
+    voxels: LabelVoxels,
+    table: LabelTable,
+}
+
+/// A label grid's values, two bytes a voxel when every value fits (nearly every
+/// segmentation), four otherwise.
+#[derive(Clone, Debug)]
+enum LabelVoxels {
+    U16(Vec<u16>),
+    U32(Vec<u32>),
+}
+
+impl LabelLookup {
+    /// The lookup of `grid` named by `table`.
+    pub(crate) fn new(grid: LabelGrid, table: LabelTable) -> LabelLookup {
+        let linear = linear_part(&grid.affine);
+        // The grid was placed in the world (its surfaces extracted) with this affine,
+        // which glint-io checked to be invertible; a singular one finds no label.
+        let inverse = inverse3(&linear).unwrap_or([[f64::NAN; 3]; 3]);
+        let shift = [0, 1, 2].map(|r| grid.affine[r][3]);
+        let voxels = match grid.labels.iter().all(|&v| v <= u32::from(u16::MAX)) {
+            true => LabelVoxels::U16(grid.labels.iter().map(|&v| v as u16).collect()),
+            false => LabelVoxels::U32(grid.labels),
+        };
+        LabelLookup {
+            dims: grid.dims,
+            to_index: (inverse, shift),
+            voxels,
+            table,
+        }
+    }
+
+    /// The label of the voxel nearest world point `p`; `None` off the grid or in the
+    /// background (0).
+    pub(crate) fn at(&self, p: [f64; 3]) -> Option<PickLabel> {
+        let (inverse, shift) = &self.to_index;
+        let index = mul3(inverse, [0, 1, 2].map(|a| p[a] - shift[a]));
+        let [i, j, k] = nearest(index, self.dims)?;
+        let n = i + self.dims[0] * (j + self.dims[1] * k);
+        let id = match &self.voxels {
+            LabelVoxels::U16(v) => u32::from(v[n]),
+            LabelVoxels::U32(v) => v[n],
+        };
+        (id != 0).then(|| PickLabel {
+            id,
+            name: self.table.name_of(id),
+        })
+    }
+}
+
+/// The voxel nearest index-space point `p` of a grid of `dims`; `None` off the grid
+/// (more than half a voxel past its outer voxel centres) or not finite.
+fn nearest(p: [f64; 3], dims: [usize; 3]) -> Option<[usize; 3]> {
+    let mut out = [0usize; 3];
+    for a in 0..3 {
+        let r = p[a].round();
+        if !(r >= 0.0 && r < dims[a] as f64) {
+            return None;
+        }
+        out[a] = r as usize;
+    }
+    Some(out)
+}
+
+/// Where the ray of one pixel stops, before the volume is looked at.
+struct Hit {
+    object: PickedObject,
+    depth: f32,
+    world: [f64; 3],
+    opacity: Option<f32>,
+}
+
+impl Renderer {
+    /// The point image point `(x, y)` of `scene`'s image shows ([`Renderer::pick_with`]
+    /// at the default opacity threshold, [`PICK_OPACITY`]).
+    pub fn pick(&mut self, scene: &Scene, x: f64, y: f64) -> Result<Option<Pick>, RenderError> {
+        self.pick_with(scene, x, y, PICK_OPACITY)
+    }
+
+    /// The point image point `(x, y)` of `scene`'s image shows: `(x, y)` in pixels
+    /// from the image's top-left corner (pixel `(i, j)` covers `[i, i + 1) x [j, j +
+    /// 1)`; its centre traces the same ray as the frame's pixel). One ray is traced
+    /// with the frame's camera, sampling and classification: in composite mode to the
+    /// first point where the accumulated opacity reaches `opacity` (in 0..1), in iso
+    /// mode to the iso surface, in MIP to the ray's maximum; meshes (and label
+    /// surfaces, and a label volume's first drawn sample) are hit where they are
+    /// nearer than the volume's point, as the frame hides the volume behind them.
+    ///
+    /// `None` when the pixel shows nothing. A point off the image is
+    /// [`RenderError::OffImage`]; nothing is rendered.
+    pub fn pick_with(
+        &mut self,
+        scene: &Scene,
+        x: f64,
+        y: f64,
+        opacity: f32,
+    ) -> Result<Option<Pick>, RenderError> {
+        let resolved = self.resolve(scene)?;
+        let (w, h) = match &resolved.plan {
+            Plan::Volume { frame, .. } => (frame.width, frame.height),
+            Plan::Surface { settings, .. } => (settings.width, settings.height),
+        };
+        if !(x >= 0.0 && x < f64::from(w) && y >= 0.0 && y < f64::from(h)) {
+            return Err(RenderError::OffImage {
+                x,
+                y,
+                width: w,
+                height: h,
+            });
+        }
+        // Pixel index coordinates: pixel (i, j)'s centre at (i, j).
+        let (px, py) = ((x - 0.5) as f32, (y - 0.5) as f32);
+        // The meshes `resolve` read for this scene (the cache may hold another
+        // scene's when this one has none).
+        let set = (scene.has_meshes() || scene.is_surface())
+            .then(|| self.meshes.as_ref().map(|(_, s)| s.clone()))
+            .flatten();
+        let hit = match &resolved.plan {
+            Plan::Volume {
+                tf,
+                classify,
+                frame,
+                meshes,
+                ..
+            } => {
+                let (class, _) = self.classification(tf, classify)?;
+                let camera = class.camera(frame)?;
+                let (o, d) = camera.ray(px, py, w, h);
+                let mut near = meshes
+                    .as_ref()
+                    .and_then(|m| m.surfaces.as_ref())
+                    .and_then(|s| surface_hit(s.pick(o, d), set.as_deref(), scene));
+                if let Some((labels, step)) = meshes.as_ref().and_then(|m| m.label_volume.as_ref())
+                {
+                    let end = near.as_ref().map_or(f32::INFINITY, |n| n.depth);
+                    let first =
+                        labels.first_drawn(&camera, &resolved.shader, (px, py), (w, h), *step, end);
+                    if let Some(t) = first {
+                        near = Some(Hit {
+                            object: PickedObject::LabelVolume,
+                            depth: t,
+                            world: world(o + d * t),
+                            opacity: None,
+                        });
+                    }
+                }
+                let end = near.as_ref().map_or(f32::INFINITY, |n| n.depth);
+                match class.pick(&resolved.shader, frame, (px, py), end, opacity)? {
+                    Some(v) => Some(Hit {
+                        object: PickedObject::Volume,
+                        depth: v.depth,
+                        world: v.world,
+                        opacity: Some(v.opacity),
+                    }),
+                    None => near,
+                }
+            }
+            Plan::Surface {
+                surfaces, settings, ..
+            } => {
+                let camera: Camera = surfaces.camera(settings)?;
+                let (o, d) = camera.ray(px, py, w, h);
+                surface_hit(surfaces.pick(o, d), set.as_deref(), scene)
+            }
+        };
+        Ok(hit.map(|hit| self.describe(hit, (x, y), set.as_deref())))
+    }
+
+    /// The pick of `hit` at image point `at`: its voxel and values from the field,
+    /// its label from the scene's label map.
+    fn describe(&self, hit: Hit, (x, y): (f64, f64), set: Option<&MeshSet>) -> Pick {
+        let field: Option<&Field> = self.field().map(|f| &**f);
+        let voxel = field.map(|f| f.world_to_index(hit.world));
+        let voxel_nearest = field.zip(voxel).and_then(|(f, v)| nearest(v, f.dims()));
+        let value = field
+            .zip(voxel_nearest)
+            .and_then(|(f, n)| f.sample(n))
+            .filter(|v| v.is_finite())
+            .map(f64::from);
+        let interpolated = field.zip(voxel).and_then(|(f, v)| {
+            let dims = f.dims();
+            let inside = (0..3).all(|a| v[a] >= 0.0 && v[a] <= (dims[a] - 1) as f64);
+            inside.then(|| f64::from(f.value(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))))
+        });
+        let label = match (&hit.object, set.and_then(|s| s.labels.as_ref())) {
+            // A label's surface is that label's, wherever its smoothed surface lies.
+            (PickedObject::LabelSurface { label }, Some(l)) => Some(PickLabel {
+                id: *label,
+                name: l.table.name_of(*label),
+            }),
+            (_, Some(l)) => l.at(hit.world),
+            (_, None) => None,
+        };
+        Pick {
+            x,
+            y,
+            object: hit.object,
+            world_mm: hit.world,
+            depth_mm: f64::from(hit.depth),
+            voxel,
+            voxel_nearest,
+            value,
+            interpolated,
+            units: self.units(),
+            label,
+            opacity: hit.opacity.map(f64::from),
+        }
+    }
+}
+
+/// The pick of a surface hit, named by what its mesh is in `set`.
+fn surface_hit(
+    hit: Option<glint_raster::SurfaceHit>,
+    set: Option<&MeshSet>,
+    scene: &Scene,
+) -> Option<Hit> {
+    let hit = hit?;
+    let kind = set.and_then(|s| s.kinds.get(hit.mesh).copied());
+    let object = match kind {
+        Some(MeshKind::Scene(k)) => PickedObject::Mesh {
+            index: k,
+            path: scene
+                .meshes
+                .get(k)
+                .map(|m| m.path.clone())
+                .unwrap_or_default(),
+        },
+        Some(MeshKind::Isosurface) => PickedObject::Isosurface,
+        Some(MeshKind::Label(v)) => PickedObject::LabelSurface { label: v },
+        None => PickedObject::Mesh {
+            index: hit.mesh,
+            path: PathBuf::new(),
+        },
+    };
+    Some(Hit {
+        object,
+        depth: hit.t,
+        world: world(hit.point),
+        opacity: None,
+    })
+}
+
+/// A point as f64 coordinates.
+fn world(p: Vec3) -> [f64; 3] {
+    [p.x, p.y, p.z].map(f64::from)
+}
