@@ -93,6 +93,34 @@ impl Pick {
     }
 }
 
+/// Where world point `p` (mm) lies on the image of `scene`, a scene resolved by a
+/// render (its [`Scene::derived`] camera, its size and projection): pixels from the
+/// image's top-left corner, as [`Renderer::pick`] takes them (the point a pick
+/// returns projects back to where it was picked). `None` without a derived camera,
+/// or for a point at or behind a perspective camera's eye.
+pub fn image_point(scene: &Scene, p: [f64; 3]) -> Option<[f64; 2]> {
+    let d = scene.derived.as_ref()?;
+    let v3 = |a: [f32; 3]| Vec3::new(a[0], a[1], a[2]);
+    let eye = v3(d.eye);
+    let forward = (v3(d.focal_point) - eye).normalize_or_zero();
+    let up = v3(d.view_up);
+    let right = forward.cross(up);
+    let r = Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) - eye;
+    let (mut u, mut v) = (f64::from(r.dot(right)), f64::from(r.dot(up)));
+    if scene.camera.projection == glint_core::camera::Projection::Perspective {
+        let z = f64::from(r.dot(forward));
+        if !(z > 1e-6) {
+            return None;
+        }
+        (u, v) = (u / z, v / z);
+    }
+    let [w, h] = scene.size.map(f64::from);
+    let hh = f64::from(d.parallel_scale);
+    let x = (u / (hh * w / h) + 1.0) * w / 2.0;
+    let y = (1.0 - v / hh) * h / 2.0;
+    (x.is_finite() && y.is_finite()).then_some([x, y])
+}
+
 /// The label of every voxel of a scene's label map and the names of its table: what
 /// a pick reads its label from.
 #[derive(Clone, Debug)]

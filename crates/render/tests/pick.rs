@@ -505,3 +505,22 @@ fn picks_name_the_label_at_the_point() {
     assert_eq!(pick.label.unwrap().name, "Left-Amygdala");
     assert_eq!(pick.voxel, None, "no volume");
 }
+
+#[test]
+fn picked_points_project_back_to_where_they_were_picked() {
+    for projection in [Projection::Perspective, Projection::Orthographic] {
+        let scene = scene(RenderMode::Iso, View::Left, projection);
+        let mut r = renderer();
+        let resolved = r.render(&scene, &|_| {}).unwrap().scene;
+        for (x, y) in [(24.0, 20.0), (17.3, 25.9), (30.5, 14.25)] {
+            let pick = r.pick(&scene, x, y).unwrap().unwrap();
+            let [px, py] = glint_render::image_point(&resolved, pick.world_mm).unwrap();
+            assert!(
+                (px - x).abs() < 0.01 && (py - y).abs() < 0.01,
+                "{projection:?} ({x}, {y}) projects to ({px}, {py})"
+            );
+        }
+    }
+    // A scene never rendered has no camera to project with.
+    assert_eq!(glint_render::image_point(&Scene::default(), [0.0; 3]), None);
+}
