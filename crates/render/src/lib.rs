@@ -91,9 +91,9 @@ pub use glint_volume::{
 pub use glint_volume::{
     LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
 };
-pub use labels::{LabelSpec, LabelsAs, DEFAULT_LABEL_SMOOTHING};
+pub use labels::{LabelSpec, LabelsAs, PickLabel, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
-pub use pick::{image_point, Pick, PickLabel, PickedObject};
+pub use pick::{image_point, Pick, PickedObject};
 pub use renderer::{InMemory, Rendered, Renderer};
 pub use scene::{
     Derived, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,

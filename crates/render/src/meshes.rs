@@ -12,8 +12,7 @@ use glint_core::{srgb_to_linear, ColorMap, Legend, Material, RenderError, Scalar
 use glint_raster::{Surfaces, SURFACE_COLOR};
 use glint_volume::LabelVolume;
 
-use crate::labels::{LabelMeshes, LabelSpec};
-use crate::pick::LabelLookup;
+use crate::labels::{LabelLookup, LabelMeshes, LabelSpec};
 
 /// Supersampling factor of surface renders when the scene gives none: 2x2 samples a
 /// pixel removes most stair-stepping at a quarter of 4x4's cost.

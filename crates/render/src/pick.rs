@@ -5,11 +5,10 @@ use std::path::PathBuf;
 
 use glint_core::camera::Camera;
 use glint_core::{RenderError, Vec3};
-use glint_io::affine::{inverse3, linear_part, mul3};
-use glint_labels::{LabelGrid, LabelTable};
 use glint_volume::{Field, PICK_OPACITY};
 use serde::{Deserialize, Serialize};
 
+use crate::labels::{nearest, PickLabel};
 use crate::meshes::{MeshKind, MeshSet};
 use crate::renderer::Renderer;
 use crate::scene::{Plan, Scene};
@@ -37,15 +36,6 @@ pub enum PickedObject {
     },
     /// The scene's label map drawn as a label volume (its first drawn sample).
     LabelVolume,
-}
-
-/// A label at a picked point.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct PickLabel {
-    /// The label's value in the label map.
-    pub id: u32,
-    /// Its name in the scene's colour table (`label N` when the table has none).
-    pub name: String,
 }
 
 /// The point a pixel of a scene's image shows ([`Renderer::pick`]).
@@ -109,7 +99,7 @@ pub fn image_point(scene: &Scene, p: [f64; 3]) -> Option<[f64; 2]> {
     let (mut u, mut v) = (f64::from(r.dot(right)), f64::from(r.dot(up)));
     if scene.camera.projection == glint_core::camera::Projection::Perspective {
         let z = f64::from(r.dot(forward));
-        if !(z > 1e-6) {
+        if z.is_nan() || z <= 1e-6 {
             return None;
         }
         (u, v) = (u / z, v / z);
@@ -119,78 +109,6 @@ pub fn image_point(scene: &Scene, p: [f64; 3]) -> Option<[f64; 2]> {
     let x = (u / (hh * w / h) + 1.0) * w / 2.0;
     let y = (1.0 - v / hh) * h / 2.0;
     (x.is_finite() && y.is_finite()).then_some([x, y])
-}
-
-/// The label of every voxel of a scene's label map and the names of its table: what
-/// a pick reads its label from.
-#[derive(Clone, Debug)]
-pub(crate) struct LabelLookup {
-    dims: [usize; 3],
-    /// World mm to voxel index: the inverse of the grid's affine, linear part and
-    /// translation.
-    to_index: ([[f64; 3]; 3], [f64; 3]),
-    voxels: LabelVoxels,
-    table: LabelTable,
-}
-
-/// A label grid's values, two bytes a voxel when every value fits (nearly every
-/// segmentation), four otherwise.
-#[derive(Clone, Debug)]
-enum LabelVoxels {
-    U16(Vec<u16>),
-    U32(Vec<u32>),
-}
-
-impl LabelLookup {
-    /// The lookup of `grid` named by `table`.
-    pub(crate) fn new(grid: LabelGrid, table: LabelTable) -> LabelLookup {
-        let linear = linear_part(&grid.affine);
-        // The grid was placed in the world (its surfaces extracted) with this affine,
-        // which glint-io checked to be invertible; a singular one finds no label.
-        let inverse = inverse3(&linear).unwrap_or([[f64::NAN; 3]; 3]);
-        let shift = [0, 1, 2].map(|r| grid.affine[r][3]);
-        let voxels = match grid.labels.iter().all(|&v| v <= u32::from(u16::MAX)) {
-            true => LabelVoxels::U16(grid.labels.iter().map(|&v| v as u16).collect()),
-            false => LabelVoxels::U32(grid.labels),
-        };
-        LabelLookup {
-            dims: grid.dims,
-            to_index: (inverse, shift),
-            voxels,
-            table,
-        }
-    }
-
-    /// The label of the voxel nearest world point `p`; `None` off the grid or in the
-    /// background (0).
-    pub(crate) fn at(&self, p: [f64; 3]) -> Option<PickLabel> {
-        let (inverse, shift) = &self.to_index;
-        let index = mul3(inverse, [0, 1, 2].map(|a| p[a] - shift[a]));
-        let [i, j, k] = nearest(index, self.dims)?;
-        let n = i + self.dims[0] * (j + self.dims[1] * k);
-        let id = match &self.voxels {
-            LabelVoxels::U16(v) => u32::from(v[n]),
-            LabelVoxels::U32(v) => v[n],
-        };
-        (id != 0).then(|| PickLabel {
-            id,
-            name: self.table.name_of(id),
-        })
-    }
-}
-
-/// The voxel nearest index-space point `p` of a grid of `dims`; `None` off the grid
-/// (more than half a voxel past its outer voxel centres) or not finite.
-fn nearest(p: [f64; 3], dims: [usize; 3]) -> Option<[usize; 3]> {
-    let mut out = [0usize; 3];
-    for a in 0..3 {
-        let r = p[a].round();
-        if !(r >= 0.0 && r < dims[a] as f64) {
-            return None;
-        }
-        out[a] = r as usize;
-    }
-    Some(out)
 }
 
 /// Where the ray of one pixel stops, before the volume is looked at.
@@ -317,7 +235,7 @@ impl Renderer {
             // A label's surface is that label's, wherever its smoothed surface lies.
             (PickedObject::LabelSurface { label }, Some(l)) => Some(PickLabel {
                 id: *label,
-                name: l.table.name_of(*label),
+                name: l.name_of(*label),
             }),
             (_, Some(l)) => l.at(hit.world),
             (_, None) => None,

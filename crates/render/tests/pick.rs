@@ -116,13 +116,14 @@ fn points(scene: &Scene) -> Vec<(f64, f64)> {
     out
 }
 
-/// Per image point: the ray's entry into the ball (None: it misses, or grazes it
-/// within `margin` mm of the silhouette, where either answer is right).
-fn entries(
-    camera: &Camera,
-    scene: &Scene,
-    margin: f64,
-) -> Vec<((f64, f64), Option<Option<[f64; 3]>>)> {
+/// What an image point should show: `Some(Some(entry))` where its ray enters the
+/// ball, `Some(None)` where it misses, `None` where it grazes the silhouette (either
+/// answer is right).
+type Expected = Option<Option<[f64; 3]>>;
+
+/// Per image point: the ray's entry into the ball (grazing: within `margin` mm of the
+/// silhouette).
+fn entries(camera: &Camera, scene: &Scene, margin: f64) -> Vec<((f64, f64), Expected)> {
     let c = centre();
     points(scene)
         .into_iter()

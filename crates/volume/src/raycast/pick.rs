@@ -69,7 +69,7 @@ impl Classification {
                 height: settings.height,
             });
         }
-        if !(threshold > 0.0 && threshold < 1.0) {
+        if threshold.is_nan() || threshold <= 0.0 || threshold >= 1.0 {
             return Err(RenderError::Parameter(format!(
                 "pick opacity threshold {threshold}: expected a number between 0 and 1 (exclusive)"
             )));
@@ -179,7 +179,8 @@ impl Caster<'_> {
         let value = |t: f32| self.field.value_in(ray.at(t), guard);
         let (a, b, c) = (value(t - self.dt), value(t), value(t + self.dt));
         let bend = a - 2.0 * b + c;
-        if !(bend < 0.0) {
+        // Not bending down (or NaN): no vertex to move to.
+        if bend.is_nan() || bend >= 0.0 {
             return t;
         }
         t + self.dt * (0.5 * (a - c) / bend).clamp(-0.5, 0.5)
@@ -194,7 +195,7 @@ impl Caster<'_> {
     fn crossing(&self, ray: &Ray, k: i64, from: f32, threshold: f32, guard: &Guard) -> f32 {
         let t_end = ray.t(k, self.dt);
         let t_start = ray.t(k - 1, self.dt).max(ray.t_entry);
-        if !(t_end > t_start) {
+        if t_end <= t_start || t_start.is_nan() {
             return t_end;
         }
         let h = (t_end - t_start) / REFINE as f32;
