@@ -44,6 +44,9 @@ enum Command {
     Render(cmd::render::Args),
     /// Render a scene with exact cos^n and with cheaper lobes; image metrics and a picture.
     Compare(cmd::compare::Args),
+    /// The 3D point a pixel of the rendered image shows (world mm, voxel, value,
+    /// label), as JSON.
+    Pick(cmd::pick::Args),
     /// Extract the isosurface of a volume as an STL, PLY or OBJ mesh.
     Mesh(cmd::mesh::Args),
     /// Evaluate lobes at given angles or cosines.
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cmd::render::run(args),
         Command::Compare(args) => cmd::compare::run(args),
         Command::Mesh(args) => cmd::mesh::run(args),
+        Command::Pick(args) => cmd::pick::run(args),
         Command::Eval(args) => cmd::eval::run(args),
         Command::Analyze(args) => cmd::analyze::run(args),
         Command::Bench(args) => cmd::bench::run(args),

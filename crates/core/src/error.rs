@@ -21,6 +21,20 @@ pub enum RenderError {
     /// A render parameter is out of range (size, step, zoom, light, ...).
     #[error("invalid parameter: {0}")]
     Parameter(String),
+    /// A picked image point lies off the image (a pick, `Renderer::pick`, or any
+    /// other query of one pixel): coordinates in pixels from the image's top-left
+    /// corner.
+    #[error("pick at ({x}, {y}) is off the {width}x{height} image: expected x in [0, {width}) and y in [0, {height}), pixels from the top-left corner")]
+    OffImage {
+        /// The point's x, pixels from the left edge.
+        x: f64,
+        /// The point's y, pixels from the top edge.
+        y: f64,
+        /// Image width in pixels.
+        width: u32,
+        /// Image height in pixels.
+        height: u32,
+    },
     /// A transfer function is malformed (unsorted points, values out of range, ...).
     #[error("invalid transfer function: {0}")]
     TransferFunction(String),

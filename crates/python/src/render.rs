@@ -146,6 +146,40 @@ impl Renderer {
         let scene = with_fields(&base, fields)?;
         self.render_scene(py, scene)
     }
+
+    /// The 3D point image point `(x, y)` of `scene`'s image shows (pixels from the
+    /// image's top-left corner; the centre of pixel (i, j) is (i + 0.5, j + 0.5)),
+    /// traced as the frame traces that pixel's ray: a dict as `glint pick` prints it
+    /// (`object`, `world_mm`, `depth_mm`, `voxel`, `voxel_nearest`, `value` in the
+    /// volume's units, `interpolated`, `units`, `label`, `opacity`), or None where
+    /// the pixel shows nothing. `opacity` is the composite mode's accumulated opacity
+    /// threshold. A point off the image raises ValueError.
+    #[pyo3(signature = (x, y, scene=None, opacity=glint_render::PICK_OPACITY, **fields))]
+    fn pick<'py>(
+        &self,
+        py: Python<'py>,
+        x: f64,
+        y: f64,
+        scene: Option<&Bound<'py, Scene>>,
+        opacity: f32,
+        fields: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
+        let mut scene = with_fields(&base, fields)?;
+        if let Some(p) = &self.path {
+            scene.input = Input::Path(p.clone());
+        }
+        let pick = crate::pool::detach(py, || {
+            let mut r = self
+                .inner
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            r.pick_with(&scene, x, y, opacity)
+        })?
+        .map_err(|e| render_error(py, e))?;
+        let json = serde_json::to_value(&pick).map_err(|e| errors::value_error(&e))?;
+        crate::json::to_py(py, &json)
+    }
 }
 
 /// Renders a volume (a `glint.Volume` or a path; None: the scene's own input) with a

@@ -37,6 +37,7 @@ mod avx2;
 mod ctx;
 mod cull;
 mod frame;
+mod pick;
 mod rect;
 mod shade;
 mod tile;
@@ -45,6 +46,8 @@ use std::mem::MaybeUninit;
 
 use glint_io::{IoError, Mesh};
 use rayon::prelude::*;
+
+pub use self::pick::SurfaceHit;
 
 use self::ctx::Ctx;
 use self::frame::Frame;

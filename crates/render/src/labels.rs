@@ -9,9 +9,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glint_core::{srgb_to_linear, Legend, RenderError};
+use glint_io::affine::{inverse3, linear_part, mul3};
 use glint_io::{read_volume, Mesh, ReadOptions};
 use glint_labels::{label_surfaces, LabelGrid, LabelTable};
 use glint_volume::{LabelLook, LabelVolume};
+
 use serde::{Deserialize, Serialize};
 
 /// Smoothing of label surfaces when the scene gives none: a Gaussian of one voxel
@@ -164,12 +166,16 @@ pub(crate) struct LabelMeshes {
     pub(crate) meshes: Vec<Mesh>,
     /// Their colours, linear RGB.
     pub(crate) colors: Vec<[f32; 3]>,
+    /// Their label values.
+    pub(crate) values: Vec<u32>,
     /// The labels shown, in value order, when the scene asks for a legend.
     pub(crate) legend: Option<Legend>,
     /// The label grid's world box, voxel centres (min, max), mm.
     pub(crate) bounds: ([f64; 3], [f64; 3]),
     /// The labels shown as a label volume, when the spec asks for one.
     pub(crate) volume: Option<Arc<LabelVolume>>,
+    /// The label of every voxel and their names, for picks.
+    pub(crate) lookup: Arc<LabelLookup>,
 }
 
 impl LabelMeshes {
@@ -232,23 +238,27 @@ impl LabelMeshes {
             surfaces
                 .into_iter()
                 .filter(|(_, m)| !m.triangles.is_empty())
-                .map(|(v, m)| (m, linear(v)))
+                .map(|(v, m)| (m, (linear(v), v)))
                 .unzip()
         } else {
             (Vec::new(), Vec::new())
         };
+        let (colors, surface_values) = colors.into_iter().unzip();
         let legend = spec.legend.then(|| Legend {
             entries: values
                 .iter()
                 .map(|&v| (table.name_of(v), linear(v)))
                 .collect(),
         });
+        let bounds = grid.world_bounds();
         Ok(LabelMeshes {
             meshes,
             colors,
+            values: surface_values,
             legend,
-            bounds: grid.world_bounds(),
+            bounds,
             volume,
+            lookup: Arc::new(LabelLookup::new(grid, table)),
         })
     }
 
@@ -313,4 +323,90 @@ fn label_volume(
         &grid.labels,
         &looks,
     )?))
+}
+
+/// A label at a picked point.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PickLabel {
+    /// The label's value in the label map.
+    pub id: u32,
+    /// Its name in the scene's colour table (`label N` when the table has none).
+    pub name: String,
+}
+
+/// The label of every voxel of a scene's label map and the names of its table: what
+/// a pick reads its label from.
+#[derive(Clone, Debug)]
+pub(crate) struct LabelLookup {
+    dims: [usize; 3],
+    /// World mm to voxel index: the inverse of the grid's affine, linear part and
+    /// translation.
+    to_index: ([[f64; 3]; 3], [f64; 3]),
+    voxels: LabelVoxels,
+    table: LabelTable,
+}
+
+/// A label grid's values, two bytes a voxel when every value fits (nearly every
+/// segmentation), four otherwise.
+#[derive(Clone, Debug)]
+enum LabelVoxels {
+    U16(Vec<u16>),
+    U32(Vec<u32>),
+}
+
+impl LabelLookup {
+    /// The lookup of `grid` named by `table`.
+    pub(crate) fn new(grid: LabelGrid, table: LabelTable) -> LabelLookup {
+        let linear = linear_part(&grid.affine);
+        // The grid was placed in the world (its surfaces extracted) with this affine,
+        // which glint-io checked to be invertible; a singular one finds no label.
+        let inverse = inverse3(&linear).unwrap_or([[f64::NAN; 3]; 3]);
+        let shift = [0, 1, 2].map(|r| grid.affine[r][3]);
+        let voxels = match grid.labels.iter().all(|&v| v <= u32::from(u16::MAX)) {
+            true => LabelVoxels::U16(grid.labels.iter().map(|&v| v as u16).collect()),
+            false => LabelVoxels::U32(grid.labels),
+        };
+        LabelLookup {
+            dims: grid.dims,
+            to_index: (inverse, shift),
+            voxels,
+            table,
+        }
+    }
+
+    /// The name of label `id` in the table.
+    pub(crate) fn name_of(&self, id: u32) -> String {
+        self.table.name_of(id)
+    }
+
+    /// The label of the voxel nearest world point `p`; `None` off the grid or in the
+    /// background (0).
+    pub(crate) fn at(&self, p: [f64; 3]) -> Option<PickLabel> {
+        let (inverse, shift) = &self.to_index;
+        let index = mul3(inverse, [0, 1, 2].map(|a| p[a] - shift[a]));
+        let [i, j, k] = nearest(index, self.dims)?;
+        let n = i + self.dims[0] * (j + self.dims[1] * k);
+        let id = match &self.voxels {
+            LabelVoxels::U16(v) => u32::from(v[n]),
+            LabelVoxels::U32(v) => v[n],
+        };
+        (id != 0).then(|| PickLabel {
+            id,
+            name: self.table.name_of(id),
+        })
+    }
+}
+
+/// The voxel nearest index-space point `p` of a grid of `dims`; `None` off the grid
+/// (more than half a voxel past its outer voxel centres) or not finite.
+pub(crate) fn nearest(p: [f64; 3], dims: [usize; 3]) -> Option<[usize; 3]> {
+    let mut out = [0usize; 3];
+    for a in 0..3 {
+        let r = p[a].round();
+        if !(r >= 0.0 && r < dims[a] as f64) {
+            return None;
+        }
+        out[a] = r as usize;
+    }
+    Some(out)
 }

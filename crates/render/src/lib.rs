@@ -59,6 +59,7 @@ mod animation;
 mod hwlobe;
 mod labels;
 mod meshes;
+mod pick;
 mod renderer;
 mod scene;
 mod turntable;
@@ -85,13 +86,14 @@ pub use glint_volume::{phantom, presets};
 pub use glint_volume::{
     preset, Classification, ClassifySettings, Field, FrameSettings, Kernel, Phantom, Prefilter,
     Preset, Sampling, Source, TfFormat, TransferFunction, TransferFunctionFile, WindowLevel,
-    MACRO_CELL, MAX_FIELD_VOXELS, PRESETS, TERMINATION_OPACITY,
+    MACRO_CELL, MAX_FIELD_VOXELS, PICK_OPACITY, PRESETS, TERMINATION_OPACITY,
 };
 pub use glint_volume::{
     LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
 };
-pub use labels::{LabelSpec, LabelsAs, DEFAULT_LABEL_SMOOTHING};
+pub use labels::{LabelSpec, LabelsAs, PickLabel, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
+pub use pick::{image_point, Pick, PickedObject};
 pub use renderer::{InMemory, Rendered, Renderer};
 pub use scene::{
     Derived, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,

@@ -12,7 +12,7 @@ use glint_core::{srgb_to_linear, ColorMap, Legend, Material, RenderError, Scalar
 use glint_raster::{Surfaces, SURFACE_COLOR};
 use glint_volume::LabelVolume;
 
-use crate::labels::{LabelMeshes, LabelSpec};
+use crate::labels::{LabelLookup, LabelMeshes, LabelSpec};
 
 /// Supersampling factor of surface renders when the scene gives none: 2x2 samples a
 /// pixel removes most stair-stepping at a quarter of 4x4's cost.
@@ -150,6 +150,21 @@ pub(crate) struct MeshSet {
     pub(crate) legend: Option<Legend>,
     /// The label map as a label volume, when the scene draws it so.
     pub(crate) label_volume: Option<Arc<LabelVolume>>,
+    /// What each mesh of `surfaces` is, in their order (what a pick names).
+    pub(crate) kinds: Vec<MeshKind>,
+    /// The label map's voxels and names, when the scene has one (picks).
+    pub(crate) labels: Option<Arc<LabelLookup>>,
+}
+
+/// What a mesh of a [`MeshSet`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum MeshKind {
+    /// The scene's mesh `k` ([`Scene::meshes`](crate::Scene::meshes)).
+    Scene(usize),
+    /// The volume's isosurface (surface mode).
+    Isosurface,
+    /// The surface of the label with this value.
+    Label(u32),
 }
 
 impl MeshSet {
@@ -187,7 +202,14 @@ impl MeshSet {
         let mut extra_colors = Vec::new();
         let mut legend = None;
         let mut label_volume = None;
+        let mut kinds: Vec<MeshKind> = (0..specs.len()).map(MeshKind::Scene).collect();
+        if extra.is_some() {
+            kinds.push(MeshKind::Isosurface);
+        }
+        let mut lookup = None;
         if let Some(l) = label_meshes {
+            kinds.extend(l.values.iter().map(|&v| MeshKind::Label(v)));
+            lookup = Some(l.lookup);
             label_volume = l.volume;
             if extra.is_some() {
                 extra_colors.push(SURFACE_COLOR);
@@ -214,6 +236,8 @@ impl MeshSet {
             extra_colors,
             legend,
             label_volume,
+            kinds,
+            labels: lookup,
         })
     }
 

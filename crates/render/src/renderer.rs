@@ -294,6 +294,15 @@ impl Renderer {
         &self.notes
     }
 
+    /// The units of the volume's values when its file names them (e.g. `HU`);
+    /// `None` for a renderer made from a field or a streamed source.
+    pub(crate) fn units(&self) -> Option<String> {
+        match &self.source {
+            Some(Kept::Volume(v)) => v.units.clone(),
+            _ => None,
+        }
+    }
+
     /// Builds the field with `prefilter` when it is not built yet or was built with
     /// another one (and forgets what depended on it); nothing without a volume.
     fn use_prefilter(&mut self, prefilter: Prefilter) -> Result<(), RenderError> {

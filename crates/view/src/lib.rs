@@ -43,6 +43,7 @@ pub mod access;
 pub mod histogram;
 pub mod labels;
 pub mod levels;
+mod pick;
 pub mod protocol;
 mod session;
 
@@ -65,6 +66,7 @@ pub use access::{is_loopback, Access, Token};
 pub use histogram::{Histogram, HISTOGRAM_BINS};
 pub use labels::{LabelInfo, LabelList};
 pub use levels::PyramidLevel;
+pub use pick::MAX_MARKS;
 pub use session::{apply_patch, next_samples, render_frame, Frame, MAX_VIEW_SIDE};
 
 use levels::Stage;
@@ -278,8 +280,8 @@ pub async fn serve(
     axum::serve(listener, app).await
 }
 
-/// The viewer's routes: `/` (the page), `/app.js`, `/tfedit.js`, `/style.css`, `/ws`, behind the
-/// checks of `access`.
+/// The viewer's routes: `/` (the page), `/app.js`, `/tfedit.js`, `/pick.js`, `/style.css`,
+/// `/ws`, behind the checks of `access`.
 pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
     Router::new()
         .route("/", get(|| async { Html(include_str!("page/index.html")) }))
@@ -298,6 +300,15 @@ pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
                 (
                     [(header::CONTENT_TYPE, "text/javascript")],
                     include_str!("page/tfedit.js"),
+                )
+            }),
+        )
+        .route(
+            "/pick.js",
+            get(|| async {
+                (
+                    [(header::CONTENT_TYPE, "text/javascript")],
+                    include_str!("page/pick.js"),
                 )
             }),
         )
@@ -476,6 +487,9 @@ struct Pending {
     settle: Option<tokio::time::Instant>,
     /// Samples per pixel the last full frame of the current state held (`path`).
     reached: u32,
+    /// The resolved scene and update of the last frame shown: new marks are drawn
+    /// on it at once.
+    shown: Option<(Scene, u32)>,
 }
 
 impl Pending {
@@ -528,6 +542,17 @@ async fn finished(
                     pending.refine();
                 }
             }
+            // The marks on this frame, before it (the page draws them with it).
+            let marked = !state.marks.is_empty() && state.split == Split::Off;
+            if marked && purpose != Purpose::Save {
+                let marks = state.marks.projected(&frame.scene, frame.seq);
+                if !send_json(socket, &marks).await {
+                    return false;
+                }
+            }
+            if purpose != Purpose::Save {
+                pending.shown = Some((frame.scene.clone(), frame.seq));
+            }
             if socket
                 .send(Message::Binary(frame.message.into()))
                 .await
@@ -568,6 +593,39 @@ async fn finished(
     send_json(socket, &ServerMessage::Error { message }).await
 }
 
+/// Picks and marks pixel `at` of the client's scene (as its frames show it, hidden
+/// labels hidden) and answers; then the marks on the frame shown now (the frames
+/// after it bring theirs). `false`: the socket is gone.
+async fn answer_pick(
+    socket: &mut WebSocket,
+    viewer: &Viewer,
+    renderer: &Mutex<Renderer>,
+    state: &mut ClientState,
+    pending: &Pending,
+    at: (f64, f64),
+) -> bool {
+    let mut scene = state.scene.clone();
+    if let Some(list) = viewer.labels() {
+        scene = list.visible(&scene);
+    }
+    let answer = {
+        let mut r = renderer.lock().unwrap_or_else(|e| e.into_inner());
+        state.marks.pick(&mut r, &scene, at)
+    };
+    let msg = answer.unwrap_or_else(|e| ServerMessage::Error {
+        message: glint_io::one_line(&e),
+    });
+    if !send_json(socket, &msg).await {
+        return false;
+    }
+    match &pending.shown {
+        Some((shown, seq)) if !state.marks.is_empty() => {
+            send_json(socket, &state.marks.projected(shown, *seq)).await
+        }
+        _ => true,
+    }
+}
+
 async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     let mut stages = viewer.refined.subscribe();
     let stage = stages.borrow_and_update().clone();
@@ -583,12 +641,14 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         scene: viewer.scene.clone(),
         split: Split::Off,
         seq: 0,
+        marks: pick::Marks::default(),
     };
     let mut pending = Pending {
         wanted: Wanted::Frame(Purpose::Full),
         save: false,
         settle: None,
         reached: 0,
+        shown: None,
     };
     let mut inflight: Option<FrameJob> = None;
     loop {
@@ -640,6 +700,13 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                         }
                     }
                     Ok(Action::Save) => pending.save = true,
+                    Ok(Action::Pick(x, y)) => {
+                        if !answer_pick(&mut socket, &viewer, &renderer, &mut state, &pending, (x, y)).await { return }
+                    }
+                    Ok(Action::Unmarked) => {
+                        let msg = ServerMessage::Marks { seq: state.seq, points: Vec::new(), distance_mm: None };
+                        if !send_json(&mut socket, &msg).await { return }
+                    }
                     Err(e) => {
                         let message = glint_io::one_line(&e);
                         if !send_json(&mut socket, &ServerMessage::Error { message }).await { return }
@@ -665,12 +732,20 @@ struct ClientState {
     scene: Scene,
     split: Split,
     seq: u32,
+    /// Picked points (a point, or a ruler's ends).
+    marks: pick::Marks,
 }
 
 /// What a client message asks for.
 enum Action {
-    Render { interactive: bool },
+    Render {
+        interactive: bool,
+    },
     Save,
+    /// Pick and mark the pixel at `(x, y)` of the full-resolution image.
+    Pick(f64, f64),
+    /// Tell the page the marks are gone.
+    Unmarked,
 }
 
 impl ClientState {
@@ -713,6 +788,14 @@ impl ClientState {
                 Ok(Action::Render { interactive: false })
             }
             ClientMessage::Save {} => Ok(Action::Save),
+            ClientMessage::Pick { .. } if self.split != Split::Off => Err(ViewError::Message(
+                "picking needs the single view: set split to off".into(),
+            )),
+            ClientMessage::Pick { x, y } => Ok(Action::Pick(x, y)),
+            ClientMessage::Unmark {} => {
+                self.marks.clear();
+                Ok(Action::Unmarked)
+            }
         }
     }
 }

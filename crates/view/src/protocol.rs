@@ -28,6 +28,19 @@ pub enum ClientMessage {
     },
     /// Send the full-resolution PNG and the resolved scene, for download.
     Save {},
+    /// Pick the point pixel `(x, y)` of the full-resolution image shows (pixels from
+    /// its top-left corner) and mark it: the first mark is a point, the second makes
+    /// a ruler with the first, a third starts again. Answered by
+    /// [`ServerMessage::Pick`]; every frame after it comes with
+    /// [`ServerMessage::Marks`].
+    Pick {
+        /// Pixels from the image's left edge.
+        x: f64,
+        /// Pixels from the image's top edge.
+        y: f64,
+    },
+    /// Remove the marks.
+    Unmark {},
 }
 
 /// What a frame shows.
@@ -89,6 +102,28 @@ pub enum ServerMessage {
         /// where the page's window/level drag starts; absent without one (surfaces).
         #[serde(skip_serializing_if = "Option::is_none")]
         window_level: Option<glint_render::WindowLevel>,
+    },
+    /// The answer to [`ClientMessage::Pick`].
+    Pick {
+        /// What the pixel shows (`glint_render::Pick` as JSON), null where it shows
+        /// nothing (no mark is made then).
+        pick: serde_json::Value,
+        /// The marks now, world mm (at most two).
+        marks: Vec<[f64; 3]>,
+        /// The ruler's length, mm, when there are two marks.
+        distance_mm: Option<f64>,
+    },
+    /// Where the marks lie on the frame that follows (sent before every frame while
+    /// there are marks, and with no points after [`ClientMessage::Unmark`]): per mark,
+    /// its position as fractions of the image's width and height from the top-left
+    /// corner, projected with that frame's camera (null: behind the eye).
+    Marks {
+        /// The update the frame reflects.
+        seq: u32,
+        /// Per mark, `[x / width, y / height]`.
+        points: Vec<Option<[f64; 2]>>,
+        /// The ruler's length, mm, when there are two marks.
+        distance_mm: Option<f64>,
     },
     /// A message was refused; the previous state stays.
     Error {

@@ -454,6 +454,20 @@ impl Field {
         )
     }
 
+    /// The stored sample of voxel `ijk` in physical units (the source's value after
+    /// its rescale, before the prefilter: what a radiology viewer shows for the
+    /// voxel); `None` off the grid.
+    pub fn sample(&self, ijk: [usize; 3]) -> Option<f32> {
+        if (0..3).any(|a| ijk[a] >= self.dims[a]) {
+            return None;
+        }
+        let mut out = [0.0f32];
+        self.recipe
+            .source
+            .read(ijk.map(|i| i as isize), [1, 1, 1], &mut out);
+        Some(out[0])
+    }
+
     /// Trilinear value at `p` (index units).
     #[inline(always)]
     pub fn value(&self, p: Vec3) -> f32 {

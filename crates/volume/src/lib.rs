@@ -59,7 +59,9 @@ pub use field::{
 pub use frames::Transport;
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
-pub use raycast::{FrameSettings, Kernel, LabelLook, LabelVolume, TERMINATION_OPACITY};
+pub use raycast::{
+    FrameSettings, Kernel, LabelLook, LabelVolume, VolumeHit, PICK_OPACITY, TERMINATION_OPACITY,
+};
 pub use transport::{
     check_spp, LightingModel, Occluders, PathImage, PathSettings, ShadowField, ShadowSettings,
     MAX_BOUNCES, MAX_SPP,

@@ -11,6 +11,7 @@ pub mod info;
 pub mod info_labels;
 pub mod label_flags;
 pub mod mesh;
+pub mod pick;
 pub mod render;
 pub mod scene_flags;
 mod spinner;

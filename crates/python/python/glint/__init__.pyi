@@ -159,6 +159,18 @@ class Renderer:
     def __init__(self, volume: Union[Volume, _Path]) -> None: ...
     def render(self, scene: Optional[Scene] = None, **fields: Any) -> Image:
         """Renders scene (default Scene()) with fields replaced; its input is ignored."""
+    def pick(
+        self,
+        x: float,
+        y: float,
+        scene: Optional[Scene] = None,
+        opacity: float = 0.5,
+        **fields: Any,
+    ) -> Optional[Dict[str, Any]]:
+        """The 3D point image point (x, y) (pixels from the top-left corner) of the
+        scene's image shows, as ``glint pick`` prints it (object, world_mm, depth_mm,
+        voxel, voxel_nearest, value, interpolated, units, label, opacity); None where
+        nothing shows. A point off the image raises ValueError."""
 
 def render(
     volume: Union[Volume, _Path, None] = None, scene: Optional[Scene] = None, **fields: Any

@@ -5,6 +5,8 @@ const $ = (id) => document.getElementById(id);
 const canvas = $("frame");
 const ctx = canvas.getContext("2d");
 const glint = (window.glint = { level: null, frameLevels: [], frames: 0, full: 0, samples: 0, sampleLog: [], latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
+// Scripts beside this one (pick.js) see every text message and send their own.
+glint.hooks = { message: [] };
 let seq = 0;
 let scene = null;
 // The pyramid level of an OME-Zarr store the frames come from ("" otherwise).
@@ -21,6 +23,7 @@ ws.binaryType = "arraybuffer";
 function send(msg) {
   if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
 }
+glint.send = send;
 
 // Sends a partial scene; interactive updates get a quick half-size frame.
 function update(patch, interactive = false) {
@@ -42,6 +45,7 @@ ws.onmessage = (ev) => { handled = handled.then(() => handle(ev)).catch((e) => g
 async function handle(ev) {
   if (typeof ev.data === "string") {
     const msg = JSON.parse(ev.data);
+    for (const hook of glint.hooks.message) hook(msg);
     if (msg.type === "hello") {
       scene = msg.scene;
       fill($("preset"), msg.presets);

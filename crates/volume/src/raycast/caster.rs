@@ -315,6 +315,8 @@ impl Caster<'_> {
         self.lut.position(self.field.value_at(&loc, guard))
     }
 
+    /// The iso mode's ray: the surface at `threshold` shaded where the ray first
+    /// meets it ([`Caster::iso_hit`]), or nothing.
     pub(super) fn iso(
         &self,
         ray: &Ray,
@@ -322,6 +324,28 @@ impl Caster<'_> {
         threshold: f32,
         guard: &Guard,
     ) -> ([f32; 3], f32) {
+        let Some(hi) = self.iso_hit(ray, threshold, guard) else {
+            return ([0.0; 3], 0.0);
+        };
+        let p = ray.at(hi);
+        let e = self.lut.get(threshold);
+        let g = self.field.gradient_in(p, guard);
+        let lighting = self.shader.for_ray(view);
+        let base = match self.colour {
+            Some(c) => c.at(&self.field.locate(p)),
+            None => [e[0], e[1], e[2]],
+        };
+        let rgb = match self.shadows {
+            None => self.shader.shade(base, g, &lighting),
+            Some(s) => self.shade_shadowed(s, p, base, g, &lighting),
+        };
+        (rgb, 1.0)
+    }
+
+    /// The ray parameter (mm) where `ray` first reaches `threshold`: the first sample
+    /// at or above it, refined by bisection and a linear step towards the sample
+    /// before; `None` when no sample reaches it.
+    pub(super) fn iso_hit(&self, ray: &Ray, threshold: f32, guard: &Guard) -> Option<f32> {
         let value = |p: Vec3| self.field.value_in(p, guard);
         let mut k = ray.k0;
         let mut cached_cell = usize::MAX;
@@ -358,27 +382,27 @@ impl Caster<'_> {
                         hi = lo + (hi - lo) * ((threshold - vl) / (vh - vl)).clamp(0.0, 1.0);
                     }
                 }
-                let p = ray.at(hi);
-                let e = self.lut.get(threshold);
-                let g = self.field.gradient_in(p, guard);
-                let lighting = self.shader.for_ray(view);
-                let base = match self.colour {
-                    Some(c) => c.at(&self.field.locate(p)),
-                    None => [e[0], e[1], e[2]],
-                };
-                let rgb = match self.shadows {
-                    None => self.shader.shade(base, g, &lighting),
-                    Some(s) => self.shade_shadowed(s, p, base, g, &lighting),
-                };
-                return (rgb, 1.0);
+                return Some(hi);
             }
             k += 1;
         }
-        ([0.0; 3], 0.0)
+        None
     }
 
+    /// The MIP mode's ray: the classified colour of its maximum ([`Caster::mip_max`]).
     pub(super) fn mip(&self, ray: &Ray, guard: &Guard) -> ([f32; 3], f32) {
+        let Some((best, _)) = self.mip_max(ray, guard) else {
+            return ([0.0; 3], 0.0);
+        };
+        let e = self.lut.get(best);
+        ([e[0] * e[3], e[1] * e[3], e[2] * e[3]], e[3])
+    }
+
+    /// The largest value of `ray`'s samples and the ray parameter (mm) of the first
+    /// sample that holds it; `None` when it takes no finite sample.
+    pub(super) fn mip_max(&self, ray: &Ray, guard: &Guard) -> Option<(f32, f32)> {
         let mut best = f32::NEG_INFINITY;
+        let mut best_k = ray.k0;
         let mut k = ray.k0;
         while k <= ray.k1 {
             let p = ray.at(ray.t(k, self.dt));
@@ -390,14 +414,13 @@ impl Caster<'_> {
                     continue;
                 }
             }
-            best = best.max(self.field.value_in(p, guard));
+            let v = self.field.value_in(p, guard);
+            if v > best {
+                (best, best_k) = (v, k);
+            }
             k += 1;
         }
-        if !best.is_finite() {
-            return ([0.0; 3], 0.0);
-        }
-        let e = self.lut.get(best);
-        ([e[0] * e[3], e[1] * e[3], e[2] * e[3]], e[3])
+        best.is_finite().then(|| (best, ray.t(best_k, self.dt)))
     }
 }
 

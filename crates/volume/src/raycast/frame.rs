@@ -75,6 +75,41 @@ impl Classification {
         Camera::frame(&settings.camera, center, extent * margin, w, h)
     }
 
+    /// The ray caster of a frame of `settings` seen by `camera` (from
+    /// [`Classification::camera`]), lit by `shader` (placed for `camera`): what
+    /// the frame's rays and a pick's one ray ([`Classification::pick`]) share.
+    pub(super) fn caster<'a>(
+        &'a self,
+        camera: &Camera,
+        shader: &'a Shader,
+        settings: &'a FrameSettings,
+        jitter: bool,
+        shadows: Option<&'a ShadowField>,
+    ) -> Caster<'a> {
+        let field = &*self.field;
+        Caster {
+            field,
+            lut: &self.lut,
+            distance: &self.distance,
+            clip_box: (
+                self.clip_box.0.map(|x| x as f32),
+                self.clip_box.1.map(|x| x as f32),
+            ),
+            rays: IndexRays::new(camera, field, settings.width, settings.height),
+            shader,
+            frame: settings,
+            mode: self.settings.mode,
+            iso_value: self.settings.iso,
+            skip_empty: self.settings.skip_empty,
+            dt: (self.settings.step * field.min_spacing()) as f32,
+            simd: settings.kernel == Kernel::Auto && simd_supported() && self.colour.is_none(),
+            jitter,
+            sampling: self.settings.sampling,
+            shadows,
+            colour: self.colour.as_deref(),
+        }
+    }
+
     /// The ray caster's frame ([`Classification::frame`] under the `local` and
     /// `shadows` models) with the per-pixel [`jitter`](super::caster::jitter) on or off
     /// (off only in tests that compare the two), rays stopped at `far` when given
@@ -97,30 +132,9 @@ impl Classification {
         let field = &*self.field;
         field.make_room();
         let (w, h) = (settings.width as usize, settings.height as usize);
-        let rays = IndexRays::new(&camera, field, settings.width, settings.height);
-        let starts =
-            (!self.blocks.is_empty()).then(|| StartBounds::new(&self.blocks, &rays, &camera, w, h));
-        let caster = Caster {
-            field,
-            lut: &self.lut,
-            distance: &self.distance,
-            clip_box: (
-                self.clip_box.0.map(|x| x as f32),
-                self.clip_box.1.map(|x| x as f32),
-            ),
-            rays,
-            shader,
-            frame: settings,
-            mode: self.settings.mode,
-            iso_value: self.settings.iso,
-            skip_empty: self.settings.skip_empty,
-            dt: (self.settings.step * field.min_spacing()) as f32,
-            simd: settings.kernel == Kernel::Auto && simd_supported() && self.colour.is_none(),
-            jitter,
-            sampling: self.settings.sampling,
-            shadows,
-            colour: self.colour.as_deref(),
-        };
+        let caster = self.caster(&camera, shader, settings, jitter, shadows);
+        let starts = (!self.blocks.is_empty())
+            .then(|| StartBounds::new(&self.blocks, &caster.rays, &camera, w, h));
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
             .into_par_iter()

@@ -216,6 +216,32 @@ impl LabelVolume {
         Ok((image, far))
     }
 
+    /// The distance (mm, as [`LabelVolume::render_layer`]'s) to the first label
+    /// sample the ray through pixel `(x, y)` (pixel index coordinates, centres at
+    /// whole numbers) of a `width` x `height` image by `camera` shows, the ray
+    /// stopped at `end`: a pick of the label volume. `None` when it shows none.
+    pub fn first_drawn(
+        &self,
+        camera: &Camera,
+        shader: &Shader,
+        (x, y): (f32, f32),
+        (width, height): (u32, u32),
+        step: f64,
+        end: f32,
+    ) -> Option<f32> {
+        let (o, d) = camera.ray(x, y, width, height);
+        let march = March {
+            jitter: jitter(x, y),
+            end,
+            dt: (step * self.min_spacing) as f32,
+        };
+        let shader = shader.placed(camera);
+        let first = self
+            .cast(o, d, &march, &shader, &mut RenderStats::default())
+            .2;
+        first.is_finite().then_some(first)
+    }
+
     /// Premultiplied colour, opacity and first drawn sample's distance (mm) of the
     /// world ray from `o` along unit `d`.
     fn cast(

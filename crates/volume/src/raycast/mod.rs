@@ -4,6 +4,7 @@
 mod caster;
 mod frame;
 mod labels;
+mod pick;
 mod settings;
 mod start;
 
@@ -17,6 +18,7 @@ use avx2::Scratch;
 type Scratch = ();
 
 pub use labels::{LabelLook, LabelVolume};
+pub use pick::{VolumeHit, PICK_OPACITY};
 pub use settings::{FrameSettings, Kernel};
 
 /// Accumulated opacity at which a ray stops (early ray termination, Levoy 1990).
