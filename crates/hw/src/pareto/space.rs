@@ -13,6 +13,12 @@
 //!   bound against `cos^n` over every `n` (0.5, 1, 2, 4, 8 LSB).
 //! - **Schlick**: quotient and input widths sized for a bound against Schlick's own
 //!   form (0.5, 1, 2 LSB); against `cos^n` Schlick is 50+ LSB away at any width.
+//! - **Equal terms** (space 3, issue 46): K_v (v = 3, 4, 5) sized by the same greedy
+//!   search against the same `cos^n` budgets as the exact unit ([`POWER_BUDGETS`]:
+//!   error over n 16-1023, where K_v can meet them; K_v is 34-38 LSB off for n < 16
+//!   at 8 bits), as ROM1 with generic multipliers, constant multiplier with truncated
+//!   squarers and constant multiplier with generic multipliers; the exact unit sized at
+//!   the same budgets (over every n).
 
 use serde::{Deserialize, Serialize};
 
@@ -147,6 +153,127 @@ fn kv_row(
     Ok(out_rows)
 }
 
+/// The `cos^n` budgets (output LSBs) every family is sized for, per output width.
+pub const POWER_BUDGETS: [(u32, &[f64]); 2] = [
+    (8, &[2.6, 3.0, 4.0, 5.0, 6.0, 8.0]),
+    (10, &[10.0, 12.0, 16.0]),
+];
+
+/// Error of a K_v design against `cos^n` over n 16-1023, within `budget`?
+fn kv_meets(c: &Config, budget: f64) -> Result<bool, HwError> {
+    Ok(Design::Kv(c.clone()).errors()?.power_16_up() <= budget + BOUND_SLACK_LSB)
+}
+
+/// The K_v designs sized by the greedy search of `sweep.rs` for `budget` LSB against
+/// `cos^n` (the `n` where an ideal K_v unit meets it), kept only if the design meets
+/// the budget over every n 16-1023.
+fn kv_power_row(
+    v: u32,
+    out: u32,
+    budget: f64,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let target = Target {
+        reference: Reference::Power,
+        bound: budget,
+    };
+    let row = sweep_row(
+        &kv_base(v, out, Coefficients::EnergyFit),
+        target,
+        &mut |_| {},
+    )?;
+    let cfg = match row.config {
+        Some(cfg) if kv_meets(&cfg, budget)? => cfg,
+        _ => {
+            progress(&format!(
+                "kv v={v} out={out} cos^n<={budget}: not reached for n 16-1023"
+            ));
+            return Ok(Vec::new());
+        }
+    };
+    let tag = format!("o{out}-pow{}", fmt_bound(budget));
+    let t = format!("cos^n <= {} (n >= 16)", fmt_bound(budget));
+    let mk = |name: &str, c: Config| Candidate {
+        id: format!("kv{v}-{name}-{tag}"),
+        target: t.clone(),
+        design: Design::Kv(c),
+    };
+    let with = |source: CoefSource, squarer: Squarer, guard: u32| Config {
+        coef_source: source,
+        squarer,
+        square_guard: guard,
+        ..cfg.clone()
+    };
+    let mut rows = vec![
+        mk("rom-gen", cfg.clone()),
+        mk("const-gen", with(CoefSource::Const, Squarer::Generic, 2)),
+    ];
+    for guard in 1..=12 {
+        let c = with(CoefSource::Const, Squarer::Truncated, guard);
+        if kv_meets(&c, budget)? {
+            rows.push(mk("const-trunc", c));
+            break;
+        }
+    }
+    progress(&format!(
+        "kv v={v} out={out} cos^n<={budget}: {} designs (widths {}/{}/{:?})",
+        rows.len(),
+        cfg.coef_bits,
+        cfg.mul_frac,
+        cfg.square_frac
+    ));
+    Ok(rows)
+}
+
+/// The exact unit sized for `budget` against `cos^n` over every n (interpolated and
+/// plain tables), as candidates.
+fn pow_rows(
+    o: u32,
+    budget: f64,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let mut out = Vec::new();
+    for interp in [true, false] {
+        let name = if interp { "interp" } else { "plain" };
+        match pow_sized(o, budget, interp)? {
+            Some(params) => {
+                progress(&format!("pow {name} out={o} cos^n<={budget}: {params:?}"));
+                out.push(Candidate {
+                    id: format!("pow-{name}-o{o}-pow{}", fmt_bound(budget)),
+                    target: format!("cos^n <= {}", fmt_bound(budget)),
+                    design: Design::Pow {
+                        out_bits: o,
+                        params,
+                    },
+                });
+            }
+            None => progress(&format!(
+                "pow {name} out={o} cos^n<={budget}: not reached with the largest tables"
+            )),
+        }
+    }
+    Ok(out)
+}
+
+/// Space 3's designs beyond the first space: K_v and the exact unit at every budget of
+/// [`POWER_BUDGETS`] (the exact unit's budgets already in the first space are skipped).
+pub fn equal_budget_candidates(
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let mut out = Vec::new();
+    for (o, budgets) in POWER_BUDGETS {
+        for &budget in budgets {
+            for v in [3u32, 4, 5] {
+                out.extend(kv_power_row(v, o, budget, progress)?);
+            }
+            if ![0.5, 1.0, 2.0, 4.0, 8.0].contains(&budget) {
+                out.extend(pow_rows(o, budget, progress)?);
+            }
+        }
+    }
+    Ok(out)
+}
+
 fn ports(out: u32) -> Ports {
     Ports {
         cos_bits: DESIGN_COS_BITS,
@@ -252,25 +379,7 @@ pub fn candidates(
         }
         out.extend(kv_row(4, o, 1.0, Coefficients::Minimax, progress)?);
         for budget in [0.5, 1.0, 2.0, 4.0, 8.0] {
-            for interp in [true, false] {
-                let name = if interp { "interp" } else { "plain" };
-                match pow_sized(o, budget, interp)? {
-                    Some(params) => {
-                        progress(&format!("pow {name} out={o} cos^n<={budget}: {params:?}"));
-                        out.push(Candidate {
-                            id: format!("pow-{name}-o{o}-pow{}", fmt_bound(budget)),
-                            target: format!("cos^n <= {}", fmt_bound(budget)),
-                            design: Design::Pow {
-                                out_bits: o,
-                                params,
-                            },
-                        });
-                    }
-                    None => progress(&format!(
-                        "pow {name} out={o} cos^n<={budget}: not reached with the largest tables"
-                    )),
-                }
-            }
+            out.extend(pow_rows(o, budget, progress)?);
         }
         for budget in [0.5, 1.0, 2.0] {
             match schlick_sized(o, budget)? {
@@ -289,6 +398,7 @@ pub fn candidates(
             }
         }
     }
+    out.extend(equal_budget_candidates(progress)?);
     Ok(out)
 }
 
