@@ -111,7 +111,7 @@ fn equal_budget_ratios_take_each_familys_cheapest_design_within_the_budget() {
         "{text}"
     );
     assert!(
-        text.contains("K_v dearer at 4, 5, 6, 8 LSB (+25 to +25 %)"),
+        text.contains("K_v dearer at 4, 5, 6, 8 LSB (+25 %)"),
         "{text}"
     );
     assert!(

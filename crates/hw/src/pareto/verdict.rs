@@ -311,25 +311,26 @@ fn bands(s: &mut String, points: &[Point], out_bits: u32, from_n1: bool) {
         } else {
             if !cheaper.is_empty() {
                 let (lo, hi) = span(&cheaper);
-                let _ = write!(
-                    line,
-                    "K_v cheaper at {} LSB ({:.2}-{:.2}×, i.e. {:.1}-{:.1}× smaller); ",
-                    fmt(&cheaper),
-                    lo,
-                    hi,
-                    1.0 / hi,
-                    1.0 / lo
-                );
+                let text = if format!("{lo:.2}") == format!("{hi:.2}") {
+                    format!("{lo:.2}×, i.e. {:.1}× smaller", 1.0 / lo)
+                } else {
+                    format!(
+                        "{lo:.2}-{hi:.2}×, i.e. {:.1}-{:.1}× smaller",
+                        1.0 / hi,
+                        1.0 / lo
+                    )
+                };
+                let _ = write!(line, "K_v cheaper at {} LSB ({text}); ", fmt(&cheaper));
             }
             if !dearer.is_empty() {
                 let (lo, hi) = span(&dearer);
-                let _ = write!(
-                    line,
-                    "K_v dearer at {} LSB (+{:.0} to +{:.0} %); ",
-                    fmt(&dearer),
-                    (lo - 1.0) * 100.0,
-                    (hi - 1.0) * 100.0
-                );
+                let (lo, hi) = ((lo - 1.0) * 100.0, (hi - 1.0) * 100.0);
+                let pct = if format!("{lo:.0}") == format!("{hi:.0}") {
+                    format!("+{lo:.0} %")
+                } else {
+                    format!("+{lo:.0} to +{hi:.0} %")
+                };
+                let _ = write!(line, "K_v dearer at {} LSB ({pct}); ", fmt(&dearer));
             }
             let none: Vec<String> = budgets(out_bits)
                 .iter()
