@@ -292,7 +292,9 @@ fn cached_candidates(
         }
     }
     let started = Instant::now();
-    let c = candidates(opts.quick, progress)?;
+    // Each sizing step is kept as it finishes, so a stopped run resumes its sizing too.
+    let steps = opts.cache.join("sizing-3");
+    let c = candidates(opts.quick, Some(&steps), progress)?;
     progress(&format!(
         "sized {} candidates in {:.0} s",
         c.len(),

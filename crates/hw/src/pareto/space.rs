@@ -20,6 +20,8 @@
 //!   squarers and constant multiplier with generic multipliers; the exact unit sized at
 //!   the same budgets (over every n).
 
+use std::path::Path;
+
 use serde::{Deserialize, Serialize};
 
 use crate::hdl::{HdlUnit, Ports, PowParams, PowerUnit, SchlickParams};
@@ -255,23 +257,78 @@ fn pow_rows(
     Ok(out)
 }
 
+/// Runs one sizing step, or reads its result from `steps` (one JSON file a step), so
+/// an interrupted sizing resumes after its last finished step. A result that cannot be
+/// stored is still returned (the next run sizes that step again).
+fn step(
+    steps: Option<&Path>,
+    name: &str,
+    run: impl FnOnce() -> Result<Vec<Candidate>, HwError>,
+) -> Result<Vec<Candidate>, HwError> {
+    let file = steps.map(|d| d.join(format!("{name}.json")));
+    if let Some(text) = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
+        if let Ok(c) = serde_json::from_str::<Vec<Candidate>>(&text) {
+            return Ok(c);
+        }
+    }
+    let c = run()?;
+    if let (Some(file), Ok(text)) = (&file, serde_json::to_string_pretty(&c)) {
+        if let Some(dir) = file.parent() {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        let _ = glint_io::write_atomic(file, |w| w.write_all(text.as_bytes()));
+    }
+    Ok(c)
+}
+
 /// Space 3's designs beyond the first space: K_v and the exact unit at every budget of
 /// [`POWER_BUDGETS`] (the exact unit's budgets already in the first space are skipped).
+/// Each sizing step is kept in `steps` (see [`candidates`]).
 pub fn equal_budget_candidates(
+    steps: Option<&Path>,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Candidate>, HwError> {
     let mut out = Vec::new();
     for (o, budgets) in POWER_BUDGETS {
         for &budget in budgets {
             for v in [3u32, 4, 5] {
-                out.extend(kv_power_row(v, o, budget, progress)?);
+                out.extend(step(steps, &format!("kvpow-v{v}-o{o}-{budget}"), || {
+                    kv_power_row(v, o, budget, progress)
+                })?);
             }
             if ![0.5, 1.0, 2.0, 4.0, 8.0].contains(&budget) {
-                out.extend(pow_rows(o, budget, progress)?);
+                out.extend(step(steps, &format!("pow-o{o}-{budget}"), || {
+                    pow_rows(o, budget, progress)
+                })?);
             }
         }
     }
     Ok(out)
+}
+
+/// The Schlick unit sized for `budget` against its own form, as a candidate.
+fn schlick_rows(
+    o: u32,
+    budget: f64,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    Ok(match schlick_sized(o, budget)? {
+        Some(params) => {
+            progress(&format!("schlick out={o} lobe<={budget}: {params:?}"));
+            vec![Candidate {
+                id: format!("schlick-o{o}-lobe{}", fmt_bound(budget)),
+                target: format!("lobe <= {}", fmt_bound(budget)),
+                design: Design::Schlick {
+                    out_bits: o,
+                    params,
+                },
+            }]
+        }
+        None => {
+            progress(&format!("schlick out={o} lobe<={budget}: not reached"));
+            Vec::new()
+        }
+    })
 }
 
 fn ports(out: u32) -> Ports {
@@ -325,9 +382,12 @@ fn schlick_sized(out: u32, budget: f64) -> Result<Option<SchlickParams>, HwError
 }
 
 /// Every candidate of the exploration (`quick`: three fixed designs at 8 bits, one a
-/// family, no sizing, for CI). Sizing runs exhaustive checks: minutes for the full space.
+/// family, no sizing, for CI). Sizing runs exhaustive checks: minutes for the full space
+/// (an hour on a loaded machine); with `steps`, each step's result is kept there as it
+/// finishes and read back by the next call, so an interrupted sizing resumes.
 pub fn candidates(
     quick: bool,
+    steps: Option<&Path>,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Candidate>, HwError> {
     let mut out = Vec::new();
@@ -375,30 +435,25 @@ pub fn candidates(
     for o in [8u32, 10] {
         out.push(reference(o));
         for (v, bound) in [(4, 0.5), (4, 1.0), (4, 2.0), (3, 1.0), (5, 1.0)] {
-            out.extend(kv_row(v, o, bound, Coefficients::EnergyFit, progress)?);
+            out.extend(step(steps, &format!("kv-v{v}-o{o}-lobe{bound}"), || {
+                kv_row(v, o, bound, Coefficients::EnergyFit, progress)
+            })?);
         }
-        out.extend(kv_row(4, o, 1.0, Coefficients::Minimax, progress)?);
+        out.extend(step(steps, &format!("kv-minimax-v4-o{o}-lobe1"), || {
+            kv_row(4, o, 1.0, Coefficients::Minimax, progress)
+        })?);
         for budget in [0.5, 1.0, 2.0, 4.0, 8.0] {
-            out.extend(pow_rows(o, budget, progress)?);
+            out.extend(step(steps, &format!("pow-o{o}-{budget}"), || {
+                pow_rows(o, budget, progress)
+            })?);
         }
         for budget in [0.5, 1.0, 2.0] {
-            match schlick_sized(o, budget)? {
-                Some(params) => {
-                    progress(&format!("schlick out={o} lobe<={budget}: {params:?}"));
-                    out.push(Candidate {
-                        id: format!("schlick-o{o}-lobe{}", fmt_bound(budget)),
-                        target: format!("lobe <= {}", fmt_bound(budget)),
-                        design: Design::Schlick {
-                            out_bits: o,
-                            params,
-                        },
-                    });
-                }
-                None => progress(&format!("schlick out={o} lobe<={budget}: not reached")),
-            }
+            out.extend(step(steps, &format!("schlick-o{o}-{budget}"), || {
+                schlick_rows(o, budget, progress)
+            })?);
         }
     }
-    out.extend(equal_budget_candidates(progress)?);
+    out.extend(equal_budget_candidates(steps, progress)?);
     Ok(out)
 }
 
