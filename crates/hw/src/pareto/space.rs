@@ -462,6 +462,33 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_finished_sizing_step_is_read_back_not_run_again() {
+        let dir = tempfile::tempdir().unwrap();
+        let steps = dir.path().join("sizing");
+        let made = || Candidate {
+            id: "x".into(),
+            target: "t".into(),
+            design: Design::Kv(Config::default()),
+        };
+        let runs = std::cell::Cell::new(0);
+        let run = || {
+            runs.set(runs.get() + 1);
+            Ok(vec![made()])
+        };
+        assert_eq!(step(Some(&steps), "a", run).unwrap(), vec![made()]);
+        assert_eq!(step(Some(&steps), "a", run).unwrap(), vec![made()]);
+        assert_eq!(runs.get(), 1);
+        // Another step, or no step directory, runs.
+        step(Some(&steps), "b", run).unwrap();
+        step(None, "a", run).unwrap();
+        assert_eq!(runs.get(), 3);
+        // A damaged file is sized again.
+        std::fs::write(steps.join("a.json"), "[{").unwrap();
+        step(Some(&steps), "a", run).unwrap();
+        assert_eq!(runs.get(), 4);
+    }
+
+    #[test]
     fn shrink_finds_the_corner_of_a_monotone_region() {
         // Passes iff a + 2b >= 10 and b >= 2: from (10, 10) the greedy order gives
         // a = 0 (b = 10 still), then b = 5.
