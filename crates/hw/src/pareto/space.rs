@@ -212,9 +212,19 @@ fn kv_power_row(
     ];
     for guard in 1..=12 {
         let c = with(CoefSource::Const, Squarer::Truncated, guard);
-        if kv_meets(&c, budget)? {
-            rows.push(mk("const-trunc", c));
-            break;
+        match kv_meets(&c, budget) {
+            Ok(true) => {
+                rows.push(mk("const-trunc", c));
+                break;
+            }
+            Ok(false) => {}
+            // Narrow last squarings (below the output width) admit no truncated array.
+            Err(e) => {
+                progress(&format!(
+                    "kv v={v} out={out} cos^n<={budget}: no truncated squarers ({e})"
+                ));
+                break;
+            }
         }
     }
     progress(&format!(
