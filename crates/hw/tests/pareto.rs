@@ -199,7 +199,7 @@ fn row(id: &str, family: Design, cost: u64, err: f64, lobe: f64) -> Row {
                 power: [err; 4],
                 power_all: err,
             },
-            costs: Costs {
+            costs: Some(Costs {
                 gate_cells: cost,
                 transistors: 4 * cost,
                 ice40_luts: cost,
@@ -213,15 +213,17 @@ fn row(id: &str, family: Design, cost: u64, err: f64, lobe: f64) -> Row {
                 ecp5_mult18: 0,
                 ecp5_brams: 0,
                 ecp5_lutram: 0,
-            },
+            }),
             rom_bits: 0,
             latency: 8,
-            verified: Verified {
+            verified: Some(Verified {
                 lint_clean: true,
                 vectors: 10,
                 mismatches: 0,
-            },
+            }),
             seconds: 1.0,
+            measured_at: "2026-11-28T07:00:00Z".into(),
+            tools: "test".into(),
         },
         fronts: Fronts::default(),
     }

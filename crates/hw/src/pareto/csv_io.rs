@@ -2,14 +2,18 @@
 
 use std::path::Path;
 
-use super::{ParetoError, Row, TARGETS};
-use crate::{Config, Design};
+use super::{key, Measured, ParetoError, Row, Verified, TARGETS};
+use crate::hdl::Costs;
+use crate::{Config, Design, DesignErrors};
 
 /// The columns, in order. Errors are in output LSBs; `err_pow_*` are against `cos^n`
 /// for the `n` range named; `front_<target>` is the front of error against `cos^n`
 /// (n 16-1023) and `front_<target>_lobe` that of error against the own lobe, each within
-/// the family and output width. `design` is the JSON `glint hw check --config` reads.
-pub const CSV_HEADER: [&str; 46] = [
+/// the family and output width. `measured_at` (UTC) and `tools` (flow and tool
+/// versions) say when and with what the costs were measured; a design whose costs are
+/// not measured has empty cost, lint, co-simulation, `measured_at` and `tools` cells.
+/// `design` is the JSON `glint hw check --config` reads.
+pub const CSV_HEADER: [&str; 48] = [
     "id",
     "family",
     "out_bits",
@@ -55,8 +59,13 @@ pub const CSV_HEADER: [&str; 46] = [
     "front_ice40_lobe",
     "front_ecp5_lobe",
     "seconds",
+    "measured_at",
+    "tools",
     "design",
 ];
+
+/// The columns before `measured_at` and `tools` were added (read, never written).
+const LEGACY_COLUMNS: usize = 46;
 
 /// A design's widths in one field.
 pub fn widths(d: &Design) -> String {
@@ -91,6 +100,31 @@ fn b(x: bool) -> String {
     u8::from(x).to_string()
 }
 
+/// The 16 cost cells, `nand2_eq` to `ecp5_lut_equiv` (empty when not measured).
+fn cost_cells(c: Option<&Costs>) -> Vec<String> {
+    let Some(c) = c else {
+        return vec![String::new(); 16];
+    };
+    vec![
+        format!("{:.1}", c.nand2()),
+        c.transistors.to_string(),
+        c.gate_cells.to_string(),
+        c.ice40_luts.to_string(),
+        c.ice40_carries.to_string(),
+        c.ice40_ffs.to_string(),
+        c.ice40_brams.to_string(),
+        format!("{:.2}", c.ice40_fmax),
+        format!("{:.0}", c.ice40_lut_ns()),
+        c.ecp5_luts.to_string(),
+        c.ecp5_ccu2.to_string(),
+        c.ecp5_ffs.to_string(),
+        c.ecp5_mult18.to_string(),
+        c.ecp5_brams.to_string(),
+        c.ecp5_lutram.to_string(),
+        c.ecp5_lut_equiv().to_string(),
+    ]
+}
+
 /// The CSV text of `rows`.
 pub fn csv_text(rows: &[Row]) -> Result<String, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
@@ -98,7 +132,6 @@ pub fn csv_text(rows: &[Row]) -> Result<String, csv::Error> {
     for r in rows {
         let d = &r.candidate.design;
         let m = &r.measured;
-        let c = &m.costs;
         let e = &m.errors;
         let (v, coef, src, sq, guard) = match d {
             Design::Kv(k) => (
@@ -134,29 +167,21 @@ pub fn csv_text(rows: &[Row]) -> Result<String, csv::Error> {
             m.rom_bits.to_string(),
             m.latency.to_string(),
             "1".to_string(),
-            format!("{:.1}", c.nand2()),
-            c.transistors.to_string(),
-            c.gate_cells.to_string(),
-            c.ice40_luts.to_string(),
-            c.ice40_carries.to_string(),
-            c.ice40_ffs.to_string(),
-            c.ice40_brams.to_string(),
-            format!("{:.2}", c.ice40_fmax),
-            format!("{:.0}", c.ice40_lut_ns()),
-            c.ecp5_luts.to_string(),
-            c.ecp5_ccu2.to_string(),
-            c.ecp5_ffs.to_string(),
-            c.ecp5_mult18.to_string(),
-            c.ecp5_brams.to_string(),
-            c.ecp5_lutram.to_string(),
-            c.ecp5_lut_equiv().to_string(),
-            b(m.verified.lint_clean),
-            m.verified.vectors.to_string(),
-            m.verified.mismatches.to_string(),
         ]);
+        rec.extend(cost_cells(m.costs.as_ref()));
+        rec.extend(match &m.verified {
+            Some(v) => [
+                b(v.lint_clean),
+                v.vectors.to_string(),
+                v.mismatches.to_string(),
+            ],
+            None => Default::default(),
+        });
         rec.extend(r.fronts.power.iter().map(|&x| b(x)));
         rec.extend(r.fronts.lobe.iter().map(|&x| b(x)));
         rec.push(format!("{:.0}", m.seconds));
+        rec.push(m.measured_at.clone());
+        rec.push(m.tools.clone());
         rec.push(d.to_json());
         debug_assert_eq!(rec.len(), CSV_HEADER.len());
         w.write_record(&rec)?;
@@ -185,11 +210,17 @@ pub struct CsvRow {
     pub fields: Vec<String>,
 }
 
-/// Reads a `pareto.csv` (as [`write_csv`] writes it; the header must match).
+/// Reads a `pareto.csv` (as [`write_csv`] writes it; the header must match, or be the
+/// older one without `measured_at` and `tools`, whose rows read with those empty).
 pub fn read_csv(path: &Path) -> Result<Vec<CsvRow>, ParetoError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| ParetoError::file(path, e))?;
     let header = r.headers().map_err(|e| ParetoError::file(path, e))?.clone();
-    if header.iter().ne(CSV_HEADER.iter().copied()) {
+    let legacy = CSV_HEADER[..LEGACY_COLUMNS - 1]
+        .iter()
+        .chain([&"design"])
+        .copied();
+    let is_legacy = header.iter().eq(legacy);
+    if !is_legacy && header.iter().ne(CSV_HEADER.iter().copied()) {
         return Err(ParetoError::file(
             path,
             "not a glint hw pareto CSV (its header differs)",
@@ -202,7 +233,11 @@ pub fn read_csv(path: &Path) -> Result<Vec<CsvRow>, ParetoError> {
     let mut out = Vec::new();
     for rec in r.records() {
         let rec = rec.map_err(|e| ParetoError::file(path, e))?;
-        let fields: Vec<String> = rec.iter().map(str::to_string).collect();
+        let mut fields: Vec<String> = rec.iter().map(str::to_string).collect();
+        if is_legacy {
+            let at = fields.len() - 1;
+            fields.splice(at..at, [String::new(), String::new()]);
+        }
         let design = Design::from_json(&fields[CSV_HEADER.len() - 1])
             .map_err(|e| ParetoError::file(path, e))?;
         out.push(CsvRow {
@@ -213,4 +248,121 @@ pub fn read_csv(path: &Path) -> Result<Vec<CsvRow>, ParetoError> {
         });
     }
     Ok(out)
+}
+
+fn field<'a>(row: &'a CsvRow, name: &str) -> &'a str {
+    let i = CSV_HEADER
+        .iter()
+        .position(|&h| h == name)
+        .expect("a column of CSV_HEADER");
+    row.fields[i].trim()
+}
+
+fn parse<T: std::str::FromStr>(row: &CsvRow, name: &str) -> Result<T, String> {
+    let text = field(row, name);
+    text.parse()
+        .map_err(|_| format!("row {}: column {name}: {text:?} is not a number", row.id))
+}
+
+/// The Fmax a row records, as precisely as its columns allow: `ice40_fmax_mhz` keeps 2
+/// decimals, `ice40_lut_ns_per_result` (LUTs × 1000 / Fmax) about 5 digits, so the Fmax
+/// is taken from the latter where it rounds to the former (then both columns are
+/// written back as they were).
+fn fmax_of(row: &CsvRow) -> Result<f64, String> {
+    let printed: f64 = parse(row, "ice40_fmax_mhz")?;
+    let luts: f64 = parse(row, "ice40_luts")?;
+    let lut_ns: f64 = parse(row, "ice40_lut_ns_per_result")?;
+    let finer = luts * 1000.0 / lut_ns;
+    Ok(if format!("{finer:.2}") == format!("{printed:.2}") {
+        finer
+    } else {
+        printed
+    })
+}
+
+/// The measurement a CSV row records, or `None` if its costs are empty.
+fn measured_of(row: &CsvRow) -> Result<Option<Measured>, String> {
+    if field(row, "nand2_eq").is_empty() {
+        return Ok(None);
+    }
+    let p = |n: &str| parse::<f64>(row, n);
+    let u = |n: &str| parse::<u64>(row, n);
+    let costs = Costs {
+        gate_cells: u("gate_cells")?,
+        transistors: u("transistors")?,
+        ice40_luts: u("ice40_luts")?,
+        ice40_carries: u("ice40_carries")?,
+        ice40_ffs: u("ice40_ffs")?,
+        ice40_brams: u("ice40_brams")?,
+        ice40_fmax: fmax_of(row)?,
+        ecp5_luts: u("ecp5_luts")?,
+        ecp5_ccu2: u("ecp5_ccu2")?,
+        ecp5_ffs: u("ecp5_ffs")?,
+        ecp5_mult18: u("ecp5_mult18")?,
+        ecp5_brams: u("ecp5_brams")?,
+        ecp5_lutram: u("ecp5_lutram")?,
+    };
+    let or = |name: &str, default: &str| {
+        let t = field(row, name);
+        if t.is_empty() {
+            default.to_string()
+        } else {
+            t.to_string()
+        }
+    };
+    Ok(Some(Measured {
+        errors: DesignErrors {
+            lobe: p("err_lobe")?,
+            power: [
+                p("err_pow_n1_15")?,
+                p("err_pow_n16_63")?,
+                p("err_pow_n64_255")?,
+                p("err_pow_n256_1023")?,
+            ],
+            power_all: p("err_pow_all")?,
+        },
+        costs: Some(costs),
+        rom_bits: u("rom_bits")?,
+        latency: parse(row, "latency")?,
+        verified: Some(Verified {
+            lint_clean: field(row, "lint_clean") == "1",
+            vectors: u("cosim_vectors")?,
+            mismatches: u("cosim_mismatches")?,
+        }),
+        seconds: p("seconds")?,
+        measured_at: or("measured_at", "not recorded"),
+        tools: or("tools", "not recorded"),
+    }))
+}
+
+/// Puts every measured row of the `pareto.csv` at `path` into the exploration's
+/// `cache` (the entry a run with the row's co-simulation vector count looks up), so a
+/// run on another machine resumes from the committed results instead of measuring
+/// them again. Entries already in the cache are kept. Returns (rows imported, rows
+/// already cached, rows without costs).
+///
+/// The CSV keeps the errors to 4 decimals and Fmax to 2, so an imported entry is the
+/// CSV's figures, not the original run's full precision.
+pub fn import_csv(path: &Path, cache: &Path) -> Result<(usize, usize, usize), ParetoError> {
+    let rows = read_csv(path)?;
+    let (mut new, mut kept, mut empty) = (0, 0, 0);
+    for row in &rows {
+        let Some(m) = measured_of(row).map_err(|e| ParetoError::file(path, e))? else {
+            empty += 1;
+            continue;
+        };
+        let vectors = m.verified.map_or(0, |v| v.vectors) as usize;
+        let entry = cache.join(key(&row.design, vectors));
+        let file = entry.join("measured.json");
+        if file.exists() {
+            kept += 1;
+            continue;
+        }
+        std::fs::create_dir_all(&entry).map_err(|e| ParetoError::file(&entry, e))?;
+        let text = serde_json::to_string_pretty(&m).map_err(|e| ParetoError::file(&file, e))?;
+        glint_io::write_atomic(&file, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| ParetoError::file(&file, e))?;
+        new += 1;
+    }
+    Ok((new, kept, empty))
 }

@@ -8,11 +8,12 @@
 //! finished design is stored in the cache directory under a hash of its JSON and the
 //! flow version, so an interrupted run resumes where it stopped. [`write_csv`] and
 //! [`plot`] write the results; [`cosim_fronts`] co-simulates the front designs at more
-//! vectors.
+//! vectors. [`verdict`] computes docs/hardware.md's verdict from a `pareto.csv`.
 
 mod csv_io;
 mod plot;
 pub mod space;
+pub mod verdict;
 
 use std::hash::Hasher;
 use std::path::{Path, PathBuf};
@@ -22,7 +23,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-pub use csv_io::{csv_text, read_csv, widths, write_csv, CsvRow, CSV_HEADER};
+pub use csv_io::{csv_text, import_csv, read_csv, widths, write_csv, CsvRow, CSV_HEADER};
 pub use plot::{plot, Axis, TARGETS};
 pub use space::{candidates, shrink, Candidate};
 
@@ -89,21 +90,74 @@ pub struct Verified {
     pub mismatches: u64,
 }
 
-/// Everything measured for one design (what the cache holds).
+/// Everything measured for one design (what the cache holds), or, for a design not
+/// measured yet, its errors alone (`costs` and `verified` are `None`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Measured {
     /// Error figures.
     pub errors: DesignErrors,
-    /// Cost on the three targets.
-    pub costs: Costs,
+    /// Cost on the three targets (`None`: not measured).
+    pub costs: Option<Costs>,
     /// Bits of tables the design holds.
     pub rom_bits: u64,
     /// Latency, clocks (every design takes one input per clock).
     pub latency: u32,
-    /// Lint and co-simulation.
-    pub verified: Verified,
+    /// Lint and co-simulation (`None`: not run).
+    pub verified: Option<Verified>,
     /// Seconds the measurement took (wall).
     pub seconds: f64,
+    /// When the costs were measured (UTC, RFC 3339), or what is known of it.
+    #[serde(default)]
+    pub measured_at: String,
+    /// The flow version and the tool versions that measured the costs.
+    #[serde(default)]
+    pub tools: String,
+}
+
+impl Measured {
+    /// Whether the costs were measured (the cost flows ran).
+    pub fn has_costs(&self) -> bool {
+        self.costs.is_some()
+    }
+}
+
+/// The first line of `program flag`'s output, or `program: not found`.
+fn version_of(program: &str, flag: &str) -> String {
+    match std::process::Command::new(program).arg(flag).output() {
+        Ok(o) => {
+            let text = format!(
+                "{}{}",
+                String::from_utf8_lossy(&o.stdout),
+                String::from_utf8_lossy(&o.stderr)
+            );
+            text.lines().next().unwrap_or("").trim().to_string()
+        }
+        Err(_) => format!("{program}: not found"),
+    }
+}
+
+/// [`FLOW_VERSION`] and the versions of yosys, nextpnr-ice40, Icarus Verilog and
+/// Verilator on this machine, `; `-separated (what a row's `tools` column records).
+pub fn tool_versions() -> String {
+    [
+        FLOW_VERSION.to_string(),
+        version_of("yosys", "-V"),
+        version_of("nextpnr-ice40", "--version"),
+        version_of("iverilog", "-V"),
+        version_of("verilator", "--version"),
+    ]
+    .join("; ")
+}
+
+/// The time now, UTC, RFC 3339 to the second.
+pub fn now_utc() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() as i64)
+        .unwrap_or(0);
+    chrono::DateTime::<chrono::Utc>::from_timestamp(secs, 0)
+        .map(|t| t.to_rfc3339_opts(chrono::SecondsFormat::Secs, true))
+        .unwrap_or_default()
 }
 
 /// Which fronts a design is on (within its family and output width).
@@ -144,13 +198,15 @@ pub struct Options {
     pub cache: PathBuf,
     /// Co-simulation vectors per design.
     pub vectors: usize,
-    /// Report only the designs already in the cache (measure nothing new): the
-    /// results of an interrupted run.
+    /// Measure nothing new: the designs already in the cache get their measured rows,
+    /// every other design a row with its errors (computed, exhaustive) and empty costs.
     pub cached_only: bool,
+    /// The tools' versions, recorded in each newly measured design ([`tool_versions`]).
+    pub tools: String,
 }
 
 /// The cache key of a design: FNV-1a of its JSON, the flow version and the vectors.
-fn key(design: &Design, vectors: usize) -> String {
+pub fn key(design: &Design, vectors: usize) -> String {
     let mut h = fnv::FnvHasher::default();
     h.write(design.to_json().as_bytes());
     h.write(FLOW_VERSION.as_bytes());
@@ -159,8 +215,14 @@ fn key(design: &Design, vectors: usize) -> String {
 }
 
 /// Measures one design in `work` (removed afterwards; the result is what is kept).
-fn measure_design(c: &Candidate, vectors: usize, work: &Path) -> Result<Measured, ParetoError> {
+fn measure_design(
+    c: &Candidate,
+    vectors: usize,
+    work: &Path,
+    tools: &str,
+) -> Result<Measured, ParetoError> {
     let started = Instant::now();
+    let measured_at = now_utc();
     let tool = |source| ParetoError::Tool {
         id: c.id.clone(),
         source,
@@ -180,15 +242,33 @@ fn measure_design(c: &Candidate, vectors: usize, work: &Path) -> Result<Measured
     let costs = cost_flows(unit.as_ref(), &work.join("synth")).map_err(tool)?;
     Ok(Measured {
         errors,
-        costs,
+        costs: Some(costs),
         rom_bits: unit.rom_bits(),
         latency: unit.latency(),
-        verified: Verified {
+        verified: Some(Verified {
             lint_clean,
             vectors: r.vectors,
             mismatches: r.mismatches + (r.vectors - r.passed.min(r.vectors)),
-        },
+        }),
         seconds: started.elapsed().as_secs_f64(),
+        measured_at,
+        tools: tools.to_string(),
+    })
+}
+
+/// A design's errors, table bits and latency, without the flows (no tools run).
+fn errors_only(c: &Candidate) -> Result<Measured, ParetoError> {
+    let started = Instant::now();
+    let unit = c.design.hdl()?;
+    Ok(Measured {
+        errors: c.design.errors()?,
+        costs: None,
+        rom_bits: unit.rom_bits(),
+        latency: unit.latency(),
+        verified: None,
+        seconds: started.elapsed().as_secs_f64(),
+        measured_at: String::new(),
+        tools: String::new(),
     })
 }
 
@@ -197,10 +277,13 @@ fn cached_candidates(
     opts: &Options,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Candidate>, ParetoError> {
+    // The file names the design space's version: a space with other designs (here
+    // space 3: K_v and the exact unit sized at the same cos^n budgets) is sized anew,
+    // while the measured designs it shares with an older space stay cached.
     let file = opts.cache.join(if opts.quick {
         "candidates-quick.json"
     } else {
-        "candidates.json"
+        "candidates-3.json"
     });
     if let Ok(text) = std::fs::read_to_string(&file) {
         if let Ok(c) = serde_json::from_str::<Vec<Candidate>>(&text) {
@@ -209,7 +292,9 @@ fn cached_candidates(
         }
     }
     let started = Instant::now();
-    let c = candidates(opts.quick, progress)?;
+    // Each sizing step is kept as it finishes, so a stopped run resumes its sizing too.
+    let steps = opts.cache.join("sizing-3");
+    let c = candidates(opts.quick, Some(&steps), progress)?;
     progress(&format!(
         "sized {} candidates in {:.0} s",
         c.len(),
@@ -229,15 +314,17 @@ pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<R
     // The comparison units first (fewer, and each family needs its points), then K_v.
     cands.sort_by_key(|c| u8::from(matches!(c.design, Design::Kv(_))));
     if opts.cached_only {
-        let before = cands.len();
-        cands.retain(|c| {
-            opts.cache
-                .join(key(&c.design, opts.vectors))
-                .join("measured.json")
-                .exists()
-        });
+        let measured = cands
+            .iter()
+            .filter(|c| {
+                opts.cache
+                    .join(key(&c.design, opts.vectors))
+                    .join("measured.json")
+                    .exists()
+            })
+            .count();
         progress(&format!(
-            "--cached-only: {} of {before} designs measured so far; the others are left out",
+            "--cached-only: {measured} of {} designs measured so far; the others get their errors and empty costs",
             cands.len()
         ));
     }
@@ -260,9 +347,10 @@ pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<R
                     .and_then(|t| serde_json::from_str::<Measured>(&t).ok());
                 let (m, how) = match cached {
                     Some(m) => (m, "cached"),
+                    None if opts.cached_only => (errors_only(c)?, "not measured"),
                     None => {
                         let work = entry.join("work");
-                        let m = measure_design(c, opts.vectors, &work)?;
+                        let m = measure_design(c, opts.vectors, &work, &opts.tools)?;
                         let text = serde_json::to_string_pretty(&m)
                             .map_err(|e| ParetoError::file(&file, e))?;
                         glint_io::write_atomic(&file, |w| w.write_all(text.as_bytes()))
@@ -273,20 +361,26 @@ pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<R
                     }
                 };
                 let k = done.fetch_add(1, Ordering::SeqCst) + 1;
+                let costs = match (&m.costs, &m.verified) {
+                    (Some(c), Some(v)) => format!(
+                        "{:.0} NAND2, {} iCE40 LUTs @ {:.1} MHz, ECP5 {} LUT-eq + {} MULT18; cosim {} vectors, {} mismatches",
+                        c.nand2(),
+                        c.ice40_luts,
+                        c.ice40_fmax,
+                        c.ecp5_lut_equiv(),
+                        c.ecp5_mult18,
+                        v.vectors,
+                        v.mismatches
+                    ),
+                    _ => "costs not measured".to_string(),
+                };
                 progress(&format!(
-                    "[{k}/{total}, {:.0} s] {}: {how} ({:.0} s): lobe {:.3}, cos^n(16+) {:.3} LSB; {:.0} NAND2, {} iCE40 LUTs @ {:.1} MHz, ECP5 {} LUT-eq + {} MULT18; cosim {} vectors, {} mismatches",
+                    "[{k}/{total}, {:.0} s] {}: {how} ({:.0} s): lobe {:.3}, cos^n(16+) {:.3} LSB; {costs}",
                     started.elapsed().as_secs_f64(),
                     c.id,
                     m.seconds,
                     m.errors.lobe,
                     m.errors.power_16_up(),
-                    m.costs.nand2(),
-                    m.costs.ice40_luts,
-                    m.costs.ice40_fmax,
-                    m.costs.ecp5_lut_equiv(),
-                    m.costs.ecp5_mult18,
-                    m.verified.vectors,
-                    m.verified.mismatches
                 ));
                 Ok(m)
             })
@@ -305,7 +399,8 @@ pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<R
 }
 
 /// Marks each row's fronts: within its family and output width, no other design is at
-/// most as costly and at most as wrong, and strictly better in one.
+/// most as costly and at most as wrong, and strictly better in one. Designs whose
+/// costs are not measured are on no front and dominate none.
 pub fn mark_fronts(rows: &mut [Row]) {
     let n = rows.len();
     for (t, axis) in TARGETS.iter().enumerate() {
@@ -316,18 +411,22 @@ pub fn mark_fronts(rows: &mut [Row]) {
                 } else {
                     r.measured.errors.power_16_up()
                 };
-                (axis.cost(&r.measured.costs), e)
+                r.measured.costs.as_ref().map(|c| (axis.cost(c), e))
             };
             let flags: Vec<bool> = (0..n)
                 .map(|i| {
-                    let (ci, ei) = point(&rows[i]);
+                    let Some((ci, ei)) = point(&rows[i]) else {
+                        return false;
+                    };
                     let group =
                         |r: &Row| (r.candidate.design.family(), r.candidate.design.out_bits());
                     !(0..n).any(|j| {
                         if j == i || group(&rows[j]) != group(&rows[i]) {
                             return false;
                         }
-                        let (cj, ej) = point(&rows[j]);
+                        let Some((cj, ej)) = point(&rows[j]) else {
+                            return false;
+                        };
                         cj <= ci && ej <= ei && (cj < ci || ej < ei)
                     })
                 })

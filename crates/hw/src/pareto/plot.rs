@@ -84,12 +84,14 @@ where
     let axis = TARGETS[t];
     let pts: Vec<(f64, f64, &Row)> = rows
         .iter()
-        .map(|r| {
-            (
-                axis.cost(&r.measured.costs).max(1.0),
+        .filter_map(|r| {
+            // Designs whose costs are not measured have no point.
+            let c = r.measured.costs.as_ref()?;
+            Some((
+                axis.cost(c).max(1.0),
                 r.measured.errors.power_16_up().max(0.1),
                 *r,
-            )
+            ))
         })
         .collect();
     let (x0, x1) = pts

@@ -13,6 +13,14 @@
 //!   bound against `cos^n` over every `n` (0.5, 1, 2, 4, 8 LSB).
 //! - **Schlick**: quotient and input widths sized for a bound against Schlick's own
 //!   form (0.5, 1, 2 LSB); against `cos^n` Schlick is 50+ LSB away at any width.
+//! - **Equal terms** (space 3, issue 46): K_v (v = 3, 4, 5) sized by the same greedy
+//!   search against the same `cos^n` budgets as the exact unit ([`POWER_BUDGETS`]:
+//!   error over n 16-1023, where K_v can meet them; K_v is 34-38 LSB off for n < 16
+//!   at 8 bits), as ROM1 with generic multipliers, constant multiplier with truncated
+//!   squarers and constant multiplier with generic multipliers; the exact unit sized at
+//!   the same budgets (over every n).
+
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -147,6 +155,192 @@ fn kv_row(
     Ok(out_rows)
 }
 
+/// The `cos^n` budgets (output LSBs) every family is sized for, per output width.
+pub const POWER_BUDGETS: [(u32, &[f64]); 2] = [
+    (8, &[2.6, 3.0, 4.0, 5.0, 6.0, 8.0]),
+    (10, &[10.0, 12.0, 16.0]),
+];
+
+/// Error of a K_v design against `cos^n` over n 16-1023, within `budget`?
+fn kv_meets(c: &Config, budget: f64) -> Result<bool, HwError> {
+    Ok(Design::Kv(c.clone()).errors()?.power_16_up() <= budget + BOUND_SLACK_LSB)
+}
+
+/// The K_v designs sized by the greedy search of `sweep.rs` for `budget` LSB against
+/// `cos^n` (the `n` where an ideal K_v unit meets it), kept only if the design meets
+/// the budget over every n 16-1023.
+fn kv_power_row(
+    v: u32,
+    out: u32,
+    budget: f64,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let target = Target {
+        reference: Reference::Power,
+        bound: budget,
+    };
+    let row = sweep_row(
+        &kv_base(v, out, Coefficients::EnergyFit),
+        target,
+        &mut |_| {},
+    )?;
+    let cfg = match row.config {
+        Some(cfg) if kv_meets(&cfg, budget)? => cfg,
+        _ => {
+            progress(&format!(
+                "kv v={v} out={out} cos^n<={budget}: not reached for n 16-1023"
+            ));
+            return Ok(Vec::new());
+        }
+    };
+    let tag = format!("o{out}-pow{}", fmt_bound(budget));
+    let t = format!("cos^n <= {} (n >= 16)", fmt_bound(budget));
+    let mk = |name: &str, c: Config| Candidate {
+        id: format!("kv{v}-{name}-{tag}"),
+        target: t.clone(),
+        design: Design::Kv(c),
+    };
+    let with = |source: CoefSource, squarer: Squarer, guard: u32| Config {
+        coef_source: source,
+        squarer,
+        square_guard: guard,
+        ..cfg.clone()
+    };
+    let mut rows = vec![
+        mk("rom-gen", cfg.clone()),
+        mk("const-gen", with(CoefSource::Const, Squarer::Generic, 2)),
+    ];
+    for guard in 1..=12 {
+        let c = with(CoefSource::Const, Squarer::Truncated, guard);
+        match kv_meets(&c, budget) {
+            Ok(true) => {
+                rows.push(mk("const-trunc", c));
+                break;
+            }
+            Ok(false) => {}
+            // Narrow last squarings (below the output width) admit no truncated array.
+            Err(e) => {
+                progress(&format!(
+                    "kv v={v} out={out} cos^n<={budget}: no truncated squarers ({e})"
+                ));
+                break;
+            }
+        }
+    }
+    progress(&format!(
+        "kv v={v} out={out} cos^n<={budget}: {} designs (widths {}/{}/{:?})",
+        rows.len(),
+        cfg.coef_bits,
+        cfg.mul_frac,
+        cfg.square_frac
+    ));
+    Ok(rows)
+}
+
+/// The exact unit sized for `budget` against `cos^n` over every n (interpolated and
+/// plain tables), as candidates.
+fn pow_rows(
+    o: u32,
+    budget: f64,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let mut out = Vec::new();
+    for interp in [true, false] {
+        let name = if interp { "interp" } else { "plain" };
+        match pow_sized(o, budget, interp)? {
+            Some(params) => {
+                progress(&format!("pow {name} out={o} cos^n<={budget}: {params:?}"));
+                out.push(Candidate {
+                    id: format!("pow-{name}-o{o}-pow{}", fmt_bound(budget)),
+                    target: format!("cos^n <= {}", fmt_bound(budget)),
+                    design: Design::Pow {
+                        out_bits: o,
+                        params,
+                    },
+                });
+            }
+            None => progress(&format!(
+                "pow {name} out={o} cos^n<={budget}: not reached with the largest tables"
+            )),
+        }
+    }
+    Ok(out)
+}
+
+/// Runs one sizing step, or reads its result from `steps` (one JSON file a step), so
+/// an interrupted sizing resumes after its last finished step. A result that cannot be
+/// stored is still returned (the next run sizes that step again).
+fn step(
+    steps: Option<&Path>,
+    name: &str,
+    run: impl FnOnce() -> Result<Vec<Candidate>, HwError>,
+) -> Result<Vec<Candidate>, HwError> {
+    let file = steps.map(|d| d.join(format!("{name}.json")));
+    if let Some(text) = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
+        if let Ok(c) = serde_json::from_str::<Vec<Candidate>>(&text) {
+            return Ok(c);
+        }
+    }
+    let c = run()?;
+    if let (Some(file), Ok(text)) = (&file, serde_json::to_string_pretty(&c)) {
+        if let Some(dir) = file.parent() {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        let _ = glint_io::write_atomic(file, |w| w.write_all(text.as_bytes()));
+    }
+    Ok(c)
+}
+
+/// Space 3's designs beyond the first space: K_v and the exact unit at every budget of
+/// [`POWER_BUDGETS`] (the exact unit's budgets already in the first space are skipped).
+/// Each sizing step is kept in `steps` (see [`candidates`]).
+pub fn equal_budget_candidates(
+    steps: Option<&Path>,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    let mut out = Vec::new();
+    for (o, budgets) in POWER_BUDGETS {
+        for &budget in budgets {
+            for v in [3u32, 4, 5] {
+                out.extend(step(steps, &format!("kvpow-v{v}-o{o}-{budget}"), || {
+                    kv_power_row(v, o, budget, progress)
+                })?);
+            }
+            if ![0.5, 1.0, 2.0, 4.0, 8.0].contains(&budget) {
+                out.extend(step(steps, &format!("pow-o{o}-{budget}"), || {
+                    pow_rows(o, budget, progress)
+                })?);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The Schlick unit sized for `budget` against its own form, as a candidate.
+fn schlick_rows(
+    o: u32,
+    budget: f64,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Candidate>, HwError> {
+    Ok(match schlick_sized(o, budget)? {
+        Some(params) => {
+            progress(&format!("schlick out={o} lobe<={budget}: {params:?}"));
+            vec![Candidate {
+                id: format!("schlick-o{o}-lobe{}", fmt_bound(budget)),
+                target: format!("lobe <= {}", fmt_bound(budget)),
+                design: Design::Schlick {
+                    out_bits: o,
+                    params,
+                },
+            }]
+        }
+        None => {
+            progress(&format!("schlick out={o} lobe<={budget}: not reached"));
+            Vec::new()
+        }
+    })
+}
+
 fn ports(out: u32) -> Ports {
     Ports {
         cos_bits: DESIGN_COS_BITS,
@@ -198,9 +392,12 @@ fn schlick_sized(out: u32, budget: f64) -> Result<Option<SchlickParams>, HwError
 }
 
 /// Every candidate of the exploration (`quick`: three fixed designs at 8 bits, one a
-/// family, no sizing, for CI). Sizing runs exhaustive checks: minutes for the full space.
+/// family, no sizing, for CI). Sizing runs exhaustive checks: minutes for the full space
+/// (an hour on a loaded machine); with `steps`, each step's result is kept there as it
+/// finishes and read back by the next call, so an interrupted sizing resumes.
 pub fn candidates(
     quick: bool,
+    steps: Option<&Path>,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Candidate>, HwError> {
     let mut out = Vec::new();
@@ -248,53 +445,58 @@ pub fn candidates(
     for o in [8u32, 10] {
         out.push(reference(o));
         for (v, bound) in [(4, 0.5), (4, 1.0), (4, 2.0), (3, 1.0), (5, 1.0)] {
-            out.extend(kv_row(v, o, bound, Coefficients::EnergyFit, progress)?);
+            out.extend(step(steps, &format!("kv-v{v}-o{o}-lobe{bound}"), || {
+                kv_row(v, o, bound, Coefficients::EnergyFit, progress)
+            })?);
         }
-        out.extend(kv_row(4, o, 1.0, Coefficients::Minimax, progress)?);
+        out.extend(step(steps, &format!("kv-minimax-v4-o{o}-lobe1"), || {
+            kv_row(4, o, 1.0, Coefficients::Minimax, progress)
+        })?);
         for budget in [0.5, 1.0, 2.0, 4.0, 8.0] {
-            for interp in [true, false] {
-                let name = if interp { "interp" } else { "plain" };
-                match pow_sized(o, budget, interp)? {
-                    Some(params) => {
-                        progress(&format!("pow {name} out={o} cos^n<={budget}: {params:?}"));
-                        out.push(Candidate {
-                            id: format!("pow-{name}-o{o}-pow{}", fmt_bound(budget)),
-                            target: format!("cos^n <= {}", fmt_bound(budget)),
-                            design: Design::Pow {
-                                out_bits: o,
-                                params,
-                            },
-                        });
-                    }
-                    None => progress(&format!(
-                        "pow {name} out={o} cos^n<={budget}: not reached with the largest tables"
-                    )),
-                }
-            }
+            out.extend(step(steps, &format!("pow-o{o}-{budget}"), || {
+                pow_rows(o, budget, progress)
+            })?);
         }
         for budget in [0.5, 1.0, 2.0] {
-            match schlick_sized(o, budget)? {
-                Some(params) => {
-                    progress(&format!("schlick out={o} lobe<={budget}: {params:?}"));
-                    out.push(Candidate {
-                        id: format!("schlick-o{o}-lobe{}", fmt_bound(budget)),
-                        target: format!("lobe <= {}", fmt_bound(budget)),
-                        design: Design::Schlick {
-                            out_bits: o,
-                            params,
-                        },
-                    });
-                }
-                None => progress(&format!("schlick out={o} lobe<={budget}: not reached")),
-            }
+            out.extend(step(steps, &format!("schlick-o{o}-{budget}"), || {
+                schlick_rows(o, budget, progress)
+            })?);
         }
     }
+    out.extend(equal_budget_candidates(steps, progress)?);
     Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_finished_sizing_step_is_read_back_not_run_again() {
+        let dir = tempfile::tempdir().unwrap();
+        let steps = dir.path().join("sizing");
+        let made = || Candidate {
+            id: "x".into(),
+            target: "t".into(),
+            design: Design::Kv(Config::default()),
+        };
+        let runs = std::cell::Cell::new(0);
+        let run = || {
+            runs.set(runs.get() + 1);
+            Ok(vec![made()])
+        };
+        assert_eq!(step(Some(&steps), "a", run).unwrap(), vec![made()]);
+        assert_eq!(step(Some(&steps), "a", run).unwrap(), vec![made()]);
+        assert_eq!(runs.get(), 1);
+        // Another step, or no step directory, runs.
+        step(Some(&steps), "b", run).unwrap();
+        step(None, "a", run).unwrap();
+        assert_eq!(runs.get(), 3);
+        // A damaged file is sized again.
+        std::fs::write(steps.join("a.json"), "[{").unwrap();
+        step(Some(&steps), "a", run).unwrap();
+        assert_eq!(runs.get(), 4);
+    }
 
     #[test]
     fn shrink_finds_the_corner_of_a_monotone_region() {

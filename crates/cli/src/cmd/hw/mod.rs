@@ -21,6 +21,7 @@ macro_rules! outln {
 
 mod pareto;
 mod rtl;
+mod verdict;
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
@@ -85,6 +86,14 @@ pub enum Command {
                       glint hw pareto -o /tmp/f --cosim-fronts docs/pareto/pareto.csv --front-vectors 100000"
     )]
     Pareto(pareto::ParetoArgs),
+    /// Compute docs/hardware.md's verdict from a pareto.csv (fronts, equal-budget ratios
+    /// of K_v against the exact unit, bands); print it, or check or rewrite the doc.
+    #[command(
+        after_help = "Examples:\n  glint hw verdict --csv docs/pareto/pareto.csv\n  \
+                      glint hw verdict --csv docs/pareto/pareto.csv --check docs/hardware.md\n  \
+                      glint hw verdict --csv docs/pareto/pareto.csv --write docs/hardware.md"
+    )]
+    Verdict(verdict::VerdictArgs),
 }
 
 /// Which Verilog unit.
@@ -299,6 +308,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Cosim(args) => rtl::cosim(args),
         Command::Synth(args) => rtl::synth(args),
         Command::Pareto(args) => pareto::run(args),
+        Command::Verdict(args) => verdict::run(args),
     }
 }
 

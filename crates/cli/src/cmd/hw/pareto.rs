@@ -29,10 +29,15 @@ pub struct ParetoArgs {
     /// (0: skip) and write front-cosim.csv.
     #[arg(long, default_value_t = 0)]
     pub front_vectors: usize,
-    /// Write the CSV and plots from the designs already measured in the cache only (an
-    /// interrupted run's results); measures nothing new.
+    /// Measure nothing new: write the CSV and plots from the designs measured in the
+    /// cache; every other design of the space gets a row with its errors (computed)
+    /// and empty cost cells.
     #[arg(long)]
     pub cached_only: bool,
+    /// Before the run, put this pareto.csv's measured rows into the cache (so a run
+    /// resumes from committed results instead of measuring them again).
+    #[arg(long)]
+    pub import_csv: Option<PathBuf>,
     /// Only co-simulate the front designs of this pareto.csv (with --front-vectors,
     /// default 10^5), no exploration.
     #[arg(long)]
@@ -67,15 +72,30 @@ pub fn run(args: ParetoArgs) -> anyhow::Result<()> {
         };
         return fronts(&args, &rows, vectors, &progress);
     }
+    let cache = args
+        .cache
+        .clone()
+        .unwrap_or_else(|| args.output.join("cache"));
+    if let Some(csv) = &args.import_csv {
+        std::fs::create_dir_all(&cache).with_context(|| format!("creating {}", cache.display()))?;
+        let (new, kept, empty) = pareto::import_csv(csv, &cache)?;
+        progress(&format!(
+            "{}: {new} measured rows put into {}, {kept} already there, {empty} without costs",
+            csv.display(),
+            cache.display()
+        ));
+    }
     let opts = Options {
         quick: args.quick,
         jobs: args.jobs,
-        cache: args
-            .cache
-            .clone()
-            .unwrap_or_else(|| args.output.join("cache")),
+        cache,
         vectors: args.vectors,
         cached_only: args.cached_only,
+        tools: if args.cached_only {
+            String::new()
+        } else {
+            pareto::tool_versions()
+        },
     };
     let rows = pareto::explore(&opts, &progress)?;
     let csv = args.output.join("pareto.csv");
@@ -83,7 +103,11 @@ pub fn run(args: ParetoArgs) -> anyhow::Result<()> {
     let files = pareto::plot(&args.output, &rows)?;
     let bad: Vec<&str> = rows
         .iter()
-        .filter(|r| !r.measured.verified.lint_clean || r.measured.verified.mismatches > 0)
+        .filter(|r| {
+            r.measured
+                .verified
+                .is_some_and(|v| !v.lint_clean || v.mismatches > 0)
+        })
         .map(|r| r.candidate.id.as_str())
         .collect();
     // The files are written: a closed stdout does not stop the failure check or the
