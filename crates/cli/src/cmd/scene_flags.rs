@@ -10,8 +10,8 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    ColorMap, Input, Light, LightingModel, MeshSpec, Overlay, Phantom, Prefilter, Projection,
-    RenderMode, Sampling, Scene, SceneLobe, TransferFunction, View,
+    Clip, ClipPlane, ColorMap, CropBox, Input, Light, LightingModel, MeshSpec, Overlay, Phantom,
+    Prefilter, Projection, RenderMode, Sampling, Scene, SceneLobe, TransferFunction, View,
 };
 
 use super::choice::choice;
@@ -126,6 +126,16 @@ pub struct SceneFlags {
     /// Image size WxH [default: 512x512].
     #[arg(long, value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
+    /// Clip plane through the point X,Y,Z with normal NX,NY,NZ (world mm, RAS+):
+    /// keeps the side the normal points to, in every mode and lighting model; cut
+    /// faces are lit with the plane's normal. Repeatable (all planes cut), added to a
+    /// --scene file's planes. E.g. `--clip 0,0,0,1,0,0` keeps x >= 0.
+    #[arg(long = "clip", value_name = "X,Y,Z,NX,NY,NZ", allow_hyphen_values = true, value_parser = parse_clip)]
+    pub clip: Vec<ClipPlane>,
+    /// Crop box XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX (world mm, axis-aligned): keeps its
+    /// inside, as --clip cuts; replaces a --scene file's box.
+    #[arg(long, value_name = "XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX", allow_hyphen_values = true, value_parser = parse_crop)]
+    pub crop: Option<CropBox>,
     /// Refuse what lenient readers accept with a note (DICOM without preamble or meta
     /// group, multi-frame DICOM without frame positions).
     #[arg(long)]
@@ -245,6 +255,10 @@ impl SceneFlags {
         set(&mut camera.zoom, self.zoom);
         set(&mut camera.projection, self.projection);
         set(&mut scene.size, self.size);
+        scene.clip.extend(self.clip.iter().copied());
+        if self.crop.is_some() {
+            scene.crop = self.crop;
+        }
         set(&mut scene.step, self.step);
         set(&mut scene.prefilter, self.prefilter);
         set(&mut scene.sampling, self.sampling);
@@ -431,6 +445,60 @@ pub fn parse_range(s: &str) -> Result<[f32; 2], String> {
         return Err(bad());
     }
     Ok([lo, hi])
+}
+
+/// Six comma-separated finite numbers, or `None`.
+fn six(s: &str) -> Option<[f64; 6]> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()?;
+    v.try_into().ok()
+}
+
+/// Parses `X,Y,Z,NX,NY,NZ` (a point and a non-zero normal, world mm) into a clip
+/// plane.
+pub fn parse_clip(s: &str) -> Result<ClipPlane, String> {
+    let [x, y, z, nx, ny, nz] = six(s).ok_or_else(|| {
+        format!("'{s}': expected X,Y,Z,NX,NY,NZ (a point and a normal in mm), e.g. 0,0,0,1,0,0")
+    })?;
+    let plane = ClipPlane {
+        point: [x, y, z],
+        normal: [nx, ny, nz],
+    };
+    Clip {
+        planes: vec![plane],
+        crop: None,
+    }
+    .validate()
+    .map_err(|e| format!("'{s}': {}", reason(e).trim_start_matches("clip plane 1: ")))?;
+    Ok(plane)
+}
+
+/// Parses `XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX` (world mm) into a crop box.
+pub fn parse_crop(s: &str) -> Result<CropBox, String> {
+    let [x0, x1, y0, y1, z0, z1] = six(s).ok_or_else(|| {
+        format!("'{s}': expected XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX in mm, e.g. -50,0,-80,80,-60,60")
+    })?;
+    let crop = CropBox {
+        min: [x0, y0, z0],
+        max: [x1, y1, z1],
+    };
+    Clip {
+        planes: vec![],
+        crop: Some(crop),
+    }
+    .validate()
+    .map_err(|e| format!("'{s}': {}", reason(e)))?;
+    Ok(crop)
+}
+
+/// What a parameter error says, without its kind's prefix (clap adds its own).
+fn reason(e: glint_render::RenderError) -> String {
+    match e {
+        glint_render::RenderError::Parameter(m) => m,
+        e => e.to_string(),
+    }
 }
 
 /// Parses `AZ,EL` or `AZ,EL,INTENSITY` (degrees) into a camera-relative light.

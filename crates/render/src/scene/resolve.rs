@@ -199,6 +199,7 @@ impl Scene {
             ));
         }
         check_lights(&scene.lights)?;
+        scene.clip().validate()?;
         scene.lighting.resolve(RenderMode::Surface)?;
         let material = scene.material.apply(SURFACE_MATERIAL);
         material.validate()?;
@@ -360,6 +361,7 @@ impl Scene {
             camera: scene.camera,
             background: scene.background,
             kernel: Kernel::Auto,
+            clip: scene.clip(),
         };
         frame.validate()?;
         scene.camera.validate()?;

@@ -98,6 +98,7 @@ fn a_slab_transmits_exp_minus_its_optical_depth() {
     let track = Tracker {
         field,
         medium: class.medium(),
+        clip: None,
     };
     // World box: x in [0, 29] mm, y in [0, 9.5], z in [0, 18] (voxel centres).
     let dir = Vec3::new(1.0, 0.2, 0.3).normalize_or_zero();
@@ -148,6 +149,7 @@ fn delta_and_ratio_tracking_agree_on_a_heterogeneous_medium() {
     let track = Tracker {
         field,
         medium: class.medium(),
+        clip: None,
     };
     let ray = IndexRay::from_world(
         field,
@@ -327,6 +329,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
     let track = Tracker {
         field,
         medium: class.medium(),
+        clip: None,
     };
     let l_index = field.index_direction(up);
     // Points on the floor's top face (z = 8): under the ball (r < 4) dark, clear of
