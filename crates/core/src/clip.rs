@@ -196,9 +196,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("finite"), "{e}");
-        for e in [e] {
-            assert!(!e.contains('\n'));
-        }
+        assert!(!e.contains('\n'));
         assert!(boxed([0.0; 3], [1.0; 3]).validate().is_ok());
     }
 

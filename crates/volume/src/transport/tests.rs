@@ -385,7 +385,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
     let frame = FrameSettings {
         width: 48,
         height: 48,
-        ..frame
+        ..frame.clone()
     };
     let sf = class
         .shadow_field(&side, &frame, &ShadowSettings::default(), None)
@@ -538,7 +538,10 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
         assert_eq!(sf.has_occlusion(), occlusion);
         let render = |threads: usize, kernel: Kernel| {
             on_threads(threads, || {
-                let f = FrameSettings { kernel, ..frame };
+                let f = FrameSettings {
+                    kernel,
+                    ..frame.clone()
+                };
                 shadows_frame(&class, &shader, &f, &sf).unwrap()
             })
         };
@@ -569,7 +572,7 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
     let a = shadows_frame(&pre, &shader, &frame, &sf).unwrap();
     let scalar = FrameSettings {
         kernel: Kernel::Scalar,
-        ..frame
+        ..frame.clone()
     };
     let b = shadows_frame(&pre, &shader, &scalar, &sf).unwrap();
     assert_eq!(a.rgb, b.rgb, "pre-integrated: SIMD against scalar");
@@ -586,7 +589,7 @@ fn light_volumes_refuse_other_lights_and_mip() {
             azimuth: 50.0,
             ..frame.camera
         },
-        ..frame
+        ..frame.clone()
     };
     assert!(shadows_frame(&class, &shader, &moved, &sf).is_err());
     let mip = Classification::new(
