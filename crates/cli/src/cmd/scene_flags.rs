@@ -655,6 +655,39 @@ mod tests {
     }
 
     #[test]
+    fn clip_and_crop_flags_set_the_scenes_planes_and_box() {
+        let s = scene(&[
+            "--clip",
+            "1,-2,3,0,0,-1",
+            "--clip",
+            "0,0,0,2,0,0",
+            "--crop",
+            "-50,0,-80,80,-60,60.5",
+        ])
+        .unwrap();
+        assert_eq!(s.clip.len(), 2);
+        assert_eq!(
+            (s.clip[0].point, s.clip[0].normal),
+            ([1.0, -2.0, 3.0], [0.0, 0.0, -1.0])
+        );
+        let b = s.crop.unwrap();
+        assert_eq!((b.min, b.max), ([-50.0, -80.0, -60.0], [0.0, 80.0, 60.5]));
+        for (argv, says) in [
+            (["--clip", "0,0,0,0,0,0"], "the normal is zero"),
+            (["--clip", "0,0,0,1,0"], "expected X,Y,Z,NX,NY,NZ"),
+            (["--clip", "0,0,nan,1,0,0"], "expected X,Y,Z,NX,NY,NZ"),
+            (
+                ["--crop", "0,-1,0,1,0,1"],
+                "x from 0 to -1 is empty or inverted",
+            ),
+            (["--crop", "0,1,0,1,0"], "expected XMIN,XMAX"),
+        ] {
+            let e = scene(&argv).unwrap_err().to_string();
+            assert!(e.contains(says), "{argv:?}: {e}");
+        }
+    }
+
+    #[test]
     fn size_and_light_parsing() {
         assert_eq!(parse_size("640x480").unwrap(), [640, 480]);
         assert_eq!(parse_size("64X48").unwrap(), [64, 48]);

@@ -121,7 +121,13 @@ impl Caster<'_> {
             inv_dk[a] = (1.0 / da) / self.dt;
             face_up[a] = da > 0.0;
         }
-        let t_entry = t0;
+        // With a clip, `start` holds where the kept interval begins: an iso hit is
+        // then never bisected back across the cut.
+        let t_entry = if self.clip.is_some() {
+            t0.max(start)
+        } else {
+            t0
+        };
         let t0 = t0.max(start);
         let t1 = t1.min(end);
         if t0 > t1 {

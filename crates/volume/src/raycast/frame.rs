@@ -11,7 +11,7 @@ use super::settings::{FrameSettings, Kernel};
 use super::start::StartBounds;
 use super::{simd_supported, Scratch, TILE};
 use crate::classification::Classification;
-use crate::clip::{IndexClip, CUT_DEPTH_STEPS};
+use crate::clip::IndexClip;
 use crate::light::ShadowField;
 
 impl Classification {
@@ -101,13 +101,7 @@ impl Classification {
         let rays = IndexRays::new(&camera, field, settings.width, settings.height);
         let starts =
             (!self.blocks.is_empty()).then(|| StartBounds::new(&self.blocks, &rays, &camera, w, h));
-        let dt = (self.settings.step * field.min_spacing()) as f32;
-        let clip = IndexClip::new(
-            &settings.clip,
-            field,
-            CUT_DEPTH_STEPS * dt,
-            2.0 * shader.gate(),
-        );
+        let clip = self.index_clip(shader, settings);
         let caster = Caster {
             field,
             lut: &self.lut,
@@ -122,7 +116,7 @@ impl Classification {
             mode: self.settings.mode,
             iso_value: self.settings.iso,
             skip_empty: self.settings.skip_empty,
-            dt,
+            dt: (self.settings.step * field.min_spacing()) as f32,
             simd: settings.kernel == Kernel::Auto && simd_supported() && self.colour.is_none(),
             jitter,
             sampling: self.settings.sampling,
