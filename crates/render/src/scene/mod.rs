@@ -131,9 +131,9 @@ pub struct Scene {
     /// Background colour, linear RGB.
     pub background: [f32; 3],
     /// Clip planes (world mm), each keeping the side its normal points to: the
-    /// volume, its light, the meshes and the label map are cut in every mode and
-    /// lighting model; cut faces are lit with the plane's normal where the data's
-    /// gradient is weak. Left out of the JSON when there are none.
+    /// volume, its light and a ray-cast label map are cut in every mode and lighting
+    /// model (meshes, rasterised, are not); cut faces are lit with the plane's normal
+    /// where the data's gradient is weak. Left out of the JSON when there are none.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub clip: Vec<ClipPlane>,
     /// A crop box (axis-aligned, world mm) keeping its inside, cutting as
