@@ -5,9 +5,11 @@
 //!
 //! `cargo run --release -p glint-render --example clip_speed [frames]`
 //!
-//! Frames alternate between a camera move (azimuth steps, no clip) and a clip move (the
-//! plane steps through the volume, camera fixed), so drift in machine load hits both;
-//! the medians and 95th percentiles are printed. Without the template (`GLINT_MNI152`,
+//! Frames alternate between a camera move (azimuth steps, no clip), the same camera
+//! move under a plane that keeps everything (the clip's own cost: the same samples) and
+//! a clip move (the plane steps through the volume, camera fixed: other samples, the
+//! cut opens the inside), so drift in machine load hits all three; the medians, 95th
+//! percentiles and samples per frame are printed. Without the template (`GLINT_MNI152`,
 //! default `~/.cache/glint/samples/mni152_t1_09a.nii.gz`) it uses the phantom at 192^3.
 
 use std::time::Instant;
@@ -37,7 +39,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .derived
         .as_ref()
         .map_or([0.0; 3], |d| d.focal_point.map(f64::from));
-    let (mut camera, mut clip) = (Vec::new(), Vec::new());
+    let mut times = [Vec::new(), Vec::new(), Vec::new()];
+    let mut samples = [0u64; 3];
+    let mut timed = |k: usize, s: &Scene| -> Result<(), Box<dyn std::error::Error>> {
+        let t = Instant::now();
+        let r = renderer.render(s, &|_| {})?;
+        times[k].push(t.elapsed().as_secs_f64() * 1e3);
+        samples[k] += r.image.stats.samples;
+        assert_eq!(r.timings.get("classify"), std::time::Duration::ZERO);
+        Ok(())
+    };
     for i in 0..frames {
         let moved = Scene {
             camera: glint_render::CameraSpec {
@@ -46,9 +57,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             },
             ..scene.clone()
         };
-        let t = Instant::now();
-        renderer.render(&moved, &|_| {})?;
-        camera.push(t.elapsed().as_secs_f64() * 1e3);
+        timed(0, &moved)?;
+        let everything = Scene {
+            clip: vec![ClipPlane {
+                point: [centre[0] - 1e4, centre[1], centre[2]],
+                normal: [1.0, 0.0, 0.0],
+            }],
+            ..moved
+        };
+        timed(1, &everything)?;
         let offset = 2.0 * i as f64 - frames as f64;
         let cut = Scene {
             clip: vec![ClipPlane {
@@ -57,16 +74,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }],
             ..scene.clone()
         };
-        let t = Instant::now();
-        let r = renderer.render(&cut, &|_| {})?;
-        clip.push(t.elapsed().as_secs_f64() * 1e3);
-        assert_eq!(r.timings.get("classify"), std::time::Duration::ZERO);
+        timed(2, &cut)?;
     }
-    for (name, v) in [("camera move", camera), ("clip move", clip)] {
+    let names = [
+        "camera move",
+        "camera move, plane keeping everything",
+        "clip move",
+    ];
+    for ((name, v), n) in names.iter().zip(times).zip(samples) {
         println!(
-            "{name}: median {:.1} ms, p95 {:.1} ms over {frames} frames",
+            "{name}: median {:.1} ms, p95 {:.1} ms, {} samples per frame over {frames} frames",
             quantile(v.clone(), 0.5),
-            quantile(v, 0.95)
+            quantile(v, 0.95),
+            n / frames as u64
         );
     }
     Ok(())
