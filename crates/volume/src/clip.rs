@@ -81,6 +81,13 @@ impl IndexClip {
         (lo, hi)
     }
 
+    /// Whether a gradient `g` is weak enough for a cut face to replace it: the test
+    /// [`IndexClip::cut_gradient`] makes first, which needs no position.
+    #[inline]
+    pub(crate) fn weak(&self, g: Vec3) -> bool {
+        g.length() < self.strong
+    }
+
     /// Whether index-space point `p` is kept.
     #[inline]
     pub(crate) fn contains(&self, p: Vec3) -> bool {

@@ -201,10 +201,15 @@ fn grid_cell(brick_dims: [usize; 3], s: &Sample) -> [usize; 3] {
 fn cut_faces(c: &Caster, clip: &IndexClip, kept: &Kept, batch: &mut ShadeBatch) {
     let brick_dims = c.field.brick_dims;
     for (k, s) in kept.0.iter().enumerate().take(batch.len()) {
+        let n = &mut batch.normal;
+        let g = Vec3::new(n[0][k], n[1][k], n[2][k]);
+        // A strong gradient is kept wherever the sample lies: no position needed.
+        if !clip.weak(g) {
+            continue;
+        }
         let [i, j, kk] = grid_cell(brick_dims, s);
         let p = Vec3::new(i as f32 + s.t[0], j as f32 + s.t[1], kk as f32 + s.t[2]);
-        let n = &mut batch.normal;
-        let g = clip.cut_gradient(p, Vec3::new(n[0][k], n[1][k], n[2][k]));
+        let g = clip.cut_gradient(p, g);
         (n[0][k], n[1][k], n[2][k]) = (g.x, g.y, g.z);
     }
 }
