@@ -25,6 +25,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+mod clip;
 pub mod color;
 mod colormap;
 mod error;
@@ -36,6 +37,7 @@ mod mode;
 mod timings;
 
 pub use camera::{Camera, CameraSpec, Projection, View};
+pub use clip::{Clip, ClipPlane, CropBox, HalfSpace};
 pub use color::{linear_to_srgb, luminance, luminance_f32, srgb_to_linear, REC709_LUMA};
 pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
 pub use error::{unknown_name, BoxedError, RenderError};

@@ -13,7 +13,7 @@ use crate::json;
 
 /// Fields the scene JSON omits while they are unset (`Option` fields serialised with
 /// `skip_serializing_if`); reading them gives None.
-const OPTIONAL_FIELDS: [&str; 8] = [
+const OPTIONAL_FIELDS: [&str; 9] = [
     "iso",
     "preset",
     "transfer_function",
@@ -22,6 +22,7 @@ const OPTIONAL_FIELDS: [&str; 8] = [
     "ssaa",
     "opacity_unit",
     "lighting",
+    "crop",
 ];
 
 /// A render, described completely (volume, classification, lobe, lights, camera, size).
@@ -126,7 +127,9 @@ impl Scene {
             Some(v) => json::to_py(py, v),
             None if OPTIONAL_FIELDS.contains(&name) => Ok(py.None().into_bound(py)),
             // Omitted while empty.
-            None if name == "meshes" => json::to_py(py, &Value::Array(Vec::new())),
+            None if name == "meshes" || name == "clip" => {
+                json::to_py(py, &Value::Array(Vec::new()))
+            }
             None => Err(PyAttributeError::new_err(format!(
                 "'Scene' object has no attribute '{name}'"
             ))),
@@ -137,6 +140,7 @@ impl Scene {
         let mut names: Vec<String> = as_object(&RScene::default())?.keys().cloned().collect();
         names.extend(OPTIONAL_FIELDS.iter().map(|s| s.to_string()));
         names.push("meshes".into());
+        names.push("clip".into());
         names.extend(
             ["from_json", "to_json", "to_dict", "replace", "load", "save"]
                 .iter()

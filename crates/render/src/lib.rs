@@ -76,6 +76,7 @@ pub use glint_core::{
     ScalarColors, Shader, Timings, View, COLORMAP_TABLE, MAX_IMAGE_SIDE, MAX_LIGHTS,
     RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
+pub use glint_core::{Clip, ClipPlane, CropBox, HalfSpace};
 pub use glint_io::ReadOptions;
 pub use glint_labels as label_maps;
 pub use glint_mesh as mesh;

@@ -182,8 +182,14 @@ impl Renderer {
                 if let Some((labels, step)) = meshes.as_ref().and_then(|m| m.label_volume.as_ref())
                 {
                     let end = near.as_ref().map_or(f32::INFINITY, |n| n.depth);
-                    let first =
-                        labels.first_drawn(&camera, &resolved.shader, (px, py), (w, h), *step, end);
+                    let first = labels.first_drawn(
+                        &camera,
+                        &resolved.shader,
+                        (px, py),
+                        (w, h),
+                        *step,
+                        (end, &frame.clip),
+                    );
                     if let Some(t) = first {
                         near = Some(Hit {
                             object: PickedObject::LabelVolume,

@@ -27,6 +27,8 @@ struct ShadowCache {
     settings: ShadowSettings,
     /// The meshes' occupancy the light volumes were built with.
     occluders: Option<Arc<Occluders>>,
+    /// The clip the light volumes were built with (clipped space casts no shadow).
+    clip: glint_core::Clip,
     field: Arc<ShadowField>,
 }
 
@@ -635,6 +637,7 @@ impl Renderer {
             if Arc::ptr_eq(&c.class, class)
                 && c.settings == settings
                 && same_occluders(c)
+                && c.clip == v.frame.clip
                 && c.field.is_for(v.shader, v.camera)
             {
                 return Ok(c.field.clone());
@@ -646,6 +649,7 @@ impl Renderer {
             class: class.clone(),
             settings,
             occluders: v.occluders.cloned(),
+            clip: v.frame.clip.clone(),
             field: field.clone(),
         });
         Ok(field)

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use glint_io::{nifti, Endian, Mesh, Samples, Volume};
 use glint_render::{
-    Camera, CameraSpec, Input, LabelSpec, LabelsAs, MeshSpec, Pick, PickedObject, Projection,
-    RenderError, RenderMode, Renderer, Sampling, Scene, TransferFunction, View,
+    Camera, CameraSpec, ClipPlane, CropBox, Input, LabelSpec, LabelsAs, MeshSpec, Pick,
+    PickedObject, Projection, RenderError, RenderMode, Renderer, Sampling, Scene, TransferFunction,
+    View,
 };
 
 /// Grid edge of the ball's volume, voxels.
@@ -524,4 +525,38 @@ fn picked_points_project_back_to_where_they_were_picked() {
     }
     // A scene never rendered has no camera to project with.
     assert_eq!(glint_render::image_point(&Scene::default(), [0.0; 3]), None);
+}
+
+/// A clip plane through the ball's centre facing away from the camera: a pick lands
+/// on the cut face (the plane), not on the clipped front; a crop box that keeps
+/// nothing of the ball leaves nothing to pick. Picks are cut as the frame's rays are.
+#[test]
+fn picks_respect_clip_planes_and_crop_boxes() {
+    for mode in [RenderMode::Composite, RenderMode::Iso] {
+        let mut scene = scene(mode, View::Anterior, Projection::Orthographic);
+        let mut r = renderer();
+        let camera = r.camera(&scene).unwrap();
+        let f = camera.forward;
+        let forward = [f.x, f.y, f.z].map(f64::from);
+        let (x, y) = (24.0, 20.0);
+        let front = r.pick(&scene, x, y).unwrap().unwrap();
+        scene.clip = vec![ClipPlane {
+            point: centre(),
+            normal: forward,
+        }];
+        let cut = r.pick(&scene, x, y).unwrap().unwrap();
+        let off_plane = dot(sub(cut.world_mm, centre()), forward);
+        assert!(
+            off_plane.abs() < half_voxel(),
+            "{mode:?}: {cut:?} is {off_plane} mm off the plane"
+        );
+        assert!(cut.depth_mm > front.depth_mm + 0.5 * R, "{front:?} {cut:?}");
+        scene.clip.clear();
+        let c = centre();
+        scene.crop = Some(CropBox {
+            min: [c[0] + 2.0 * R, c[1], c[2]],
+            max: [c[0] + 3.0 * R, c[1] + R, c[2] + R],
+        });
+        assert_eq!(r.pick(&scene, x, y).unwrap(), None, "{mode:?}");
+    }
 }

@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader};
 
 use crate::classification::Classification;
+use crate::clip::{IndexClip, CUT_DEPTH_STEPS};
 use crate::raycast::FrameSettings;
 use crate::transport::{
     check_spp, Occluders, PathImage, PathSettings, PathTracer, ShadowField, ShadowSettings,
@@ -123,7 +124,8 @@ impl Classification {
     /// given: the meshes cast their shadows into the volume. The averaged extinction
     /// and the occlusion are built on first use and kept with the classification; the
     /// light volumes are built here (a cache a viewer keeps while the lights point the
-    /// same way, [`ShadowField::is_for`]).
+    /// same way, [`ShadowField::is_for`], and the frame's clip is the same: the space
+    /// it cuts away casts no shadow).
     pub fn shadow_field(
         &self,
         shader: &Shader,
@@ -140,12 +142,26 @@ impl Classification {
             .map(|&(l, _)| field.index_direction(l))
             .collect();
         let occlusion = settings.occlusion.then(|| self.occlusion());
+        let clip = self.index_clip(shader, frame);
         ShadowField::new(
             self.density(),
             ShadowField::light_bits(&placed),
             &dirs,
             occlusion,
-            occluders,
+            (occluders, clip.as_ref()),
+        )
+    }
+
+    /// The clip of `frame` in the field's index space, its cut faces as deep as the
+    /// ray caster's ([`CUT_DEPTH_STEPS`] steps) and lit at twice `shader`'s gate.
+    pub(crate) fn index_clip(&self, shader: &Shader, frame: &FrameSettings) -> Option<IndexClip> {
+        let field = &**self.field();
+        let dt = (self.settings().step * field.min_spacing()) as f32;
+        IndexClip::new(
+            &frame.clip,
+            field,
+            CUT_DEPTH_STEPS * dt,
+            2.0 * shader.gate(),
         )
     }
 
@@ -195,8 +211,10 @@ impl Classification {
         }
         let camera = self.camera(frame)?;
         let placed = shader.placed(&camera);
+        let clip = self.index_clip(shader, frame);
         let tracer = PathTracer::new(self.field(), self.medium(), &placed, camera, size, settings)?
-            .occluded_by(occluders)?;
+            .occluded_by(occluders)?
+            .clipped_by(clip.as_ref());
         let w = frame.width as usize;
         let stats = image
             .sums_mut()

@@ -40,6 +40,7 @@
 #![warn(missing_docs)]
 
 mod classification;
+mod clip;
 mod field;
 mod frames;
 mod light;

@@ -10,8 +10,9 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    ColorMap, Input, Light, LightingModel, MeshSpec, Overlay, Phantom, Prefilter, Projection,
-    RenderMode, Sampling, Scene, SceneLobe, TransferFunctionFile, View, WindowLevel,
+    Clip, ClipPlane, ColorMap, CropBox, Input, Light, LightingModel, MeshSpec, Overlay, Phantom,
+    Prefilter, Projection, RenderMode, Sampling, Scene, SceneLobe, TransferFunctionFile, View,
+    WindowLevel,
 };
 
 use super::choice::choice;
@@ -143,6 +144,16 @@ pub struct SceneFlags {
     /// Image size WxH [default: 512x512].
     #[arg(long, value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
+    /// Clip plane through the point X,Y,Z with normal NX,NY,NZ (world mm, RAS+):
+    /// keeps the side the normal points to, in every mode and lighting model; cut
+    /// faces are lit with the plane's normal. Repeatable (all planes cut), added to a
+    /// --scene file's planes. E.g. `--clip 0,0,0,1,0,0` keeps x >= 0.
+    #[arg(long = "clip", value_name = "X,Y,Z,NX,NY,NZ", allow_hyphen_values = true, value_parser = parse_clip)]
+    pub clip: Vec<ClipPlane>,
+    /// Crop box XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX (world mm, axis-aligned): keeps its
+    /// inside, as --clip cuts; replaces a --scene file's box.
+    #[arg(long, value_name = "XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX", allow_hyphen_values = true, value_parser = parse_crop)]
+    pub crop: Option<CropBox>,
     /// Refuse what lenient readers accept with a note (DICOM without preamble or meta
     /// group, multi-frame DICOM without frame positions).
     #[arg(long)]
@@ -262,6 +273,10 @@ impl SceneFlags {
         set(&mut camera.zoom, self.zoom);
         set(&mut camera.projection, self.projection);
         set(&mut scene.size, self.size);
+        scene.clip.extend(self.clip.iter().copied());
+        if self.crop.is_some() {
+            scene.crop = self.crop;
+        }
         set(&mut scene.step, self.step);
         set(&mut scene.prefilter, self.prefilter);
         set(&mut scene.sampling, self.sampling);
@@ -456,6 +471,60 @@ pub fn parse_range(s: &str) -> Result<[f32; 2], String> {
     Ok([lo, hi])
 }
 
+/// Six comma-separated finite numbers, or `None`.
+fn six(s: &str) -> Option<[f64; 6]> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()?;
+    v.try_into().ok()
+}
+
+/// Parses `X,Y,Z,NX,NY,NZ` (a point and a non-zero normal, world mm) into a clip
+/// plane.
+pub fn parse_clip(s: &str) -> Result<ClipPlane, String> {
+    let [x, y, z, nx, ny, nz] = six(s).ok_or_else(|| {
+        format!("'{s}': expected X,Y,Z,NX,NY,NZ (a point and a normal in mm), e.g. 0,0,0,1,0,0")
+    })?;
+    let plane = ClipPlane {
+        point: [x, y, z],
+        normal: [nx, ny, nz],
+    };
+    Clip {
+        planes: vec![plane],
+        crop: None,
+    }
+    .validate()
+    .map_err(|e| format!("'{s}': {}", reason(e).trim_start_matches("clip plane 1: ")))?;
+    Ok(plane)
+}
+
+/// Parses `XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX` (world mm) into a crop box.
+pub fn parse_crop(s: &str) -> Result<CropBox, String> {
+    let [x0, x1, y0, y1, z0, z1] = six(s).ok_or_else(|| {
+        format!("'{s}': expected XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX in mm, e.g. -50,0,-80,80,-60,60")
+    })?;
+    let crop = CropBox {
+        min: [x0, y0, z0],
+        max: [x1, y1, z1],
+    };
+    Clip {
+        planes: vec![],
+        crop: Some(crop),
+    }
+    .validate()
+    .map_err(|e| format!("'{s}': {}", reason(e)))?;
+    Ok(crop)
+}
+
+/// What a parameter error says, without its kind's prefix (clap adds its own).
+fn reason(e: glint_render::RenderError) -> String {
+    match e {
+        glint_render::RenderError::Parameter(m) => m,
+        e => e.to_string(),
+    }
+}
+
 /// Parses `AZ,EL` or `AZ,EL,INTENSITY` (degrees) into a camera-relative light.
 pub fn parse_light(s: &str) -> Result<Light, String> {
     let bad = || format!("'{s}': expected AZ,EL or AZ,EL,INTENSITY in degrees, e.g. 45,30");
@@ -607,6 +676,39 @@ mod tests {
         };
         flags.apply(&mut s).unwrap();
         assert_eq!((s.mode, s.iso), (RenderMode::Mip, None));
+    }
+
+    #[test]
+    fn clip_and_crop_flags_set_the_scenes_planes_and_box() {
+        let s = scene(&[
+            "--clip",
+            "1,-2,3,0,0,-1",
+            "--clip",
+            "0,0,0,2,0,0",
+            "--crop",
+            "-50,0,-80,80,-60,60.5",
+        ])
+        .unwrap();
+        assert_eq!(s.clip.len(), 2);
+        assert_eq!(
+            (s.clip[0].point, s.clip[0].normal),
+            ([1.0, -2.0, 3.0], [0.0, 0.0, -1.0])
+        );
+        let b = s.crop.unwrap();
+        assert_eq!((b.min, b.max), ([-50.0, -80.0, -60.0], [0.0, 80.0, 60.5]));
+        for (argv, says) in [
+            (["--clip", "0,0,0,0,0,0"], "the normal is zero"),
+            (["--clip", "0,0,0,1,0"], "expected X,Y,Z,NX,NY,NZ"),
+            (["--clip", "0,0,nan,1,0,0"], "expected X,Y,Z,NX,NY,NZ"),
+            (
+                ["--crop", "0,-1,0,1,0,1"],
+                "x from 0 to -1 is empty or inverted",
+            ),
+            (["--crop", "0,1,0,1,0"], "expected XMIN,XMAX"),
+        ] {
+            let e = scene(&argv).unwrap_err().to_string();
+            assert!(e.contains(says), "{argv:?}: {e}");
+        }
     }
 
     #[test]

@@ -232,6 +232,12 @@ impl Shader {
         &self.material
     }
 
+    /// The gradient gate (value per mm): gradients weaker than it get no directional
+    /// shading, and full shading from twice it.
+    pub fn gate(&self) -> f32 {
+        self.gate
+    }
+
     /// The lighting geometry (Phong or Blinn).
     pub fn geometry(&self) -> Geometry {
         self.geometry

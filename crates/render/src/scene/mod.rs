@@ -9,7 +9,9 @@
 
 use std::path::PathBuf;
 
-use glint_core::{CameraSpec, Light, MaterialOverrides, RenderError, RenderMode};
+use glint_core::{
+    CameraSpec, Clip, ClipPlane, CropBox, Light, MaterialOverrides, RenderError, RenderMode,
+};
 use glint_io::{open_volume, ReadOptions, Volume};
 use glint_volume::{Field, Phantom, Prefilter, Sampling, TransferFunction, WindowLevel};
 use serde::{Deserialize, Serialize};
@@ -135,6 +137,16 @@ pub struct Scene {
     pub opacity_unit: Option<f64>,
     /// Background colour, linear RGB.
     pub background: [f32; 3],
+    /// Clip planes (world mm), each keeping the side its normal points to: the
+    /// volume, its light and a ray-cast label map are cut in every mode and lighting
+    /// model (meshes, rasterised, are not); cut faces are lit with the plane's normal
+    /// where the data's gradient is weak. Left out of the JSON when there are none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub clip: Vec<ClipPlane>,
+    /// A crop box (axis-aligned, world mm) keeping its inside, cutting as
+    /// [`clip`](Self::clip) does. Left out of the JSON when absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crop: Option<CropBox>,
     /// Written by a render for other tools (e.g. scripts/bench/bench-vtk.py): the camera
     /// and transfer function that were used, in world units. Ignored on input.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -169,6 +181,8 @@ impl Default for Scene {
             sampling: Sampling::default(),
             opacity_unit: None,
             background: [0.0; 3],
+            clip: Vec::new(),
+            crop: None,
             derived: None,
         }
     }
@@ -290,6 +304,14 @@ impl Scene {
     /// drawn into its frame).
     pub fn is_surface(&self) -> bool {
         self.mode == RenderMode::Surface || (self.has_meshes() && self.input == Input::None)
+    }
+
+    /// The clip planes and crop box as one [`Clip`].
+    pub fn clip(&self) -> Clip {
+        Clip {
+            planes: self.clip.clone(),
+            crop: self.crop,
+        }
     }
 
     /// Whether the scene has surfaces besides the volume's: meshes or a label map.

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glint_core::camera::Camera;
 use glint_core::{
-    Image, Legend, Light, Material, MaterialOverrides, RenderError, RenderMode, RenderStats,
+    Clip, Image, Legend, Light, Material, MaterialOverrides, RenderError, RenderMode, RenderStats,
     ScalarColors, Shader, MAX_LIGHTS,
 };
 use glint_raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
@@ -74,6 +74,9 @@ pub struct MeshLayer {
     /// The label map ray cast as a volume, when the scene draws it so, and its
     /// sample step (voxels of the label grid's smallest edge).
     pub label_volume: Option<(Arc<LabelVolume>, f64)>,
+    /// The scene's clip planes and crop box, which cut the label volume as they cut
+    /// the intensity volume.
+    pub clip: Clip,
 }
 
 impl MeshLayer {
@@ -105,7 +108,8 @@ impl MeshLayer {
         if let Some((labels, step)) = &self.label_volume {
             // The label volume in front of the surfaces, then the volume in front of
             // both.
-            let (front, first) = labels.render_layer(camera, shader, (w, h), bg, *step, &far)?;
+            let (front, first) =
+                labels.render_layer(camera, shader, (w, h), bg, *step, (&far, &self.clip))?;
             over(&mut behind, &front, bg);
             for (f, l) in far.iter_mut().zip(first) {
                 *f = f.min(l);
@@ -199,6 +203,7 @@ impl Scene {
             ));
         }
         check_lights(&scene.lights)?;
+        scene.clip().validate()?;
         scene.lighting.resolve(RenderMode::Surface)?;
         let material = scene.material.apply(SURFACE_MATERIAL);
         material.validate()?;
@@ -269,6 +274,7 @@ impl Scene {
             colors,
             legend: set.legend.clone(),
             label_volume: set.label_volume.clone().map(|v| (v, self.step)),
+            clip: self.clip(),
         })
     }
 
@@ -360,6 +366,7 @@ impl Scene {
             camera: scene.camera,
             background: scene.background,
             kernel: Kernel::Auto,
+            clip: scene.clip(),
         };
         frame.validate()?;
         scene.camera.validate()?;

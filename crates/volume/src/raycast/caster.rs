@@ -7,6 +7,7 @@ use glint_core::{RayLighting, RenderMode, RenderStats, Shader, Vec3, MAX_LIGHTS}
 use super::settings::FrameSettings;
 use super::{ISO_REFINE_STEPS, TERMINATION_OPACITY, TILE};
 use crate::classification::{ColourVolume, Last, Lut, Sampling};
+use crate::clip::IndexClip;
 use crate::field::{clip_ray, Field, Loc, MACRO_CELL};
 use crate::light::ShadowField;
 
@@ -41,6 +42,9 @@ pub(super) struct Caster<'a> {
     /// A colour volume's colours, which replace the transfer function's
     /// ([`Classification::with_colour`](super::Classification::with_colour)).
     pub(super) colour: Option<&'a ColourVolume>,
+    /// The frame's clip planes and crop box: the rays' bounds are cut to what they
+    /// keep ([`FrameSettings::clip`]); here, the cut faces' normals.
+    pub(super) clip: Option<&'a IndexClip>,
 }
 
 impl Caster<'_> {
@@ -117,7 +121,13 @@ impl Caster<'_> {
             inv_dk[a] = (1.0 / da) / self.dt;
             face_up[a] = da > 0.0;
         }
-        let t_entry = t0;
+        // With a clip, `start` holds where the kept interval begins: an iso hit is
+        // then never bisected back across the cut.
+        let t_entry = if self.clip.is_some() {
+            t0.max(start)
+        } else {
+            t0
+        };
         let t0 = t0.max(start);
         let t1 = t1.min(end);
         if t0 > t1 {
@@ -265,21 +275,24 @@ impl Caster<'_> {
         guard: &Guard,
     ) -> bool {
         stats.shaded += 1;
-        let grad = self.field.gradient_at(loc, guard);
+        let mut grad = self.field.gradient_at(loc, guard);
         let base = match self.colour {
             Some(c) => c.at(loc),
             None => [rgba[0], rgba[1], rgba[2]],
         };
+        let p = || {
+            Vec3::new(
+                loc.ijk[0] as f32 + loc.t[0],
+                loc.ijk[1] as f32 + loc.t[1],
+                loc.ijk[2] as f32 + loc.t[2],
+            )
+        };
+        if let Some(clip) = self.clip {
+            grad = clip.cut_gradient(p(), grad);
+        }
         let rgb = match self.shadows {
             None => self.shader.shade(base, grad, lighting),
-            Some(s) => {
-                let p = Vec3::new(
-                    loc.ijk[0] as f32 + loc.t[0],
-                    loc.ijk[1] as f32 + loc.t[1],
-                    loc.ijk[2] as f32 + loc.t[2],
-                );
-                self.shade_shadowed(s, p, base, grad, lighting)
-            }
+            Some(s) => self.shade_shadowed(s, p(), base, grad, lighting),
         };
         let w = (1.0 - **alpha) * rgba[3];
         color[0] += w * rgb[0];
@@ -329,7 +342,10 @@ impl Caster<'_> {
         };
         let p = ray.at(hi);
         let e = self.lut.get(threshold);
-        let g = self.field.gradient_in(p, guard);
+        let mut g = self.field.gradient_in(p, guard);
+        if let Some(clip) = self.clip {
+            g = clip.cut_gradient(p, g);
+        }
         let lighting = self.shader.for_ray(view);
         let base = match self.colour {
             Some(c) => c.at(&self.field.locate(p)),

@@ -11,6 +11,7 @@ use super::settings::{FrameSettings, Kernel};
 use super::start::StartBounds;
 use super::{simd_supported, Scratch, TILE};
 use crate::classification::Classification;
+use crate::clip::IndexClip;
 use crate::light::ShadowField;
 
 impl Classification {
@@ -85,6 +86,7 @@ impl Classification {
         settings: &'a FrameSettings,
         jitter: bool,
         shadows: Option<&'a ShadowField>,
+        clip: Option<&'a IndexClip>,
     ) -> Caster<'a> {
         let field = &*self.field;
         Caster {
@@ -107,6 +109,7 @@ impl Classification {
             sampling: self.settings.sampling,
             shadows,
             colour: self.colour.as_deref(),
+            clip,
         }
     }
 
@@ -132,7 +135,8 @@ impl Classification {
         let field = &*self.field;
         field.make_room();
         let (w, h) = (settings.width as usize, settings.height as usize);
-        let caster = self.caster(&camera, shader, settings, jitter, shadows);
+        let clip = self.index_clip(shader, settings);
+        let caster = self.caster(&camera, shader, settings, jitter, shadows, clip.as_ref());
         let starts = (!self.blocks.is_empty())
             .then(|| StartBounds::new(&self.blocks, &caster.rays, &camera, w, h));
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
@@ -144,7 +148,7 @@ impl Classification {
                 let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
                 let n = (x1 - x0) * (y1 - y0);
-                let start = match &starts {
+                let mut start = match &starts {
                     Some(s) => s.tile(t, (x0, x1), (y0, y1)),
                     None => [0.0; TILE * TILE],
                 };
@@ -154,6 +158,9 @@ impl Classification {
                     for (y, row) in (y0..y1).zip(end.chunks_mut(tw)) {
                         row.copy_from_slice(&far[y * w + x0..y * w + x1]);
                     }
+                }
+                if let Some(clip) = &clip {
+                    cut_bounds(clip, &caster.rays, (x0, x1), (y0, y1), &mut start, &mut end);
                 }
                 let mut rgb = Vec::with_capacity(n);
                 let mut alpha = Vec::with_capacity(n);
@@ -204,5 +211,31 @@ impl Classification {
             alpha,
             stats,
         })
+    }
+}
+
+/// Cuts the start and end bounds of the tile's rays (`xs` x `ys`, row-major) to the
+/// part of each ray `clip` keeps: a ray it keeps nothing of starts at +inf (takes no
+/// sample), as one that meets no visible block does.
+fn cut_bounds(
+    clip: &IndexClip,
+    rays: &IndexRays,
+    xs: (usize, usize),
+    ys: (usize, usize),
+    start: &mut [f32; TILE * TILE],
+    end: &mut [f32; TILE * TILE],
+) {
+    let tw = xs.1 - xs.0;
+    for y in ys.0..ys.1 {
+        for x in xs.0..xs.1 {
+            let i = (y - ys.0) * tw + (x - xs.0);
+            let (o, d, _) = rays.ray(x as f32, y as f32);
+            let (a, b) = clip.interval(o, d, (start[i], end[i]));
+            if a > b {
+                start[i] = f32::INFINITY;
+            } else {
+                (start[i], end[i]) = (a, b);
+            }
+        }
     }
 }

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use rayon::prelude::*;
 
 use glint_core::camera::Camera;
-use glint_core::{Image, RenderError, RenderStats, Shader, Vec3};
+use glint_core::{Clip, HalfSpace, Image, RenderError, RenderStats, Shader, Vec3};
 
 use super::caster::jitter;
 use super::TERMINATION_OPACITY;
@@ -142,7 +142,8 @@ impl LabelVolume {
     /// orthographic cameras; `f32::INFINITY`: nowhere), e.g. at a surface drawn with
     /// the same camera. Returns the image (RGB over the background, alpha the
     /// opacity) and each pixel's distance to the first label sample it shows
-    /// (`f32::INFINITY`: none), what a volume drawn in front of it stops at.
+    /// (`f32::INFINITY`: none), what a volume drawn in front of it stops at. Labels
+    /// outside what `clip` keeps are not drawn (each ray is cut to its kept interval).
     pub fn render_layer(
         &self,
         camera: &Camera,
@@ -150,7 +151,7 @@ impl LabelVolume {
         (width, height): (u32, u32),
         background: [f32; 3],
         step: f64,
-        end: &[f32],
+        (end, clip): (&[f32], &Clip),
     ) -> Result<(Image, Vec<f32>), RenderError> {
         let (w, h) = (width as usize, height as usize);
         if end.len() != w * h {
@@ -165,6 +166,8 @@ impl LabelVolume {
                 "label volume step {step}: expected a positive number of voxels"
             )));
         }
+        clip.validate()?;
+        let keep = clip.half_spaces();
         let shader = &shader.placed(camera);
         let dt = (step * self.min_spacing) as f32;
         let rows: Vec<Row> = (0..h)
@@ -178,9 +181,11 @@ impl LabelVolume {
                 );
                 for x in 0..w {
                     let (o, d) = camera.ray(x as f32, y as f32, width, height);
+                    let (start, end) = kept(&keep, o, d, end[y * w + x]);
                     let march = March {
                         jitter: jitter(x as f32, y as f32),
-                        end: end[y * w + x],
+                        start,
+                        end,
                         dt,
                     };
                     let (c, a, first) = self.cast(o, d, &march, shader, &mut out.3);
@@ -219,7 +224,8 @@ impl LabelVolume {
     /// The distance (mm, as [`LabelVolume::render_layer`]'s) to the first label
     /// sample the ray through pixel `(x, y)` (pixel index coordinates, centres at
     /// whole numbers) of a `width` x `height` image by `camera` shows, the ray
-    /// stopped at `end`: a pick of the label volume. `None` when it shows none.
+    /// stopped at `end` and cut by `clip` as [`LabelVolume::render_layer`] cuts it: a
+    /// pick of the label volume. `None` when it shows none.
     pub fn first_drawn(
         &self,
         camera: &Camera,
@@ -227,11 +233,13 @@ impl LabelVolume {
         (x, y): (f32, f32),
         (width, height): (u32, u32),
         step: f64,
-        end: f32,
+        (end, clip): (f32, &Clip),
     ) -> Option<f32> {
         let (o, d) = camera.ray(x, y, width, height);
+        let (start, end) = kept(&clip.half_spaces(), o, d, end);
         let march = March {
             jitter: jitter(x, y),
+            start,
             end,
             dt: (step * self.min_spacing) as f32,
         };
@@ -258,7 +266,7 @@ impl LabelVolume {
         };
         let oi = self.to_index(o, 1.0);
         let di = self.to_index(d, 0.0);
-        let (mut t0, mut t1) = (0.0f32, march.end);
+        let (mut t0, mut t1) = (march.start, march.end);
         for a in 0..3 {
             if di[a].abs() < 1e-12 {
                 if oi[a] < lo[a] || oi[a] > hi[a] {
@@ -407,8 +415,28 @@ type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<f32>, RenderStats);
 /// step (mm).
 struct March {
     jitter: f32,
+    /// Where the ray starts and ends (mm): the frame's limit and the clip's interval.
+    start: f32,
     end: f32,
     dt: f32,
+}
+
+/// The part of `[0, end]` of the world ray from `o` along unit `d` inside every
+/// half-space of `keep` (empty: start after end).
+fn kept(keep: &[HalfSpace], o: Vec3, d: Vec3, end: f32) -> (f32, f32) {
+    let (mut lo, mut hi) = (0.0f32, end);
+    for h in keep {
+        let n = Vec3::new(h.normal[0] as f32, h.normal[1] as f32, h.normal[2] as f32);
+        let (f0, slope) = (n.dot(o) + h.offset as f32, n.dot(d));
+        if slope > 0.0 {
+            lo = lo.max(-f0 / slope);
+        } else if slope < 0.0 {
+            hi = hi.min(-f0 / slope);
+        } else if f0 < 0.0 {
+            return (f32::INFINITY, f32::NEG_INFINITY);
+        }
+    }
+    (lo, hi)
 }
 
 /// The inverse of an affine 4x4 (last row 0 0 0 1); `None` when singular.
@@ -494,8 +522,15 @@ mod tests {
         let vol = LabelVolume::new([N; 3], affine, &labels, looks).unwrap();
         let camera = Camera::frame(&CameraSpec::default(), Vec3::ZERO, 9.0, SIZE, SIZE).unwrap();
         let end = vec![f32::INFINITY; (SIZE * SIZE) as usize];
-        vol.render_layer(&camera, &shader(shade), (SIZE, SIZE), [0.0; 3], 0.5, &end)
-            .unwrap()
+        vol.render_layer(
+            &camera,
+            &shader(shade),
+            (SIZE, SIZE),
+            [0.0; 3],
+            0.5,
+            (&end, &Clip::default()),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -578,6 +613,50 @@ mod tests {
     }
 
     #[test]
+    fn clip_planes_and_crop_boxes_cut_the_labels() {
+        // Label 1 lies at world x < 0, label 2 at x > 0 (nearest voxel).
+        let looks = BTreeMap::from([(1, look(RED, 1.0)), (2, look(GREEN, 1.0))]);
+        let (affine, labels) = halves();
+        let vol = LabelVolume::new([N; 3], affine, &labels, &looks).unwrap();
+        let camera = Camera::frame(&CameraSpec::default(), Vec3::ZERO, 9.0, SIZE, SIZE).unwrap();
+        let end = vec![f32::INFINITY; (SIZE * SIZE) as usize];
+        let draw = |clip: &Clip| {
+            let (image, _) = vol
+                .render_layer(
+                    &camera,
+                    &shader(false),
+                    (SIZE, SIZE),
+                    [0.0; 3],
+                    0.5,
+                    (&end, clip),
+                )
+                .unwrap();
+            let count = |c: [f32; 3]| image.rgb.iter().filter(|&&p| p == c).count();
+            (count(RED), count(GREEN))
+        };
+        let (red, green) = draw(&Clip::default());
+        assert!(red > 50 && green > 50, "{red} {green}");
+        let crop = Clip {
+            planes: vec![],
+            crop: Some(glint_core::CropBox {
+                min: [0.0, -100.0, -100.0],
+                max: [100.0; 3],
+            }),
+        };
+        let (red, green) = draw(&crop);
+        assert!(red == 0 && green > 50, "{red} {green}");
+        let plane = Clip {
+            planes: vec![glint_core::ClipPlane {
+                point: [-1.0, 0.0, 0.0],
+                normal: [-1.0, 0.0, 0.0],
+            }],
+            crop: None,
+        };
+        let (red, green) = draw(&plane);
+        assert!(red > 50 && green == 0, "{red} {green}");
+    }
+
+    #[test]
     fn a_ray_stops_where_it_is_told() {
         let looks = BTreeMap::from([(1, look(RED, 1.0)), (2, look(GREEN, 1.0))]);
         let (affine, labels) = halves();
@@ -587,7 +666,14 @@ mod tests {
         // Stop every ray just before its first label sample: nothing is drawn.
         let end: Vec<f32> = far.iter().map(|f| f - 0.01).collect();
         let (image, _) = vol
-            .render_layer(&camera, &shader(false), (SIZE, SIZE), [0.0; 3], 0.5, &end)
+            .render_layer(
+                &camera,
+                &shader(false),
+                (SIZE, SIZE),
+                [0.0; 3],
+                0.5,
+                (&end, &Clip::default()),
+            )
             .unwrap();
         assert!(image.alpha.iter().all(|a| *a == 0.0));
     }

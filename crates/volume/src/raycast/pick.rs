@@ -75,8 +75,19 @@ impl Classification {
             )));
         }
         let shader = shader.placed(&camera);
-        let caster = self.caster(&camera, &shader, settings, true, None);
-        let Some((ray, _)) = caster.ray(x, y, (0.0, end)) else {
+        // The frame's clip planes and crop box cut this ray as they cut the frame's
+        // (`cut_bounds`): a pick never lands in clipped space.
+        let clip = self.index_clip(&shader, settings);
+        let caster = self.caster(&camera, &shader, settings, true, None, clip.as_ref());
+        let mut bounds = (0.0, end);
+        if let Some(clip) = &clip {
+            let (o, d, _) = caster.rays.ray(x, y);
+            bounds = clip.interval(o, d, bounds);
+            if bounds.0 > bounds.1 {
+                return Ok(None);
+            }
+        }
+        let Some((ray, _)) = caster.ray(x, y, bounds) else {
             return Ok(None);
         };
         let guard = crossbeam_epoch::pin();

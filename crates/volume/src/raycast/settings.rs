@@ -1,12 +1,12 @@
 //! What a frame depends on, apart from the classification and the shader.
 
 use glint_core::camera::CameraSpec;
-use glint_core::{RenderError, MAX_IMAGE_SIDE};
+use glint_core::{Clip, RenderError, MAX_IMAGE_SIDE};
 
 /// What one frame of a [`Classification`](crate::Classification) depends on besides the [`Shader`](glint_core::Shader): image
-/// size, camera, background and the compositing loop. Changing them never classifies
-/// again.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// size, camera, background, the compositing loop and the clip planes and crop box.
+/// Changing them never classifies again.
+#[derive(Clone, Debug, PartialEq)]
 pub struct FrameSettings {
     /// Image width in pixels.
     pub width: u32,
@@ -18,6 +18,10 @@ pub struct FrameSettings {
     pub background: [f32; 3],
     /// Which compositing loop runs.
     pub kernel: Kernel,
+    /// What of world space is kept: samples elsewhere are empty, for the ray caster
+    /// and the light transport alike (cut at each ray's interval, never by
+    /// reclassifying).
+    pub clip: Clip,
 }
 
 impl Default for FrameSettings {
@@ -28,12 +32,13 @@ impl Default for FrameSettings {
             camera: CameraSpec::default(),
             background: [0.0; 3],
             kernel: Kernel::Auto,
+            clip: Clip::default(),
         }
     }
 }
 
 impl FrameSettings {
-    /// Checks the image size and the background.
+    /// Checks the image size, the background and the clip.
     pub fn validate(&self) -> Result<(), RenderError> {
         if self.width == 0
             || self.height == 0
@@ -48,7 +53,7 @@ impl FrameSettings {
         if self.background.iter().any(|c| !c.is_finite()) {
             return Err(RenderError::Parameter("background is not finite".into()));
         }
-        Ok(())
+        self.clip.validate()
     }
 }
 

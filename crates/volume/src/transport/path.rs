@@ -17,6 +17,7 @@ use super::rng::Rng;
 use super::tracking::{IndexRay, Tracker};
 use super::PathSettings;
 use crate::classification::Medium;
+use crate::clip::IndexClip;
 use crate::field::Field;
 
 /// Russian roulette starts after this many scattering events.
@@ -149,7 +150,11 @@ impl<'a> PathTracer<'a> {
             .map(|&(l, i)| (l, to_index(l), i))
             .collect();
         Ok(PathTracer {
-            track: Tracker { field, medium },
+            track: Tracker {
+                field,
+                medium,
+                clip: None,
+            },
             shader,
             camera,
             size,
@@ -175,6 +180,14 @@ impl<'a> PathTracer<'a> {
         }
         self.occluders = occluders;
         Ok(self)
+    }
+
+    /// The tracer with `clip` (on its field) cutting away space: no collision, no
+    /// extinction there, and cut faces lit by the plane's normal where the gradient
+    /// is weak, as the ray caster lights them.
+    pub(crate) fn clipped_by(mut self, clip: Option<&'a IndexClip>) -> PathTracer<'a> {
+        self.track.clip = clip;
+        self
     }
 
     /// Where `ray` meets the meshes over `[t0, t1]` (its first cell excluded).
@@ -231,10 +244,11 @@ impl<'a> PathTracer<'a> {
             let value = field.value(p);
             let color = self.track.medium.color(value);
             let wo = -wdir;
-            let bsdf = self
-                .shader
-                .scattering(color, field.gradient(p))
-                .choose(|| rng.uniform());
+            let mut grad = field.gradient(p);
+            if let Some(clip) = self.track.clip {
+                grad = clip.cut_gradient(p, grad);
+            }
+            let bsdf = self.shader.scattering(color, grad).choose(|| rng.uniform());
             self.direct(p, &bsdf, wo, &mut rng, beta, &mut radiance);
             let u = [rng.uniform(), rng.uniform(), rng.uniform()];
             let Some(sample) = bsdf.sample(wo, u) else {

@@ -28,6 +28,7 @@ use glint_core::{RenderError, Vec3, MAX_LIGHTS};
 
 use super::occluders::Occluders;
 use crate::classification::{DensityGrid, LIGHT_CELL};
+use crate::clip::IndexClip;
 use crate::light::{LightGrid, ShadowField};
 
 /// Grid planes between a sample and the point whose transmittance it reads (towards
@@ -46,8 +47,14 @@ pub struct ShadowSettings {
 impl LightGrid {
     /// Propagates the transmittance towards the light of index-space direction `d`
     /// (index units per mm, towards the light); grid points `occluders` occupy are
-    /// opaque (transmittance 0, and what lies behind them reads it).
-    fn new(density: &DensityGrid, d: Vec3, occluders: Option<&Occluders>) -> LightGrid {
+    /// opaque (transmittance 0, and what lies behind them reads it); grid points
+    /// `clip` does not keep are empty (extinction 0: clipped matter casts no shadow).
+    fn new(
+        density: &DensityGrid,
+        d: Vec3,
+        occluders: Option<&Occluders>,
+        clip: Option<&IndexClip>,
+    ) -> LightGrid {
         let da = [d.x, d.y, d.z];
         let a = (0..3)
             .max_by(|&x, &y| da[x].abs().total_cmp(&da[y].abs()))
@@ -76,7 +83,10 @@ impl LightGrid {
         let sigma_at = |m: usize, u: usize, v: usize| {
             let mut p = [0; 3];
             (p[a], p[b], p[c]) = (m, u, v);
-            density.at(p)
+            match clip {
+                Some(k) if !k.contains(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) * h) => 0.0,
+                _ => density.at(p),
+            }
         };
         let order: Vec<usize> = if sign > 0 {
             (0..len[0]).rev().collect()
@@ -168,13 +178,13 @@ fn bilinear(
 impl ShadowField {
     /// Light volumes for the lights of index-space directions `dirs` (world bits in
     /// `world`), from `density`, with `occlusion` when given, the grid points
-    /// `occluders` occupy opaque.
+    /// `occluders` occupy opaque, the space `clip` cuts away empty.
     pub(crate) fn new(
         density: &DensityGrid,
         world: Vec<[u32; 3]>,
         dirs: &[Vec3],
         occlusion: Option<Arc<Vec<f32>>>,
-        occluders: Option<&Occluders>,
+        (occluders, clip): (Option<&Occluders>, Option<&IndexClip>),
     ) -> Result<ShadowField, RenderError> {
         if dirs.len() > MAX_LIGHTS {
             return Err(RenderError::Parameter(format!(
@@ -193,7 +203,7 @@ impl ShadowField {
             dirs: world,
             lights: dirs
                 .iter()
-                .map(|&d| LightGrid::new(density, d, occluders))
+                .map(|&d| LightGrid::new(density, d, occluders, clip))
                 .collect(),
             occlusion: occlusion.map(|o| (o, density.dims)),
         })

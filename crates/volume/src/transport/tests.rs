@@ -98,6 +98,7 @@ fn a_slab_transmits_exp_minus_its_optical_depth() {
     let track = Tracker {
         field,
         medium: class.medium(),
+        clip: None,
     };
     // World box: x in [0, 29] mm, y in [0, 9.5], z in [0, 18] (voxel centres).
     let dir = Vec3::new(1.0, 0.2, 0.3).normalize_or_zero();
@@ -148,6 +149,7 @@ fn delta_and_ratio_tracking_agree_on_a_heterogeneous_medium() {
     let track = Tracker {
         field,
         medium: class.medium(),
+        clip: None,
     };
     let ray = IndexRay::from_world(
         field,
@@ -327,6 +329,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
     let track = Tracker {
         field,
         medium: class.medium(),
+        clip: None,
     };
     let l_index = field.index_direction(up);
     // Points on the floor's top face (z = 8): under the ball (r < 4) dark, clear of
@@ -382,7 +385,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
     let frame = FrameSettings {
         width: 48,
         height: 48,
-        ..frame
+        ..frame.clone()
     };
     let sf = class
         .shadow_field(&side, &frame, &ShadowSettings::default(), None)
@@ -535,7 +538,10 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
         assert_eq!(sf.has_occlusion(), occlusion);
         let render = |threads: usize, kernel: Kernel| {
             on_threads(threads, || {
-                let f = FrameSettings { kernel, ..frame };
+                let f = FrameSettings {
+                    kernel,
+                    ..frame.clone()
+                };
                 shadows_frame(&class, &shader, &f, &sf).unwrap()
             })
         };
@@ -566,7 +572,7 @@ fn shadow_images_are_deterministic_and_the_simd_loop_is_the_scalar_one() {
     let a = shadows_frame(&pre, &shader, &frame, &sf).unwrap();
     let scalar = FrameSettings {
         kernel: Kernel::Scalar,
-        ..frame
+        ..frame.clone()
     };
     let b = shadows_frame(&pre, &shader, &scalar, &sf).unwrap();
     assert_eq!(a.rgb, b.rgb, "pre-integrated: SIMD against scalar");
@@ -583,7 +589,7 @@ fn light_volumes_refuse_other_lights_and_mip() {
             azimuth: 50.0,
             ..frame.camera
         },
-        ..frame
+        ..frame.clone()
     };
     assert!(shadows_frame(&class, &shader, &moved, &sf).is_err());
     let mip = Classification::new(

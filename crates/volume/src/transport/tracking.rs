@@ -12,6 +12,7 @@ use glint_core::Vec3;
 
 use super::rng::Rng;
 use crate::classification::Medium;
+use crate::clip::IndexClip;
 use crate::field::{clip_ray, Field, MACRO_CELL};
 
 /// A ray in the field's index space: `o + d t`, `t` in mm (`d` is in index units per
@@ -131,14 +132,27 @@ const ROULETTE_BELOW: f32 = 0.1;
 pub(crate) struct Tracker<'a> {
     pub(crate) field: &'a Field,
     pub(crate) medium: &'a Medium,
+    /// The frame's clip: what it cuts away is empty (no collision, no extinction).
+    pub(crate) clip: Option<&'a IndexClip>,
 }
 
 impl Tracker<'_> {
+    /// The part of `[t0, t1]` where `ray` is inside the volume's box and kept by the
+    /// clip: the majorant walk covers nothing else (`None` when that is empty).
+    #[inline]
+    fn kept(&self, ray: &IndexRay, t0: f32, t1: f32) -> Option<(f32, f32)> {
+        let (t0, t1) = ray.clip(self.field.dims(), t0, t1)?;
+        match self.clip {
+            None => Some((t0, t1)),
+            Some(c) => Some(c.interval(ray.o, ray.d, (t0, t1))).filter(|(a, b)| a < b),
+        }
+    }
+
     /// Delta tracking along `ray` over `[t0, t1]`: the parameter of the first real
     /// collision, drawn with density `σ(t) exp(-∫σ)`, or `None` when the ray leaves
     /// `[t0, t1]` first (probability: the transmittance).
     pub(crate) fn free_path(&self, ray: &IndexRay, t0: f32, t1: f32, rng: &mut Rng) -> Option<f32> {
-        let (t0, t1) = ray.clip(self.field.dims(), t0, t1)?;
+        let (t0, t1) = self.kept(ray, t0, t1)?;
         let mut walk = CellWalk::new(ray, t0, t1, self.medium.cell_dims);
         while let Some((cell, a, b)) = walk.next_cell() {
             let mu = self.medium.majorant[cell];
@@ -163,7 +177,7 @@ impl Tracker<'_> {
     /// Ratio tracking along `ray` over `[t0, t1]`: an unbiased estimate of the
     /// transmittance `exp(-∫σ)`, in `[0, 1]` up to the roulette's doubling.
     pub(crate) fn transmittance(&self, ray: &IndexRay, t0: f32, t1: f32, rng: &mut Rng) -> f32 {
-        let Some((t0, t1)) = ray.clip(self.field.dims(), t0, t1) else {
+        let Some((t0, t1)) = self.kept(ray, t0, t1) else {
             return 1.0;
         };
         let mut walk = CellWalk::new(ray, t0, t1, self.medium.cell_dims);

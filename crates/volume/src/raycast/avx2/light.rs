@@ -5,6 +5,7 @@ use std::arch::x86_64::*;
 use glint_core::MAX_LIGHTS;
 
 use super::*;
+use crate::clip::IndexClip;
 use crate::field::brick::{BRICK, BRICK_ROW, BRICK_SLICE, BRICK_VOXELS};
 use crate::light::ShadowField;
 
@@ -112,6 +113,9 @@ pub(super) unsafe fn light(
         // and `kept` holds `padded` samples.
         unsafe { gather(c, kept, views, batch, r0) };
     }
+    if let Some(clip) = c.clip {
+        cut_faces(c, clip, kept, batch);
+    }
     match c.shadows {
         None => c.shader.shade_gradients(batch),
         Some(shadows) => {
@@ -189,6 +193,25 @@ fn grid_cell(brick_dims: [usize; 3], s: &Sample) -> [usize; 3] {
     ];
     let local = [v % BRICK_ROW, v / BRICK_ROW % BRICK_ROW, v / BRICK_SLICE];
     std::array::from_fn(|a| bricks[a] * BRICK + local[a])
+}
+
+/// Replaces the gradients of the `kept` samples on cut faces as the reference loop's
+/// `Caster::add` does ([`IndexClip::cut_gradient`]), at each sample's index-space
+/// position ([`grid_cell`] plus its fractions).
+fn cut_faces(c: &Caster, clip: &IndexClip, kept: &Kept, batch: &mut ShadeBatch) {
+    let brick_dims = c.field.brick_dims;
+    for (k, s) in kept.0.iter().enumerate().take(batch.len()) {
+        let n = &mut batch.normal;
+        let g = Vec3::new(n[0][k], n[1][k], n[2][k]);
+        // A strong gradient is kept wherever the sample lies: no position needed.
+        if !clip.weak(g) {
+            continue;
+        }
+        let [i, j, kk] = grid_cell(brick_dims, s);
+        let p = Vec3::new(i as f32 + s.t[0], j as f32 + s.t[1], kk as f32 + s.t[2]);
+        let g = clip.cut_gradient(p, g);
+        (n[0][k], n[1][k], n[2][k]) = (g.x, g.y, g.z);
+    }
 }
 
 /// Fills `batch`'s transmittance and occlusion columns for the `kept` samples from
