@@ -40,6 +40,7 @@
 #![forbid(unsafe_code)]
 
 pub mod access;
+mod cut;
 pub mod histogram;
 pub mod labels;
 pub mod levels;
@@ -158,6 +159,8 @@ pub struct Viewer {
     labels: Option<LabelList>,
     /// The volume's histogram (`None`: a scene of meshes only).
     histogram: Option<Histogram>,
+    /// The world box of the volume's voxel centres (`None`: a scene of meshes only).
+    bounds: Option<cut::Bounds>,
     /// The pyramid level `renderer` reads (`None`: not a pyramid).
     level: Option<PyramidLevel>,
     /// The finer level to read when `renderer` reads a coarse stand-in.
@@ -191,12 +194,16 @@ impl Viewer {
         let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
         let labels = scene.labels.as_ref().map(LabelList::read).transpose()?;
         let histogram = renderer.field().map(|f| Histogram::of(f, HISTOGRAM_BINS));
+        let bounds = renderer
+            .field()
+            .map(|f| cut::bounds(f.dims(), |p| f.index_to_world(p)));
         Ok(Viewer {
             renderer,
             scene,
             range: [lo, hi],
             labels,
             histogram,
+            bounds,
             level: plan.level,
             finer: plan.finer,
             refined: watch::Sender::new(None),
@@ -280,7 +287,8 @@ pub async fn serve(
     axum::serve(listener, app).await
 }
 
-/// The viewer's routes: `/` (the page), `/app.js`, `/tfedit.js`, `/pick.js`, `/style.css`,
+/// The viewer's routes: `/` (the page), `/app.js`, `/tfedit.js`, `/pick.js`, `/clip.js`,
+/// `/style.css`,
 /// `/ws`, behind the checks of `access`.
 pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
     Router::new()
@@ -309,6 +317,15 @@ pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
                 (
                     [(header::CONTENT_TYPE, "text/javascript")],
                     include_str!("page/pick.js"),
+                )
+            }),
+        )
+        .route(
+            "/clip.js",
+            get(|| async {
+                (
+                    [(header::CONTENT_TYPE, "text/javascript")],
+                    include_str!("page/clip.js"),
                 )
             }),
         )
@@ -381,6 +398,7 @@ fn hello(viewer: &Viewer, stage: Option<&Stage>) -> ServerMessage {
         views: View::NAMES.to_vec(),
         range: stage.map_or(viewer.range, |s| s.range),
         level: stage.map_or_else(|| viewer.level.clone(), |s| Some(s.level.clone())),
+        bounds: viewer.bounds,
         labels: viewer
             .labels
             .as_ref()
@@ -547,6 +565,13 @@ async fn finished(
             if marked && purpose != Purpose::Save {
                 let marks = state.marks.projected(&frame.scene, frame.seq);
                 if !send_json(socket, &marks).await {
+                    return false;
+                }
+            }
+            // The crop box and clip planes on this frame, before it.
+            let cut = viewer.bounds.filter(|_| state.split == Split::Off);
+            if let Some(msg) = cut.and_then(|b| cut::projected(&frame.scene, frame.seq, b)) {
+                if purpose != Purpose::Save && !send_json(socket, &msg).await {
                     return false;
                 }
             }

@@ -77,6 +77,9 @@ pub enum ServerMessage {
         labels: Vec<crate::labels::LabelInfo>,
         /// The pyramid level the frames come from (null: not a pyramid).
         level: Option<crate::levels::PyramidLevel>,
+        /// The world (mm) box of the volume's voxel centres, `[min, max]` (null: a
+        /// scene of meshes only): where the page's crop box and clip plane start.
+        bounds: Option<[[f64; 3]; 2]>,
     },
     /// The frames now come from another pyramid level (the finer one, read in the
     /// background, swapped in when the camera rests).
@@ -125,11 +128,34 @@ pub enum ServerMessage {
         /// The ruler's length, mm, when there are two marks.
         distance_mm: Option<f64>,
     },
+    /// Where the scene's crop box and clip planes lie on the frame that follows
+    /// (sent before every frame of a scene that cuts, split off), as fractions of
+    /// the image's width and height from the top-left corner, projected with that
+    /// frame's camera (null: behind the eye).
+    Cut {
+        /// The update the frame reflects.
+        seq: u32,
+        /// The crop box's 8 corners, corner `c` at the box's max along axis `a`
+        /// where bit `a` of `c` is set (null: no crop box).
+        crop: Option<Vec<Option<[f64; 2]>>>,
+        /// Per clip plane, in the scene's order.
+        planes: Vec<CutPlane>,
+    },
     /// A message was refused; the previous state stays.
     Error {
         /// One line for the user.
         message: String,
     },
+}
+
+/// A clip plane as [`ServerMessage::Cut`] draws it.
+#[derive(Clone, Debug, Serialize)]
+pub struct CutPlane {
+    /// Where the plane crosses the volume's bounds, corners in order around.
+    pub outline: Vec<Option<[f64; 2]>>,
+    /// The handle: the outline's centre and a point along the normal (towards the
+    /// side kept).
+    pub handle: [Option<[f64; 2]>; 2],
 }
 
 /// Size of [`FrameHeader`] on the wire.

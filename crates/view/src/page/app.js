@@ -31,6 +31,7 @@ function update(patch, interactive = false) {
   glint.sent.set(seq, performance.now());
   send({ type: "update", seq, interactive, scene: patch });
 }
+glint.update = update;
 
 function fill(select, names) {
   select.innerHTML = "";

@@ -1,0 +1,129 @@
+//! Cutting in a real browser (crates/view/browser/clip.mjs, headless Chromium through
+//! playwright-core, as tests/browser.rs): the "Cut" panel's crop box is ticked and
+//! its x max slider dragged to the middle of a ball's volume shown in MIP, facing
+//! the camera; on the frames, the cut half of the image goes dark and the other half
+//! is unchanged, the overlay draws the box's edges over the half kept, and the
+//! server's scene holds the crop. Needs `node`, `chromium` and `npm ci` in
+//! crates/view/browser; in strict mode a missing piece fails.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Arc;
+
+use glint_io::{nifti, Endian, Samples, Volume};
+use glint_render::{Input, Projection, RenderMode, Scene};
+use glint_view::{Access, Viewer, ViewerConfig};
+use serde_json::Value;
+
+/// Grid edge and ball radius, voxels (1 mm each); the value is the depth below the
+/// ball's surface, mm.
+const N: usize = 40;
+const R: f64 = 15.0;
+
+/// The ball written as NIfTI into the test's temporary folder.
+fn ball() -> PathBuf {
+    let c = (N - 1) as f64 / 2.0;
+    let mut values = Vec::with_capacity(N * N * N);
+    for k in 0..N {
+        for j in 0..N {
+            for i in 0..N {
+                let d2: f64 = [i, j, k].iter().map(|&x| (x as f64 - c).powi(2)).sum();
+                values.push((R - d2.sqrt()) as f32);
+            }
+        }
+    }
+    let vol = Volume::new([N; 3], [1.0; 3], Samples::F32(values)).unwrap();
+    let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("glint-clip-ball.nii");
+    nifti::write(&path, &vol, false, Endian::Little).unwrap();
+    path
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+fn xyz(v: &Value) -> [f64; 3] {
+    [0, 1, 2].map(|a| f(&v[a]))
+}
+
+#[test]
+fn a_crop_slider_darkens_the_half_it_cuts_and_the_box_is_drawn() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("browser");
+    if !glint_testkit::browser_tools(&dir) {
+        return;
+    }
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    let mut scene = Scene {
+        input: Input::Path(ball()),
+        mode: RenderMode::Mip,
+        size: [128, 128],
+        ..Scene::default()
+    };
+    // Parallel rays: a pixel's ray stays on one side of the cut.
+    scene.camera.projection = Projection::Orthographic;
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
+        .unwrap();
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    let url = access.url();
+    runtime.spawn(glint_view::serve(listener, viewer, access));
+    let shot = Path::new(env!("CARGO_TARGET_TMPDIR")).join("glint-view-clip.png");
+    let out = Command::new("node")
+        .current_dir(&dir)
+        .args(["clip.mjs", "test", &url, shot.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "clip.mjs failed: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_str(stdout.trim()).unwrap();
+    // The panel starts from the volume's bounds: its voxel centres, 0 to N-1 mm.
+    let top = (N - 1) as f64;
+    let bounds = &report["bounds"];
+    assert_eq!([xyz(&bounds[0]), xyz(&bounds[1])], [[0.0; 3], [top; 3]]);
+    assert_eq!(xyz(&report["ticked"]["min"]), [0.0; 3], "{report}");
+    assert_eq!(xyz(&report["ticked"]["max"]), [top; 3], "{report}");
+    // The server's scene holds the crop: x up to the middle, the rest whole.
+    let crop = &report["crop"];
+    assert!((f(&crop["max"][0]) - top / 2.0).abs() < 1e-9, "{report}");
+    assert_eq!(f(&crop["max"][1]), top, "{report}");
+    // The box drawn lies over one half of the image: the half kept.
+    let (x0, x1) = (f(&report["box_x"][0]), f(&report["box_x"][1]));
+    let (kept, cut) = if x1 <= 0.55 {
+        ("left", "right")
+    } else if x0 >= 0.45 {
+        ("right", "left")
+    } else {
+        panic!("the box drawn spans both halves: {report}")
+    };
+    let halves = &report["halves"];
+    let background = f(&halves["background"]);
+    // The ball showed in both halves before.
+    for side in ["left", "right"] {
+        assert!(
+            f(&halves[side]["before"]) > background + 20.0,
+            "{side} half was dark before: {report}"
+        );
+    }
+    // The cut half is background now; the kept half is as it was.
+    assert!(
+        (f(&halves[cut]["after"]) - background).abs() < 1.0,
+        "the cut ({cut}) half is not dark: {report}"
+    );
+    assert!(
+        f(&halves[kept]["diff"]) < 0.5,
+        "the kept ({kept}) half changed: {report}"
+    );
+    // The box's edges are drawn on the overlay.
+    let edges = report["edges"].as_array().unwrap();
+    assert!(
+        !edges.is_empty() && edges.iter().all(|a| a.as_u64().unwrap() > 0),
+        "box edges not drawn: {report}"
+    );
+    eprintln!("browser clip test: {report}; screenshot {}", shot.display());
+    glint_testkit::ran("chromium + node (view clip browser test)");
+}
