@@ -4,7 +4,8 @@
 //   node clip.mjs test URL [SHOT.png]   tick the crop box, drag the x max slider to the
 //                                       volume's middle; report the frame's pixels per
 //                                       half before and after, the overlay's box, the
-//                                       server's scene
+//                                       server's scene; then tick the clip plane and
+//                                       drag its handle half its length towards its tip
 //   node clip.mjs bench URL SECONDS     tick the clip plane and sweep its offset slider
 //                                       for SECONDS (an input event every 16 ms):
 //                                       frames/s received, input-to-frame latency
@@ -34,6 +35,10 @@ try {
     await act();
     await page.waitForFunction((n) => window.glint.full > n, full, { timeout: 120000 });
   };
+  if (process.env.GLINT_VIEW) {
+    // Start from a named view (the benchmark's scene, as drive.mjs).
+    await afterFrame(() => page.click(`#views button:text-is("${process.env.GLINT_VIEW}")`));
+  }
   if (mode === "test") {
     const visible = await page.locator("#cut-box").isVisible();
     const keep = () => page.evaluate(() => {
@@ -97,9 +102,30 @@ try {
     }
     const xs = c ? c.map((p) => p[0]) : [];
     const boxX = [Math.min(...xs), Math.max(...xs)];
+    // The clip plane: ticked, its handle drawn; dragging the handle half its length
+    // towards its tip moves the plane along its normal.
+    await afterFrame(() => page.locator("#clip-on").check());
+    await page.waitForFunction(() => (window.glint.scene.clip || []).length === 1 && window.glint.cut.last.planes.length === 1, null, { timeout: 120000 });
+    const plane = await page.evaluate(() => ({ start: window.glint.scene.clip[0], handle: window.glint.cut.last.planes[0].handle }));
+    const [h, t] = plane.handle;
+    const handleDrawn = await alphaAt(...h);
+    // Ticking the box scrolled the panel into view: the image back into view first.
+    await page.locator("#frame").scrollIntoViewIfNeeded();
+    const fb = await page.locator("#frame").boundingBox();
+    const at = (p) => [fb.x + p[0] * fb.width, fb.y + p[1] * fb.height];
+    const [[hx, hy], [tx, ty]] = [at(h), at(t)];
+    await afterFrame(async () => {
+      await page.mouse.move(hx, hy);
+      await page.mouse.down();
+      await page.mouse.move(hx + (tx - hx) / 2, hy + (ty - hy) / 2, { steps: 5 });
+      await page.mouse.up();
+    });
+    await page.waitForFunction((x) => window.glint.scene.clip[0].point[0] !== x, plane.start.point[0], { timeout: 120000 });
+    const dragged = await page.evaluate(() => ({ plane: window.glint.scene.clip[0], camera: window.glint.scene.camera, picks: window.glint.pick.answers }));
     if (arg) await page.screenshot({ path: arg });
     const errors = await page.evaluate(() => window.glint.errors);
-    const report = { visible, ticked, bounds, middle, halves, crop: cut.scene, box_x: boxX, edges: onEdges, drawn: cut.drawn, errors };
+    const report = { visible, ticked, bounds, middle, halves, crop: cut.scene, box_x: boxX, edges: onEdges, drawn: cut.drawn,
+      plane: plane.start, handle: plane.handle, handle_drawn: handleDrawn, dragged, errors };
     console.log(JSON.stringify(report));
     if (!visible || errors.length || !c || onEdges.length === 0) process.exitCode = 1;
   } else {

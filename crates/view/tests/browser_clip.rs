@@ -3,7 +3,8 @@
 //! its x max slider dragged to the middle of a ball's volume shown in MIP, facing
 //! the camera; on the frames, the cut half of the image goes dark and the other half
 //! is unchanged, the overlay draws the box's edges over the half kept, and the
-//! server's scene holds the crop. Needs `node`, `chromium` and `npm ci` in
+//! server's scene holds the crop; the clip plane's handle, dragged on the image,
+//! moves the plane along its normal without turning the camera. Needs `node`, `chromium` and `npm ci` in
 //! crates/view/browser; in strict mode a missing piece fails.
 
 use std::path::{Path, PathBuf};
@@ -124,6 +125,23 @@ fn a_crop_slider_darkens_the_half_it_cuts_and_the_box_is_drawn() {
         !edges.is_empty() && edges.iter().all(|a| a.as_u64().unwrap() > 0),
         "box edges not drawn: {report}"
     );
+    // The clip plane across x at the middle; its handle (drawn) dragged half its
+    // length towards its tip moves the plane half the handle's world length (15% of
+    // the bounds' diagonal) along +x, and turns neither the camera nor picks.
+    assert_eq!(xyz(&report["plane"]["normal"]), [1.0, 0.0, 0.0], "{report}");
+    assert!((f(&report["plane"]["point"][0]) - top / 2.0).abs() < 1e-9);
+    assert!(
+        f(&report["handle_drawn"]) > 0.0,
+        "handle not drawn: {report}"
+    );
+    let moved = f(&report["dragged"]["plane"]["point"][0]) - top / 2.0;
+    let expected = 0.5 * 0.15 * (3.0f64).sqrt() * top;
+    assert!(
+        (moved - expected).abs() < 1.5,
+        "the plane moved {moved} mm, not {expected}: {report}"
+    );
+    assert_eq!(report["dragged"]["camera"]["azimuth"], 0.0, "{report}");
+    assert_eq!(report["dragged"]["picks"], 0, "{report}");
     eprintln!("browser clip test: {report}; screenshot {}", shot.display());
     glint_testkit::ran("chromium + node (view clip browser test)");
 }
