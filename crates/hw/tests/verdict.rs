@@ -4,7 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use glint_hw::hdl::PowParams;
-use glint_hw::pareto::verdict::{between_markers, cheapest, front, ratio, verdict_markdown, Point};
+use glint_hw::pareto::verdict::{
+    between_markers, cheapest, front, low_path, ratio, ratio_n1, verdict_markdown, Point,
+    SLICES_PER_EBR, SLICES_PER_MULT18,
+};
 use glint_hw::pareto::{
     csv_text, import_csv, key, read_csv, Candidate, Fronts, Measured, Row, CSV_HEADER,
 };
@@ -114,10 +117,39 @@ fn equal_budget_ratios_take_each_familys_cheapest_design_within_the_budget() {
         text.contains("K_v dearer at 4, 5, 6, 8 LSB (+25 %)"),
         "{text}"
     );
+    // Over n 1-1023 K_v needs an n < 16 path: the cheapest exact unit within the budget
+    // over n 1-15. At 4 LSB: kv-a (100) + pow-p (80) over pow-p (80) = 2.25.
+    let r1 = |b: f64| {
+        ratio_n1(&points, 8, 0, b).map(|(r, k, l, e)| (r, k.id.clone(), l.id.clone(), e.id.clone()))
+    };
+    assert_eq!(
+        r1(4.0),
+        Some((2.25, "kv-a".into(), "pow-p".into(), "pow-p".into()))
+    );
+    // At 3 LSB pow-p is too far off: kv-a (100) + pow-q (200) over pow-q (200).
+    assert_eq!(
+        r1(3.0),
+        Some((1.5, "kv-a".into(), "pow-q".into(), "pow-q".into()))
+    );
+    assert_eq!(low_path(&points, 8, 0, 0.5).map(|p| p.id.as_str()), None);
     assert!(
-        text.contains("the closest, kv-a, is 40.00 LSB off"),
+        text.contains("n 1-1023 (K_v + its n < 16 path), gates (NAND2): K_v dearer at 2.6, 3, 4, 5, 6, 8 LSB (+50 to +125 %)"),
         "{text}"
     );
+}
+
+#[test]
+fn ecp5_hard_blocks_are_priced_at_their_share_of_the_lfe5u_85f() {
+    let kv = Design::Kv(Config::default());
+    let (points, _) = points_of(&[line("kv-a", &kv, 3.0, 40.0, Some(100))]);
+    // Slices: max(100, 400) / 2 = 200; one MULT18 at 41,820 / 156 slices, no BRAM.
+    let priced = points[0].cost[4].unwrap();
+    assert!(
+        (priced - (200.0 + 41_820.0 / 156.0)).abs() < 1e-9,
+        "{priced}"
+    );
+    assert!((SLICES_PER_MULT18 - 268.08).abs() < 0.01);
+    assert!((SLICES_PER_EBR - 201.06).abs() < 0.01);
 }
 
 #[test]

@@ -41,15 +41,29 @@ pub enum CostTarget {
     /// ECP5 slices, lower bound: `ceil(max(ecp5_lut_equiv, ecp5_ffs) / 2)` (a slice
     /// holds two LUT4s and two flip-flops; MULT18 and BRAM apart).
     Ecp5Slices,
+    /// ECP5 in one figure: the slices above plus each MULT18 and block RAM priced at
+    /// its share of an LFE5U-85F ([`SLICES_PER_MULT18`], [`SLICES_PER_EBR`]).
+    Ecp5Priced,
 }
 
 /// Every cost target, in table order.
-pub const COST_TARGETS: [CostTarget; 4] = [
+pub const COST_TARGETS: [CostTarget; 5] = [
     CostTarget::Gates,
     CostTarget::Ice40,
     CostTarget::Ecp5,
     CostTarget::Ecp5Slices,
+    CostTarget::Ecp5Priced,
 ];
+
+/// Slices of the largest ECP5, the LFE5U-85F: 84K LUT4s (83,640), two per slice.
+/// Lattice, "ECP5 and ECP5-5G Family Data Sheet", FPGA-DS-02012, Table 1.1.
+pub const ECP5_85F_SLICES: f64 = 41_820.0;
+/// A MULT18 priced as the LFE5U-85F's slices over its 156 18x18 multipliers (the same
+/// table): what one multiplier displaces of the die, on the device with the most
+/// multipliers per slice (the price most favourable to the design using more of them).
+pub const SLICES_PER_MULT18: f64 = ECP5_85F_SLICES / 156.0;
+/// A block RAM (EBR, 18 kbit) priced as the LFE5U-85F's slices over its 208 EBRs.
+pub const SLICES_PER_EBR: f64 = ECP5_85F_SLICES / 208.0;
 
 impl CostTarget {
     /// The column heading.
@@ -59,6 +73,7 @@ impl CostTarget {
             CostTarget::Ice40 => "iCE40 (LUTs)",
             CostTarget::Ecp5 => "ECP5 (LUT-eq.)",
             CostTarget::Ecp5Slices => "ECP5 (slices, lower bound)",
+            CostTarget::Ecp5Priced => "ECP5 (slices + MULT18 + BRAM priced)",
         }
     }
 }
@@ -76,8 +91,10 @@ pub struct Point {
     pub err16: f64,
     /// Error against `cos^n`, `n` 1-1023 (LSB).
     pub err1: f64,
+    /// Error against `cos^n`, `n` 1-15 (LSB): what a path for `n < 16` beside K_v must meet.
+    pub err_low: f64,
     /// Cost per [`COST_TARGETS`] (`None`: not measured).
-    pub cost: [Option<f64>; 4],
+    pub cost: [Option<f64>; 5],
     /// `ecp5_mult18` and `ecp5_brams` (`None`: not measured).
     pub ecp5_hard: Option<(u32, u32)>,
 }
@@ -116,7 +133,8 @@ impl Point {
         let err16 = ["err_pow_n16_63", "err_pow_n64_255", "err_pow_n256_1023"]
             .iter()
             .try_fold(0.0f64, |m, c| Ok::<_, ParetoError>(m.max(need(row, c)?)))?;
-        let err1 = err16.max(need(row, "err_pow_n1_15")?);
+        let err_low = need(row, "err_pow_n1_15")?;
+        let err1 = err16.max(err_low);
         let luts = num(row, "ecp5_lut_equiv")?;
         let ffs = num(row, "ecp5_ffs")?;
         let slices = match (luts, ffs) {
@@ -127,13 +145,26 @@ impl Point {
             (Some(m), Some(b)) => Some((m as u32, b as u32)),
             _ => None,
         };
+        let priced = match (slices, hard) {
+            (Some(s), Some((m, b))) => {
+                Some(s + f64::from(m) * SLICES_PER_MULT18 + f64::from(b) * SLICES_PER_EBR)
+            }
+            _ => None,
+        };
         Ok(Point {
             id: row.id.clone(),
             family: row.fields[col("family")].clone(),
             out_bits: need(row, "out_bits")? as u32,
             err16,
             err1,
-            cost: [num(row, "nand2_eq")?, num(row, "ice40_luts")?, luts, slices],
+            err_low,
+            cost: [
+                num(row, "nand2_eq")?,
+                num(row, "ice40_luts")?,
+                luts,
+                slices,
+                priced,
+            ],
             ecp5_hard: hard,
         })
     }
@@ -211,9 +242,39 @@ pub fn ratio(
     Some((k.cost[t]? / e.cost[t]?, k, e))
 }
 
-fn cost_text(p: &Point, t: usize) -> String {
-    let c = p.cost[t].unwrap_or(f64::NAN);
-    let hard = match (COST_TARGETS[t], p.ecp5_hard) {
+/// The cheapest measured exact unit at `out_bits` on target `t` within `budget` LSB
+/// of `cos^n` over `n` 1-15: the path a K_v renderer needs beside K_v for `n < 16`
+/// (K_v is 34-38 LSB off there at 8 bits). The CSV holds no unit made for `n < 16`
+/// alone, so this is an upper bound on that path's cost.
+pub fn low_path(points: &[Point], out_bits: u32, t: usize, budget: f64) -> Option<&Point> {
+    points
+        .iter()
+        .filter(|p| p.family == "pow" && p.out_bits == out_bits)
+        .filter(|p| p.cost[t].is_some() && p.err_low <= budget)
+        .min_by(|a, b| {
+            (a.cost[t].unwrap_or(f64::MAX), a.err_low, &a.id)
+                .partial_cmp(&(b.cost[t].unwrap_or(f64::MAX), b.err_low, &b.id))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+}
+
+/// Over `n` 1-1023: the cheapest K_v design within `budget` over `n` 16-1023 plus its
+/// `n < 16` path ([`low_path`]), over the cheapest exact unit within `budget` over
+/// `n` 1-1023, on target `t`: (ratio, K_v design, `n < 16` path, exact unit).
+pub fn ratio_n1(
+    points: &[Point],
+    out_bits: u32,
+    t: usize,
+    budget: f64,
+) -> Option<(f64, &Point, &Point, &Point)> {
+    let k = cheapest(points, "kv", out_bits, t, budget, false)?;
+    let l = low_path(points, out_bits, t, budget)?;
+    let e = cheapest(points, "pow", out_bits, t, budget, true)?;
+    Some(((k.cost[t]? + l.cost[t]?) / e.cost[t]?, k, l, e))
+}
+
+fn cost_text_of(c: f64, hard: Option<(u32, u32)>, t: usize) -> String {
+    let hard = match (COST_TARGETS[t], hard) {
         (CostTarget::Ecp5 | CostTarget::Ecp5Slices, Some((m, b))) => {
             format!(
                 " + {m} MULT18{}",
@@ -227,6 +288,58 @@ fn cost_text(p: &Point, t: usize) -> String {
         _ => String::new(),
     };
     format!("{c:.0}{hard}")
+}
+
+fn cost_text(p: &Point, t: usize) -> String {
+    cost_text_of(p.cost[t].unwrap_or(f64::NAN), p.ecp5_hard, t)
+}
+
+/// The cost text of a K_v design and its `n < 16` path together.
+fn pair_text(k: &Point, l: &Point, t: usize) -> String {
+    let hard = match (k.ecp5_hard, l.ecp5_hard) {
+        (Some((m1, b1)), Some((m2, b2))) => Some((m1 + m2, b1 + b2)),
+        _ => None,
+    };
+    let c = k.cost[t].unwrap_or(f64::NAN) + l.cost[t].unwrap_or(f64::NAN);
+    cost_text_of(c, hard, t)
+}
+
+/// The table over `n` 1-1023 with K_v's `n < 16` path costed.
+fn n1_table(s: &mut String, points: &[Point], out_bits: u32) {
+    let _ = writeln!(
+        s,
+        "\n**{out_bits}-bit output, error against `cos^n` over n 1-1023**: K_v is far off \
+         `cos^n` below n = 16, so a K_v renderer that serves n >= 1 needs a second path for \
+         n < 16; it is costed here as the cheapest exact unit within the budget over n 1-15 \
+         (an upper bound: the CSV holds no unit made for n < 16 alone). Cheapest K_v within \
+         the budget over n 16-1023 + that path / cheapest exact unit within the budget over \
+         n 1-1023 (ids, cost), and the ratio; the K_v-only ratios above are the lower bound.\n"
+    );
+    let mut head = String::from("| budget (LSB) |");
+    let mut rule = String::from("|---|");
+    for t in COST_TARGETS {
+        let _ = write!(head, " {} |", t.label());
+        rule.push_str("---|");
+    }
+    let _ = writeln!(s, "{head}\n{rule}");
+    for &b in budgets(out_bits) {
+        let mut line = format!("| {b} |");
+        for t in 0..COST_TARGETS.len() {
+            let cell = match ratio_n1(points, out_bits, t, b) {
+                Some((r, k, l, e)) => format!(
+                    " **{r:.2}×**: {} + {} {} / {} {} |",
+                    k.id,
+                    l.id,
+                    pair_text(k, l, t),
+                    e.id,
+                    cost_text(e, t)
+                ),
+                None => " no comparison |".to_string(),
+            };
+            line.push_str(&cell);
+        }
+        let _ = writeln!(s, "{line}");
+    }
 }
 
 /// The equal-budget table of one output width and error axis.
@@ -284,13 +397,13 @@ fn budget_table(s: &mut String, points: &[Point], out_bits: u32, from_n1: bool) 
     }
 }
 
-/// The bands: per target, the budgets where K_v is cheaper and the range of ratios.
-fn bands(s: &mut String, points: &[Point], out_bits: u32, from_n1: bool) {
-    let axis = if from_n1 { "1" } else { "16" };
+/// The bands: per target, the budgets where K_v is cheaper and the range of ratios
+/// (`ratio_at(t, budget)`; `axis` names the error axis and what K_v's cost includes).
+fn bands(s: &mut String, out_bits: u32, axis: &str, ratio_at: &dyn Fn(usize, f64) -> Option<f64>) {
     for (t, target) in COST_TARGETS.iter().enumerate() {
         let rs: Vec<(f64, f64)> = budgets(out_bits)
             .iter()
-            .filter_map(|&b| ratio(points, out_bits, t, b, from_n1).map(|r| (b, r.0)))
+            .filter_map(|&b| ratio_at(t, b).map(|r| (b, r)))
             .collect();
         let fmt = |v: &[(f64, f64)]| {
             v.iter()
@@ -305,7 +418,7 @@ fn bands(s: &mut String, points: &[Point], out_bits: u32, from_n1: bool) {
             let hi = v.iter().map(|r| r.1).fold(f64::MIN, f64::max);
             (lo, hi)
         };
-        let mut line = format!("- {out_bits} bits, n {axis}-1023, {}: ", target.label());
+        let mut line = format!("- {out_bits} bits, {axis}, {}: ", target.label());
         if rs.is_empty() {
             line.push_str("no budget has both a K_v and an exact design measured.");
         } else {
@@ -404,32 +517,19 @@ pub fn verdict_markdown(rows: &[CsvRow]) -> Result<String, ParetoError> {
         if !points.iter().any(|p| p.out_bits == out_bits) {
             continue;
         }
-        for from_n1 in [false, true] {
-            let top = budgets(out_bits).iter().copied().fold(0.0, f64::max);
-            let best_kv = points
-                .iter()
-                .filter(|p| p.family == "kv" && p.out_bits == out_bits)
-                .min_by(|a, b| err(a, from_n1).total_cmp(&err(b, from_n1)));
-            match best_kv {
-                Some(k) if from_n1 && err(k, true) > top => {
-                    let _ = writeln!(
-                        s,
-                        "\n**{out_bits}-bit output, n 1-1023**: no K_v design is within {top} LSB of `cos^n` over n 1-1023: the \
-                         closest, {}, is {:.2} LSB off, while every exact unit is sized over \
-                         every n (within its `cos^n <= B` target for n 0-1023), so at n >= 1 \
-                         the exact unit is the only equal-error choice until a unit for n < 16 beside K_v \
-                         is costed (none is in the CSV).",
-                        k.id,
-                        k.err1
-                    );
-                }
-                _ => {
-                    budget_table(&mut s, &points, out_bits, from_n1);
-                    let _ = writeln!(s);
-                    bands(&mut s, &points, out_bits, from_n1);
-                }
-            }
-        }
+        budget_table(&mut s, &points, out_bits, false);
+        let _ = writeln!(s);
+        bands(&mut s, out_bits, "n 16-1023", &|t, b| {
+            ratio(&points, out_bits, t, b, false).map(|r| r.0)
+        });
+        n1_table(&mut s, &points, out_bits);
+        let _ = writeln!(s);
+        bands(
+            &mut s,
+            out_bits,
+            "n 1-1023 (K_v + its n < 16 path)",
+            &|t, b| ratio_n1(&points, out_bits, t, b).map(|r| r.0),
+        );
         fronts(&mut s, &points, out_bits);
     }
     Ok(s)
