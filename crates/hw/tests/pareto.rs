@@ -6,8 +6,8 @@
 //! environment variable CI is set; otherwise they print a note and pass.
 
 use glint_hw::hdl::{
-    cosim, lint, Costs, HdlUnit, KvUnit, Ports, PowParams, PowerUnit, SchlickParams, SchlickUnit,
-    ToolError,
+    cosim, lint, Costs, Ecp5Cells, HdlUnit, KvUnit, Ports, PowParams, PowerUnit, SchlickParams,
+    SchlickUnit, ToolError,
 };
 use glint_hw::pareto::{
     csv_text, mark_fronts, read_csv, Candidate, Fronts, Measured, Row, Verified,
@@ -213,6 +213,15 @@ fn row(id: &str, family: Design, cost: u64, err: f64, lobe: f64) -> Row {
                 ecp5_mult18: 0,
                 ecp5_brams: 0,
                 ecp5_lutram: 0,
+                ice40_fmax_seeds: vec![50.0, 47.5, 52.25],
+                ecp5_nodsp: Some(Ecp5Cells {
+                    luts: 3 * cost,
+                    ccu2: 1,
+                    ffs: 2,
+                    mult18: 0,
+                    brams: 0,
+                    lutram: 0,
+                }),
             }),
             rom_bits: 0,
             latency: 8,

@@ -13,6 +13,11 @@
 //! - **iCE40 HX8K**: `synth_ice40` and `nextpnr-ice40` (LUTs, carries, FFs, BRAMs, Fmax);
 //! - **ECP5** (hard 18×18 multipliers): `synth_ecp5` cell counts, no place and route
 //!   (nextpnr-ecp5 is not packaged in Debian 12, whose tools this project installs).
+//!
+//! Two more, run by [`extra_flows`] (also on designs measured before they existed):
+//! iCE40 place and route with more seeds (the median Fmax is the figure a single seed's
+//! luck cannot move), and ECP5 with `synth_ecp5 -nodsp` (the multipliers as logic: the
+//! control that says what the hard multipliers are worth to each design).
 
 use std::path::Path;
 
@@ -58,6 +63,63 @@ pub struct Costs {
     pub ecp5_brams: u64,
     /// ECP5: 16×4 distributed RAMs (LUT RAM).
     pub ecp5_lutram: u64,
+    /// iCE40: Fmax (MHz) of every place-and-route seed run, seed 1 ([`Costs::ice40_fmax`])
+    /// first; empty for a design measured before seeds were added.
+    #[serde(default)]
+    pub ice40_fmax_seeds: Vec<f64>,
+    /// ECP5 without DSPs (`synth_ecp5 -nodsp`); `None`: not run.
+    #[serde(default)]
+    pub ecp5_nodsp: Option<Ecp5Cells>,
+}
+
+/// ECP5 cell counts of one `synth_ecp5` run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Ecp5Cells {
+    /// LUT4s.
+    pub luts: u64,
+    /// CCU2C carry cells.
+    pub ccu2: u64,
+    /// Flip-flops.
+    pub ffs: u64,
+    /// 18×18 multipliers (0 with `-nodsp`).
+    pub mult18: u64,
+    /// 18 kbit block RAMs.
+    pub brams: u64,
+    /// 16×4 distributed RAMs.
+    pub lutram: u64,
+}
+
+impl Ecp5Cells {
+    /// LUT4 equivalents: LUT4 + 2 per CCU2C + 2 per distributed RAM.
+    pub fn lut_equiv(&self) -> u64 {
+        self.luts + 2 * self.ccu2 + 2 * self.lutram
+    }
+
+    fn of_stat(text: &str) -> Ecp5Cells {
+        Ecp5Cells {
+            luts: count_cells(text, "LUT4"),
+            ccu2: count_cells(text, "CCU2C"),
+            ffs: count_cells(text, "TRELLIS_FF"),
+            mult18: count_cells(text, "MULT18X18D"),
+            brams: count_cells(text, "DP16KD") + count_cells(text, "PDPW16KD"),
+            lutram: count_cells(text, "TRELLIS_DPR16X4"),
+        }
+    }
+}
+
+/// The median of `xs` (the mean of the middle two for an even count; `None` if empty).
+pub fn median(xs: &[f64]) -> Option<f64> {
+    let mut v: Vec<f64> = xs.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    Some(if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        (v[m - 1] + v[m]) / 2.0
+    })
 }
 
 impl Costs {
@@ -74,6 +136,21 @@ impl Costs {
     /// ECP5 logic in LUT4s: LUT4 + 2 per CCU2C + 2 per distributed RAM.
     pub fn ecp5_lut_equiv(&self) -> u64 {
         self.ecp5_luts + 2 * self.ecp5_ccu2 + 2 * self.ecp5_lutram
+    }
+
+    /// The median iCE40 Fmax over the seeds run ([`Costs::ice40_fmax`] if only seed 1).
+    pub fn ice40_fmax_median(&self) -> f64 {
+        median(&self.ice40_fmax_seeds).unwrap_or(self.ice40_fmax)
+    }
+
+    /// Place-and-route seeds run on iCE40 (1 for a design measured before seeds).
+    pub fn ice40_seeds(&self) -> usize {
+        self.ice40_fmax_seeds.len().max(1)
+    }
+
+    /// Whether [`extra_flows`] with `seeds` has something left to run.
+    pub fn needs_extra(&self, seeds: usize) -> bool {
+        self.ecp5_nodsp.is_none() || self.ice40_seeds() < seeds
     }
 }
 
@@ -125,7 +202,34 @@ pub fn cost_flows<U: HdlUnit + ?Sized>(unit: &U, dir: &Path) -> Result<Costs, To
         format!("read_verilog {v}; synth_ice40 -top {m} -json {json}; tee -o {m}_ice40.txt stat");
     run("yosys", "yosys", dir, &["-q", "-p", &ice])?;
     let ice_text = read(dir, &format!("{m}_ice40.txt"))?;
-    let report = format!("{m}_pnr.json");
+    let ice40_fmax = ice40_pnr(dir, m, 1)?;
+
+    let ecp5 = format!("read_verilog {v}; synth_ecp5 -top {m}; tee -o {m}_ecp5.txt stat");
+    run("yosys", "yosys", dir, &["-q", "-p", &ecp5])?;
+    let e = read(dir, &format!("{m}_ecp5.txt"))?;
+    Ok(Costs {
+        ice40_fmax_seeds: vec![ice40_fmax],
+        ecp5_nodsp: None,
+        gate_cells,
+        transistors,
+        ice40_luts: count_cells(&ice_text, "SB_LUT4"),
+        ice40_carries: count_cells(&ice_text, "SB_CARRY"),
+        ice40_ffs: count_cells(&ice_text, "SB_DFF"),
+        ice40_brams: count_cells(&ice_text, "SB_RAM40_4K"),
+        ice40_fmax,
+        ecp5_luts: count_cells(&e, "LUT4"),
+        ecp5_ccu2: count_cells(&e, "CCU2C"),
+        ecp5_ffs: count_cells(&e, "TRELLIS_FF"),
+        ecp5_mult18: count_cells(&e, "MULT18X18D"),
+        ecp5_brams: count_cells(&e, "DP16KD") + count_cells(&e, "PDPW16KD"),
+        ecp5_lutram: count_cells(&e, "TRELLIS_DPR16X4"),
+    })
+}
+
+/// Places and routes `{m}_ice40.json` (in `dir`) on the iCE40 with `seed`: the Fmax, MHz.
+fn ice40_pnr(dir: &Path, m: &str, seed: u32) -> Result<f64, ToolError> {
+    let json = format!("{m}_ice40.json");
+    let report = format!("{m}_pnr_{seed}.json");
     run(
         "nextpnr-ice40",
         "nextpnr-ice40",
@@ -141,35 +245,71 @@ pub fn cost_flows<U: HdlUnit + ?Sized>(unit: &U, dir: &Path) -> Result<Costs, To
             "--freq",
             "100",
             "--seed",
-            "1",
+            &seed.to_string(),
             "--report",
             &report,
             "-q",
         ],
     )?;
     let pnr = read(dir, &report)?;
-    let ice40_fmax = fmax_from_report(&pnr).ok_or_else(|| ToolError::Parse {
+    fmax_from_report(&pnr).ok_or_else(|| ToolError::Parse {
         tool: "nextpnr-ice40",
         what: "fmax",
         tail: tail(&pnr),
-    })?;
-
-    let ecp5 = format!("read_verilog {v}; synth_ecp5 -top {m}; tee -o {m}_ecp5.txt stat");
-    run("yosys", "yosys", dir, &["-q", "-p", &ecp5])?;
-    let e = read(dir, &format!("{m}_ecp5.txt"))?;
-    Ok(Costs {
-        gate_cells,
-        transistors,
-        ice40_luts: count_cells(&ice_text, "SB_LUT4"),
-        ice40_carries: count_cells(&ice_text, "SB_CARRY"),
-        ice40_ffs: count_cells(&ice_text, "SB_DFF"),
-        ice40_brams: count_cells(&ice_text, "SB_RAM40_4K"),
-        ice40_fmax,
-        ecp5_luts: count_cells(&e, "LUT4"),
-        ecp5_ccu2: count_cells(&e, "CCU2C"),
-        ecp5_ffs: count_cells(&e, "TRELLIS_FF"),
-        ecp5_mult18: count_cells(&e, "MULT18X18D"),
-        ecp5_brams: count_cells(&e, "DP16KD") + count_cells(&e, "PDPW16KD"),
-        ecp5_lutram: count_cells(&e, "TRELLIS_DPR16X4"),
     })
+}
+
+/// Runs what `costs` lacks of the extra flows on `unit` in `dir`: iCE40 place and route
+/// with seeds up to `seeds` (seed 1's Fmax is [`Costs::ice40_fmax`]) and ECP5 with
+/// `synth_ecp5 -nodsp`. Returns whether anything ran.
+pub fn extra_flows<U: HdlUnit + ?Sized>(
+    unit: &U,
+    dir: &Path,
+    costs: &mut Costs,
+    seeds: usize,
+) -> Result<bool, ToolError> {
+    if !costs.needs_extra(seeds) {
+        return Ok(false);
+    }
+    write_files(dir, &unit.files())?;
+    let m = unit.module();
+    let v = format!("{m}.v");
+    if costs.ice40_fmax_seeds.is_empty() {
+        costs.ice40_fmax_seeds.push(costs.ice40_fmax);
+    }
+    if costs.ice40_fmax_seeds.len() < seeds {
+        let json = format!("{m}_ice40.json");
+        if !dir.join(&json).exists() {
+            let ice = format!("read_verilog {v}; synth_ice40 -top {m} -json {json}");
+            run("yosys", "yosys", dir, &["-q", "-p", &ice])?;
+        }
+        for seed in costs.ice40_fmax_seeds.len() + 1..=seeds {
+            let f = ice40_pnr(dir, m, seed as u32)?;
+            costs.ice40_fmax_seeds.push(f);
+        }
+    }
+    if costs.ecp5_nodsp.is_none() {
+        let nodsp =
+            format!("read_verilog {v}; synth_ecp5 -nodsp -top {m}; tee -o {m}_ecp5_nodsp.txt stat");
+        run("yosys", "yosys", dir, &["-q", "-p", &nodsp])?;
+        costs.ecp5_nodsp = Some(Ecp5Cells::of_stat(&read(
+            dir,
+            &format!("{m}_ecp5_nodsp.txt"),
+        )?));
+    }
+    Ok(true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_median_of_seeds() {
+        assert_eq!(median(&[]), None);
+        assert_eq!(median(&[50.0]), Some(50.0));
+        assert_eq!(median(&[53.0, 49.0, 51.0]), Some(51.0));
+        assert_eq!(median(&[53.0, 49.0, 51.0, 60.0]), Some(52.0));
+        assert_eq!(median(&[f64::NAN, 40.0]), Some(40.0));
+    }
 }

@@ -35,7 +35,7 @@ mod vlog;
 
 use std::path::{Path, PathBuf};
 
-pub use flows::{cost_flows, Costs, GATE_SET, NAND2_TRANSISTORS};
+pub use flows::{cost_flows, extra_flows, median, Costs, Ecp5Cells, GATE_SET, NAND2_TRANSISTORS};
 pub use kv::KvUnit;
 pub use power::{PowParams, PowerUnit, MAX_POW_INDEX};
 pub use schlick::{SchlickParams, SchlickUnit};

@@ -12,8 +12,11 @@ use crate::{Config, Design, DesignErrors};
 /// the family and output width. `measured_at` (UTC) and `tools` (flow and tool
 /// versions) say when and with what the costs were measured; a design whose costs are
 /// not measured has empty cost, lint, co-simulation, `measured_at` and `tools` cells.
+/// The extra flows' cells (`ice40_fmax_seeds_mhz`: every seed's Fmax, `;`-separated,
+/// seed 1 first; their median and LUT·ns at the median; `ecp5_nodsp_*`: `synth_ecp5
+/// -nodsp`) are empty where those flows have not run on the design.
 /// `design` is the JSON `glint hw check --config` reads.
-pub const CSV_HEADER: [&str; 48] = [
+pub const CSV_HEADER: [&str; 57] = [
     "id",
     "family",
     "out_bits",
@@ -61,11 +64,50 @@ pub const CSV_HEADER: [&str; 48] = [
     "seconds",
     "measured_at",
     "tools",
+    "ice40_fmax_seeds_mhz",
+    "ice40_fmax_median_mhz",
+    "ice40_lut_ns_median",
+    "ecp5_nodsp_luts",
+    "ecp5_nodsp_ccu2",
+    "ecp5_nodsp_ffs",
+    "ecp5_nodsp_brams",
+    "ecp5_nodsp_lutram",
+    "ecp5_nodsp_lut_equiv",
     "design",
 ];
 
-/// The columns before `measured_at` and `tools` were added (read, never written).
-const LEGACY_COLUMNS: usize = 46;
+/// Older headers, read (never written): the columns before `measured_at` and `tools`
+/// were added, and before the extra flows' columns; each is a prefix of
+/// [`CSV_HEADER`] followed by `design`, and its rows read with the rest empty.
+const OLDER_COLUMNS: [usize; 2] = [46, 48];
+
+/// The extra flows' cells (empty where they have not run).
+fn extra_cells(c: Option<&Costs>) -> Vec<String> {
+    let mut cells = vec![String::new(); 9];
+    let Some(c) = c else {
+        return cells;
+    };
+    if !c.ice40_fmax_seeds.is_empty() {
+        let seeds: Vec<String> = c
+            .ice40_fmax_seeds
+            .iter()
+            .map(|f| format!("{f:.2}"))
+            .collect();
+        let med = c.ice40_fmax_median();
+        cells[0] = seeds.join(";");
+        cells[1] = format!("{med:.2}");
+        cells[2] = format!("{:.0}", c.ice40_luts as f64 * 1000.0 / med);
+    }
+    if let Some(e) = &c.ecp5_nodsp {
+        cells[3] = e.luts.to_string();
+        cells[4] = e.ccu2.to_string();
+        cells[5] = e.ffs.to_string();
+        cells[6] = e.brams.to_string();
+        cells[7] = e.lutram.to_string();
+        cells[8] = e.lut_equiv().to_string();
+    }
+    cells
+}
 
 /// A design's widths in one field.
 pub fn widths(d: &Design) -> String {
@@ -182,6 +224,7 @@ pub fn csv_text(rows: &[Row]) -> Result<String, csv::Error> {
         rec.push(format!("{:.0}", m.seconds));
         rec.push(m.measured_at.clone());
         rec.push(m.tools.clone());
+        rec.extend(extra_cells(m.costs.as_ref()));
         rec.push(d.to_json());
         debug_assert_eq!(rec.len(), CSV_HEADER.len());
         w.write_record(&rec)?;
@@ -210,17 +253,18 @@ pub struct CsvRow {
     pub fields: Vec<String>,
 }
 
-/// Reads a `pareto.csv` (as [`write_csv`] writes it; the header must match, or be the
-/// older one without `measured_at` and `tools`, whose rows read with those empty).
+/// Reads a `pareto.csv` (as [`write_csv`] writes it; the header must match, or be an
+/// older one (without `measured_at` and `tools`, or without the extra flows'
+/// columns), whose rows read with those cells empty).
 pub fn read_csv(path: &Path) -> Result<Vec<CsvRow>, ParetoError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| ParetoError::file(path, e))?;
     let header = r.headers().map_err(|e| ParetoError::file(path, e))?.clone();
-    let legacy = CSV_HEADER[..LEGACY_COLUMNS - 1]
-        .iter()
-        .chain([&"design"])
-        .copied();
-    let is_legacy = header.iter().eq(legacy);
-    if !is_legacy && header.iter().ne(CSV_HEADER.iter().copied()) {
+    let older = OLDER_COLUMNS.iter().copied().find(|&n| {
+        header
+            .iter()
+            .eq(CSV_HEADER[..n - 1].iter().chain([&"design"]).copied())
+    });
+    if older.is_none() && header.iter().ne(CSV_HEADER.iter().copied()) {
         return Err(ParetoError::file(
             path,
             "not a glint hw pareto CSV (its header differs)",
@@ -234,9 +278,19 @@ pub fn read_csv(path: &Path) -> Result<Vec<CsvRow>, ParetoError> {
     for rec in r.records() {
         let rec = rec.map_err(|e| ParetoError::file(path, e))?;
         let mut fields: Vec<String> = rec.iter().map(str::to_string).collect();
-        if is_legacy {
+        if let Some(n) = older {
+            if fields.len() != n {
+                return Err(ParetoError::file(
+                    path,
+                    format!(
+                        "row {}: {} fields, the header has {n}",
+                        fields[0],
+                        fields.len()
+                    ),
+                ));
+            }
             let at = fields.len() - 1;
-            fields.splice(at..at, [String::new(), String::new()]);
+            fields.splice(at..at, vec![String::new(); CSV_HEADER.len() - n]);
         }
         let design = Design::from_json(&fields[CSV_HEADER.len() - 1])
             .map_err(|e| ParetoError::file(path, e))?;
@@ -265,19 +319,21 @@ fn parse<T: std::str::FromStr>(row: &CsvRow, name: &str) -> Result<T, String> {
 }
 
 /// The Fmax a row records, as precisely as its columns allow: `ice40_fmax_mhz` keeps 2
-/// decimals, `ice40_lut_ns_per_result` (LUTs × 1000 / Fmax) about 5 digits, so the Fmax
-/// is taken from the latter where it rounds to the former (then both columns are
-/// written back as they were).
+/// decimals and `ice40_lut_ns_per_result` (LUTs × 1000 / Fmax) none, so each bounds
+/// the Fmax to an interval; the middle of their intersection writes both columns back
+/// as they were (the printed Fmax where the intervals do not meet).
 fn fmax_of(row: &CsvRow) -> Result<f64, String> {
     let printed: f64 = parse(row, "ice40_fmax_mhz")?;
     let luts: f64 = parse(row, "ice40_luts")?;
     let lut_ns: f64 = parse(row, "ice40_lut_ns_per_result")?;
-    let finer = luts * 1000.0 / lut_ns;
-    Ok(if format!("{finer:.2}") == format!("{printed:.2}") {
-        finer
-    } else {
-        printed
-    })
+    let lo = (printed - 0.005).max(luts * 1000.0 / (lut_ns + 0.5));
+    let hi = (printed + 0.005).min(luts * 1000.0 / (lut_ns - 0.5));
+    let mid = (lo + hi) / 2.0;
+    let same = |f: f64| {
+        format!("{f:.2}") == format!("{printed:.2}")
+            && format!("{:.0}", luts * 1000.0 / f) == format!("{lut_ns:.0}")
+    };
+    Ok(if lo < hi && same(mid) { mid } else { printed })
 }
 
 /// The measurement a CSV row records, or `None` if its costs are empty.
@@ -301,7 +357,36 @@ fn measured_of(row: &CsvRow) -> Result<Option<Measured>, String> {
         ecp5_mult18: u("ecp5_mult18")?,
         ecp5_brams: u("ecp5_brams")?,
         ecp5_lutram: u("ecp5_lutram")?,
+        ice40_fmax_seeds: Vec::new(),
+        ecp5_nodsp: None,
     };
+    let mut costs = costs;
+    let seeds = field(row, "ice40_fmax_seeds_mhz");
+    if !seeds.is_empty() {
+        costs.ice40_fmax_seeds = seeds
+            .split(';')
+            .map(|t| {
+                t.trim().parse::<f64>().map_err(|_| {
+                    format!(
+                        "row {}: column ice40_fmax_seeds_mhz: {t:?} is not a number",
+                        row.id
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        // Seed 1's Fmax at the precision the other columns give it.
+        costs.ice40_fmax_seeds[0] = costs.ice40_fmax;
+    }
+    if !field(row, "ecp5_nodsp_luts").is_empty() {
+        costs.ecp5_nodsp = Some(crate::hdl::Ecp5Cells {
+            luts: u("ecp5_nodsp_luts")?,
+            ccu2: u("ecp5_nodsp_ccu2")?,
+            ffs: u("ecp5_nodsp_ffs")?,
+            mult18: 0,
+            brams: u("ecp5_nodsp_brams")?,
+            lutram: u("ecp5_nodsp_lutram")?,
+        });
+    }
     let or = |name: &str, default: &str| {
         let t = field(row, name);
         if t.is_empty() {

@@ -27,7 +27,7 @@ pub use csv_io::{csv_text, import_csv, read_csv, widths, write_csv, CsvRow, CSV_
 pub use plot::{plot, Axis, TARGETS};
 pub use space::{candidates, shrink, Candidate};
 
-use crate::hdl::{cosim, cost_flows, lint, Costs, ToolError};
+use crate::hdl::{cosim, cost_flows, extra_flows, lint, Costs, ToolError};
 use crate::{Design, DesignErrors, HwError};
 
 /// Changes whenever a flow or the error definition changes, so old cache entries are
@@ -203,6 +203,9 @@ pub struct Options {
     pub cached_only: bool,
     /// The tools' versions, recorded in each newly measured design ([`tool_versions`]).
     pub tools: String,
+    /// iCE40 place-and-route seeds per design (1, 2, ...); a cached design measured with
+    /// fewer gets the missing seeds, and the `-nodsp` ECP5 run, added ([`extra_flows`]).
+    pub seeds: usize,
 }
 
 /// The cache key of a design: FNV-1a of its JSON, the flow version and the vectors.
@@ -218,6 +221,7 @@ pub fn key(design: &Design, vectors: usize) -> String {
 fn measure_design(
     c: &Candidate,
     vectors: usize,
+    seeds: usize,
     work: &Path,
     tools: &str,
 ) -> Result<Measured, ParetoError> {
@@ -239,7 +243,8 @@ fn measure_design(
         Err(e) => return Err(tool(e)),
     };
     let r = cosim(unit.as_ref(), vectors, COSIM_SEED, v, &work.join("sim")).map_err(tool)?;
-    let costs = cost_flows(unit.as_ref(), &work.join("synth")).map_err(tool)?;
+    let mut costs = cost_flows(unit.as_ref(), &work.join("synth")).map_err(tool)?;
+    extra_flows(unit.as_ref(), &work.join("synth"), &mut costs, seeds).map_err(tool)?;
     Ok(Measured {
         errors,
         costs: Some(costs),
@@ -254,6 +259,70 @@ fn measure_design(
         measured_at,
         tools: tools.to_string(),
     })
+}
+
+/// One design's measurement: from the cache (topped up with the extra flows it lacks,
+/// unless `--cached-only`), or measured now and cached; with how it was had.
+fn measure_or_cached(
+    c: &Candidate,
+    opts: &Options,
+) -> Result<(Measured, &'static str), ParetoError> {
+    let entry = opts.cache.join(key(&c.design, opts.vectors));
+    let file = entry.join("measured.json");
+    let cached = std::fs::read_to_string(&file)
+        .ok()
+        .and_then(|t| serde_json::from_str::<Measured>(&t).ok());
+    let (m, how) = match cached {
+        Some(m)
+            if !opts.cached_only && m.costs.as_ref().is_some_and(|k| k.needs_extra(opts.seeds)) =>
+        {
+            (top_up(c, m, opts, &entry)?, "cached, extra flows run")
+        }
+        Some(m) => (m, "cached"),
+        None if opts.cached_only => (errors_only(c)?, "not measured"),
+        None => {
+            let work = entry.join("work");
+            let m = measure_design(c, opts.vectors, opts.seeds, &work, &opts.tools)?;
+            let text = serde_json::to_string_pretty(&m).map_err(|e| ParetoError::file(&file, e))?;
+            glint_io::write_atomic(&file, |w| w.write_all(text.as_bytes()))
+                .map_err(|e| ParetoError::file(&file, e))?;
+            // The netlists and vectors are large; the result is what is kept.
+            let _ = std::fs::remove_dir_all(&work);
+            (m, "measured")
+        }
+    };
+    Ok((m, how))
+}
+
+/// Runs the extra flows ([`extra_flows`]) a cached design lacks and writes it back; its
+/// `tools` gains this run's versions, its `measured_at` the time of the addition.
+fn top_up(
+    c: &Candidate,
+    mut m: Measured,
+    opts: &Options,
+    entry: &Path,
+) -> Result<Measured, ParetoError> {
+    let started = Instant::now();
+    let tool = |source| ParetoError::Tool {
+        id: c.id.clone(),
+        source,
+    };
+    let unit = c.design.hdl()?;
+    let work = entry.join("work");
+    if let Some(costs) = m.costs.as_mut() {
+        extra_flows(unit.as_ref(), &work.join("synth"), costs, opts.seeds).map_err(tool)?;
+    }
+    let _ = std::fs::remove_dir_all(&work);
+    m.seconds += started.elapsed().as_secs_f64();
+    m.measured_at = format!("{}; extra flows {}", m.measured_at, now_utc());
+    if !m.tools.contains(&opts.tools) {
+        m.tools = format!("{}; extra flows: {}", m.tools, opts.tools);
+    }
+    let file = entry.join("measured.json");
+    let text = serde_json::to_string_pretty(&m).map_err(|e| ParetoError::file(&file, e))?;
+    glint_io::write_atomic(&file, |w| w.write_all(text.as_bytes()))
+        .map_err(|e| ParetoError::file(&file, e))?;
+    Ok(m)
 }
 
 /// A design's errors, table bits and latency, without the flows (no tools run).
@@ -335,30 +404,24 @@ pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<R
         .build()
         .map_err(|e| ParetoError::file(&opts.cache, e))?;
     let started = Instant::now();
-    let measured: Vec<Result<Measured, ParetoError>> = pool.install(|| {
-        cands
+    // New designs first, then cached ones that lack the extra flows: a run stopped
+    // early has measured what the CSV misses most. The rows keep the candidates' order.
+    let mut order: Vec<usize> = (0..total).collect();
+    order.sort_by_key(|&i| {
+        opts.cache
+            .join(key(&cands[i].design, opts.vectors))
+            .join("measured.json")
+            .exists()
+    });
+    let mut measured: Vec<(usize, Result<Measured, ParetoError>)> = pool.install(|| {
+        order
             .par_iter()
             .with_max_len(1)
-            .map(|c| {
-                let entry = opts.cache.join(key(&c.design, opts.vectors));
-                let file = entry.join("measured.json");
-                let cached = std::fs::read_to_string(&file)
-                    .ok()
-                    .and_then(|t| serde_json::from_str::<Measured>(&t).ok());
-                let (m, how) = match cached {
-                    Some(m) => (m, "cached"),
-                    None if opts.cached_only => (errors_only(c)?, "not measured"),
-                    None => {
-                        let work = entry.join("work");
-                        let m = measure_design(c, opts.vectors, &work, &opts.tools)?;
-                        let text = serde_json::to_string_pretty(&m)
-                            .map_err(|e| ParetoError::file(&file, e))?;
-                        glint_io::write_atomic(&file, |w| w.write_all(text.as_bytes()))
-                            .map_err(|e| ParetoError::file(&file, e))?;
-                        // The netlists and vectors are large; the result is what is kept.
-                        let _ = std::fs::remove_dir_all(&work);
-                        (m, "measured")
-                    }
+            .map(|&i| {
+                let c = &cands[i];
+                let (m, how) = match measure_or_cached(c, opts) {
+                    Ok(x) => x,
+                    Err(e) => return (i, Err(e)),
                 };
                 let k = done.fetch_add(1, Ordering::SeqCst) + 1;
                 let costs = match (&m.costs, &m.verified) {
@@ -382,10 +445,12 @@ pub fn explore(opts: &Options, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<R
                     m.errors.lobe,
                     m.errors.power_16_up(),
                 ));
-                Ok(m)
+                (i, Ok(m))
             })
             .collect()
     });
+    measured.sort_by_key(|(i, _)| *i);
+    let measured = measured.into_iter().map(|(_, m)| m);
     let mut rows = Vec::with_capacity(total);
     for (c, m) in cands.into_iter().zip(measured) {
         rows.push(Row {

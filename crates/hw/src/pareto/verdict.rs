@@ -44,15 +44,20 @@ pub enum CostTarget {
     /// ECP5 in one figure: the slices above plus each MULT18 and block RAM priced at
     /// its share of an LFE5U-85F ([`SLICES_PER_MULT18`], [`SLICES_PER_EBR`]).
     Ecp5Priced,
+    /// ECP5 synthesised without DSPs (`synth_ecp5 -nodsp`, the control): slices as
+    /// [`CostTarget::Ecp5Slices`] counts them plus block RAMs priced as in
+    /// [`CostTarget::Ecp5Priced`].
+    Ecp5NoDsp,
 }
 
 /// Every cost target, in table order.
-pub const COST_TARGETS: [CostTarget; 5] = [
+pub const COST_TARGETS: [CostTarget; 6] = [
     CostTarget::Gates,
     CostTarget::Ice40,
     CostTarget::Ecp5,
     CostTarget::Ecp5Slices,
     CostTarget::Ecp5Priced,
+    CostTarget::Ecp5NoDsp,
 ];
 
 /// Slices of the largest ECP5, the LFE5U-85F: 84K LUT4s (83,640), two per slice.
@@ -74,6 +79,7 @@ impl CostTarget {
             CostTarget::Ecp5 => "ECP5 (LUT-eq.)",
             CostTarget::Ecp5Slices => "ECP5 (slices, lower bound)",
             CostTarget::Ecp5Priced => "ECP5 (slices + MULT18 + BRAM priced)",
+            CostTarget::Ecp5NoDsp => "ECP5 -nodsp (slices + BRAM priced)",
         }
     }
 }
@@ -94,7 +100,7 @@ pub struct Point {
     /// Error against `cos^n`, `n` 1-15 (LSB): what a path for `n < 16` beside K_v must meet.
     pub err_low: f64,
     /// Cost per [`COST_TARGETS`] (`None`: not measured).
-    pub cost: [Option<f64>; 5],
+    pub cost: [Option<f64>; 6],
     /// `ecp5_mult18` and `ecp5_brams` (`None`: not measured).
     pub ecp5_hard: Option<(u32, u32)>,
 }
@@ -151,6 +157,14 @@ impl Point {
             }
             _ => None,
         };
+        let nodsp = match (
+            num(row, "ecp5_nodsp_lut_equiv")?,
+            num(row, "ecp5_nodsp_ffs")?,
+            num(row, "ecp5_nodsp_brams")?,
+        ) {
+            (Some(l), Some(f), Some(b)) => Some((l.max(f) / 2.0).ceil() + b * SLICES_PER_EBR),
+            _ => None,
+        };
         Ok(Point {
             id: row.id.clone(),
             family: row.fields[col("family")].clone(),
@@ -164,6 +178,7 @@ impl Point {
                 luts,
                 slices,
                 priced,
+                nodsp,
             ],
             ecp5_hard: hard,
         })
@@ -496,14 +511,20 @@ pub fn verdict_markdown(rows: &[CsvRow]) -> Result<String, ParetoError> {
     let mut s = String::new();
     let unmeasured: Vec<&str> = points
         .iter()
-        .filter(|p| p.cost.iter().any(Option::is_none))
+        .filter(|p| p.cost[..5].iter().any(Option::is_none))
         .map(|p| p.id.as_str())
         .collect();
-    let _ = writeln!(
+    let nodsp = points.iter().filter(|p| p.cost[5].is_some()).count();
+    let _ = write!(
         s,
-        "{} designs in the CSV, {} with every cost measured{}.",
+        "{} designs in the CSV, {} with the gates, iCE40 and ECP5 costs measured, {nodsp} \
+         with the ECP5 -nodsp control",
         points.len(),
         points.len() - unmeasured.len(),
+    );
+    let _ = writeln!(
+        s,
+        "{}.",
         if unmeasured.is_empty() {
             String::new()
         } else {
