@@ -1,9 +1,14 @@
 """Study throughput of glint against nilearn, in one run (scripts/bench/bench-batch runs it).
 
-    python bench-batch.py MNI152.nii.gz GLINT_BIN OUT_DIR SUBJECTS SURFACE_SUBJECTS
+    python bench-batch.py MNI152.nii.gz GLINT_BIN READ_FLOOR_BIN OUT_DIR SUBJECTS SURFACE_SUBJECTS
 
 Makes a BIDS study of SUBJECTS variants of the MNI152 template in OUT_DIR/study, then
 times, on this machine's cores:
+  - the read floor: READ_FLOOR_BIN (crates/io/examples/read_floor.rs) reads every
+    input and inflates it with the inflater glint's readers use (flate2 on zlib-rs),
+    parsing nothing; its CPU seconds per subject, before each round of `glint batch`,
+    median of the rounds, are the least any reader of the study spends, and glint's
+    CPU seconds per subject are printed as a multiple of them (issue 47: <= 2x);
   - `glint batch` (the command, --jobs = cores), median of GLINT_BENCH_ROUNDS rounds
     (default 3), every subject made (--force);
   - `glint.batch` on a Dask LocalCluster of one worker process per core (started and
@@ -13,6 +18,8 @@ times, on this machine's cores:
   - nilearn's plot_img_on_surf (fsaverage5, both hemispheres, lateral and medial) of
     SURFACE_SUBJECTS subjects on the same pool.
 Prints seconds and subjects per hour of each and the ratios; writes OUT_DIR/bench.json.
+With GLINT_BENCH_GLINT_ONLY=1, times the read floor and `glint batch` only (no Dask,
+no nilearn).
 
 Each side's CPU seconds (user + system) are counted too: of the `glint batch` process,
 of the Dask workers over a round, and of nilearn's figure calls in the pool processes.
@@ -119,16 +126,23 @@ def timed(f):
 
 
 def main():
-    mni, glint_bin, out, subjects, surface = sys.argv[1:6]
+    mni, glint_bin, floor_bin, out, subjects, surface = sys.argv[1:7]
     subjects, surface = int(subjects), int(surface)
     rounds = int(os.environ.get("GLINT_BENCH_ROUNDS", "3"))
+    glint_only = os.environ.get("GLINT_BENCH_GLINT_ONLY") == "1"
     cores = os.cpu_count() or 1
     study = os.path.join(out, "study")
     paths = make_study(mni, study, subjects)
     print(f"bench-batch: {subjects} subjects (MNI152 variants, {len(paths)} files), views "
           f"{','.join(VIEWS)} at {SIZE}x{SIZE}, {cores} cores, {rounds} rounds", file=sys.stderr)
 
-    cpu = {"cli": [], "dask": []}
+    cpu = {"cli": [], "dask": [], "floor": []}
+
+    def floor():
+        before = cpu_seconds(resource.RUSAGE_CHILDREN)
+        proc = subprocess.run([floor_bin, *paths], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr
+        cpu["floor"].append(cpu_seconds(resource.RUSAGE_CHILDREN) - before)
 
     def cli():
         before = cpu_seconds(resource.RUSAGE_CHILDREN)
@@ -137,6 +151,23 @@ def main():
                                "--preset", PRESET, "--force", "-q"], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
         cpu["cli"].append(cpu_seconds(resource.RUSAGE_CHILDREN) - before)
+
+    if glint_only:
+        t_cli, t_floor = [], []
+        for r in range(rounds):
+            t_floor.append(timed(floor))
+            t_cli.append(timed(cli))
+            print(f"bench-batch: round {r + 1}/{rounds}: read floor {t_floor[-1]:.2f} s, "
+                  f"glint batch {t_cli[-1]:.2f} s", file=sys.stderr)
+        results = {"subjects": subjects, "cores": cores, "rounds": rounds, "views": VIEWS,
+                   "size": SIZE, "glint_batch_s": statistics.median(t_cli),
+                   "glint_batch_rounds_s": t_cli,
+                   "glint_batch_cpu_s": statistics.median(cpu["cli"]),
+                   "glint_batch_cpu_rounds_s": cpu["cli"]}
+        print_floor(results, cpu["floor"], t_floor, subjects)
+        with open(os.path.join(out, "bench.json"), "w") as f:
+            json.dump(results, f, indent=1)
+        return
 
     import glint
     from dask.distributed import Client, LocalCluster
@@ -156,8 +187,9 @@ def main():
         assert s["failed"] == 0, s
         cpu["dask"].append(sum(client.run(cpu_seconds).values()) - before)
 
-    t_cli, t_dask = [], []
+    t_cli, t_dask, t_floor = [], [], []
     for r in range(rounds):
+        t_floor.append(timed(floor))
         t_cli.append(timed(cli))
         t_dask.append(timed(dask))
         print(f"bench-batch: round {r + 1}/{rounds}: glint batch {t_cli[-1]:.2f} s, "
@@ -212,9 +244,24 @@ def main():
         key = "cli" if name.startswith("glint batch") else "dask"
         results[f"ratio_{key}_vs_plot_anat"] = ratio
         results[f"cpu_ratio_{key}_vs_plot_anat"] = cpu_ratio
+    print_floor(results, cpu["floor"], t_floor, subjects)
     print(f"bench-batch: load average at the end {os.getloadavg()}", file=sys.stderr)
     with open(os.path.join(out, "bench.json"), "w") as f:
         json.dump(results, f, indent=1)
+
+
+def print_floor(results, floor_cpu, floor_s, subjects):
+    """The read floor's CPU seconds per subject beside `glint batch`'s, and their
+    ratio (issue 47's target: at most 2), into `results` and on stdout."""
+    floor = statistics.median(floor_cpu) / subjects
+    glint_cpu = results["glint_batch_cpu_s"] / subjects
+    results.update({"read_floor_cpu_s": statistics.median(floor_cpu),
+                    "read_floor_cpu_rounds_s": floor_cpu, "read_floor_rounds_s": floor_s,
+                    "glint_batch_cpu_vs_read_floor": glint_cpu / floor})
+    print(f"read floor (read + inflate, zlib-rs): {floor:.3f} CPU s/subject; glint batch "
+          f"{glint_cpu:.3f} CPU s/subject = {glint_cpu / floor:.2f}x the read floor "
+          f"(wall {results['glint_batch_s']:.2f} s for {subjects} subjects, "
+          f"{results['glint_batch_s'] / subjects:.3f} s each)")
 
 
 def warm_one(_):

@@ -225,17 +225,22 @@ impl Field {
             inv_scale: 1.0,
         };
         let mut timings = Timings::default();
-        let range = if source.may_be_non_finite() {
-            let r = timings.time("field: range", || prepare::finite_range(&recipe))?;
-            recipe.fill = Some(r.0);
-            Some(r)
-        } else {
-            None
-        };
         let total = dims[2] as u64;
         let done = AtomicU64::new(0);
         let tick = |n: u64| progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
-        let p = timings.time("field: prepare", || prepare::prepare(&recipe, range, &tick))?;
+        // The pass measures the range itself; a source that holds NaN or infinities
+        // (they are replaced by the minimum before filtering, so the minimum must be
+        // known first) takes a pass for its finite range and the pass again. Float
+        // volumes that could hold them but do not (most) read the volume once.
+        let mut p = timings.time("field: prepare", || prepare::prepare(&recipe, None, &tick))?;
+        if !p.finite {
+            let r = timings.time("field: range", || prepare::finite_range(&recipe))?;
+            recipe.fill = Some(r.0);
+            done.store(0, Ordering::Relaxed);
+            p = timings.time("field: prepare", || {
+                prepare::prepare(&recipe, Some(r), &tick)
+            })?;
+        }
         let gradient_scale = filter::gradient_scale(p.largest);
         recipe.inv_scale = 1.0 / gradient_scale;
         let cache = BrickCache::new(bricks, slots).ok_or_else(|| {

@@ -93,7 +93,8 @@ impl Recipe {
     /// [`Recipe::values`] into `out` (resized; every element overwritten), with the
     /// buffers of `scratch`; when `measure`, returns the (min, max) of the physical
     /// values read for them (the voxels and the faces of the box around them: every
-    /// one a voxel of the volume), else (0, 0).
+    /// one a voxel of the volume) and whether all of them are finite (after the fill,
+    /// if any), else ((0, 0), true).
     pub(crate) fn values_into(
         &self,
         lo: [usize; 3],
@@ -101,7 +102,7 @@ impl Recipe {
         measure: bool,
         scratch: &mut Scratch,
         out: &mut Vec<f32>,
-    ) -> (f32, f32) {
+    ) -> ((f32, f32), bool) {
         let size = [0, 1, 2].map(|a| hi[a] - lo[a] + 1);
         let pad = usize::from(self.prefilter == Prefilter::Binomial);
         let read_size = size.map(|s| s + 2 * pad);
@@ -117,18 +118,22 @@ impl Recipe {
                 *v = fill;
             }
         }
-        let range = if measure {
-            raw.iter()
+        let measured = if measure {
+            let range = raw
+                .iter()
                 .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
                     (a.min(x), b.max(x))
-                })
+                });
+            // NaN drops out of min and max; infinities do not.
+            let finite = range.0.is_finite() && range.1.is_finite() && !has_nan(raw);
+            (range, finite)
         } else {
-            (0.0, 0.0)
+            ((0.0, 0.0), true)
         };
         if self.prefilter == Prefilter::Binomial {
             binomial_box_into(&scratch.raw, read_size, out, &mut scratch.filter);
         }
-        range
+        measured
     }
 
     /// Builds brick `b` into `values` and `gradients` (each [`BRICK_VOXELS`] long, brick
@@ -184,4 +189,17 @@ impl Recipe {
         }
         BUFFERS.set((scratch, f));
     }
+}
+
+/// Whether `v` holds a NaN, in eight lanes the compiler keeps in one vector register
+/// (a loop that stopped at the first would not vectorise).
+fn has_nan(v: &[f32]) -> bool {
+    let mut lanes = [false; 8];
+    let mut chunks = v.chunks_exact(8);
+    for chunk in &mut chunks {
+        for (m, x) in lanes.iter_mut().zip(chunk) {
+            *m |= x.is_nan();
+        }
+    }
+    lanes.contains(&true) || chunks.remainder().iter().any(|x| x.is_nan())
 }

@@ -4,6 +4,7 @@
 //! keeping no copy of the volume; the values and gradients themselves are built later,
 //! per brick, where rays go.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, PoisonError};
 
 use rayon::prelude::*;
@@ -25,13 +26,31 @@ pub(super) struct Prepared {
     pub(super) cells: Vec<(f32, f32)>,
     /// The largest world gradient component over all voxels.
     pub(super) largest: f32,
+    /// Whether every value read was finite. When the pass measured the range and met
+    /// a NaN or an infinity, nothing else it found holds: the caller measures the
+    /// finite range ([`finite_range`]) and runs the pass again with the fill set.
+    pub(super) finite: bool,
 }
 
 /// One slab's share of [`Prepared`] (its cells are written in place).
 struct Slab {
     range: (f32, f32),
+    finite: bool,
     largest: f32,
     robust: Vec<f32>,
+}
+
+impl Slab {
+    /// The share of a slab that met a non-finite value, or of one skipped after
+    /// another did.
+    fn void() -> Slab {
+        Slab {
+            range: (f32::NAN, f32::NAN),
+            finite: false,
+            largest: 0.0,
+            robust: Vec::new(),
+        }
+    }
 }
 
 /// Buffers that slabs hand on to the next slab a thread takes: at most one set per
@@ -119,9 +138,11 @@ fn finite_min_max(v: &[f32]) -> (f32, f32) {
     (lo, hi)
 }
 
-/// The pass. `recipe.fill` must be set when the source may hold non-finite values
-/// ([`finite_range`] gives it); `range` is that pass's result, or `None` to measure the
-/// range here. `progress` is called with the slices done after each slab.
+/// The pass. `range` is [`finite_range`]'s result with `recipe.fill` set from it, or
+/// `None` to measure the range here: then, should the source hold a non-finite value,
+/// the pass says so ([`Prepared::finite`]) and its other results are not to be used.
+/// Most float volumes hold none, and measuring the range here spares them a pass of
+/// its own. `progress` is called with the slices done after each slab.
 pub(super) fn prepare(
     recipe: &Recipe,
     range: Option<(f32, f32)>,
@@ -147,12 +168,21 @@ pub(super) fn prepare(
     // cells were held twice at the end of the pass (512 MiB more at the peak of a
     // 2048x2048x1024 level).
     let mut cells = vec![(0.0f32, 0.0f32); cell_dims.iter().product()];
+    let non_finite = AtomicBool::new(false);
     let parts: Vec<Slab> = cells
         .par_chunks_mut(layers * cell_dims[0] * cell_dims[1])
         .enumerate()
         .map(|(s, cells)| {
             let cz = (s * layers, ((s + 1) * layers).min(cell_dims[2]));
+            // Once a slab met a non-finite value the pass's results are void: the
+            // slabs left are skipped.
+            if non_finite.load(Ordering::Relaxed) {
+                return Slab::void();
+            }
             let slab = spares.with(|b| slab(recipe, cz, stride, range.is_none(), b, cells));
+            if !slab.finite {
+                non_finite.store(true, Ordering::Relaxed);
+            }
             progress((slab_slices(dims, cz, cell_dims[2]).1 - cz.0 * MACRO_CELL) as u64);
             slab
         })
@@ -164,7 +194,11 @@ pub(super) fn prepare(
         cell_dims,
         cells,
         largest: 0.0,
+        finite: parts.iter().all(|p| p.finite),
     };
+    if !out.finite {
+        return Ok(out);
+    }
     let mut sub = Vec::with_capacity(count.div_ceil(stride));
     for p in parts {
         if range.is_none() {
@@ -218,9 +252,12 @@ fn slab(
     // Filtered slices fa ..= fb: the cells' and one around the owned slices.
     let fa = z0.saturating_sub(1);
     let fb = z1.max(cz.1 * MACRO_CELL).min(nz - 1);
-    // With the range of the physical values read (all finite: the caller measures the
-    // range here only when the source has no others).
-    let range = recipe.values_into([0, 0, fa], [nx - 1, ny - 1, fb], measure_range, scratch, f);
+    // With the range of the physical values read, and whether they are all finite.
+    let (range, finite) =
+        recipe.values_into([0, 0, fa], [nx - 1, ny - 1, fb], measure_range, scratch, f);
+    if !finite {
+        return Slab::void();
+    }
     let f = &f[..];
     let row = |j: usize, k: usize| &f[nx * (j + ny * (k - fa))..][..nx];
     let g = &recipe.to_world_gradient;
@@ -240,6 +277,7 @@ fn slab(
     cells(f, dims, fa, cz, cells_out);
     Slab {
         range,
+        finite,
         largest,
         robust,
     }

@@ -21,7 +21,8 @@ pub trait Source: Send + Sync {
     fn resident_bytes(&self) -> u64;
 
     /// Whether a physical value can be NaN or infinite (float samples, or a scale that
-    /// overflows f32); the field then finds the finite range in a first pass.
+    /// overflows f32); the field then checks its pass over the volume for them, and
+    /// when it meets one, finds the finite range in a pass of its own and passes again.
     fn may_be_non_finite(&self) -> bool;
 
     /// Physical values (`(slope * stored + intercept) as f32`) of the voxels

@@ -243,6 +243,34 @@ fn nan_samples_and_small_volumes_equal_the_whole_volume_computation() {
     check_against_oracle(&linear_volume(), Prefilter::None);
 }
 
+/// A float volume without NaN or infinities is read in one pass (the range measured
+/// in it); one with a non-finite value in its last slab of slices passes again, after
+/// a pass for its finite range, and equals the whole-volume computation.
+#[test]
+fn only_volumes_with_non_finite_values_take_a_range_pass() {
+    // 80 slices of a small size: three slabs of up to 32 slices.
+    let dims = [6, 5, 80];
+    let values = |n: usize| (0..n).map(|i| (i * 37 % 101) as f32 * 0.5 - 7.0);
+    let clean = Volume::new(dims, [1.0; 3], Samples::F32(values(480 * 5).collect())).unwrap();
+    let field = Field::new(&clean).unwrap();
+    let stages: Vec<&str> = field.timings().stages().iter().map(|s| s.0).collect();
+    assert_eq!(stages, ["field: prepare"]);
+    assert_eq!(field.range(), (-7.0, 43.0));
+    check_against_oracle(&clean, Prefilter::Binomial);
+    for bad in [f32::NAN, f32::NEG_INFINITY, f32::INFINITY] {
+        let mut v: Vec<f32> = values(480 * 5).collect();
+        v[2390] = bad;
+        let vol = Volume::new(dims, [1.0; 3], Samples::F32(v)).unwrap();
+        let field = Field::new(&vol).unwrap();
+        let stages: Vec<&str> = field.timings().stages().iter().map(|s| s.0).collect();
+        assert_eq!(stages, ["field: prepare", "field: range"], "{bad}");
+        assert_eq!(field.range(), (-7.0, 43.0), "{bad}");
+        for &prefilter in Prefilter::ALL {
+            check_against_oracle(&vol, prefilter);
+        }
+    }
+}
+
 /// An axis-aligned affine (anisotropic, one axis flipped) takes the pass's shortcut
 /// for the largest gradient component; its quantisation step and gradients stay the
 /// oracle's, also when differences overflow f32 (where the shortcut gives way).
