@@ -30,8 +30,8 @@ use super::Surfaces;
 const CHUNK: usize = 1 << 14;
 
 /// What caps a clipped [`Surfaces`] draws: the clip's half-spaces and, per triangle,
-/// the orientation of the closed component it was cut from (`cull::Closure::of`'s
-/// sign, 0 when that was not closed).
+/// the sign that turns its winding out of the matter its mesh bounds, when it was cut
+/// from a closed component (0 otherwise).
 #[derive(Clone, Debug)]
 pub(super) struct Caps {
     pub(super) planes: Vec<HalfSpace>,
@@ -238,11 +238,53 @@ impl Surfaces {
                 false => 0,
             })
             .collect();
-        out.caps = caps.then(|| Caps {
-            planes,
-            facing: parents.iter().map(|&p| self.facing[p as usize]).collect(),
+        out.caps = caps.then(|| {
+            let inside = self.material_sides();
+            Caps {
+                planes,
+                facing: parents
+                    .iter()
+                    .map(|&p| match self.facing[p as usize] {
+                        0 => 0,
+                        _ => inside[self.mesh_of(p)],
+                    })
+                    .collect(),
+            }
         });
         out
+    }
+
+    /// Per mesh: the sign that turns the windings of its closed components out of the
+    /// matter they bound, from the signed volume of all of them together (0 when it
+    /// has none). One sign for the whole mesh, not one per component as culling takes
+    /// (`cull::Closure::of`): a cavity, wound the other way inside a shell, bounds
+    /// empty space, and a line of sight crossing it must not be capped.
+    fn material_sides(&self) -> Vec<i8> {
+        let mut volume = vec![0.0f64; self.mesh_starts.len()];
+        let o = self.center;
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if self.facing[t] == 0 {
+                continue;
+            }
+            let [a, b, c] = tri.map(|i| {
+                let p = self.positions[i as usize] - o;
+                [p.x, p.y, p.z].map(f64::from)
+            });
+            let cross = [
+                b[1] * c[2] - b[2] * c[1],
+                b[2] * c[0] - b[0] * c[2],
+                b[0] * c[1] - b[1] * c[0],
+            ];
+            volume[self.mesh_of(t as u32)] += dot(a, cross);
+        }
+        volume
+            .iter()
+            .map(|&v| match v {
+                v if v > 0.0 => 1,
+                v if v < 0.0 => -1,
+                _ => 0,
+            })
+            .collect()
     }
 
     /// Triangle index range of mesh `k`.

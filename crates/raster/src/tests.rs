@@ -880,3 +880,54 @@ fn a_pick_goes_through_the_clipped_part_and_stops_at_a_cap() {
         .to_string()
         .contains("zero"));
 }
+
+#[test]
+fn a_capped_hollow_shell_shows_a_ring_and_its_cavity_stays_open() {
+    // A shell: a sphere of radius 10 wound outwards around a cavity of radius 5 wound
+    // inwards (as an isosurface bounds a hollow object), one mesh.
+    let (outer, inner) = (
+        closed_sphere([0.0; 3], 10.0, 24, 48, false),
+        closed_sphere([0.0; 3], 5.0, 16, 32, true),
+    );
+    let base = outer.positions.len() as u32;
+    let mut shell = outer;
+    shell.positions.extend(inner.positions);
+    shell
+        .triangles
+        .extend(inner.triangles.iter().map(|t| t.map(|i| i + base)));
+    let s = Surfaces::new([&shell]).unwrap();
+    let settings = clip_settings();
+    let camera = s.camera(&settings).unwrap();
+    let shader = headlight_shader();
+    let capped = s
+        .clipped(&plane_clip(Vec3::ZERO, camera.forward), true)
+        .unwrap();
+    let cap = shader
+        .placed(&camera)
+        .shade_normal(settings.color, -camera.forward, -camera.forward);
+    let (w, h) = (settings.width, settings.height);
+    let (got, _) = capped
+        .render_with(&camera, &shader, &settings, None, simd(), false)
+        .unwrap();
+    let (mut ring, mut hole) = (0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let (o, _) = camera.ray(x as f32, y as f32, w, h);
+            let r = (o - camera.eye).length();
+            let c = got.rgb[(y * w + x) as usize];
+            let is_cap = (0..3).all(|i| (c[i] - cap[i]).abs() < 1e-5);
+            if (5.5..9.5).contains(&r) {
+                assert!(is_cap, "({x}, {y}) in the ring: {c:?}");
+                ring += 1;
+            } else if r < 4.5 {
+                // The cavity's far wall, lit with its own normals, not a cap.
+                assert!(
+                    !is_cap && got.alpha[(y * w + x) as usize] == 1.0,
+                    "({x}, {y})"
+                );
+                hole += 1;
+            }
+        }
+    }
+    assert!(ring > 100 && hole > 30, "{ring} ring, {hole} cavity pixels");
+}

@@ -313,8 +313,8 @@ impl Ctx<'_> {
             return false;
         }
         let [pa, pb, pc] = s.triangles[id as usize].map(|i| s.positions[i as usize]);
-        // The outward normal (the closed component's orientation turns the winding's
-        // normal out of what it encloses) faces away from the eye.
+        // The outward normal (the mesh's orientation turns the winding's normal out
+        // of the matter) faces away from the eye.
         let out = (pb - pa).cross(pc - pa) * f32::from(o);
         let cam = &self.frame.camera;
         match cam.projection {
