@@ -342,7 +342,11 @@ fn a_crop_box_cuts_label_surfaces_and_picks_go_through_what_it_removes() {
     });
     let mut r = Renderer::open(&whole, &ReadOptions::default()).unwrap();
     let camera = r.camera(&whole).unwrap();
-    assert_eq!(r.camera(&cropped).unwrap(), camera, "the crop keeps the framing");
+    assert_eq!(
+        r.camera(&cropped).unwrap(),
+        camera,
+        "the crop keeps the framing"
+    );
     let a = r.render(&whole, &|_| {}).unwrap().image;
     let b = r.render(&cropped, &|_| {}).unwrap().image;
     let (w, h) = (a.width, a.height);
@@ -370,5 +374,8 @@ fn a_crop_box_cuts_label_surfaces_and_picks_go_through_what_it_removes() {
         })
         .unwrap();
     assert!(r.pick(&whole, f64::from(x) + 0.5, 48.5).unwrap().is_some());
-    assert!(r.pick(&cropped, f64::from(x) + 0.5, 48.5).unwrap().is_none());
+    assert!(r
+        .pick(&cropped, f64::from(x) + 0.5, 48.5)
+        .unwrap()
+        .is_none());
 }
