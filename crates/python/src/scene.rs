@@ -130,6 +130,8 @@ impl Scene {
             None if name == "meshes" || name == "clip" => {
                 json::to_py(py, &Value::Array(Vec::new()))
             }
+            // Omitted while off.
+            None if name == "clip_caps" => json::to_py(py, &Value::Bool(false)),
             None => Err(PyAttributeError::new_err(format!(
                 "'Scene' object has no attribute '{name}'"
             ))),
@@ -141,6 +143,7 @@ impl Scene {
         names.extend(OPTIONAL_FIELDS.iter().map(|s| s.to_string()));
         names.push("meshes".into());
         names.push("clip".into());
+        names.push("clip_caps".into());
         names.extend(
             ["from_json", "to_json", "to_dict", "replace", "load", "save"]
                 .iter()

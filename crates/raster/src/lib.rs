@@ -34,6 +34,7 @@
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+mod clip;
 mod ctx;
 mod cull;
 mod frame;
@@ -155,6 +156,8 @@ pub struct Surfaces {
     facing: Vec<i8>,
     /// Per mesh: its bounding box and the caps of its holes, for culling.
     closures: Vec<cull::Closure>,
+    /// What closes the cut of clipped meshes ([`Surfaces::clipped`] with caps).
+    caps: Option<clip::Caps>,
     center: Vec3,
     radius: f32,
 }
@@ -177,6 +180,7 @@ impl Surfaces {
             mesh_starts: Vec::new(),
             facing: Vec::new(),
             closures: Vec::new(),
+            caps: None,
             center: Vec3::ZERO,
             radius: 0.0,
         };

@@ -30,7 +30,10 @@ pub struct SurfaceHit {
 
 impl Surfaces {
     /// The nearest triangle the ray `origin + t dir` (`dir` a unit vector) meets at
-    /// `t > 0`, front or back face; `None` when it meets none.
+    /// `t > 0`, front or back face; `None` when it meets none. On surfaces cut by
+    /// [`Surfaces::clipped`] only what the clip keeps is met; with caps, a ray that
+    /// meets the inside of a cut closed mesh first is stopped by the cap (the point
+    /// where it enters the kept region; the triangle named is the one behind it).
     pub fn pick(&self, origin: Vec3, dir: Vec3) -> Option<SurfaceHit> {
         let nearest = |a: Option<(f32, u32)>, b: Option<(f32, u32)>| match (a, b) {
             (Some(x), Some(y)) => Some(if y.0 < x.0 { y } else { x }),
@@ -53,12 +56,33 @@ impl Surfaces {
                 best
             })
             .reduce(|| None, nearest)?;
+        let t = self.capped(origin, dir, t, triangle);
         Some(SurfaceHit {
             t,
             point: origin + dir * t,
             mesh: self.mesh_of(triangle),
             triangle,
         })
+    }
+}
+
+impl Surfaces {
+    /// The ray parameter of a pick that met triangle `id` at `t`: the cap's in front
+    /// of it when the triangle shows the inside of a capped cut mesh, else `t`.
+    fn capped(&self, origin: Vec3, dir: Vec3, t: f32, id: u32) -> f32 {
+        let Some(caps) = &self.caps else {
+            return t;
+        };
+        let o = caps.facing[id as usize];
+        let [a, b, c] = self.triangles[id as usize].map(|i| self.positions[i as usize]);
+        let out = (b - a).cross(c - a) * f32::from(o);
+        if o == 0 || out.dot(dir) <= 0.0 {
+            return t;
+        }
+        match caps.entry(origin, dir) {
+            Some((e, _)) if e > 0.0 && (e as f32) < t => e as f32,
+            _ => t,
+        }
     }
 }
 

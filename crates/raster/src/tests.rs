@@ -665,3 +665,269 @@ fn no_culling_with_the_eye_inside_a_closed_mesh() {
         assert_eq!(got.alpha, want.alpha);
     }
 }
+
+/// A clip of one plane through `point` keeping the side `normal` points to.
+fn plane_clip(point: Vec3, normal: Vec3) -> glint_core::Clip {
+    glint_core::Clip {
+        planes: vec![glint_core::ClipPlane {
+            point: [point.x, point.y, point.z].map(f64::from),
+            normal: [normal.x, normal.y, normal.z].map(f64::from),
+        }],
+        crop: None,
+    }
+}
+
+/// 48x48, one sample a pixel, orthographic from an oblique direction.
+fn clip_settings() -> SurfaceSettings {
+    SurfaceSettings {
+        width: 48,
+        height: 48,
+        ssaa: 1,
+        camera: CameraSpec {
+            azimuth: 30.0,
+            elevation: 20.0,
+            projection: Projection::Orthographic,
+            ..Default::default()
+        },
+        background: [0.1, 0.2, 0.3],
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_clipped_sphere_loses_what_lies_beyond_the_plane_and_keeps_the_rest() {
+    let ball = sphere([0.0; 3], 10.0, 24, 48);
+    let s = Surfaces::new([&ball]).unwrap();
+    let settings = clip_settings();
+    let camera = s.camera(&settings).unwrap();
+    let shader = headlight_shader();
+    let whole = s.render(&camera, &shader, &settings, None).unwrap();
+    // Keep the image's right of a vertical plane 2 mm right of the centre; the
+    // orthographic rays run along the plane, so a pixel's side is its ray's.
+    let point = camera.right * 2.0;
+    let cut = s.clipped(&plane_clip(point, camera.right), false).unwrap();
+    assert!(cut.triangle_count() < s.triangle_count());
+    assert_eq!(
+        cut.camera(&settings).unwrap(),
+        camera,
+        "the framing is kept"
+    );
+    let (w, h) = (settings.width, settings.height);
+    let (mut gone, mut same) = (0, 0);
+    for avx2 in paths() {
+        let (got, _) = cut
+            .render_with(&camera, &shader, &settings, None, avx2, false)
+            .unwrap();
+        for y in 0..h {
+            for x in 0..w {
+                let (o, _) = camera.ray(x as f32, y as f32, w, h);
+                let side = (o - point).dot(camera.right);
+                let k = (y * w + x) as usize;
+                if side < -1e-3 {
+                    assert_eq!(got.alpha[k], 0.0, "({x}, {y}) beyond the plane");
+                    assert_eq!(got.rgb[k], settings.background);
+                    gone += usize::from(whole.alpha[k] > 0.0);
+                } else if side > 2.0 {
+                    // Further than a triangle from the cut: the same triangles.
+                    assert_eq!(got.alpha[k], whole.alpha[k], "({x}, {y})");
+                    assert_eq!(got.rgb[k], whole.rgb[k], "({x}, {y})");
+                    same += usize::from(whole.alpha[k] > 0.0);
+                }
+            }
+        }
+    }
+    assert!(gone > 100 && same > 100, "{gone} cut, {same} kept");
+}
+
+#[test]
+fn a_capped_sphere_cut_through_its_centre_shows_a_disc_lit_with_the_plane_normal() {
+    let r = 10.0;
+    let ball = closed_sphere([0.0; 3], r, 24, 48, false);
+    let s = Surfaces::new([&ball]).unwrap();
+    let settings = clip_settings();
+    let camera = s.camera(&settings).unwrap();
+    let shader = headlight_shader();
+    // Keep the far half: the cut faces the eye.
+    let clip = plane_clip(Vec3::ZERO, camera.forward);
+    let open = s.clipped(&clip, false).unwrap();
+    let capped = s.clipped(&clip, true).unwrap();
+    let (w, h) = (settings.width, settings.height);
+    let base = settings.color;
+    let want = shader
+        .placed(&camera)
+        .shade_normal(base, -camera.forward, -camera.forward);
+    // The plane is this far from the eye's image plane along every ray.
+    let depth = (Vec3::ZERO - camera.eye).dot(camera.forward);
+    let (plain, _) = open
+        .render_with(&camera, &shader, &settings, None, false, false)
+        .unwrap();
+    let mut disc = 0;
+    for avx2 in paths() {
+        let (got, far) = capped
+            .render_with(&camera, &shader, &settings, None, avx2, true)
+            .unwrap();
+        let far = far.unwrap();
+        for y in 0..h {
+            for x in 0..w {
+                let (o, _) = camera.ray(x as f32, y as f32, w, h);
+                let off = o - camera.eye;
+                let k = (y * w + x) as usize;
+                if off.length() < 0.9 * r {
+                    let c = got.rgb[k];
+                    assert!(
+                        (0..3).all(|i| (c[i] - want[i]).abs() < 1e-5),
+                        "({x}, {y}): {c:?} against the plane's {want:?}"
+                    );
+                    assert!((far[k] - depth).abs() < 1e-3, "{} against {depth}", far[k]);
+                    // Without caps the inside of the far half shows.
+                    assert!((0..3).any(|i| (plain.rgb[k][i] - want[i]).abs() > 1e-3));
+                    disc += 1;
+                }
+            }
+        }
+    }
+    assert!(disc > 200, "{disc}");
+}
+
+#[test]
+fn scalar_and_avx2_agree_on_clipped_and_capped_meshes() {
+    let (ball, plane) = (
+        closed_sphere([0.0; 3], 10.0, 24, 48, false),
+        square(12.0, 2.0),
+    );
+    let s = Surfaces::new([&ball, &plane]).unwrap();
+    let clip = glint_core::Clip {
+        planes: vec![glint_core::ClipPlane {
+            point: [1.0, 0.0, 0.0],
+            normal: [1.0, 0.3, -0.2],
+        }],
+        crop: Some(glint_core::CropBox {
+            min: [-20.0, -20.0, -6.0],
+            max: [20.0, 7.0, 20.0],
+        }),
+    };
+    let shader = headlight_shader();
+    let mut shown = false;
+    for projection in [Projection::Perspective, Projection::Orthographic] {
+        let settings = SurfaceSettings {
+            width: 45,
+            height: 38,
+            ssaa: 2,
+            camera: CameraSpec {
+                azimuth: 200.0,
+                elevation: 25.0,
+                projection,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let camera = s.camera(&settings).unwrap();
+        let open = s.clipped(&clip, false).unwrap();
+        // Uncapped, the clipped triangles are plain triangles: the reference holds.
+        let want = reference(&open, &camera, &shader, &settings, false);
+        let capped = s.clipped(&clip, true).unwrap();
+        let (first, first_far) = capped
+            .render_with(&camera, &shader, &settings, None, false, true)
+            .unwrap();
+        shown |= first.rgb != want.rgb;
+        for avx2 in paths() {
+            let (got, _) = open
+                .render_with(&camera, &shader, &settings, None, avx2, false)
+                .unwrap();
+            assert_eq!(got.rgb, want.rgb, "{projection:?} avx2 {avx2}");
+            assert_eq!(got.alpha, want.alpha);
+            let (got, far) = capped
+                .render_with(&camera, &shader, &settings, None, avx2, true)
+                .unwrap();
+            assert_eq!(got.rgb, first.rgb, "{projection:?} avx2 {avx2} capped");
+            assert_eq!(got.alpha, first.alpha);
+            assert_eq!(far, first_far);
+        }
+    }
+    assert!(shown, "the caps show");
+}
+
+#[test]
+fn a_pick_goes_through_the_clipped_part_and_stops_at_a_cap() {
+    let s = Surfaces::new([&square(1.0, 0.0), &square(1.0, -2.0)]).unwrap();
+    let down = Vec3::new(0.0, 0.0, -1.0);
+    let from = Vec3::new(0.3, -0.2, 5.0);
+    assert_eq!(s.pick(from, down).unwrap().mesh, 0);
+    // Keep below z = -1: the upper square is cut away, the ray meets the lower one.
+    let cut = s
+        .clipped(&plane_clip(Vec3::new(0.0, 0.0, -1.0), down), true)
+        .unwrap();
+    let hit = cut.pick(from, down).unwrap();
+    assert_eq!(hit.mesh, 1);
+    assert!((hit.t - 7.0).abs() < 1e-5, "{hit:?}");
+    // A closed sphere cut through its centre and capped: the pick stops on the cut.
+    let ball = closed_sphere([0.0; 3], 10.0, 24, 48, false);
+    let ball = Surfaces::new([&ball]).unwrap();
+    let clip = plane_clip(Vec3::ZERO, down);
+    let hit = ball.clipped(&clip, true).unwrap().pick(from, down).unwrap();
+    assert!(hit.point.z.abs() < 1e-4, "{hit:?}");
+    // Uncapped, it goes on to the inside of the far half.
+    let hit = ball
+        .clipped(&clip, false)
+        .unwrap()
+        .pick(from, down)
+        .unwrap();
+    assert!(hit.point.z < -9.0, "{hit:?}");
+    let bad = plane_clip(Vec3::ZERO, Vec3::ZERO);
+    assert!(ball
+        .clipped(&bad, true)
+        .unwrap_err()
+        .to_string()
+        .contains("zero"));
+}
+
+#[test]
+fn a_capped_hollow_shell_shows_a_ring_and_its_cavity_stays_open() {
+    // A shell: a sphere of radius 10 wound outwards around a cavity of radius 5 wound
+    // inwards (as an isosurface bounds a hollow object), one mesh.
+    let (outer, inner) = (
+        closed_sphere([0.0; 3], 10.0, 24, 48, false),
+        closed_sphere([0.0; 3], 5.0, 16, 32, true),
+    );
+    let base = outer.positions.len() as u32;
+    let mut shell = outer;
+    shell.positions.extend(inner.positions);
+    shell
+        .triangles
+        .extend(inner.triangles.iter().map(|t| t.map(|i| i + base)));
+    let s = Surfaces::new([&shell]).unwrap();
+    let settings = clip_settings();
+    let camera = s.camera(&settings).unwrap();
+    let shader = headlight_shader();
+    let capped = s
+        .clipped(&plane_clip(Vec3::ZERO, camera.forward), true)
+        .unwrap();
+    let cap = shader
+        .placed(&camera)
+        .shade_normal(settings.color, -camera.forward, -camera.forward);
+    let (w, h) = (settings.width, settings.height);
+    let (got, _) = capped
+        .render_with(&camera, &shader, &settings, None, simd(), false)
+        .unwrap();
+    let (mut ring, mut hole) = (0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let (o, _) = camera.ray(x as f32, y as f32, w, h);
+            let r = (o - camera.eye).length();
+            let c = got.rgb[(y * w + x) as usize];
+            let is_cap = (0..3).all(|i| (c[i] - cap[i]).abs() < 1e-5);
+            if (5.5..9.5).contains(&r) {
+                assert!(is_cap, "({x}, {y}) in the ring: {c:?}");
+                ring += 1;
+            } else if r < 4.5 {
+                // The cavity's far wall, lit with its own normals, not a cap.
+                assert!(
+                    !is_cap && got.alpha[(y * w + x) as usize] == 1.0,
+                    "({x}, {y})"
+                );
+                hole += 1;
+            }
+        }
+    }
+    assert!(ring > 100 && hole > 30, "{ring} ring, {hole} cavity pixels");
+}

@@ -100,10 +100,11 @@ impl Ctx<'_> {
             ids.clear();
             ids.resize(len, u32::MAX);
             self.raster(tris, rect, depth, ids);
+            // The resolve moves the depth of capped samples to their cap's.
+            shaded += self.resolve(rect, (ids, depth), batch, sum, covered);
             if let Some(far) = far.as_deref_mut() {
                 self.write_far(rect, depth, far);
             }
-            shaded += self.resolve(rect, ids, batch, sum, covered);
             self.write(rect, sum, covered, rgb, alpha);
         }
         shaded
@@ -227,11 +228,13 @@ impl Ctx<'_> {
     }
 
     /// Lights every covered sample of the tile, adding it to its pixel's `sum` and
-    /// `covered`; returns the number of samples lit.
+    /// `covered`; returns the number of samples lit. A sample showing the inside of a
+    /// cut closed mesh, when the surfaces draw caps, is lit as its cap instead, and
+    /// its key in `depth` becomes the cap's.
     fn resolve(
         &self,
         rect: Rect,
-        ids: &[u32],
+        (ids, depth): (&[u32], &mut [f32]),
         batch: &mut Batch,
         sum: &mut [[f32; 3]],
         covered: &mut [u32],
@@ -252,11 +255,18 @@ impl Ctx<'_> {
                 if id != tri.id {
                     tri = self.tri(id);
                 }
-                let (normal, base) = self.surface_at(&tri, (rect.x0 + x) as f32, fy);
+                let fx = (rect.x0 + x) as f32;
+                let (mut normal, base) = self.surface_at(&tri, fx, fy);
+                if tri.cap {
+                    if let Some((key, n)) = self.cap_at(fx, fy) {
+                        depth[y * rect.stride() + x] = key;
+                        normal = n;
+                    }
+                }
                 batch.push(
                     id,
                     (prow + (x >> f.ssaa_shift)) as u32,
-                    (rect.x0 + x) as f32,
+                    fx,
                     fy,
                     normal,
                     base,
@@ -286,6 +296,54 @@ impl Ctx<'_> {
             idx,
             normals: idx.map(|i| s.normals[i]),
             color,
+            cap: self.shows_inside(id),
+        }
+    }
+
+    /// Whether triangle `id` is a back face of a cut closed mesh whose cut the
+    /// surfaces cap: the eye sees the inside of the solid through it.
+    #[inline]
+    fn shows_inside(&self, id: u32) -> bool {
+        let s = self.s;
+        let Some(caps) = &s.caps else {
+            return false;
+        };
+        let o = caps.facing[id as usize];
+        if o == 0 {
+            return false;
+        }
+        let [pa, pb, pc] = s.triangles[id as usize].map(|i| s.positions[i as usize]);
+        // The outward normal (the mesh's orientation turns the winding's normal out
+        // of the matter) faces away from the eye.
+        let out = (pb - pa).cross(pc - pa) * f32::from(o);
+        let cam = &self.frame.camera;
+        match cam.projection {
+            Projection::Perspective => out.dot(pa - cam.eye) > 0.0,
+            Projection::Orthographic => out.dot(cam.forward) > 0.0,
+        }
+    }
+
+    /// The cap seen at sample `(x, y)`: the depth key where the sample's ray enters
+    /// the kept region and the cap's normal there (facing the eye); `None` when the
+    /// ray enters it through no plane in front of the eye.
+    #[inline]
+    fn cap_at(&self, x: f32, y: f32) -> Option<(f32, Vec3)> {
+        let caps = self.s.caps.as_ref()?;
+        let f = self.frame;
+        let cam = &f.camera;
+        let [u0, du, v0, dv] = f.plane;
+        let (u, v) = (u0 + x * du, v0 + y * dv);
+        let lateral = cam.right * u + cam.up * v;
+        match cam.projection {
+            // The ray's direction has a unit forward part: t is the depth z.
+            Projection::Perspective => {
+                let (t, n) = caps.entry(cam.eye, cam.forward + lateral)?;
+                (t > 0.0).then(|| ((1.0 / t) as f32, n))
+            }
+            Projection::Orthographic => {
+                let (t, n) = caps.entry(cam.eye + lateral, cam.forward)?;
+                Some((-t as f32, n))
+            }
         }
     }
 
@@ -346,6 +404,8 @@ struct TriCache {
     normals: [Vec3; 3],
     /// The colour of its mesh.
     color: [f32; 3],
+    /// Whether its samples show a cap (`Ctx::shows_inside`).
+    cap: bool,
 }
 
 impl TriCache {
@@ -367,6 +427,7 @@ impl TriCache {
             idx: [0; 3],
             normals: [Vec3::ZERO; 3],
             color: [0.0; 3],
+            cap: false,
         }
     };
 }

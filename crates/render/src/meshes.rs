@@ -3,12 +3,12 @@
 //! chooses.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use glint_io::{read_mesh, read_surface_data, Format, IoError, Mesh, VertexValues};
 use serde::{Deserialize, Serialize};
 
-use glint_core::{srgb_to_linear, ColorMap, Legend, Material, RenderError, ScalarColors};
+use glint_core::{srgb_to_linear, Clip, ColorMap, Legend, Material, RenderError, ScalarColors};
 use glint_raster::{Surfaces, SURFACE_COLOR};
 use glint_volume::LabelVolume;
 
@@ -154,6 +154,19 @@ pub(crate) struct MeshSet {
     pub(crate) kinds: Vec<MeshKind>,
     /// The label map's voxels and names, when the scene has one (picks).
     pub(crate) labels: Option<Arc<LabelLookup>>,
+    /// The surfaces last cut ([`MeshSet::surfaces_for`]): the clip, whether capped,
+    /// and the cut surfaces, so that frames with the same clip cut once (and the
+    /// meshes' occupancy of the light volumes, kept while the surfaces are the same,
+    /// is reused).
+    clipped: Arc<Mutex<Option<Clipped>>>,
+}
+
+/// Surfaces cut by a clip ([`MeshSet::surfaces_for`]).
+#[derive(Debug)]
+struct Clipped {
+    clip: Clip,
+    caps: bool,
+    surfaces: Arc<Surfaces>,
 }
 
 /// What a mesh of a [`MeshSet`] is.
@@ -238,7 +251,36 @@ impl MeshSet {
             label_volume,
             kinds,
             labels: lookup,
+            clipped: Arc::default(),
         })
+    }
+
+    /// The surfaces as `clip` cuts them, the cut closed with caps when `caps`
+    /// ([`Surfaces::clipped`]): the uncut surfaces when nothing is cut, the last cut
+    /// when the clip is the same.
+    pub(crate) fn surfaces_for(
+        &self,
+        clip: &Clip,
+        caps: bool,
+    ) -> Result<Option<Arc<Surfaces>>, RenderError> {
+        let Some(whole) = &self.surfaces else {
+            return Ok(None);
+        };
+        if clip.is_empty() {
+            return Ok(Some(whole.clone()));
+        }
+        // A poisoned lock only means another thread panicked while cutting: cut again.
+        let mut last = self.clipped.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(c) = last.as_ref().filter(|c| c.clip == *clip && c.caps == caps) {
+            return Ok(Some(c.surfaces.clone()));
+        }
+        let surfaces = Arc::new(whole.clipped(clip, caps)?);
+        *last = Some(Clipped {
+            clip: clip.clone(),
+            caps,
+            surfaces: surfaces.clone(),
+        });
+        Ok(Some(surfaces))
     }
 
     /// The colours of the scalar overlays of `specs` (whose `colormap` and `range`

@@ -327,3 +327,55 @@ fn a_table_alpha_is_the_label_volume_default_opacity_and_surfaces_stay_opaque() 
     let r = render(&scene(spec)).unwrap();
     assert!(r.image.alpha.iter().filter(|a| **a == 1.0).count() > 1000);
 }
+
+#[test]
+fn a_crop_box_cuts_label_surfaces_and_picks_go_through_what_it_removes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = two_blocks(dir.path(), "aseg.nii", 17, 18, 0.0);
+    let whole = scene(LabelSpec::new(&path));
+    // Keep x <= 10.5 mm: through the middle of label 18's block (x 8..13).
+    let cut = 10.5f32;
+    let mut cropped = whole.clone();
+    cropped.crop = Some(glint_render::CropBox {
+        min: [-100.0; 3],
+        max: [f64::from(cut), 100.0, 100.0],
+    });
+    let mut r = Renderer::open(&whole, &ReadOptions::default()).unwrap();
+    let camera = r.camera(&whole).unwrap();
+    assert_eq!(
+        r.camera(&cropped).unwrap(),
+        camera,
+        "the crop keeps the framing"
+    );
+    let a = r.render(&whole, &|_| {}).unwrap().image;
+    let b = r.render(&cropped, &|_| {}).unwrap().image;
+    let (w, h) = (a.width, a.height);
+    let (mut lost, mut kept) = (0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            // Orthographic from the front: a pixel's world x is its ray's.
+            let (o, _) = camera.ray(x as f32, y as f32, w, h);
+            let k = (y * w + x) as usize;
+            if o.x > cut + 0.01 {
+                assert_eq!((b.rgb[k], b.alpha[k]), ([0.0; 3], 0.0), "({x}, {y})");
+                lost += usize::from(a.alpha[k] > 0.0);
+            } else if o.x < cut - 0.01 {
+                assert_eq!((b.rgb[k], b.alpha[k]), (a.rgb[k], a.alpha[k]), "({x}, {y})");
+                kept += usize::from(a.alpha[k] > 0.0);
+            }
+        }
+    }
+    assert!(lost > 100 && kept > 300, "{lost} lost, {kept} kept");
+    // A pick where the crop removed the surface meets nothing; beside it, label 17.
+    let x = (0..w)
+        .find(|&x| {
+            let (o, _) = camera.ray(x as f32, 48.0, w, h);
+            o.x > cut + 1.0 && o.x < 13.0
+        })
+        .unwrap();
+    assert!(r.pick(&whole, f64::from(x) + 0.5, 48.5).unwrap().is_some());
+    assert!(r
+        .pick(&cropped, f64::from(x) + 0.5, 48.5)
+        .unwrap()
+        .is_none());
+}

@@ -4,12 +4,13 @@
 //! light transport (`transport`), which it joins.
 
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader};
+use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
 
-use crate::classification::Classification;
+use crate::classification::{occlusion_grid, Classification, LIGHT_CELL};
 use crate::clip::{IndexClip, CUT_DEPTH_STEPS};
 use crate::raycast::FrameSettings;
 use crate::transport::{
@@ -141,8 +142,20 @@ impl Classification {
             .iter()
             .map(|&(l, _)| field.index_direction(l))
             .collect();
-        let occlusion = settings.occlusion.then(|| self.occlusion());
         let clip = self.index_clip(shader, frame);
+        // The occlusion of the whole classification is kept with it; a clip's, where
+        // the space cut away occludes nothing (as it casts no shadow), is built with
+        // the light volumes, which a viewer keeps while the clip is the same.
+        let occlusion = settings.occlusion.then(|| match &clip {
+            None => self.occlusion(),
+            Some(k) => {
+                let h = LIGHT_CELL as f32;
+                let kept = |p: [usize; 3]| {
+                    k.contains(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) * h)
+                };
+                Arc::new(occlusion_grid(self.density(), kept))
+            }
+        });
         ShadowField::new(
             self.density(),
             ShadowField::light_bits(&placed),

@@ -154,6 +154,11 @@ pub struct SceneFlags {
     /// inside, as --clip cuts; replaces a --scene file's box.
     #[arg(long, value_name = "XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX", allow_hyphen_values = true, value_parser = parse_crop)]
     pub crop: Option<CropBox>,
+    /// Where --clip or --crop cuts a closed mesh or label surface, close the cut with
+    /// the plane (lit with its normal, in the surface's colour) instead of showing the
+    /// inside.
+    #[arg(long)]
+    pub clip_caps: bool,
     /// Refuse what lenient readers accept with a note (DICOM without preamble or meta
     /// group, multi-frame DICOM without frame positions).
     #[arg(long)]
@@ -277,6 +282,7 @@ impl SceneFlags {
         if self.crop.is_some() {
             scene.crop = self.crop;
         }
+        scene.clip_caps |= self.clip_caps;
         set(&mut scene.step, self.step);
         set(&mut scene.prefilter, self.prefilter);
         set(&mut scene.sampling, self.sampling);
@@ -696,6 +702,12 @@ mod tests {
         );
         let b = s.crop.unwrap();
         assert_eq!((b.min, b.max), ([-50.0, -80.0, -60.0], [0.0, 80.0, 60.5]));
+        assert!(!s.clip_caps, "caps are off by default");
+        assert!(
+            scene(&["--clip", "0,0,0,1,0,0", "--clip-caps"])
+                .unwrap()
+                .clip_caps
+        );
         for (argv, says) in [
             (["--clip", "0,0,0,0,0,0"], "the normal is zero"),
             (["--clip", "0,0,0,1,0"], "expected X,Y,Z,NX,NY,NZ"),

@@ -138,15 +138,21 @@ pub struct Scene {
     /// Background colour, linear RGB.
     pub background: [f32; 3],
     /// Clip planes (world mm), each keeping the side its normal points to: the
-    /// volume, its light and a ray-cast label map are cut in every mode and lighting
-    /// model (meshes, rasterised, are not); cut faces are lit with the plane's normal
-    /// where the data's gradient is weak. Left out of the JSON when there are none.
+    /// volume, its light, a label map (as a volume or as surfaces) and the meshes are
+    /// cut in every mode and lighting model; cut faces of the volume are lit with the
+    /// plane's normal where the data's gradient is weak. Left out of the JSON when
+    /// there are none.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub clip: Vec<ClipPlane>,
     /// A crop box (axis-aligned, world mm) keeping its inside, cutting as
     /// [`clip`](Self::clip) does. Left out of the JSON when absent.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub crop: Option<CropBox>,
+    /// Close the cut of closed meshes and label surfaces with the cut plane (lit with
+    /// the plane's normal, in the mesh's colour) rather than showing their inside
+    /// [default: false]. Left out of the JSON while false.
+    #[serde(skip_serializing_if = "is_false")]
+    pub clip_caps: bool,
     /// Written by a render for other tools (e.g. scripts/bench/bench-vtk.py): the camera
     /// and transfer function that were used, in world units. Ignored on input.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -183,9 +189,15 @@ impl Default for Scene {
             background: [0.0; 3],
             clip: Vec::new(),
             crop: None,
+            clip_caps: false,
             derived: None,
         }
     }
+}
+
+/// Whether `b` is false (serde's `skip_serializing_if` for flags off by default).
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// Where the volume comes from.

@@ -269,7 +269,7 @@ impl Scene {
         };
         settings.validate()?;
         Ok(MeshLayer {
-            surfaces: set.surfaces.clone(),
+            surfaces: set.surfaces_for(&self.clip(), self.clip_caps)?,
             settings,
             colors,
             legend: set.legend.clone(),

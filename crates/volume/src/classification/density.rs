@@ -102,8 +102,12 @@ fn tent(src: &[f32], dims: [usize; 3], axis: usize, out: [usize; 3]) -> Vec<f32>
 
 /// Local ambient occlusion per grid point: the mean over 14 directions (the axes and
 /// the diagonals) of the transmittance over [`OCCLUSION_STEPS`] grid steps, the
-/// point's own cell excluded.
-pub(crate) fn occlusion_grid(density: &DensityGrid) -> Vec<f32> {
+/// point's own cell excluded. Grid points `kept` refuses (a clip cuts them away) are
+/// empty: they occlude nothing, as they cast no shadow.
+pub(crate) fn occlusion_grid(
+    density: &DensityGrid,
+    kept: impl Fn([usize; 3]) -> bool + Sync,
+) -> Vec<f32> {
     let d = density.dims;
     let mut dirs: Vec<[i64; 3]> = Vec::with_capacity(14);
     for a in 0..3 {
@@ -147,7 +151,10 @@ pub(crate) fn occlusion_grid(density: &DensityGrid) -> Vec<f32> {
                             if (0..3).any(|a| p[a] < 0 || p[a] >= d[a] as i64) {
                                 break;
                             }
-                            tau += density.at(p.map(|x| x as usize)) * len;
+                            let p = p.map(|x| x as usize);
+                            if kept(p) {
+                                tau += density.at(p) * len;
+                            }
                         }
                         sum += (-tau).exp();
                     }

@@ -249,7 +249,7 @@ impl Classification {
     /// The local ambient occlusion on the light volumes' grid (built on first use).
     pub(crate) fn occlusion(&self) -> Arc<Vec<f32>> {
         self.occlusion
-            .get_or_init(|| Arc::new(occlusion_grid(self.density())))
+            .get_or_init(|| Arc::new(occlusion_grid(self.density(), |_| true)))
             .clone()
     }
 

@@ -802,3 +802,46 @@ fn a_mesh_shadows_the_path_traced_volume() {
         }
     }
 }
+
+#[test]
+fn ambient_occlusion_treats_clipped_space_as_empty() {
+    let (class, shader, frame) = small_scene();
+    let field = class.field().clone();
+    // A plane through the ball's centre across index axis 0, keeping i >= 24.
+    let o = field.index_to_world([24.0, 0.0, 0.0]);
+    let e = field.index_to_world([25.0, 0.0, 0.0]);
+    let cut = FrameSettings {
+        clip: glint_core::Clip {
+            planes: vec![glint_core::ClipPlane {
+                point: o,
+                normal: [0, 1, 2].map(|a| e[a] - o[a]),
+            }],
+            crop: None,
+        },
+        ..frame.clone()
+    };
+    let occlusion = |frame: &FrameSettings| {
+        let sf = class
+            .shadow_field(&shader, frame, &ShadowSettings { occlusion: true }, None)
+            .unwrap();
+        move |p: Vec3| sf.at(p, &mut [0.0; glint_core::MAX_LIGHTS])
+    };
+    let (whole, clipped) = (occlusion(&frame), occlusion(&cut));
+    let mut brighter = 0;
+    for k in 0..48 {
+        for j in 0..48 {
+            for i in 24..48 {
+                let p = Vec3::new(i as f32, j as f32, k as f32);
+                let (a, b) = (whole(p), clipped(p));
+                assert!(b >= a - 1e-6, "({i}, {j}, {k}): {b} darker than {a}");
+                if i >= 34 {
+                    // Beyond the occlusion's reach of the plane: as it was.
+                    assert_eq!(a, b, "({i}, {j}, {k})");
+                }
+                brighter += usize::from(b > a + 0.01);
+            }
+        }
+    }
+    // The ball's removed half no longer occludes the kept half and the floor by it.
+    assert!(brighter > 100, "{brighter}");
+}
