@@ -112,9 +112,11 @@ fn a_directory_turntable_writes_png_frames_and_frame_0_is_the_still() {
     assert_eq!(std::fs::read(again.join("frame-0000.png")).unwrap()[24], 16);
 }
 
-/// An animated WebP's frames (RGB) and durations (ms), with its canvas's size,
-/// decoded by image-webp's decoder.
-fn webp_frames(path: &Path) -> ((u32, u32), Vec<(u32, Vec<u8>)>) {
+/// A decoded WebP frame: its duration (ms) and RGB pixels.
+type WebPFrame = (u32, Vec<u8>);
+
+/// An animated WebP's frames, with its canvas's size, decoded by image-webp's decoder.
+fn webp_frames(path: &Path) -> ((u32, u32), Vec<WebPFrame>) {
     let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
     let mut decoder = image_webp::WebPDecoder::new(file).unwrap();
     assert!(decoder.is_animated());
