@@ -257,11 +257,14 @@ fn camera_keys(keys: &Bound<'_, PyAny>) -> PyResult<glint_render::CameraPath> {
         let value = crate::json::to_json(keys)?;
         glint_render::CameraPath::from_json(&value.to_string())
     };
-    parsed.map_err(|e| match e {
-        glint_render::CameraPathError::Read { source, .. } => {
-            errors::os_error(keys.py(), errors::one_line(&e), source)
+    parsed.map_err(|e| {
+        let message = errors::one_line(&e);
+        match e {
+            glint_render::CameraPathError::Read { source, .. } => {
+                errors::os_error(keys.py(), message, source)
+            }
+            other => errors::value_error(&other),
         }
-        other => errors::value_error(&other),
     })
 }
 
