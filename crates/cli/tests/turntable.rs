@@ -1,6 +1,7 @@
-//! `glint render --turntable N`: N views round the scene as an animated GIF, an MP4
-//! (through ffmpeg) or a directory of PNG frames, frame 0 the still; bad requests fail
-//! with one line and leave nothing behind (issue 43 item 4).
+//! `glint render --turntable N`: N views round the scene as an animated GIF, an
+//! animated WebP, an MP4 (through ffmpeg) or a directory of PNG frames, frame 0 the
+//! still; `--camera-path KEYS --frames N`: N views along camera keys; bad requests
+//! fail with one line and leave nothing behind (issue 43 item 4).
 
 mod common;
 
@@ -111,6 +112,95 @@ fn a_directory_turntable_writes_png_frames_and_frame_0_is_the_still() {
     assert_eq!(std::fs::read(again.join("frame-0000.png")).unwrap()[24], 16);
 }
 
+/// A decoded WebP frame: its duration (ms) and RGB pixels.
+type WebPFrame = (u32, Vec<u8>);
+
+/// An animated WebP's frames, with its canvas's size, decoded by image-webp's decoder.
+fn webp_frames(path: &Path) -> ((u32, u32), Vec<WebPFrame>) {
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let mut decoder = image_webp::WebPDecoder::new(file).unwrap();
+    assert!(decoder.is_animated());
+    let size = decoder.dimensions();
+    let mut buf = vec![0u8; decoder.output_buffer_size().unwrap()];
+    let channels = buf.len() / (size.0 * size.1) as usize;
+    let frames = (0..decoder.num_frames())
+        .map(|_| {
+            let ms = decoder.read_frame(&mut buf).unwrap();
+            (
+                ms,
+                buf.chunks(channels).flat_map(|p| p[..3].to_vec()).collect(),
+            )
+        })
+        .collect();
+    (size, frames)
+}
+
+/// A PNG's 8-bit RGB pixels.
+fn png_rgb(path: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0u8; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.line_size / info.width as usize;
+    buf[..info.buffer_size()]
+        .chunks(channels)
+        .flat_map(|p| p[..3].to_vec())
+        .collect()
+}
+
+#[test]
+fn a_webp_turntable_holds_the_png_frames_losslessly() {
+    let dir = tempfile::tempdir().unwrap();
+    let webp = dir.path().join("spin.webp");
+    render(&webp, &["--turntable", "3", "--fps", "20"]);
+    let out = format!("{}/", dir.path().join("frames").display());
+    render(Path::new(&out), &["--turntable", "3"]);
+    let (size, frames) = webp_frames(&webp);
+    assert_eq!(size, (40, 32));
+    assert_eq!(frames.len(), 3);
+    for (k, (ms, rgb)) in frames.iter().enumerate() {
+        assert_eq!(*ms, 50, "a frame every 1/20 s");
+        let png = png_rgb(&dir.path().join(format!("frames/frame-{k:04}.png")));
+        assert!(rgb == &png, "WebP frame {k} differs from the PNG frame");
+    }
+    assert_eq!(files(dir.path()), ["frames", "spin.webp"]);
+}
+
+#[test]
+fn camera_path_frames_are_the_stills_at_the_interpolated_cameras() {
+    let dir = tempfile::tempdir().unwrap();
+    let keys = dir.path().join("keys.json");
+    std::fs::write(
+        &keys,
+        r#"[{"azimuth": 0, "elevation": 0, "zoom": 1},
+            {"azimuth": 90, "elevation": 40, "zoom": 4}]"#,
+    )
+    .unwrap();
+    let out = format!("{}/", dir.path().join("path").display());
+    render(
+        Path::new(&out),
+        &["--camera-path", keys.to_str().unwrap(), "--frames", "3"],
+    );
+    // Frame 1 of 3 is half way: azimuth and elevation linear, zoom geometric.
+    for (k, camera) in [
+        (0, ["0", "0", "1"]),
+        (1, ["45", "20", "2"]),
+        (2, ["90", "40", "4"]),
+    ] {
+        let still = dir.path().join(format!("still-{k}.png"));
+        let [az, el, zoom] = camera;
+        render(
+            &still,
+            &["--azimuth", az, "--elevation", el, "--zoom", zoom],
+        );
+        let frame = dir.path().join(format!("path/frame-{k:04}.png"));
+        assert!(
+            std::fs::read(&frame).unwrap() == std::fs::read(&still).unwrap(),
+            "frame {k} is not the still at {camera:?}"
+        );
+    }
+}
+
 /// `ffprobe`'s width, height and counted frames of a video's first stream.
 fn probe(path: &Path) -> String {
     let out = Command::new("ffprobe")
@@ -189,15 +279,38 @@ fn bad_turntables_fail_in_one_line_and_write_nothing() {
             "a.png: expected an animated GIF",
         ),
         ("--turntable 4 -o D/a", "expected an animated GIF"),
-        (
-            "--turntable 4 -o D/a.webp",
-            "animated WebP is not supported",
-        ),
         ("--turntable 4 --fps 0 -o D/a.gif", "1..=120"),
         ("--turntable 4 --fps 500 -o D/a.gif", "1..=120"),
         (
             "--fps 30 -o D/a.png",
             "--fps is the frame rate of a --turntable",
+        ),
+        ("--frames 4 -o D/a.gif", "--camera-path"),
+        (
+            "--camera-path K/two.json --frames 4 --turntable 4 -o D/a.gif",
+            "--turntable",
+        ),
+        ("--camera-path K/two.json -o D/a.gif", "--frames"),
+        ("--camera-path K/two.json --frames 1 -o D/a.gif", "2..=3600"),
+        (
+            "--camera-path K/two.json --frames 4 -o D/a.xyz",
+            "expected an animated GIF",
+        ),
+        (
+            "--camera-path K/missing.json --frames 4 -o D/a.gif",
+            "[1]: missing field `zoom`",
+        ),
+        (
+            "--camera-path K/one.json --frames 4 -o D/a.gif",
+            "1 keys: expected 2..=",
+        ),
+        (
+            "--camera-path K/unknown.json --frames 4 -o D/a.gif",
+            "unknown field `target`",
+        ),
+        (
+            "--camera-path K/none.json --frames 4 -o D/a.gif",
+            "cannot read the camera keys",
         ),
         ("--turntable 4 --repeat 3 -o D/a.gif", "--repeat"),
         ("--turntable 4 -o D/missing/a.gif", "does not exist"),
@@ -209,9 +322,27 @@ fn bad_turntables_fail_in_one_line_and_write_nothing() {
             "unknown preset",
         ),
     ];
+    // K/ stands for a directory of camera key files.
+    let keys = tempfile::tempdir().unwrap();
+    let key = r#"{"azimuth": 0, "elevation": 0, "zoom": 1}"#;
+    for (name, text) in [
+        ("two.json", format!("[{key}, {key}]")),
+        (
+            "missing.json",
+            format!(r#"[{key}, {{"azimuth": 0, "elevation": 0}}]"#),
+        ),
+        ("one.json", format!("[{key}]")),
+        (
+            "unknown.json",
+            format!(r#"[{key}, {{"azimuth": 0, "elevation": 0, "zoom": 1, "target": [0, 0, 0]}}]"#),
+        ),
+    ] {
+        std::fs::write(keys.path().join(name), text).unwrap();
+    }
     let root = format!("{}/", dir.path().display());
+    let key_root = format!("{}/", keys.path().display());
     for (case, needle) in cases {
-        let case = case.replace("D/", &root);
+        let case = case.replace("D/", &root).replace("K/", &key_root);
         let mut args = vec!["render", "-q", "--phantom-size", "16", "--size", "16x16"];
         args.extend(case.split_whitespace());
         let err = fails(&args);

@@ -200,14 +200,18 @@ pub fn render<'py>(
 }
 
 /// Renders a turntable of a scene: `frames` views whose camera azimuth steps
-/// 360/frames degrees from the scene's own (frame 0 is `glint.render`'s image), with
-/// one renderer (the volume read and classified once), written to `path` as
-/// `glint render --turntable` writes it: an animated GIF (`.gif`), an MP4 (`.mp4`,
-/// through ffmpeg) or PNG frames in a directory (a path ending in `/`, or an existing
-/// directory). The volume and scene are taken as by `glint.render`; nothing is left at
-/// `path` when it fails. The GIL is released throughout.
+/// 360/frames degrees from the scene's own (frame 0 is `glint.render`'s image), or with
+/// `keys` `frames` views along camera keys (a list of cameras as the scene's `camera`
+/// writes them, dicts with `azimuth`, `elevation` and `zoom`, or the path of a JSON
+/// file of them: `glint render --camera-path`), with one renderer (the volume read and
+/// classified once), written to `path` as `glint render --turntable` writes it: an
+/// animated GIF (`.gif`), an animated WebP (`.webp`), an MP4 (`.mp4`, through ffmpeg)
+/// or PNG frames in a directory (a path ending in `/`, or an existing directory). The
+/// volume and scene are taken as by `glint.render`; nothing is left at `path` when it
+/// fails. The GIL is released throughout.
 #[pyfunction]
-#[pyo3(signature = (scene, frames, path, fps=glint_render::DEFAULT_TURNTABLE_FPS, volume=None, **fields))]
+#[pyo3(signature = (scene, frames, path, fps=glint_render::DEFAULT_TURNTABLE_FPS, volume=None, keys=None, **fields))]
+#[allow(clippy::too_many_arguments)]
 pub fn turntable<'py>(
     py: Python<'py>,
     scene: Option<&Bound<'py, Scene>>,
@@ -215,15 +219,18 @@ pub fn turntable<'py>(
     path: PathBuf,
     fps: u32,
     volume: Option<&Bound<'py, PyAny>>,
+    keys: Option<&Bound<'py, PyAny>>,
     fields: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<()> {
     let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
     let mut scene = with_fields(&base, fields)?;
+    let keys = keys.map(camera_keys).transpose()?;
     let turntable = glint_render::Turntable {
         fps,
+        keys,
         ..glint_render::Turntable::new(frames)
     };
-    // The count, rate, format and ffmpeg are checked before the volume is read.
+    // The keys, count, rate, format and ffmpeg are checked before the volume is read.
     let writer = turntable
         .writer(&path)
         .map_err(|e| errors::turntable_error(py, e))?;
@@ -238,6 +245,27 @@ pub fn turntable<'py>(
     crate::pool::detach(py, || turntable.render(&mut inner, &scene, writer, &|_| {}))?
         .map_err(|e| errors::turntable_error(py, e))?;
     Ok(())
+}
+
+/// `glint.turntable`'s `keys`: a path of a JSON file (read as `--camera-path` reads
+/// it) or a list of camera dicts; bad keys raise `ValueError` (an unreadable file
+/// `OSError`) with `glint render`'s line.
+fn camera_keys(keys: &Bound<'_, PyAny>) -> PyResult<glint_render::CameraPath> {
+    let parsed = if let Ok(file) = keys.extract::<PathBuf>() {
+        glint_render::CameraPath::load(&file)
+    } else {
+        let value = crate::json::to_json(keys)?;
+        glint_render::CameraPath::from_json(&value.to_string())
+    };
+    parsed.map_err(|e| {
+        let message = errors::one_line(&e);
+        match e {
+            glint_render::CameraPathError::Read { source, .. } => {
+                errors::os_error(keys.py(), message, source)
+            }
+            other => errors::value_error(&other),
+        }
+    })
 }
 
 /// Compares a volume's rendering with the exact `cos^n` lobe and with each of `lobes`

@@ -1,6 +1,7 @@
-//! Writing a sequence of frames: an animated GIF, an MP4 through `ffmpeg`, or a
-//! directory of PNG frames, chosen by the output path ([`AnimationFormat::of`]). Every
-//! writer leaves nothing behind when it fails or is dropped unfinished: a GIF or MP4 is
+//! Writing a sequence of frames: an animated GIF, an animated WebP, an MP4 through
+//! `ffmpeg`, or a directory of PNG frames, chosen by the output path
+//! ([`AnimationFormat::of`]). Every writer leaves nothing behind when it fails or is
+//! dropped unfinished: a GIF, WebP or MP4 is
 //! written to a temporary file beside the target and renamed at the end; PNG frames
 //! written into a directory are removed again (and the directory, when the writer made
 //! it).
@@ -13,6 +14,8 @@ use std::thread::JoinHandle;
 use glint_core::{Depth, Image, RenderError};
 use tempfile::NamedTempFile;
 
+use crate::webp::{WebPSink, MAX_WEBP_SIDE};
+
 /// The most frames a turntable may have (a tenth of a degree apart).
 pub const MAX_TURNTABLE_FRAMES: u32 = 3600;
 
@@ -23,8 +26,9 @@ pub const MAX_TURNTABLE_FPS: u32 = 120;
 pub const DEFAULT_TURNTABLE_FPS: u32 = 24;
 
 /// The formats an animation can be written in, as an error message lists them.
-pub const ANIMATION_FORMATS: &str = "an animated GIF (.gif), an MP4 (.mp4, through ffmpeg) \
-or a directory of PNG frames (a path ending in '/' or an existing directory)";
+pub const ANIMATION_FORMATS: &str = "an animated GIF (.gif), an animated WebP (.webp), an MP4 \
+(.mp4, through ffmpeg) or a directory of PNG frames (a path ending in '/' or an existing \
+directory)";
 
 /// The file format of an animation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,6 +36,9 @@ pub enum AnimationFormat {
     /// An animated GIF, looping forever: each frame quantised to its own 256-colour
     /// palette (NeuQuant), its delay `fps` rounded to hundredths of a second.
     Gif,
+    /// An animated WebP, looping forever: each frame lossless (VP8L, the frame's 8-bit
+    /// sRGB pixels exactly), its duration `1000 / fps` ms rounded.
+    WebP,
     /// An H.264 MP4 (yuv420p) written by `ffmpeg` from the frames' sRGB pixels (MPEG-4
     /// part 2 when that ffmpeg has no libx264); an odd width or height is padded by a
     /// black pixel, as yuv420p needs even sides.
@@ -43,8 +50,7 @@ pub enum AnimationFormat {
 
 impl AnimationFormat {
     /// The format `path` asks for: a directory (a path ending in `/`, or an existing
-    /// directory), `.gif` or `.mp4` (any case). Animated WebP is refused: no
-    /// maintained pure-Rust crate encodes it.
+    /// directory), `.gif`, `.webp` or `.mp4` (any case).
     pub fn of(path: &Path) -> Result<AnimationFormat, TurntableError> {
         if path.as_os_str().to_string_lossy().ends_with('/') || path.is_dir() {
             return Ok(AnimationFormat::Frames);
@@ -56,7 +62,7 @@ impl AnimationFormat {
         match ext.as_deref() {
             Some("gif") => Ok(AnimationFormat::Gif),
             Some("mp4") => Ok(AnimationFormat::Mp4),
-            Some("webp") => Err(TurntableError::WebP { path: path.into() }),
+            Some("webp") => Ok(AnimationFormat::WebP),
             _ => Err(TurntableError::Format { path: path.into() }),
         }
     }
@@ -78,11 +84,13 @@ pub enum TurntableError {
         /// The output path.
         path: PathBuf,
     },
-    /// Animated WebP was asked for.
-    #[error("cannot write {}: animated WebP is not supported (no maintained pure-Rust crate encodes it); write .gif, .mp4 or a directory of PNG frames", path.display())]
+    /// Encoding or writing the animated WebP failed.
+    #[error("cannot write the WebP {}: {why}", path.display())]
     WebP {
         /// The output path.
         path: PathBuf,
+        /// What went wrong.
+        why: String,
     },
     /// An MP4 was asked for and `ffmpeg` is not on `PATH`.
     #[error("cannot write {}: ffmpeg is not on PATH (install ffmpeg, or write .gif or a directory of PNG frames)", path.display())]
@@ -144,6 +152,7 @@ enum Sink {
     /// Nothing written yet (the size is not known).
     Waiting,
     Gif(Box<gif::Encoder<BufWriter<std::fs::File>>>),
+    WebP(WebPSink),
     Ffmpeg(Ffmpeg),
     Frames,
 }
@@ -156,7 +165,7 @@ pub struct AnimationWriter {
     format: AnimationFormat,
     fps: u32,
     depth: Depth,
-    /// The GIF's or MP4's temporary file beside the target.
+    /// The GIF's, WebP's or MP4's temporary file beside the target.
     tmp: Option<NamedTempFile>,
     /// The MP4's video encoder (`libx264` or `mpeg4`).
     encoder: &'static str,
@@ -172,7 +181,7 @@ pub struct AnimationWriter {
 
 impl AnimationWriter {
     /// A writer of `path` at `fps` frames per second (PNG frames at `depth` bits per
-    /// channel; GIF and MP4 are 8-bit). Checks what it can before any frame is
+    /// channel; GIF, WebP and MP4 are 8-bit). Checks what it can before any frame is
     /// rendered: the format, the output's directory, that `ffmpeg` is on `PATH` and
     /// has an encoder (MP4); creates the temporary file or the frames' directory.
     pub fn create(path: &Path, fps: u32, depth: Depth) -> Result<AnimationWriter, TurntableError> {
@@ -205,7 +214,7 @@ impl AnimationWriter {
                     w.dir_created = true;
                 }
             }
-            AnimationFormat::Gif | AnimationFormat::Mp4 => {
+            AnimationFormat::Gif | AnimationFormat::WebP | AnimationFormat::Mp4 => {
                 if format == AnimationFormat::Mp4 {
                     w.encoder = ffmpeg_encoder(path)?;
                 }
@@ -213,10 +222,10 @@ impl AnimationWriter {
                     Some(d) if !d.as_os_str().is_empty() => d,
                     _ => Path::new("."),
                 };
-                let suffix = if format == AnimationFormat::Gif {
-                    ".gif"
-                } else {
-                    ".mp4"
+                let suffix = match format {
+                    AnimationFormat::Gif => ".gif",
+                    AnimationFormat::WebP => ".webp",
+                    _ => ".mp4",
                 };
                 let mut builder = tempfile::Builder::new();
                 builder.prefix(".glint-").suffix(suffix);
@@ -278,6 +287,9 @@ impl AnimationWriter {
                         source,
                     })?;
             }
+            Sink::WebP(webp) => webp
+                .frame(&image.encode_srgb(Depth::Eight))
+                .map_err(|e| webp_error(&self.path, e))?,
             Sink::Ffmpeg(ff) => ff.write(&image.encode_srgb(Depth::Eight), &self.path)?,
             Sink::Frames => {
                 let file = self.path.join(format!("frame-{index:04}.png"));
@@ -320,6 +332,22 @@ impl AnimationWriter {
                     .map_err(gif_error)?;
                 Sink::Gif(Box::new(encoder))
             }
+            AnimationFormat::WebP => {
+                if width > MAX_WEBP_SIDE || height > MAX_WEBP_SIDE {
+                    return Err(TurntableError::FrameSize {
+                        path: self.path.clone(),
+                        width,
+                        height,
+                        why: "a WebP frame is at most 16384 pixels wide and high",
+                    });
+                }
+                let file = tmp.expect("a WebP has a temporary file");
+                let file = file.as_file().try_clone().map_err(io)?;
+                Sink::WebP(
+                    WebPSink::start(file, width, height, self.fps)
+                        .map_err(|e| webp_error(&self.path, e))?,
+                )
+            }
             AnimationFormat::Mp4 => {
                 let out = tmp.expect("an MP4 has a temporary file").path();
                 Sink::Ffmpeg(Ffmpeg::spawn(
@@ -355,6 +383,7 @@ impl AnimationWriter {
                 })?;
                 file.into_inner().map_err(|e| io(e.into_error()))?;
             }
+            Sink::WebP(webp) => webp.finish().map_err(|e| webp_error(&self.path, e))?,
             Sink::Ffmpeg(ff) => ff.finish(&self.path)?,
         }
         if let Some(tmp) = self.tmp.take() {
@@ -381,6 +410,21 @@ impl Drop for AnimationWriter {
         if self.dir_created {
             let _ = std::fs::remove_dir(&self.path);
         }
+    }
+}
+
+/// The error of a failed WebP write of `path`: the operating system's refusal as
+/// [`TurntableError::Io`], the rest as [`TurntableError::WebP`].
+fn webp_error(path: &Path, e: crate::webp::WebPError) -> TurntableError {
+    match e {
+        crate::webp::WebPError::Io(source) => TurntableError::Io {
+            path: path.into(),
+            source,
+        },
+        other => TurntableError::WebP {
+            path: path.into(),
+            why: other.to_string(),
+        },
     }
 }
 

@@ -56,6 +56,7 @@
 #![forbid(unsafe_code)]
 
 mod animation;
+mod camera_path;
 mod hwlobe;
 mod labels;
 mod meshes;
@@ -63,11 +64,13 @@ mod pick;
 mod renderer;
 mod scene;
 mod turntable;
+mod webp;
 
 pub use animation::{
     AnimationFormat, AnimationWriter, TurntableError, ANIMATION_FORMATS, DEFAULT_TURNTABLE_FPS,
     MAX_TURNTABLE_FPS, MAX_TURNTABLE_FRAMES,
 };
+pub use camera_path::{CameraKey, CameraPath, CameraPathError, MAX_CAMERA_KEYS};
 pub use glint_core::Legend;
 pub use glint_core::{camera, math};
 pub use glint_core::{

@@ -1,7 +1,8 @@
 //! Turntables: a scene rendered from `N` cameras stepping `360/N` degrees of azimuth
 //! (about the view's up axis) from the scene's own camera, with one [`Renderer`], so
 //! the volume is read, its field built and classified once, and every frame after the
-//! first changes only the camera; the frames go to an [`AnimationWriter`].
+//! first changes only the camera; the frames go to an [`AnimationWriter`]. With
+//! camera keys ([`CameraPath`]) the `N` frames follow the keys instead.
 
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -12,6 +13,7 @@ use crate::animation::{
     AnimationFormat, AnimationWriter, TurntableError, DEFAULT_TURNTABLE_FPS, MAX_TURNTABLE_FPS,
     MAX_TURNTABLE_FRAMES,
 };
+use crate::camera_path::CameraPath;
 use crate::renderer::{Rendered, Renderer};
 use crate::scene::Scene;
 
@@ -33,14 +35,17 @@ use crate::scene::Scene;
 /// assert_eq!((done.frames, done.width, done.height), (4, 24, 24));
 /// assert!(std::fs::read(&gif).unwrap().starts_with(b"GIF89a"));
 /// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Turntable {
     /// Frames in one turn (2..=[`MAX_TURNTABLE_FRAMES`]).
     pub frames: u32,
     /// Frames per second (1..=[`MAX_TURNTABLE_FPS`]).
     pub fps: u32,
-    /// Bits per channel of PNG frames written to a directory (GIF and MP4 are 8-bit).
+    /// Bits per channel of PNG frames written to a directory (GIF, WebP and MP4 are
+    /// 8-bit).
     pub depth: Depth,
+    /// Camera keys the frames follow instead of turning round (`None`: a turn).
+    pub keys: Option<CameraPath>,
 }
 
 /// What a turntable wrote.
@@ -69,6 +74,15 @@ impl Turntable {
             frames,
             fps: DEFAULT_TURNTABLE_FPS,
             depth: Depth::Eight,
+            keys: None,
+        }
+    }
+
+    /// `frames` frames along camera `keys` ([`CameraPath::frame_camera`]).
+    pub fn along(keys: CameraPath, frames: u32) -> Turntable {
+        Turntable {
+            keys: Some(keys),
+            ..Turntable::new(frames)
         }
     }
 
@@ -85,10 +99,13 @@ impl Turntable {
 
     /// Frame `k`'s scene: `scene` with its camera's azimuth turned by `360 k / N`
     /// degrees (frame 0 is `scene` itself, so it renders the still of the scene bit
-    /// for bit; the others' azimuths are brought into -180..180).
+    /// for bit; the others' azimuths are brought into -180..180); with camera keys,
+    /// `scene` with the camera of [`CameraPath::frame_camera`].
     pub fn frame_scene(&self, scene: &Scene, k: u32) -> Scene {
         let mut s = scene.clone();
-        if k > 0 {
+        if let Some(keys) = &self.keys {
+            s.camera = keys.frame_camera(&scene.camera, k, self.frames);
+        } else if k > 0 {
             let turned =
                 scene.camera.azimuth + 360.0 * f64::from(k) / f64::from(self.frames.max(1));
             s.camera.azimuth = (turned + 180.0).rem_euclid(360.0) - 180.0;

@@ -5,7 +5,11 @@
 //                                       volume's middle; report the frame's pixels per
 //                                       half before and after, the overlay's box, the
 //                                       server's scene; then tick the clip plane and
-//                                       drag its handle half its length towards its tip
+//                                       drag its handle half its length towards its tip;
+//                                       before that, drag the box's x min face handle
+//                                       inwards, the frames before and after kept;
+//                                       at the end, record a 4-frame GIF (its bytes
+//                                       in the report)
 //   node clip.mjs bench URL SECONDS     tick the clip plane and sweep its offset slider
 //                                       for SECONDS (an input event every 16 ms):
 //                                       frames/s received, input-to-frame latency
@@ -102,6 +106,47 @@ try {
     }
     const xs = c ? c.map((p) => p[0]) : [];
     const boxX = [Math.min(...xs), Math.max(...xs)];
+    // A face handle: the box's x min face (face 0) dragged on the image 90% of its
+    // handle's length inwards (away from its tip); the strip of the image between
+    // the face's old and new place goes dark, the rest of the box is unchanged.
+    const faceStart = await page.evaluate(() => ({ crop: window.glint.scene.crop, handle: window.glint.cut.last.faces[0].handle }));
+    const faceDrawn = await alphaAt(...faceStart.handle[0]);
+    await page.locator("#frame").scrollIntoViewIfNeeded();
+    {
+      const fb = await page.locator("#frame").boundingBox();
+      const at = (p) => [fb.x + p[0] * fb.width, fb.y + p[1] * fb.height];
+      const [[hx, hy], [tx, ty]] = faceStart.handle.map(at);
+      await afterFrame(async () => {
+        await page.mouse.move(hx, hy);
+        await page.mouse.down();
+        await page.mouse.move(hx - 0.9 * (tx - hx), hy - 0.9 * (ty - hy), { steps: 6 });
+        await page.mouse.up();
+      });
+    }
+    await page.waitForFunction((x) => window.glint.scene.crop.min[0] !== x, faceStart.crop.min[0], { timeout: 120000 });
+    await page.waitForFunction(() => window.glint.cut.last && window.glint.cut.last.faces, null, { timeout: 120000 });
+    await keep();
+    const faceEnd = await page.evaluate(() => ({ crop: window.glint.scene.crop, handle: window.glint.cut.last.faces[0].handle,
+      camera: window.glint.scene.camera, picks: window.glint.pick.answers }));
+    // Columns (fractions of the width) of the strip cut away and of the box still
+    // kept, two pixels in from each edge; per region the mean and most grey before
+    // and after the drag, and the mean absolute change.
+    const faceRegions = await page.evaluate(([a0, a1, keptEnd]) => {
+      const [, a, b] = window.__kept;
+      const w = a.width, h = a.height;
+      const cols = (u, v) => [Math.ceil(Math.min(u, v) * w) + 2, Math.floor(Math.max(u, v) * w) - 2];
+      const stats = ([x0, x1]) => {
+        let before = 0, after = 0, most = 0, diff = 0, n = 0;
+        for (let y = 0; y < h; y++) for (let x = x0; x <= x1; x++) {
+          const i = 4 * (y * w + x);
+          const g0 = (a.data[i] + a.data[i + 1] + a.data[i + 2]) / 3, g1 = (b.data[i] + b.data[i + 1] + b.data[i + 2]) / 3;
+          before += g0; after += g1; most = Math.max(most, g0); diff += Math.abs(g1 - g0); n += 1;
+        }
+        return { columns: [x0, x1], before: before / n, after: after / n, most_before: most, diff: diff / n };
+      };
+      return { strip: stats(cols(a0, a1)), rest: stats(cols(a1, keptEnd)) };
+    }, [faceStart.handle[0][0], faceEnd.handle[0][0], faceStart.handle[0][0] < 0.5 ? boxX[1] : boxX[0]]);
+    const face = { start: faceStart, end: faceEnd, drawn: faceDrawn, regions: faceRegions };
     // The clip plane: ticked, its handle drawn; dragging the handle half its length
     // towards its tip moves the plane along its normal.
     await afterFrame(() => page.locator("#clip-on").check());
@@ -122,10 +167,25 @@ try {
     });
     await page.waitForFunction((x) => window.glint.scene.clip[0].point[0] !== x, plane.start.point[0], { timeout: 120000 });
     const dragged = await page.evaluate(() => ({ plane: window.glint.scene.clip[0], camera: window.glint.scene.camera, picks: window.glint.pick.answers }));
+    // The record button: a 4-frame GIF of the scene (the plane off again: with it,
+    // nothing is left of the ball), rendered by the server; the page shows the
+    // progress and offers the file, whose bytes come back to the test to be decoded.
+    await afterFrame(() => page.locator("#clip-on").uncheck());
+    await page.locator("#record-frames").fill("4");
+    await page.selectOption("#record-format", "gif");
+    await page.click("#record");
+    await page.waitForFunction(() => window.glint.record.bytes !== null || window.glint.errors.length > 0, null, { timeout: 120000 });
+    const record = await page.evaluate(() => {
+      const r = window.glint.record, link = document.getElementById("record-link");
+      return { recorded: r.recorded, progress: r.progress, bytes: r.bytes ? Array.from(new Uint8Array(r.bytes)) : null,
+        link: { shown: !link.hidden, download: link.download, href: link.href.slice(0, 5) },
+        formats: [...document.getElementById("record-format").options].map((o) => o.value),
+        scene: window.glint.scene.size };
+    });
     if (arg) await page.screenshot({ path: arg });
     const errors = await page.evaluate(() => window.glint.errors);
     const report = { visible, ticked, bounds, middle, halves, crop: cut.scene, box_x: boxX, edges: onEdges, drawn: cut.drawn,
-      plane: plane.start, handle: plane.handle, handle_drawn: handleDrawn, dragged, errors };
+      plane: plane.start, handle: plane.handle, handle_drawn: handleDrawn, dragged, face, record, errors };
     console.log(JSON.stringify(report));
     if (!visible || errors.length || !c || onEdges.length === 0) process.exitCode = 1;
   } else {

@@ -5,11 +5,14 @@
 //! ([`glint_render::image_point`]): interactive frames carry no scene, so the page
 //! could not project them itself. A plane's outline is where it crosses the
 //! volume's bounds; its handle is the outline's centre and a point 15% of the
-//! bounds' diagonal along the normal (towards the kept side).
+//! bounds' diagonal along the normal (towards the kept side). The crop box has a
+//! handle on each of its six faces, drawn the same way: the face's centre and a
+//! point as far along its outward normal, so that the page can turn the pointer's
+//! travel on the image into the face's travel along its axis.
 
 use glint_render::{image_point, ClipPlane, Scene};
 
-use crate::protocol::ServerMessage;
+use crate::protocol::{CutHandle, ServerMessage};
 
 /// The world (mm) box of a volume's voxel centres: `[min, max]`.
 pub(crate) type Bounds = [[f64; 3]; 2];
@@ -145,7 +148,33 @@ pub(crate) fn projected(frame: &Scene, seq: u32, bounds: Bounds) -> Option<Serve
     let crop = frame
         .crop
         .map(|c| corners([c.min, c.max]).map(onto).to_vec());
-    Some(ServerMessage::Cut { seq, crop, planes })
+    let faces = frame.crop.map(|c| {
+        face_handles([c.min, c.max], 0.15 * diagonal)
+            .into_iter()
+            .map(|[centre, tip]| CutHandle {
+                handle: [onto(centre), onto(tip)],
+            })
+            .collect()
+    });
+    Some(ServerMessage::Cut {
+        seq,
+        crop,
+        faces,
+        planes,
+    })
+}
+
+/// The handles of box `b`'s six faces (x min, x max, y min, ..., z max): each face's
+/// centre and the point `length` mm from it along the face's outward normal.
+pub(crate) fn face_handles(b: Bounds, length: f64) -> [[[f64; 3]; 2]; 6] {
+    std::array::from_fn(|f| {
+        let (axis, side) = (f / 2, f % 2);
+        let mut centre: [f64; 3] = std::array::from_fn(|a| (b[0][a] + b[1][a]) / 2.0);
+        centre[axis] = b[side][axis];
+        let mut tip = centre;
+        tip[axis] += if side == 0 { -length } else { length };
+        [centre, tip]
+    })
 }
 
 #[cfg(test)]
@@ -182,6 +211,18 @@ mod tests {
             normal: [0.0, 0.0, 1.0],
         };
         assert!(section(&outside, CUBE).is_empty());
+    }
+
+    #[test]
+    fn face_handles_sit_on_the_face_centres_and_point_outwards() {
+        let b = [[0.0, 2.0, 4.0], [10.0, 6.0, 8.0]];
+        let h = face_handles(b, 3.0);
+        assert_eq!(h[0], [[0.0, 4.0, 6.0], [-3.0, 4.0, 6.0]]);
+        assert_eq!(h[1], [[10.0, 4.0, 6.0], [13.0, 4.0, 6.0]]);
+        assert_eq!(h[2], [[5.0, 2.0, 6.0], [5.0, -1.0, 6.0]]);
+        assert_eq!(h[3], [[5.0, 6.0, 6.0], [5.0, 9.0, 6.0]]);
+        assert_eq!(h[4], [[5.0, 4.0, 4.0], [5.0, 4.0, 1.0]]);
+        assert_eq!(h[5], [[5.0, 4.0, 8.0], [5.0, 4.0, 11.0]]);
     }
 
     #[test]

@@ -22,7 +22,8 @@
 //! Protocol ([`protocol`]): on connection the server sends a `hello` (the resolved
 //! scene, presets, lobes, views, the value range) and a first frame. The page sends
 //! `update` messages (a partial scene, a sequence number, whether the user is still
-//! dragging), `split` and `save`. Only the latest state is rendered: updates that
+//! dragging), `split`, `save`, `pick`, `unmark` and `record` (a turntable of the
+//! scene rendered on the server and sent as a file, see `record.rs`). Only the latest state is rendered: updates that
 //! arrive while a frame renders are merged, never queued. While the user drags,
 //! frames are half size and JPEG at quality 70; 150 ms after the last interactive
 //! update a full-resolution frame follows. A `path` scene is progressive: its
@@ -46,6 +47,7 @@ pub mod labels;
 pub mod levels;
 mod pick;
 pub mod protocol;
+mod record;
 mod session;
 
 use std::net::SocketAddr;
@@ -288,8 +290,7 @@ pub async fn serve(
 }
 
 /// The viewer's routes: `/` (the page), `/app.js`, `/tfedit.js`, `/pick.js`, `/clip.js`,
-/// `/style.css`,
-/// `/ws`, behind the checks of `access`.
+/// `/record.js`, `/style.css`, `/ws`, behind the checks of `access`.
 pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
     Router::new()
         .route("/", get(|| async { Html(include_str!("page/index.html")) }))
@@ -326,6 +327,15 @@ pub fn router(viewer: Arc<Viewer>, access: Arc<Access>) -> Router {
                 (
                     [(header::CONTENT_TYPE, "text/javascript")],
                     include_str!("page/clip.js"),
+                )
+            }),
+        )
+        .route(
+            "/record.js",
+            get(|| async {
+                (
+                    [(header::CONTENT_TYPE, "text/javascript")],
+                    include_str!("page/record.js"),
                 )
             }),
         )
@@ -399,6 +409,7 @@ fn hello(viewer: &Viewer, stage: Option<&Stage>) -> ServerMessage {
         range: stage.map_or(viewer.range, |s| s.range),
         level: stage.map_or_else(|| viewer.level.clone(), |s| Some(s.level.clone())),
         bounds: viewer.bounds,
+        record: record::formats(),
         labels: viewer
             .labels
             .as_ref()
@@ -676,6 +687,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         shown: None,
     };
     let mut inflight: Option<FrameJob> = None;
+    let mut recording = record::Recording::idle();
     loop {
         if inflight.is_none() && pending.resting() {
             if let Some(stage) = finer.take() {
@@ -725,6 +737,13 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                         }
                     }
                     Ok(Action::Save) => pending.save = true,
+                    Ok(Action::Record(frames, format)) => {
+                        let mine = renderer.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                        let scene = viewer.labels().map_or_else(|| state.scene.clone(), |l| l.visible(&state.scene));
+                        if let Err(e) = recording.start(mine, scene, frames, &format) {
+                            if !send_json(&mut socket, &ServerMessage::Error { message: e.to_string() }).await { return }
+                        }
+                    }
                     Ok(Action::Pick(x, y)) => {
                         if !answer_pick(&mut socket, &viewer, &renderer, &mut state, &pending, (x, y)).await { return }
                     }
@@ -746,6 +765,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 pending.settle = None;
                 pending.wanted = Wanted::Frame(Purpose::Full);
             }
+            event = recording.next() => if !record::forward(&mut socket, event).await { return },
             Ok(()) = stages.changed() => finer = stages.borrow_and_update().clone(),
         }
     }
@@ -771,6 +791,8 @@ enum Action {
     Pick(f64, f64),
     /// Tell the page the marks are gone.
     Unmarked,
+    /// Record a turntable: frames, format.
+    Record(u32, String),
 }
 
 impl ClientState {
@@ -817,6 +839,7 @@ impl ClientState {
                 "picking needs the single view: set split to off".into(),
             )),
             ClientMessage::Pick { x, y } => Ok(Action::Pick(x, y)),
+            ClientMessage::Record { frames, format } => Ok(Action::Record(frames, format)),
             ClientMessage::Unmark {} => {
                 self.marks.clear();
                 Ok(Action::Unmarked)

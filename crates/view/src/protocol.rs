@@ -41,6 +41,16 @@ pub enum ClientMessage {
     },
     /// Remove the marks.
     Unmark {},
+    /// Record a turntable of the current scene (as `glint render --turntable`
+    /// renders it, at the scene's size) as a file sent to the page: answered by
+    /// [`ServerMessage::Recording`] messages, then [`ServerMessage::Recorded`] and
+    /// the file as a binary message.
+    Record {
+        /// Views round the scene (2..=360).
+        frames: u32,
+        /// `gif`, `webp` or (with ffmpeg) `mp4`.
+        format: String,
+    },
 }
 
 /// What a frame shows.
@@ -80,6 +90,23 @@ pub enum ServerMessage {
         /// The world (mm) box of the volume's voxel centres, `[min, max]` (null: a
         /// scene of meshes only): where the page's crop box and clip plane start.
         bounds: Option<[[f64; 3]; 2]>,
+        /// The formats [`ClientMessage::Record`] may ask for: `gif`, `webp`, and
+        /// `mp4` when `ffmpeg` is on the server's `PATH`.
+        record: Vec<&'static str>,
+    },
+    /// How far the recording asked for by [`ClientMessage::Record`] is.
+    Recording {
+        /// Percent of its pixels rendered.
+        percent: u32,
+    },
+    /// The recording is done: the next binary message is the file (not a frame).
+    Recorded {
+        /// The file's format (`gif`, `webp` or `mp4`: its extension).
+        format: String,
+        /// Frames in it.
+        frames: u32,
+        /// The file's size in bytes.
+        bytes: usize,
     },
     /// The frames now come from another pyramid level (the finer one, read in the
     /// background, swapped in when the camera rests).
@@ -138,6 +165,9 @@ pub enum ServerMessage {
         /// The crop box's 8 corners, corner `c` at the box's max along axis `a`
         /// where bit `a` of `c` is set (null: no crop box).
         crop: Option<Vec<Option<[f64; 2]>>>,
+        /// The crop box's 6 face handles, in the order x min, x max, y min, y max,
+        /// z min, z max (null: no crop box).
+        faces: Option<Vec<CutHandle>>,
         /// Per clip plane, in the scene's order.
         planes: Vec<CutPlane>,
     },
@@ -155,6 +185,17 @@ pub struct CutPlane {
     pub outline: Vec<Option<[f64; 2]>>,
     /// The handle: the outline's centre and a point along the normal (towards the
     /// side kept).
+    pub handle: [Option<[f64; 2]>; 2],
+}
+
+/// A crop box face's handle as [`ServerMessage::Cut`] draws it: dragging it moves
+/// the face along its axis.
+#[derive(Clone, Debug, Serialize)]
+pub struct CutHandle {
+    /// The face's centre and a point outside the box along the face's outward
+    /// normal, 15% of the volume bounds' diagonal away (the handle's world length):
+    /// the pointer's travel along the line between them on the image gives the
+    /// face's travel in mm.
     pub handle: [Option<[f64; 2]>; 2],
 }
 

@@ -4,7 +4,9 @@
 //! the camera; on the frames, the cut half of the image goes dark and the other half
 //! is unchanged, the overlay draws the box's edges over the half kept, and the
 //! server's scene holds the crop; the clip plane's handle, dragged on the image,
-//! moves the plane along its normal without turning the camera. Needs `node`, `chromium` and `npm ci` in
+//! moves the plane along its normal without turning the camera, and so does a crop box
+//! face's handle (the strip it cuts away goes dark on the frames); the "record"
+//! button brings a turntable GIF of the scene, decoded here. Needs `node`, `chromium` and `npm ci` in
 //! crates/view/browser; in strict mode a missing piece fails.
 
 use std::path::{Path, PathBuf};
@@ -14,7 +16,7 @@ use std::sync::Arc;
 use glint_io::{nifti, Endian, Samples, Volume};
 use glint_render::{Input, Projection, RenderMode, Scene};
 use glint_view::{Access, Viewer, ViewerConfig};
-use serde_json::Value;
+use serde_json::{json, Value};
 
 /// Grid edge and ball radius, voxels (1 mm each); the value is the depth below the
 /// ball's surface, mm.
@@ -81,7 +83,7 @@ fn a_crop_slider_darkens_the_half_it_cuts_and_the_box_is_drawn() {
         "clip.mjs failed: {stdout}\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let report: Value = serde_json::from_str(stdout.trim()).unwrap();
+    let mut report: Value = serde_json::from_str(stdout.trim()).unwrap();
     // The panel starts from the volume's bounds: its voxel centres, 0 to N-1 mm.
     let top = (N - 1) as f64;
     let bounds = &report["bounds"];
@@ -125,6 +127,39 @@ fn a_crop_slider_darkens_the_half_it_cuts_and_the_box_is_drawn() {
         !edges.is_empty() && edges.iter().all(|a| a.as_u64().unwrap() > 0),
         "box edges not drawn: {report}"
     );
+    // The box's x min face handle (drawn), dragged 90% of its length inwards on the
+    // image: the box's x min moves 90% of the handle's world length (15% of the
+    // bounds' diagonal), nothing else of the box moves; the strip between the face's
+    // old and new place showed the ball and is dark now, the rest of the box is
+    // unchanged; the camera did not turn and nothing was picked.
+    let face = &report["face"];
+    assert!(f(&face["drawn"]) > 0.0, "face handle not drawn: {report}");
+    let (start, end) = (&face["start"]["crop"], &face["end"]["crop"]);
+    let moved = f(&end["min"][0]) - f(&start["min"][0]);
+    let expected = 0.9 * 0.15 * (3.0f64).sqrt() * top;
+    assert!(
+        (moved - expected).abs() < 1.5,
+        "the x min face moved {moved} mm, not {expected}: {report}"
+    );
+    assert_eq!(start["max"], end["max"], "{report}");
+    for a in [1, 2] {
+        assert_eq!(start["min"][a], end["min"][a], "{report}");
+    }
+    let strip = &face["regions"]["strip"];
+    assert!(
+        f(&strip["most_before"]) > background + 20.0,
+        "the strip showed nothing before: {report}"
+    );
+    assert!(
+        (f(&strip["after"]) - background).abs() < 1.0,
+        "the strip cut away by the face is not dark: {report}"
+    );
+    assert!(
+        f(&face["regions"]["rest"]["diff"]) < 0.5,
+        "the rest of the box changed: {report}"
+    );
+    assert_eq!(face["end"]["camera"]["azimuth"], 0.0, "{report}");
+    assert_eq!(face["end"]["picks"], 0, "{report}");
     // The clip plane across x at the middle; its handle (drawn) dragged half its
     // length towards its tip moves the plane half the handle's world length (15% of
     // the bounds' diagonal) along +x, and turns neither the camera nor picks.
@@ -142,6 +177,37 @@ fn a_crop_slider_darkens_the_half_it_cuts_and_the_box_is_drawn() {
     );
     assert_eq!(report["dragged"]["camera"]["azimuth"], 0.0, "{report}");
     assert_eq!(report["dragged"]["picks"], 0, "{report}");
+    // The record button: a valid 4-frame GIF of the scene's size arrived, its
+    // frames differ (views round a cut ball), the progress reached 100% and the
+    // page offers the file.
+    let record = &report["record"];
+    assert_eq!(record["recorded"]["format"], "gif", "{record}");
+    assert_eq!(record["recorded"]["frames"], 4, "{record}");
+    let formats = record["formats"].as_array().unwrap();
+    assert_eq!(&formats[..2], [json!("gif"), json!("webp")], "{record}");
+    let bytes: Vec<u8> = record["bytes"]
+        .as_array()
+        .expect("the file's bytes")
+        .iter()
+        .map(|b| b.as_u64().unwrap() as u8)
+        .collect();
+    assert_eq!(record["recorded"]["bytes"], bytes.len(), "{record}");
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options.read_info(bytes.as_slice()).expect("a GIF");
+    assert_eq!((decoder.width(), decoder.height()), (128, 128));
+    let mut frames = Vec::new();
+    while let Some(frame) = decoder.read_next_frame().expect("a GIF frame") {
+        frames.push(frame.buffer.to_vec());
+    }
+    assert_eq!(frames.len(), 4);
+    assert!(frames[1..].iter().all(|f| *f != frames[0]), "frames alike");
+    let progress = record["progress"].as_array().unwrap();
+    assert_eq!(progress.last(), Some(&json!(100)), "{}", record["progress"]);
+    assert_eq!(record["link"]["shown"], true);
+    assert_eq!(record["link"]["download"], "glint-turntable.gif");
+    assert_eq!(record["link"]["href"], "blob:");
+    report["record"]["bytes"] = json!(bytes.len());
     eprintln!("browser clip test: {report}; screenshot {}", shot.display());
     glint_testkit::ran("chromium + node (view clip browser test)");
 }

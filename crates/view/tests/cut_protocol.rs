@@ -104,6 +104,23 @@ async fn frames_of_a_cut_scene_come_with_the_box_and_plane_projected() {
     assert_eq!(cut["planes"], json!([]));
     // Corners 0 and 1 differ in x (the box is half the volume wide): apart.
     assert_ne!(corners[0], corners[1], "{cut}");
+    // Six face handles, each a centre and a tip; the x faces' centres lie apart,
+    // each between its face's corners (x min: corners 0, 2, 4, 6) on the image.
+    let faces = cut["faces"].as_array().unwrap();
+    assert_eq!(faces.len(), 6, "{cut}");
+    for face in faces {
+        assert!(face["handle"].as_array().unwrap().iter().all(on_image));
+    }
+    assert_ne!(faces[0]["handle"][0], faces[1]["handle"][0], "{cut}");
+    for (f, ids) in [(0, [0, 2, 4, 6]), (1, [1, 3, 5, 7])] {
+        for k in 0..2 {
+            let c = |i: usize| corners[i][k].as_f64().unwrap();
+            let lo = ids.iter().map(|&i| c(i)).fold(f64::INFINITY, f64::min);
+            let hi = ids.iter().map(|&i| c(i)).fold(f64::NEG_INFINITY, f64::max);
+            let v = faces[f]["handle"][0][k].as_f64().unwrap();
+            assert!(lo - 1e-9 <= v && v <= hi + 1e-9, "face {f}: {cut}");
+        }
+    }
     // A plane instead: its outline across the bounds (a rectangle) and its handle.
     let plane = json!([{"point": mid, "normal": [0.0, 0.0, 1.0]}]);
     update(&mut c, 2, false, json!({"crop": null, "clip": plane})).await;
@@ -111,6 +128,7 @@ async fn frames_of_a_cut_scene_come_with_the_box_and_plane_projected() {
         .await
         .expect("a cut message");
     assert_eq!(cut["crop"], Value::Null, "{cut}");
+    assert_eq!(cut["faces"], Value::Null, "{cut}");
     let planes = cut["planes"].as_array().unwrap();
     assert_eq!(planes.len(), 1, "{cut}");
     let outline = planes[0]["outline"].as_array().unwrap();

@@ -32,7 +32,10 @@ use super::spinner::Spinner;
     glint render --scene brain.json --lobe exact -o b.png        # flags override the file\n  \
     glint render --phantom shepp-logan --size 256x256 --turntable 36 -o spin.gif\n  \
     glint render head.nii.gz --preset ct-bone --turntable 120 --fps 30 -o spin.mp4   # needs ffmpeg\n  \
-    glint render head.nii.gz --turntable 8 -o frames/   # frames/frame-0000.png ...\n\n\
+    glint render head.nii.gz --turntable 8 -o frames/   # frames/frame-0000.png ...\n  \
+    glint render head.nii.gz --turntable 72 -o spin.webp   # animated WebP (lossless)\n  \
+    glint render head.nii.gz --camera-path keys.json --frames 60 -o fly.gif\n    \
+      keys.json: [{\"azimuth\": 0, \"elevation\": 0, \"zoom\": 1}, {\"azimuth\": 90, \"elevation\": 30, \"zoom\": 2}]\n\n\
 Presets (3D Slicer's volume rendering presets, MR ones scaled to the volume's maximum):\n  \
     phantom (glint's, the default for the phantom), ct-aaa, ct-aaa2, ct-bone, ct-bones,\n  \
     ct-cardiac, ct-cardiac2, ct-cardiac3, ct-chest-contrast-enhanced, ct-chest-vessels,\n  \
@@ -67,9 +70,9 @@ pub struct Args {
 struct Options {
     #[command(flatten)]
     scene: SceneFlags,
-    /// Output PNG (written atomically); with --turntable, an animated GIF (.gif), an MP4
-    /// (.mp4, through ffmpeg) or a directory of PNG frames (ending in '/', or an
-    /// existing directory).
+    /// Output PNG (written atomically); with --turntable or --camera-path, an animated
+    /// GIF (.gif), an animated WebP (.webp), an MP4 (.mp4, through ffmpeg) or a
+    /// directory of PNG frames (ending in '/', or an existing directory).
     #[arg(short, long, default_value = "render.png")]
     output: PathBuf,
     /// Render N views round the scene, the camera's azimuth stepping 360/N degrees
@@ -77,7 +80,18 @@ struct Options {
     /// (2..=3600).
     #[arg(long, value_name = "N", conflicts_with = "repeat")]
     turntable: Option<u32>,
-    /// Frames per second of a --turntable GIF or MP4 (1..=120) [default: 24].
+    /// Render --frames N views along camera keys read from a JSON file: a list of
+    /// cameras as the scene's "camera" writes them (azimuth, elevation and zoom
+    /// required; view and projection optional, alike in every key), evenly spaced in
+    /// time; azimuth and elevation interpolated linearly in degrees (the eye moves
+    /// over the sphere, keeping the keys' winding), zoom geometrically.
+    #[arg(long, value_name = "KEYS.json", conflicts_with_all = ["turntable", "repeat"])]
+    camera_path: Option<PathBuf>,
+    /// The number of frames along --camera-path (2..=3600).
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
+    /// Frames per second of a --turntable or --camera-path GIF, WebP or MP4 (1..=120)
+    /// [default: 24].
     #[arg(long)]
     fps: Option<u32>,
     /// Write the resolved scene (every default chosen, plus the camera and transfer
@@ -115,10 +129,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let args = *args.opts;
     check_output_dir(&args.output)?;
     if let Some(frames) = args.turntable {
-        return run_turntable(&args, frames);
+        return run_turntable(&args, Turntable::new(frames));
+    }
+    match (&args.camera_path, args.frames) {
+        (Some(keys), Some(frames)) => {
+            let keys = glint_render::CameraPath::load(keys)?;
+            return run_turntable(&args, Turntable::along(keys, frames));
+        }
+        (Some(_), None) => bail!("--camera-path needs --frames N, the number of frames"),
+        (None, Some(_)) => {
+            bail!(
+                "--frames is the frame count of a --camera-path; give --camera-path KEYS.json too"
+            )
+        }
+        (None, None) => {}
     }
     if args.fps.is_some() {
-        bail!("--fps is the frame rate of a --turntable; give --turntable N too");
+        bail!("--fps is the frame rate of a --turntable or --camera-path; give one of them too");
     }
     let scene = build_scene(&args)?;
     let mut renderer = open_for(&args, &scene)?;
@@ -168,15 +195,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `--turntable N`: the frames round the scene, rendered with one renderer (read and
-/// classified once), written as the output's format asks. The format, the frame count
-/// and rate and (MP4) ffmpeg are checked before the volume is read.
-fn run_turntable(args: &Options, frames: u32) -> anyhow::Result<()> {
+/// `--turntable N` or `--camera-path KEYS --frames N`: the frames round the scene or
+/// along the keys, rendered with one renderer (read and classified once), written as
+/// the output's format asks. The format, the frame count and rate and (MP4) ffmpeg are
+/// checked before the volume is read.
+fn run_turntable(args: &Options, turntable: Turntable) -> anyhow::Result<()> {
     let turntable = Turntable {
-        frames,
         fps: args.fps.unwrap_or(DEFAULT_TURNTABLE_FPS),
         depth: depth(args),
+        ..turntable
     };
+    let frames = turntable.frames;
     let writer = turntable.writer(&args.output)?;
     let scene = build_scene(args)?;
     let mut renderer = open_for(args, &scene)?;

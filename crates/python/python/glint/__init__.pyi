@@ -183,10 +183,13 @@ def turntable(
     path: _Path,
     fps: int = 24,
     volume: Union[Volume, _Path, None] = None,
+    keys: Union[Sequence[Dict[str, Any]], _Path, None] = None,
     **fields: Any,
 ) -> None:
     """Writes frames views round scene (azimuth stepping 360/frames degrees; frame 0 is
-    glint.render's image) to path: .gif, .mp4 (through ffmpeg) or a directory of PNGs."""
+    glint.render's image), or with keys along camera keys (dicts with azimuth, elevation
+    and zoom, or a JSON file of them, as ``glint render --camera-path``), to path: .gif,
+    .webp, .mp4 (through ffmpeg) or a directory of PNGs."""
 
 def compare(
     volume: Union[Volume, _Path, None] = None,

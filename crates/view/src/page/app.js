@@ -6,7 +6,7 @@ const canvas = $("frame");
 const ctx = canvas.getContext("2d");
 const glint = (window.glint = { level: null, frameLevels: [], frames: 0, full: 0, samples: 0, sampleLog: [], latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
 // Scripts beside this one (pick.js) see every text message and send their own.
-glint.hooks = { message: [] };
+glint.hooks = { message: [], binary: [] };
 let seq = 0;
 let scene = null;
 // The pyramid level of an OME-Zarr store the frames come from ("" otherwise).
@@ -75,6 +75,8 @@ async function handle(ev) {
     }
     return;
   }
+  // A binary message another script expects (record.js's file) is its own.
+  if (glint.hooks.binary.some((hook) => hook(ev.data))) return;
   const view = new DataView(ev.data);
   const magic = String.fromCharCode(...new Uint8Array(ev.data, 0, 4));
   if (magic !== "GLNT") return;

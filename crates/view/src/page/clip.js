@@ -5,7 +5,9 @@
 // a scene that cuts, where the box's corners and the plane's outline lie on that frame
 // (projected with its own camera): this script draws them over the image. The
 // plane's handle (a dot and a line towards the side kept) can be dragged along the
-// normal on the image itself.
+// normal on the image itself, and so can each face of the crop box (a square on the
+// face's centre and a line along its outward normal): a face dragged moves along its
+// axis (the box's min or max there).
 // window.glint.cut exposes what was received and drawn, for the browser test.
 "use strict";
 (() => {
@@ -127,9 +129,19 @@
     if (m.crop) {
       const c = m.crop.map(px);
       octx.strokeStyle = "#0ff";
+      octx.fillStyle = "#0ff";
       octx.beginPath();
       for (const [i, j] of EDGES) line(c[i], c[j]);
       octx.stroke();
+      // The face handles: a line along the outward normal and a square on the centre.
+      for (const face of m.faces || []) {
+        const [h, t] = face.handle.map(px);
+        if (!h || !t) continue;
+        octx.beginPath();
+        line(h, t);
+        octx.stroke();
+        octx.fillRect(h[0] - 4, h[1] - 4, 8, 8);
+      }
     }
     octx.strokeStyle = "#f0f";
     octx.fillStyle = "#f0f";
@@ -168,16 +180,30 @@
     }
   });
 
-  // Dragging the plane's handle on the image moves the plane along its normal: the
-  // pointer's travel along the handle's line on the image, over the line's length,
-  // is 15% of the bounds' diagonal (the handle's length in the world).
+  // Dragging a handle on the image (the plane's, or a crop box face's) moves it along
+  // its normal: the pointer's travel along the handle's line on the image, over the
+  // line's length, is 15% of the bounds' diagonal (the handle's length in the world).
+  // Of the handles within 10 pixels, the nearest that shows a direction (a face
+  // seen edge-on cannot be dragged along its normal) is taken.
   let grab = null;
   const near = (e) => {
-    const plane = state.last && clipOn.checked ? state.last.planes[0] : null;
-    if (!plane || !plane.handle[0] || !plane.handle[1]) return null;
+    const m = state.last;
+    if (!m) return null;
     const r = frame.getBoundingClientRect();
-    const [h, t] = plane.handle.map((p) => [r.left + p[0] * r.width, r.top + p[1] * r.height]);
-    return Math.hypot(e.clientX - h[0], e.clientY - h[1]) <= 10 ? { h, t } : null;
+    const onPage = (p) => [r.left + p[0] * r.width, r.top + p[1] * r.height];
+    const found = [];
+    const plane = clipOn.checked ? m.planes[0] : null;
+    if (plane) found.push({ handle: plane.handle, face: -1 });
+    if (cropOn.checked) (m.faces || []).forEach((f, i) => found.push({ handle: f.handle, face: i }));
+    let best = null;
+    for (const { handle, face } of found) {
+      if (!handle[0] || !handle[1]) continue;
+      const [h, t] = handle.map(onPage);
+      const d = Math.hypot(e.clientX - h[0], e.clientY - h[1]);
+      const len2 = (t[0] - h[0]) ** 2 + (t[1] - h[1]) ** 2;
+      if (d <= 10 && len2 >= 4 && (!best || d < best.d)) best = { h, t, d, face };
+    }
+    return best;
   };
   frame.addEventListener("pointerdown", (e) => {
     const hit = near(e);
@@ -188,23 +214,34 @@
     const [dx, dy] = [hit.t[0] - hit.h[0], hit.t[1] - hit.h[1]];
     const b = state.bounds;
     const diagonal = Math.hypot(...b[1].map((x, k) => x - b[0][k]));
-    grab = { x: e.clientX, y: e.clientY, dx, dy, len2: dx * dx + dy * dy, start: Number(clipOffset.value), mm: 0.15 * diagonal };
+    const slider = hit.face >= 0 ? rows[hit.face >> 1][hit.face & 1] : clipOffset;
+    grab = { x: e.clientX, y: e.clientY, dx, dy, len2: dx * dx + dy * dy, face: hit.face, slider,
+      start: Number(slider.value), mm: 0.15 * diagonal };
+    state.dragging = hit.face >= 0 ? `face ${hit.face}` : "plane";
   }, { capture: true });
   frame.addEventListener("pointermove", (e) => {
     if (!grab) return;
     e.stopImmediatePropagation();
-    if (grab.len2 < 1) return;
     const along = ((e.clientX - grab.x) * grab.dx + (e.clientY - grab.y) * grab.dy) / grab.len2;
-    const sign = state.flipped ? -1 : 1;
-    const v = grab.start + sign * along * grab.mm;
-    clipOffset.value = Math.max(Number(clipOffset.min), Math.min(Number(clipOffset.max), v));
-    send(planePatch(), true);
+    const s = grab.slider;
+    if (grab.face >= 0) {
+      // Outwards is towards the tip: a max face grows with it, a min face shrinks.
+      const sign = grab.face & 1 ? 1 : -1;
+      s.value = Math.max(Number(s.min), Math.min(Number(s.max), grab.start + sign * along * grab.mm));
+      keepOrder(grab.face >> 1, s);
+      send(cropPatch(), true);
+    } else {
+      const sign = state.flipped ? -1 : 1;
+      s.value = Math.max(Number(s.min), Math.min(Number(s.max), grab.start + sign * along * grab.mm));
+      send(planePatch(), true);
+    }
   }, { capture: true });
   frame.addEventListener("pointerup", (e) => {
     if (!grab) return;
     e.stopImmediatePropagation();
+    send(grab.face >= 0 ? cropPatch() : planePatch(), false);
     grab = null;
-    send(planePatch(), false);
+    state.dragging = null;
   }, { capture: true });
   window.addEventListener("resize", draw);
 })();
