@@ -41,7 +41,7 @@ pub(super) fn slice_of(ks: &[f64], slices: usize) -> Result<usize, OffSlice> {
     let mean = ks.iter().sum::<f64>() / ks.len() as f64;
     let nearest = mean.round();
     let distance = (hi - nearest).max(nearest - lo);
-    if !(distance <= HALF_SLICE + SLICE_EPS) {
+    if distance.is_nan() || distance > HALF_SLICE + SLICE_EPS {
         return Err(OffSlice::Spread { lo, hi });
     }
     if nearest < 0.0 || nearest >= slices as f64 {
