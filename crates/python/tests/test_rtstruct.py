@@ -420,3 +420,23 @@ def test_the_viewer_legend_lists_the_rois_and_hides_one_by_name(data, glint_bin)
     # The body outline gives up the organs' voxels; the ROIs without contours are
     # not drawn, so not listed.
     assert listed == {n: (ROIS[n][0], "#%02x%02x%02x" % ROIS[n][1]) for n in (1, 2, 3, 4)}
+
+
+def test_python_draws_the_structure_set_over_its_ct(data):
+    """From Python the structure set is a scene's labels path like any label map: a
+    label volume over the (transparent) CT, unshaded, shows the box in its
+    ROIDisplayColor and the sphere in its own."""
+    glint = require_module("glint")
+    root, _ = data
+    export = root / "export"
+    scene = glint.Scene(
+        input=str(export),
+        labels={"path": str(export / "rs.dcm"), "render_as": "volume", "hide": ["External"], "legend": False},
+        size=(64, 64),
+        camera={"view": "anterior", "projection": "orthographic"},
+        material={"ambient": 1.0, "diffuse": 0.0, "specular": 0.0, "shade": False},
+        transfer_function={"opacity": [[-1000.0, 0.0], [1000.0, 0.0]], "color": [[0.0, 1.0, 1.0, 1.0]]},
+    )
+    rgb = np.asarray(glint.render(str(export), scene), dtype=np.int32)[..., :3].reshape(-1, 3)
+    near = lambda c: np.all(np.abs(rgb - c) <= 2, axis=1)
+    assert near(ROIS[1][1]).sum() > 20 and near(ROIS[2][1]).sum() > 20
