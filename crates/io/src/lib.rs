@@ -186,6 +186,10 @@ pub struct ReadOptions {
     pub series: Option<String>,
     /// The level of an OME-Zarr pyramid to read (default: the finest).
     pub level: zarr::Level,
+    /// The image (a DICOM file or directory) an RT structure set's contours are
+    /// rasterised onto: the volume they are drawn over. `None`: the series the structure
+    /// set references, found in its own directory (see [`dicom::read_structure_set`]).
+    pub reference: Option<std::path::PathBuf>,
 }
 
 /// The grey a colour volume's [`Volume::samples`] hold ([`ReadOptions::grey`]).
@@ -248,6 +252,7 @@ impl Default for ReadOptions {
             colour: true,
             series: None,
             level: zarr::Level::Finest,
+            reference: None,
         }
     }
 }

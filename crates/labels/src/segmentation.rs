@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glint_io::dicom::{read_segments, Segment};
+use glint_io::dicom::{read_rois, read_segments, Roi, Segment};
 use glint_io::{Format, ReadOptions};
 
 use crate::table::{named_color, LabelEntry, LabelTable, OPAQUE};
@@ -81,19 +81,41 @@ impl LabelTable {
         table
     }
 
+    /// The table of an RT structure set's ROIs: ROINumber to ROIName and
+    /// ROIDisplayColor; an ROI without a colour gets [`named_color`].
+    pub fn from_rois(source: impl Into<String>, rois: &[Roi]) -> LabelTable {
+        let mut table = LabelTable::new(source);
+        for r in rois {
+            let color = r.color.unwrap_or_else(|| named_color(&r.name, r.number));
+            table.insert(
+                r.number,
+                LabelEntry {
+                    name: r.name.clone(),
+                    color,
+                    alpha: OPAQUE,
+                },
+            );
+        }
+        table
+    }
+
     /// The table a label map file carries itself: a DICOM Segmentation's segments
-    /// ([`LabelTable::from_segments`]); `None` for any other file.
+    /// ([`LabelTable::from_segments`]) or an RT structure set's ROIs
+    /// ([`LabelTable::from_rois`]); `None` for any other file.
     pub fn embedded(path: &Path) -> Result<Option<LabelTable>, LabelError> {
         let guess = Format::guess(path);
         if !path.is_file() || guess.is_some_and(|f| f != Format::Dicom) {
             return Ok(None);
         }
-        match read_segments(path, &ReadOptions::default()) {
-            Ok(s) => {
-                Ok(s.map(|s| {
-                    LabelTable::from_segments(format!("{} (DICOM SEG)", path.display()), &s)
-                }))
-            }
+        let options = ReadOptions::default();
+        match read_segments(path, &options) {
+            Ok(Some(s)) => Ok(Some(LabelTable::from_segments(
+                format!("{} (DICOM SEG)", path.display()),
+                &s,
+            ))),
+            Ok(None) => Ok(read_rois(path, &options)?.map(|r| {
+                LabelTable::from_rois(format!("{} (RT structure set)", path.display()), &r)
+            })),
             // A file without a DICOM extension that is not DICOM.
             Err(_) if guess.is_none() => Ok(None),
             Err(e) => Err(e.into()),

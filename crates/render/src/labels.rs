@@ -159,6 +159,15 @@ impl LabelSpec {
     }
 }
 
+/// How a scene's label map is read: an RT structure set onto the grid of `image`, the
+/// scene's volume file (see [`glint_io::dicom::read_structure_set`]).
+pub fn label_read_options(image: Option<&Path>) -> ReadOptions {
+    ReadOptions {
+        reference: image.map(Path::to_path_buf),
+        ..ReadOptions::default()
+    }
+}
+
 /// A label map's surfaces, read and extracted for a scene.
 #[derive(Clone, Debug)]
 pub(crate) struct LabelMeshes {
@@ -180,9 +189,13 @@ pub(crate) struct LabelMeshes {
 
 impl LabelMeshes {
     /// Reads `spec`'s label volume and table (`spec` resolved: [`LabelSpec::resolve`])
-    /// and extracts the surfaces of the labels it shows.
-    pub(crate) fn build(spec: &LabelSpec) -> Result<LabelMeshes, RenderError> {
-        let volume = read_volume(&spec.path, &ReadOptions::default())?;
+    /// and extracts the surfaces of the labels it shows. `image` is the scene's volume
+    /// file, the grid an RT structure set's contours are rasterised onto.
+    pub(crate) fn build(
+        spec: &LabelSpec,
+        image: Option<&Path>,
+    ) -> Result<LabelMeshes, RenderError> {
+        let volume = read_volume(&spec.path, &label_read_options(image))?;
         let grid = LabelGrid::from_volume(&volume).map_err(|e| spec.error(e))?;
         drop(volume);
         let table =

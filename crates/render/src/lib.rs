@@ -95,7 +95,7 @@ pub use glint_volume::{
 pub use glint_volume::{
     LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
 };
-pub use labels::{LabelSpec, LabelsAs, PickLabel, DEFAULT_LABEL_SMOOTHING};
+pub use labels::{label_read_options, LabelSpec, LabelsAs, PickLabel, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use pick::{image_point, Pick, PickedObject};
 pub use renderer::{InMemory, Rendered, Renderer};

@@ -377,7 +377,13 @@ impl Renderer {
         };
         let label_meshes = match &labels {
             Some(spec) => {
-                let built = self.opened.time("labels", || LabelMeshes::build(spec))?;
+                let image = match &scene.input {
+                    Input::Path(p) => Some(p.as_path()),
+                    _ => None,
+                };
+                let built = self
+                    .opened
+                    .time("labels", || LabelMeshes::build(spec, image))?;
                 if let Some(f) = field {
                     built.check_overlap(spec, glint_labels::world_box(f.dims(), &f.affine()))?;
                 }

@@ -6,10 +6,11 @@
 //! `labels` update, [`LABEL_FIELDS`]); the label file and its table stay the server's.
 
 use std::collections::BTreeSet;
+use std::path::Path;
 
-use glint_io::{read_volume, ReadOptions};
+use glint_io::read_volume;
 use glint_render::label_maps::{LabelError, LabelGrid, LabelTable};
-use glint_render::{LabelSpec, LabelsAs, RenderError, Scene};
+use glint_render::{label_read_options, LabelSpec, LabelsAs, RenderError, Scene};
 use serde::Serialize;
 use serde_json::{Map, Value};
 
@@ -44,13 +45,14 @@ pub struct LabelList {
 
 impl LabelList {
     /// Reads the label map of `spec` (resolved: its table named) and lists the labels
-    /// present (0, background, left out), in value order.
-    pub fn read(spec: &LabelSpec) -> Result<LabelList, RenderError> {
+    /// present (0, background, left out), in value order. `image` is the scene's volume
+    /// file (an RT structure set is rasterised onto its grid, as the renderer does).
+    pub fn read(spec: &LabelSpec, image: Option<&Path>) -> Result<LabelList, RenderError> {
         let error = |e: Box<dyn std::error::Error + Send + Sync>| RenderError::Labels {
             path: spec.path.clone(),
             source: e,
         };
-        let volume = read_volume(&spec.path, &ReadOptions::default())?;
+        let volume = read_volume(&spec.path, &label_read_options(image))?;
         let grid = LabelGrid::from_volume(&volume).map_err(|e| error(Box::new(e)))?;
         drop(volume);
         // The renderer's rule, so the legend names and colours what the image shows

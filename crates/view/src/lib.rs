@@ -194,7 +194,15 @@ impl Viewer {
         let scene = renderer.resolve(&scene)?.scene;
         // A scene of meshes only has no value range (the page's iso slider).
         let (lo, hi) = renderer.field().map_or((0.0, 1.0), |f| f.range());
-        let labels = scene.labels.as_ref().map(LabelList::read).transpose()?;
+        let image = match &scene.input {
+            glint_render::Input::Path(p) => Some(p.as_path()),
+            _ => None,
+        };
+        let labels = scene
+            .labels
+            .as_ref()
+            .map(|l| LabelList::read(l, image))
+            .transpose()?;
         let histogram = renderer.field().map(|f| Histogram::of(f, HISTOGRAM_BINS));
         let bounds = renderer
             .field()

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Context;
-use glint_io::Volume;
+use glint_io::{Format, ReadOptions, Volume};
 use glint_render::label_maps::{LabelGrid, LabelTable};
 use serde_json::{json, Value};
 
@@ -20,6 +20,8 @@ struct Row {
     voxels: u64,
     ml: f64,
     color: [u8; 3],
+    /// Why an RT structure set's ROI has no voxel.
+    note: Option<&'static str>,
 }
 
 /// Which labels `glint info --labels` lists.
@@ -35,6 +37,9 @@ pub struct Listing<'a> {
 /// The labels of `volume` (read from `path`) named by the listing's table, in value
 /// order.
 fn rows(path: &Path, volume: &Volume, listing: &Listing) -> anyhow::Result<(LabelTable, Vec<Row>)> {
+    if let Some(rows) = structure_set_rows(path, listing)? {
+        return Ok(rows);
+    }
     let grid = LabelGrid::from_volume(volume)
         .with_context(|| format!("{}: cannot list labels", path.display()))?;
     let table = LabelTable::for_map(path, listing.table)?;
@@ -48,6 +53,7 @@ fn rows(path: &Path, volume: &Volume, listing: &Listing) -> anyhow::Result<(Labe
         voxels,
         ml: voxels as f64 * ml,
         color: table.color_of(value),
+        note: None,
     };
     let mut rows: Vec<Row> = summary
         .iter()
@@ -65,6 +71,43 @@ fn rows(path: &Path, volume: &Volume, listing: &Listing) -> anyhow::Result<(Labe
         rows.sort_by_key(|r| r.value);
     }
     Ok((table, rows))
+}
+
+/// The ROIs of an RT structure set, every one listed (an ROI without contours with 0
+/// voxels and a note), each with all the voxels inside its contours (where ROIs
+/// overlap, the label map gives the voxel to one of them); `None` for any other file.
+fn structure_set_rows(
+    path: &Path,
+    listing: &Listing,
+) -> anyhow::Result<Option<(LabelTable, Vec<Row>)>> {
+    if !path.is_file() || Format::guess(path).is_some_and(|f| f != Format::Dicom) {
+        return Ok(None);
+    }
+    let Ok(Some(set)) = glint_io::dicom::read_structure_set(path, &ReadOptions::default()) else {
+        return Ok(None);
+    };
+    let table = LabelTable::for_map(path, listing.table)?;
+    let ml = set.voxel_ml();
+    let rows = set
+        .rois
+        .iter()
+        .zip(&set.voxels)
+        .map(|(r, &voxels)| Row {
+            value: r.number,
+            name: table.name_of(r.number),
+            in_table: table.get(r.number).is_some(),
+            present: voxels > 0,
+            voxels,
+            ml: voxels as f64 * ml,
+            color: table.color_of(r.number),
+            note: match (r.contours, voxels) {
+                (0, _) => Some("no closed contour"),
+                (_, 0) => Some("encloses no voxel centre"),
+                _ => None,
+            },
+        })
+        .collect();
+    Ok(Some((table, rows)))
 }
 
 /// Appends the label listing to `glint info`'s text.
@@ -97,7 +140,9 @@ pub fn print(
         "value", "name", "voxels", "ml"
     )?;
     for r in &rows {
+        let note = r.note.map(|n| format!(" ({n})"));
         let mark = match (r.present, r.in_table) {
+            _ if note.is_some() => note.as_deref().unwrap_or_default(),
             (false, _) => " (absent)",
             (true, false) => " (not in table)",
             (true, true) => "",
@@ -124,7 +169,7 @@ pub fn add_json(
     v["labels"] = rows
         .iter()
         .map(|r| {
-            json!({
+            let mut row = json!({
                 "value": r.value,
                 "name": r.name,
                 "in_table": r.in_table,
@@ -132,7 +177,11 @@ pub fn add_json(
                 "voxels": r.voxels,
                 "ml": r.ml,
                 "color": r.color,
-            })
+            });
+            if let Some(n) = r.note {
+                row["note"] = json!(n);
+            }
+            row
         })
         .collect();
     Ok(())

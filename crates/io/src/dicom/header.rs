@@ -39,6 +39,8 @@ pub(super) struct Header {
     pub ts: String,
     pub encapsulated: bool,
     pub series: Option<String>,
+    /// FrameOfReferenceUID (what an RT structure set's contours refer to).
+    pub frame_of_reference: Option<String>,
     pub orientation: Option<[f64; 6]>,
     pub pixel_spacing: Option<[f64; 2]>,
     /// One position per frame, when known.
@@ -475,6 +477,7 @@ fn header_of(
         ts: ts.to_string(),
         encapsulated,
         series: string(obj, tags::SERIES_INSTANCE_UID),
+        frame_of_reference: string(obj, tags::FRAME_OF_REFERENCE_UID),
         orientation,
         pixel_spacing,
         positions,
@@ -499,6 +502,9 @@ pub(super) struct Refused {
     pub series: Option<String>,
     pub modality: Option<String>,
     pub class: Option<String>,
+    /// Its SOPClassUID, when the data set parsed (an RT structure set is read by
+    /// `rtstruct`).
+    pub class_uid: Option<String>,
     /// Whether it parsed and has no PixelData (an RT structure set, a report, ...).
     pub not_image: bool,
 }
@@ -510,6 +516,7 @@ impl From<IoError> for Box<Refused> {
             series: None,
             modality: None,
             class: None,
+            class_uid: None,
             not_image: false,
         })
     }
@@ -549,6 +556,7 @@ pub(super) fn open_header(
         series: string(obj, tags::SERIES_INSTANCE_UID),
         modality: string(obj, tags::MODALITY),
         class: class_name(obj),
+        class_uid: string(obj, tags::SOP_CLASS_UID),
         not_image: false,
     };
     if !loaded.has_pixels {

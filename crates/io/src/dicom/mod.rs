@@ -32,6 +32,8 @@ mod header;
 mod jpeg;
 mod jpegls;
 mod pixels;
+mod raster;
+mod rtstruct;
 mod scan;
 mod seg;
 mod series;
@@ -45,6 +47,7 @@ use pixels::Frame;
 use crate::common::checked_voxels;
 use crate::{Format, IoError, ReadOptions, Rgb, Samples, Volume, VolumeFile};
 
+pub use rtstruct::{read_rois, read_structure_set, Roi, StructureSet};
 pub use scan::MAX_NESTING;
 pub use seg::{read_segments, Segment};
 pub use series::{list, Listing, Series, Skipped};
@@ -131,7 +134,13 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
     let headers = if path.is_dir() {
         series::select(path, options, &mut notes)?
     } else {
-        let h = open_header(path, options.max_voxels, options.strict).map_err(|r| r.error)?;
+        let h = match open_header(path, options.max_voxels, options.strict) {
+            Ok(h) => h,
+            Err(r) if rtstruct::is_structure_set(r.class_uid.as_deref()) => {
+                return rtstruct::read(path, options);
+            }
+            Err(r) => return Err(r.error),
+        };
         if let Some(uid) = options
             .series
             .as_ref()
@@ -152,19 +161,15 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         }
         vec![h]
     };
-    check_series(path, &headers)?;
     let first = &headers[0];
-    let plane = geometry::plane(path, first, options.strict, &mut notes)?;
-    let mut frames = geometry::frames(&headers, plane.normal, options.strict, &mut notes)?;
-    let dims = [first.cols, first.rows, frames.len()];
-    checked_voxels(
-        path,
+    let bytes =
+        usize::from(first.bits_allocated.div_ceil(8)) * usize::from(first.samples_per_pixel);
+    let Grid {
+        frames,
         dims,
-        usize::from(first.bits_allocated.div_ceil(8)) * usize::from(first.samples_per_pixel),
-        options.max_voxels,
-    )?;
-    let slice_vec = geometry::sort_and_step(path, &mut frames, first, plane.normal, &mut notes)?;
-    let (affine, spacing) = geometry::affine(path, &plane, slice_vec, frames[0].position)?;
+        affine,
+        spacing,
+    } = grid(path, &headers, bytes, options, &mut notes)?;
     let (samples, colour, mut slope, intercept) = assemble(&headers, &frames, options, &mut notes)?;
     let mut units = first
         .rescale_type
@@ -205,6 +210,40 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<VolumeFile, IoError> {
         format: Format::Dicom,
         notes,
         inflate: None,
+    })
+}
+
+/// Where a series' voxels are: its frames in slice order, the grid's size and its
+/// voxel-to-RAS affine and spacing.
+struct Grid {
+    frames: Vec<geometry::Frame>,
+    dims: [usize; 3],
+    affine: [[f64; 4]; 4],
+    spacing: [f64; 3],
+}
+
+/// The grid of a series (its headers, read without pixels), checked as one series and
+/// against the voxel limit at `bytes` a voxel.
+fn grid(
+    path: &Path,
+    headers: &[Header],
+    bytes: usize,
+    options: &ReadOptions,
+    notes: &mut Vec<String>,
+) -> Result<Grid, IoError> {
+    check_series(path, headers)?;
+    let first = &headers[0];
+    let plane = geometry::plane(path, first, options.strict, notes)?;
+    let mut frames = geometry::frames(headers, plane.normal, options.strict, notes)?;
+    let dims = [first.cols, first.rows, frames.len()];
+    checked_voxels(path, dims, bytes, options.max_voxels)?;
+    let slice_vec = geometry::sort_and_step(path, &mut frames, first, plane.normal, notes)?;
+    let (affine, spacing) = geometry::affine(path, &plane, slice_vec, frames[0].position)?;
+    Ok(Grid {
+        frames,
+        dims,
+        affine,
+        spacing,
     })
 }
 

@@ -308,3 +308,15 @@ pub(super) fn select(
     }
     Ok(chosen)
 }
+
+/// The headers of the files of a directory that open as images (the others are left
+/// out), or of the one file: where an RT structure set looks for the series it was
+/// drawn on.
+pub(super) fn images(path: &Path, options: &ReadOptions) -> Result<Vec<Header>, IoError> {
+    if !path.is_dir() {
+        return open_header(path, options.max_voxels, options.strict)
+            .map(|h| vec![h])
+            .map_err(|r| r.error);
+    }
+    Ok(scan(path, options)?.headers)
+}
