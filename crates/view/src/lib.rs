@@ -69,10 +69,9 @@ pub use histogram::{Histogram, HISTOGRAM_BINS};
 pub use labels::{LabelInfo, LabelList};
 pub use levels::PyramidLevel;
 pub use pick::MAX_MARKS;
-pub use schedule::Schedule;
+pub use schedule::{next_samples, Schedule};
 pub use session::{
-    apply_patch, next_samples, render_frame, render_image, Frame, FrameImage, Session,
-    MAX_VIEW_SIDE,
+    apply_patch, render_frame, render_image, Frame, FrameImage, Session, MAX_VIEW_SIDE,
 };
 
 use levels::Stage;

@@ -11,7 +11,13 @@
 use std::time::{Duration, Instant};
 
 use crate::protocol::Purpose;
-use crate::session::next_samples;
+
+/// The sample count a progressive `path` frame renders to, having `done` of `goal`:
+/// 1, 2, 4, 8, then 8 more at a time, so each refinement of a 512x512 frame takes a
+/// bounded time and input is answered between two of them.
+pub fn next_samples(done: u32, goal: u32) -> u32 {
+    done.saturating_add(done.clamp(1, 8)).min(goal).max(1)
+}
 
 /// What a client is owed: the next frame, a save, the full frame due when the input
 /// settles, and how far the current progressive state has refined.

@@ -90,13 +90,6 @@ pub struct Frame {
     pub samples: u32,
 }
 
-/// The sample count a progressive `path` frame renders to, having `done` of `goal`:
-/// 1, 2, 4, 8, then 8 more at a time, so each refinement of a 512x512 frame takes a
-/// bounded time and input is answered between two of them.
-pub fn next_samples(done: u32, goal: u32) -> u32 {
-    done.saturating_add(done.clamp(1, 8)).min(goal).max(1)
-}
-
 /// A rendered frame before encoding ([`render_image`]).
 pub struct FrameImage {
     /// The image (with `split`, both halves or the difference).
@@ -381,6 +374,7 @@ fn difference(a: &Image, b: &Image) -> Image {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::schedule::next_samples;
     use glint_lobe::LobeKind;
     use glint_render::{Phantom, ReadOptions};
 
