@@ -1,7 +1,12 @@
 """The napari plugin (crates/python/napari-glint, issue 45): its readers' layer data
 and metadata, and the dock widget "Render with glint" adding a rendered layer, with
-napari's own test fixture (make_napari_viewer) on headless Qt (pytest-qt,
-QT_QPA_PLATFORM=offscreen).
+napari's own test fixture (make_napari_viewer) on headless Qt (pytest-qt).
+
+Qt's offscreen platform (QT_QPA_PLATFORM=offscreen) has no OpenGL, and napari's canvas
+(vispy) needs it: adding a layer to a viewer fails there. So without a display these
+tests start Xvfb (mesa's software GL; scripts/install-deps installs it) and use Qt's
+xcb platform on it; without Xvfb they fall back to offscreen, where only the readers
+work (strict mode fails instead).
 
 The plugin is not pip-installed into the test venv (that would need a build backend):
 its source is put on sys.path and its npe2 manifest registered with napari's plugin
@@ -17,7 +22,30 @@ import pytest
 
 from conftest import ran, record, require_module, strict
 
-os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+def _display():
+    """A display for Qt: the one set, else an Xvfb of our own (stopped at exit)."""
+    import atexit
+    import shutil
+    import subprocess
+
+    if os.environ.get("DISPLAY") or os.environ.get("QT_QPA_PLATFORM"):
+        return
+    if shutil.which("Xvfb") is None:
+        if strict():
+            raise RuntimeError("missing: Xvfb (scripts/install-deps; strict mode)")
+        os.environ["QT_QPA_PLATFORM"] = "offscreen"
+        return
+    read, write = os.pipe()
+    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0", "1280x1024x24",
+                             "-nolisten", "tcp"], pass_fds=(write,), stderr=subprocess.DEVNULL)
+    os.close(write)
+    with os.fdopen(read) as f:
+        number = f.readline().strip()
+    atexit.register(proc.terminate)
+    os.environ["DISPLAY"] = f":{number}"
+    os.environ["QT_QPA_PLATFORM"] = "xcb"
+
+
 PLUGIN = pathlib.Path(__file__).resolve().parents[1] / "napari-glint" / "src"
 
 _needed = [m for m in ("napari", "npe2", "pytestqt", "magicgui") if importlib.util.find_spec(m) is None]
@@ -27,6 +55,7 @@ if _needed:
         raise ImportError(f"missing: {what} (strict mode: GLINT_STRICT or CI is set)")
     record(f"SKIPPED {what}")
     pytest.skip(what, allow_module_level=True)
+_display()
 sys.path.insert(0, str(PLUGIN))
 import napari_glint  # noqa: E402
 from napari_glint import _reader  # noqa: E402
@@ -69,8 +98,10 @@ def test_dicom_seg_reads_as_labels_with_names_colours_and_affine(tmp_path, regis
         assert np.abs(got - rgb).max() <= 2, (value, got, rgb)
     # The CT series directory: an image with its affine.
     [(ct_data, ct_meta, ct_kind)] = _reader.get_reader(str(tmp_path / "ct"))(str(tmp_path / "ct"))
-    assert ct_kind == "image" and ct_data.shape == want.shape
-    assert np.allclose(ct_meta["affine"], glint.read(str(tmp_path / "ct")).affine)
+    ct_vol = glint.read(str(tmp_path / "ct"))
+    assert ct_kind == "image" and ct_data.shape == ct_vol.shape == (test_seg.COLS, test_seg.ROWS, test_seg.SLICES)
+    assert np.array_equal(ct_data, ct_vol.samples)
+    assert np.allclose(ct_meta["affine"], ct_vol.affine)
     ran("napari reader: DICOM series and SEG")
 
 
@@ -125,12 +156,12 @@ def test_render_widget_adds_a_rendered_layer(make_napari_viewer, registered):
     vol = np.zeros((24, 24, 24), np.float32)
     vol[6:18, 6:18, 6:18] = 100.0
     viewer.add_image(vol, name="cube", scale=(1.0, 1.0, 1.0))
-    widget, _ = viewer.window.add_plugin_dock_widget("napari-glint", "Render with glint")
-    widget.size.value = 48
+    _, widget = viewer.window.add_plugin_dock_widget("napari-glint", "Render with glint")
+    widget.size_box.value = 48
     for model in ("local", "shadows"):
-        widget.lighting.value = model
+        widget.lighting_box.value = model
         layer = widget.render()
-        assert layer is not None, widget.status.value
+        assert layer is not None, widget.status_box.value
         assert layer.rgb and layer.data.shape == (48, 48, 3) and layer.data.dtype == np.uint8
         assert layer.data.max() > 0  # the cube is lit
     assert [l.name for l in viewer.layers] == ["cube", "cube (glint local)", "cube (glint shadows)"]

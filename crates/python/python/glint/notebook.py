@@ -129,21 +129,31 @@ class Viewer(_w.HBox):
         return self._frames
 
     def snapshot(self) -> np.ndarray:
-        """The frame shown now, an sRGB uint8 array (height, width, 3); rendered at
-        full size first when none has been yet."""
+        """The frame shown now, an sRGB uint8 array (height, width, 3): a frame still
+        owed (a change not yet drawn, a drag's full frame) is rendered first, at full
+        size, and shown in the widget too."""
+        drawn = False
+        while True:
+            frame = self._session.next_frame()
+            if frame is None:
+                break
+            self._shown(frame)
+            drawn = True
+            if frame[1] != "interactive":
+                break
         if self._last is None or self._last[1] == "interactive":
-            while True:
-                frame = self._session.next_frame()
-                if frame is None:
-                    break
-                self._shown(frame)
-                if frame[1] != "interactive":
-                    break
-        if self._last is None:
-            # Nothing was owed (a drag not yet settled): a full frame now.
+            # A drag not yet settled: its full frame now.
             self._session.update({}, False)
             self._shown(self._session.next_frame())
+            drawn = True
+        if drawn:
+            self._send(self._last[0])
         return np.array(self._last[0])
+
+    def _send(self, array):
+        """Shows a frame rendered outside the widget's draw (a snapshot)."""
+        if self.canvas.comm is not None:
+            self.canvas.send_frame(array)
 
     # -- events and frames ---------------------------------------------------------
 

@@ -52,18 +52,18 @@ class RenderWidget(Container):
 
         self._viewer = napari_viewer
         choices = _glint.view_choices()
-        self.image = ComboBox(label="image", choices=self._layers(napari.layers.Image))
-        self.labels = ComboBox(label="labels", choices=self._layers(napari.layers.Labels, True))
-        self.lighting = ComboBox(label="lighting", choices=list(choices["lighting"]))
-        self.preset = ComboBox(label="preset", choices=[""] + list(choices["presets"]))
-        self.size = SpinBox(label="size", value=256, min=16, max=2048)
+        self.image_box = ComboBox(label="image", choices=self._layers(napari.layers.Image))
+        self.labels_box = ComboBox(label="labels", choices=self._layers(napari.layers.Labels, True))
+        self.lighting_box = ComboBox(label="lighting", choices=list(choices["lighting"]))
+        self.preset_box = ComboBox(label="preset", choices=[""] + list(choices["presets"]))
+        self.size_box = SpinBox(label="size", value=256, min=16, max=2048)
         self.turntable_path = FileEdit(label="turntable", mode="w", filter="*.gif *.mp4")
         self.render_button = PushButton(text="Render")
         self.turntable_button = PushButton(text="Save turntable")
-        self.status = Label(value="")
-        super().__init__(widgets=[self.image, self.labels, self.lighting, self.preset, self.size,
+        self.status_box = Label(value="")
+        super().__init__(widgets=[self.image_box, self.labels_box, self.lighting_box, self.preset_box, self.size_box,
                                   self.render_button, self.turntable_path,
-                                  self.turntable_button, self.status])
+                                  self.turntable_button, self.status_box])
         self.render_button.changed.connect(self.render)
         self.turntable_button.changed.connect(self.turntable)
         napari_viewer.layers.events.inserted.connect(self._refresh)
@@ -76,38 +76,38 @@ class RenderWidget(Container):
         return choices
 
     def _refresh(self, _event=None):
-        self.image.reset_choices()
-        self.labels.reset_choices()
+        self.image_box.reset_choices()
+        self.labels_box.reset_choices()
 
     def _chosen(self):
-        if not self.image.value:
+        if not self.image_box.value:
             raise ValueError("no image layer: open a volume first")
-        image = self._viewer.layers[self.image.value]
-        labels = self._viewer.layers[self.labels.value] if self.labels.value else None
+        image = self._viewer.layers[self.image_box.value]
+        labels = self._viewer.layers[self.labels_box.value] if self.labels_box.value else None
         return image, labels
 
     def render(self, _=None):
         """Renders the chosen layers; adds the image as a new RGB layer (returned)."""
         try:
             image, labels = self._chosen()
-            rgb = render_layer(image, labels, self.lighting.value, self.preset.value or None,
-                               int(self.size.value))
+            rgb = render_layer(image, labels, self.lighting_box.value, self.preset_box.value or None,
+                               int(self.size_box.value))
         except (ValueError, OSError) as e:
-            self.status.value = str(e)
+            self.status_box.value = str(e)
             return None
-        self.status.value = f"rendered {image.name} ({self.lighting.value})"
-        return self._viewer.add_image(rgb, rgb=True, name=f"{image.name} (glint {self.lighting.value})")
+        self.status_box.value = f"rendered {image.name} ({self.lighting_box.value})"
+        return self._viewer.add_image(rgb, rgb=True, name=f"{image.name} (glint {self.lighting_box.value})")
 
     def turntable(self, _=None):
         """Writes a 36-frame turntable of the chosen layers to the chosen path."""
         try:
             image, _labels = self._chosen()
-            scene = glint.Scene(size=(int(self.size.value),) * 2,
-                                lighting={"model": self.lighting.value})
-            if self.preset.value:
-                scene = scene.replace(preset=self.preset.value)
+            scene = glint.Scene(size=(int(self.size_box.value),) * 2,
+                                lighting={"model": self.lighting_box.value})
+            if self.preset_box.value:
+                scene = scene.replace(preset=self.preset_box.value)
             glint.turntable(scene, 36, str(self.turntable_path.value), volume=_volume(image))
         except (ValueError, OSError) as e:
-            self.status.value = str(e)
+            self.status_box.value = str(e)
             return
-        self.status.value = f"wrote {self.turntable_path.value}"
+        self.status_box.value = f"wrote {self.turntable_path.value}"
