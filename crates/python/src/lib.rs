@@ -1,7 +1,7 @@
 //! The `glint` Python package's native module, `glint._glint`: conversions between
 //! numpy arrays and the glint crates, and GIL handling. No imaging logic lives here;
 //! every function forwards to `glint-io`, `glint-lobe`, `glint-hw`, `glint-render`,
-//! `glint-compare` or `glint-batch`.
+//! `glint-compare`, `glint-batch` or `glint-view` (the notebook viewer's session).
 //!
 //! Rules every function follows:
 //! - inputs are copied into Rust-owned buffers while the GIL is held, then the GIL is
@@ -23,6 +23,7 @@ mod lobe;
 mod pool;
 mod render;
 mod scene;
+mod view;
 mod volume;
 
 use pyo3::prelude::*;
@@ -37,6 +38,10 @@ fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(render::compare, m)?)?;
     m.add_function(wrap_pyfunction!(render::turntable, m)?)?;
+    m.add_class::<view::ViewSession>()?;
+    m.add_function(wrap_pyfunction!(view::view_choices, m)?)?;
+    m.add_function(wrap_pyfunction!(view::read_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(view::label_table, m)?)?;
     m.add_function(wrap_pyfunction!(volume::read, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe, m)?)?;
     m.add_function(wrap_pyfunction!(lobe::lobe_kinds, m)?)?;

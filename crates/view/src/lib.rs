@@ -48,6 +48,7 @@ pub mod levels;
 mod pick;
 pub mod protocol;
 mod record;
+pub mod schedule;
 mod session;
 
 use std::net::SocketAddr;
@@ -70,7 +71,10 @@ pub use histogram::{Histogram, HISTOGRAM_BINS};
 pub use labels::{LabelInfo, LabelList};
 pub use levels::PyramidLevel;
 pub use pick::MAX_MARKS;
-pub use session::{apply_patch, next_samples, render_frame, Frame, MAX_VIEW_SIDE};
+pub use schedule::{next_samples, Schedule};
+pub use session::{
+    apply_patch, render_frame, render_image, Frame, FrameImage, Session, MAX_VIEW_SIDE,
+};
 
 use levels::Stage;
 use protocol::{ClientMessage, Purpose, ServerMessage, Split};
@@ -396,13 +400,6 @@ async fn send_json(socket: &mut WebSocket, msg: &ServerMessage) -> bool {
     socket.send(Message::Text(text.into())).await.is_ok()
 }
 
-/// What the connection should render next.
-#[derive(Clone, Copy, PartialEq)]
-enum Wanted {
-    Nothing,
-    Frame(Purpose),
-}
-
 /// A frame being rendered on the blocking pool, with what it is for.
 type FrameJob = tokio::task::JoinHandle<Result<(Frame, Purpose), RenderError>>;
 
@@ -426,13 +423,13 @@ fn hello(viewer: &Viewer, stage: Option<&Stage>) -> ServerMessage {
 }
 
 /// Starts rendering `state` for `purpose` on the blocking pool; a full frame of a
-/// progressive (`path`) state takes the next sample count after `reached`.
+/// progressive (`path`) state takes the sample count `schedule` gives it.
 fn spawn_frame(
     renderer: &Arc<Mutex<Renderer>>,
     cancel: &Arc<AtomicBool>,
     state: &ClientState,
     purpose: Purpose,
-    reached: u32,
+    schedule: &Schedule,
     labels: Option<&LabelList>,
 ) -> FrameJob {
     let (r, mut s) = (renderer.clone(), state.clone());
@@ -440,8 +437,8 @@ fn spawn_frame(
         s.scene = list.visible(&s.scene);
     }
     if purpose == Purpose::Full {
-        if let Some(goal) = state.progressive() {
-            s.scene.lighting.spp = Some(next_samples(reached, goal));
+        if let Some(spp) = schedule.samples_for(state.progressive()) {
+            s.scene.lighting.spp = Some(spp);
         }
     }
     // A cancel asked of the job before this one (which finished first) is spent.
@@ -516,44 +513,12 @@ async fn swap_level(
     send_json(socket, &msg).await
 }
 
-/// What a connection owes its client: the next frame, a save, the full frame due when
-/// the input settles, and how far the current `path` state has refined.
+/// What a connection owes its client ([`Schedule`]) and the frame it shows.
 struct Pending {
-    wanted: Wanted,
-    save: bool,
-    settle: Option<tokio::time::Instant>,
-    /// Samples per pixel the last full frame of the current state held (`path`).
-    reached: u32,
+    schedule: Schedule,
     /// The resolved scene and update of the last frame shown: new marks are drawn
     /// on it at once.
     shown: Option<(Scene, u32)>,
-}
-
-impl Pending {
-    /// The frame to render next, if any (a save first), taken off the list.
-    fn take(&mut self) -> Option<Purpose> {
-        if self.save {
-            self.save = false;
-            Some(Purpose::Save)
-        } else if let Wanted::Frame(p) = self.wanted {
-            self.wanted = Wanted::Nothing;
-            Some(p)
-        } else {
-            None
-        }
-    }
-
-    /// Whether the camera rests: no drag under way, no drag frame owed.
-    fn resting(&self) -> bool {
-        self.settle.is_none() && self.wanted != Wanted::Frame(Purpose::Interactive)
-    }
-
-    /// A full frame again when nothing else is owed (a `path` state refining).
-    fn refine(&mut self) {
-        if self.wanted == Wanted::Nothing && self.settle.is_none() {
-            self.wanted = Wanted::Frame(Purpose::Full);
-        }
-    }
 }
 
 /// Sends a finished frame (and, for a full or saved one, its scene) or the error of
@@ -571,13 +536,9 @@ async fn finished(
             // A `path` state still holding still refines: the next full frame adds
             // samples, until the scene's count.
             if purpose == Purpose::Full && frame.seq == state.seq {
-                pending.reached = frame.samples;
-                if state
-                    .progressive()
-                    .is_some_and(|goal| pending.reached < goal)
-                {
-                    pending.refine();
-                }
+                pending
+                    .schedule
+                    .full_done(frame.samples, state.progressive());
             }
             // The marks on this frame, before it (the page draws them with it).
             let marked = !state.marks.is_empty() && state.split == Split::Off;
@@ -627,8 +588,7 @@ async fn finished(
         Ok(Err(RenderError::Cancelled)) => {
             // The refinement's samples are gone: start again from none.
             viewer.cancelled.fetch_add(1, Ordering::SeqCst);
-            pending.reached = 0;
-            pending.refine();
+            pending.schedule.cancelled();
             return true;
         }
         Ok(Err(e)) => glint_io::one_line(&e),
@@ -688,28 +648,32 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         marks: pick::Marks::default(),
     };
     let mut pending = Pending {
-        wanted: Wanted::Frame(Purpose::Full),
-        save: false,
-        settle: None,
-        reached: 0,
+        schedule: Schedule::default(),
         shown: None,
     };
     let mut inflight: Option<FrameJob> = None;
     let mut recording = record::Recording::idle();
     loop {
-        if inflight.is_none() && pending.resting() {
+        if inflight.is_none() && pending.schedule.resting() {
             if let Some(stage) = finer.take() {
                 if !swap_level(&mut socket, &renderer, &cancel, &stage).await {
                     return;
                 }
-                (pending.wanted, pending.reached) = (Wanted::Frame(Purpose::Full), 0);
+                pending.schedule.restart();
             }
         }
         if inflight.is_none() {
-            if let Some(purpose) = pending.take() {
+            if let Some(purpose) = pending.schedule.take() {
                 refining = purpose == Purpose::Full && state.progressive().is_some();
                 let labels = viewer.labels();
-                let job = spawn_frame(&renderer, &cancel, &state, purpose, pending.reached, labels);
+                let job = spawn_frame(
+                    &renderer,
+                    &cancel,
+                    &state,
+                    purpose,
+                    &pending.schedule,
+                    labels,
+                );
                 inflight = Some(job);
             }
         }
@@ -735,16 +699,10 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 };
                 match outcome {
                     Ok(Action::Render { interactive }) => {
-                        pending.reached = 0;
-                        if interactive {
-                            pending.wanted = Wanted::Frame(Purpose::Interactive);
-                            pending.settle = Some(tokio::time::Instant::now() + viewer.config.settle);
-                        } else {
-                            pending.wanted = Wanted::Frame(Purpose::Full);
-                            pending.settle = None;
-                        }
+                        let now = std::time::Instant::now();
+                        pending.schedule.input(interactive, now, viewer.config.settle);
                     }
-                    Ok(Action::Save) => pending.save = true,
+                    Ok(Action::Save) => pending.schedule.save(),
                     Ok(Action::Record(frames, format)) => {
                         let mine = renderer.lock().unwrap_or_else(|e| e.into_inner()).clone();
                         let scene = viewer.labels().map_or_else(|| state.scene.clone(), |l| l.visible(&state.scene));
@@ -769,14 +727,21 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 inflight = None;
                 if !finished(&mut socket, &viewer, &state, &mut pending, done).await { return }
             }
-            _ = tokio::time::sleep_until(pending.settle.unwrap_or_else(tokio::time::Instant::now)), if pending.settle.is_some() => {
-                pending.settle = None;
-                pending.wanted = Wanted::Frame(Purpose::Full);
+            _ = tokio::time::sleep_until(settle_instant(&pending.schedule)), if pending.schedule.settle_at().is_some() => {
+                // Tokio's timer never wakes early; were it to, the loop sleeps again.
+                pending.schedule.settled(std::time::Instant::now());
             }
             event = recording.next() => if !record::forward(&mut socket, event).await { return },
             Ok(()) = stages.changed() => finer = stages.borrow_and_update().clone(),
         }
     }
+}
+
+/// When the drag's full frame is due, on tokio's clock (now when none is due).
+fn settle_instant(schedule: &Schedule) -> tokio::time::Instant {
+    schedule
+        .settle_at()
+        .map_or_else(tokio::time::Instant::now, tokio::time::Instant::from_std)
 }
 
 /// One client's scene, split mode and last event number.

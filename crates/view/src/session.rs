@@ -2,16 +2,17 @@
 //! keeps its classification; turning messages into state changes and states into
 //! encoded frames.
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glint_render::{
     luminance_f32, srgb_to_linear, Depth, Image, LightingModel, RenderError, RenderStats, Renderer,
-    Scene, MAX_IMAGE_SIDE,
+    Scene, DEFAULT_SPP, MAX_IMAGE_SIDE,
 };
 use serde_json::{Map, Value};
 
 use crate::labels::{merge_labels, LabelList};
 use crate::protocol::{Format, FrameHeader, Purpose, Split};
+use crate::schedule::Schedule;
 use crate::ViewError;
 
 /// Largest image side a client may ask for (the viewer renders every frame at this
@@ -89,11 +90,16 @@ pub struct Frame {
     pub samples: u32,
 }
 
-/// The sample count a progressive `path` frame renders to, having `done` of `goal`:
-/// 1, 2, 4, 8, then 8 more at a time, so each refinement of a 512x512 frame takes a
-/// bounded time and input is answered between two of them.
-pub fn next_samples(done: u32, goal: u32) -> u32 {
-    done.saturating_add(done.clamp(1, 8)).min(goal).max(1)
+/// A rendered frame before encoding ([`render_image`]).
+pub struct FrameImage {
+    /// The image (with `split`, both halves or the difference).
+    pub image: Image,
+    /// The resolved scene of the (main) render.
+    pub scene: Scene,
+    /// Path-traced samples per pixel in the image (0 for the other lighting models).
+    pub samples: u32,
+    /// Milliseconds spent rendering.
+    pub render_ms: f32,
 }
 
 /// Renders `scene` for `purpose` (interactive frames at half size; a `path` scene's
@@ -107,6 +113,47 @@ pub fn render_frame(
     purpose: Purpose,
     seq: u32,
 ) -> Result<Frame, RenderError> {
+    let FrameImage {
+        image,
+        scene,
+        samples,
+        render_ms,
+    } = render_image(renderer, scene, split, purpose)?;
+    let (format, bytes) = match purpose {
+        Purpose::Save => (
+            Format::Png,
+            image
+                .encode_png(Depth::Eight)
+                .map_err(RenderError::Encode)?,
+        ),
+        Purpose::Interactive => (Format::Jpeg, jpeg(&image, INTERACTIVE_QUALITY)?),
+        Purpose::Full => (Format::Jpeg, jpeg(&image, FULL_QUALITY)?),
+    };
+    let header = FrameHeader {
+        seq,
+        width: image.width,
+        height: image.height,
+        render_ms,
+        format,
+        purpose,
+        samples: u16::try_from(samples).unwrap_or(u16::MAX),
+    };
+    Ok(Frame {
+        message: header.encode(&bytes),
+        scene,
+        seq,
+        samples,
+    })
+}
+
+/// [`render_frame`]'s image, not encoded: the frame `purpose` asks for of `scene`
+/// with `split`.
+pub fn render_image(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    split: Split,
+    purpose: Purpose,
+) -> Result<FrameImage, RenderError> {
     let mut s = scene.clone();
     if purpose == Purpose::Interactive {
         s.size = s.size.map(|x| (x / 2).max(1));
@@ -138,31 +185,136 @@ pub fn render_frame(
     } else {
         0
     };
-    let (format, bytes) = match purpose {
-        Purpose::Save => (
-            Format::Png,
-            image
-                .encode_png(Depth::Eight)
-                .map_err(RenderError::Encode)?,
-        ),
-        Purpose::Interactive => (Format::Jpeg, jpeg(&image, INTERACTIVE_QUALITY)?),
-        Purpose::Full => (Format::Jpeg, jpeg(&image, FULL_QUALITY)?),
-    };
-    let header = FrameHeader {
-        seq,
-        width: image.width,
-        height: image.height,
-        render_ms,
-        format,
-        purpose,
-        samples: u16::try_from(samples).unwrap_or(u16::MAX),
-    };
-    Ok(Frame {
-        message: header.encode(&bytes),
+    Ok(FrameImage {
+        image,
         scene: main.scene,
-        seq,
         samples,
+        render_ms,
     })
+}
+
+/// One viewer without a transport: a renderer, the live scene, the labels present
+/// and the [`Schedule`] of frames owed, for a front end that renders on its own
+/// thread (the notebook's `glint.Viewer`). It follows `glint view`'s rules: patches
+/// through [`apply_patch`], reduced frames while dragging, a full frame once the
+/// input settles, a `path` scene refined while it holds still.
+pub struct Session {
+    renderer: Renderer,
+    scene: Scene,
+    labels: Option<LabelList>,
+    schedule: Schedule,
+    settle: Duration,
+}
+
+impl Session {
+    /// A session of `scene` on `renderer` (its volume, meshes and label map read):
+    /// the scene is resolved and its label map's labels listed; a full frame is owed.
+    /// `settle`: the quiet time after a drag's last input before the full frame
+    /// ([`crate::ViewerConfig::settle`]).
+    pub fn new(
+        mut renderer: Renderer,
+        scene: &Scene,
+        settle: Duration,
+    ) -> Result<Session, RenderError> {
+        let scene = renderer.resolve(scene)?.scene;
+        // An RT structure set is rasterised onto the scene's image (its path).
+        let image = match &scene.input {
+            glint_render::Input::Path(p) => Some(p.as_path()),
+            _ => None,
+        };
+        let labels = scene
+            .labels
+            .as_ref()
+            .map(|l| LabelList::read(l, image))
+            .transpose()?;
+        Ok(Session {
+            renderer,
+            scene,
+            labels,
+            schedule: Schedule::default(),
+            settle,
+        })
+    }
+
+    /// The live scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The labels of the scene's label map (`None` without one).
+    pub fn labels(&self) -> Option<&LabelList> {
+        self.labels.as_ref()
+    }
+
+    /// Applies `patch` ([`apply_patch`]) at `now`: a drag's reduced frame when
+    /// `interactive`, else a full frame. A refused patch changes nothing.
+    pub fn update(
+        &mut self,
+        patch: &Map<String, Value>,
+        interactive: bool,
+        now: Instant,
+    ) -> Result<(), ViewError> {
+        self.scene = apply_patch(&self.renderer, &self.scene, patch, self.labels.as_ref())?;
+        self.schedule.input(interactive, now, self.settle);
+        Ok(())
+    }
+
+    /// When a drag's full frame is due (`None`: no drag under way).
+    pub fn settle_at(&self) -> Option<Instant> {
+        self.schedule.settle_at()
+    }
+
+    /// The frame owed at `now`, if any, taken off the list.
+    pub fn next(&mut self, now: Instant) -> Option<Purpose> {
+        self.schedule.settled(now);
+        self.schedule.take()
+    }
+
+    /// Whether a frame is owed now (a `path` scene refining, a full frame after a
+    /// change); a drag's full frame that is not due yet is not ([`Session::settle_at`]).
+    pub fn owes(&self) -> bool {
+        self.schedule.owes()
+    }
+
+    /// A full-resolution frame is wanted ([`Purpose::Save`]), next.
+    pub fn save(&mut self) {
+        self.schedule.save();
+    }
+
+    /// The sample count the live scene refines to (`None`: not a `path` scene).
+    fn progressive(&self) -> Option<u32> {
+        let lighting = &self.scene.lighting;
+        (lighting.model == LightingModel::Path).then(|| lighting.spp.unwrap_or(DEFAULT_SPP))
+    }
+
+    /// Renders the live scene for `purpose` (hidden labels hidden; a full frame of a
+    /// `path` scene to the next sample count) and notes it in the schedule: a `path`
+    /// scene short of its samples owes the next refinement.
+    pub fn render(&mut self, purpose: Purpose) -> Result<FrameImage, RenderError> {
+        let mut s = match &self.labels {
+            Some(list) => list.visible(&self.scene),
+            None => self.scene.clone(),
+        };
+        let goal = self.progressive();
+        if purpose == Purpose::Full {
+            if let Some(spp) = self.schedule.samples_for(goal) {
+                s.lighting.spp = Some(spp);
+            }
+        }
+        match render_image(&mut self.renderer, &s, Split::Off, purpose) {
+            Ok(frame) => {
+                if purpose == Purpose::Full {
+                    self.schedule.full_done(frame.samples, goal);
+                }
+                Ok(frame)
+            }
+            Err(RenderError::Cancelled) => {
+                self.schedule.cancelled();
+                Err(RenderError::Cancelled)
+            }
+            Err(e) => Err(e),
+        }
+    }
 }
 
 fn jpeg(image: &Image, quality: u8) -> Result<Vec<u8>, RenderError> {
@@ -231,6 +383,7 @@ fn difference(a: &Image, b: &Image) -> Image {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::schedule::next_samples;
     use glint_lobe::LobeKind;
     use glint_render::{Phantom, ReadOptions};
 
@@ -342,6 +495,44 @@ mod tests {
             std::iter::successors(Some(0), |&d| (d < 40).then(|| next_samples(d, 40))).collect();
         assert_eq!(steps, [0, 1, 2, 4, 8, 16, 24, 32, 40]);
         assert_eq!(next_samples(0, 0), 1);
+    }
+
+    #[test]
+    fn a_session_follows_the_schedule_and_refuses_bad_patches() {
+        let mut s = scene();
+        s.lighting = glint_render::Lighting {
+            model: LightingModel::Path,
+            spp: Some(4),
+            ..Default::default()
+        };
+        let r = Renderer::open(&s, &ReadOptions::default()).unwrap();
+        let settle = Duration::from_millis(150);
+        let mut session = Session::new(r, &s, settle).unwrap();
+        let t0 = Instant::now();
+        let mut samples = Vec::new();
+        while let Some(p) = session.next(t0) {
+            let f = session.render(p).unwrap();
+            samples.push((p, f.samples, f.image.width));
+        }
+        let full = |n| (Purpose::Full, n, 24);
+        assert_eq!(samples, [full(1), full(2), full(4)]);
+        let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
+        session
+            .update(&patch(r#"{"camera": {"azimuth": 40}}"#), true, t0)
+            .unwrap();
+        assert_eq!(session.scene().camera.azimuth, 40.0);
+        assert_eq!(session.next(t0), Some(Purpose::Interactive));
+        let f = session.render(Purpose::Interactive).unwrap();
+        assert_eq!((f.samples, f.image.width), (0, 12));
+        assert!(session.next(t0).is_none() && session.settle_at() == Some(t0 + settle));
+        assert_eq!(session.next(t0 + settle), Some(Purpose::Full));
+        let before = session.scene().clone();
+        let err = session
+            .update(&patch(r#"{"colour": 1}"#), false, t0)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("colour"), "{err}");
+        assert!(session.scene() == &before && !session.owes());
     }
 
     #[test]

@@ -6,7 +6,8 @@ renders a :class:`Scene` (a :class:`Renderer` keeps the classification across vi
 ``glint.turntable(scene, n, path)`` writes n views round it as a GIF, an MP4 or PNG frames;
 ``glint.compare`` measures what a cheap lobe changes in the image; ``glint.lobe`` evaluates any
 specular lobe on a numpy array; ``glint.hw.Unit`` is the device model; ``glint.batch`` renders
-a whole study on Dask (``pip install glint[dask]``), as ``glint batch`` does on one machine. Every function
+a whole study on Dask (``pip install glint[dask]``), as ``glint batch`` does on one machine;
+``glint.Viewer`` is an interactive view in a notebook (``pip install glint[notebook]``). Every function
 releases the GIL while it works and raises ``ValueError``/``OSError``/``TypeError``
 with the one-line messages of the ``glint`` command.
 """
@@ -34,6 +35,12 @@ def __getattr__(name):
         import importlib
 
         return importlib.import_module("glint.batch")
+    if name == "Viewer":
+        # glint.Viewer needs the notebook extra (jupyter_rfb, ipywidgets): imported on
+        # first use, so `import glint` works without them.
+        from glint.notebook import Viewer
+
+        return Viewer
     raise AttributeError(f"module 'glint' has no attribute {name!r}")
 
 
@@ -41,6 +48,7 @@ __all__ = [
     "Image",
     "Renderer",
     "Scene",
+    "Viewer",
     "Volume",
     "batch",
     "compare",

@@ -200,3 +200,27 @@ def compare(
 ) -> Dict[str, Any]:
     """Exact cos^n against each lobe, as ``glint compare --json`` reports it (a path
     scene with the command's defaults and its converged reference)."""
+
+class Viewer:
+    """An inline, interactive view in a notebook (glint.notebook; pip install glint[notebook])."""
+    def __init__(
+        self,
+        volume: Union[Volume, _Path, None] = None,
+        scene: Optional[Scene] = None,
+        size: Tuple[int, int] = (512, 512),
+        settle: float = 0.15,
+        **fields: Any,
+    ) -> None: ...
+    @property
+    def scene(self) -> Scene:
+        """The live scene; assign a Scene or a dict of fields to patch it."""
+    @scene.setter
+    def scene(self, value: Union[Scene, Dict[str, Any]]) -> None: ...
+    def update(self, **fields: Any) -> None:
+        """Patches the live scene; the widget and panel follow."""
+    @property
+    def labels(self) -> List[Dict[str, Any]]: ...
+    @property
+    def frames(self) -> int: ...
+    def snapshot(self) -> npt.NDArray[np.uint8]:
+        """The frame shown, sRGB uint8 (height, width, 3)."""
