@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import time
 
 import numpy as np
 
@@ -77,6 +78,9 @@ class Viewer(_w.HBox):
         self._last = None
         self._drag = None
         self._settle_handle = None
+        # Pacing of drag frames: a pause of a quarter of the last one's render time.
+        self._pace_handle = None
+        self._next_draw_at = 0.0
         self._frames = 0
         self._syncing = False
         self.canvas = _Canvas(
@@ -177,12 +181,37 @@ class Viewer(_w.HBox):
 
     def _interact(self, patch):
         self._session.update(patch, True)
-        self.canvas.request_draw()
+        self._request_paced()
         # The full frame once the input settles: ask for a draw then (the session
         # decides whether it is due).
         wait = self._session.settle_in()
         if wait is not None:
             self._later(wait + 0.005)
+
+    def _request_paced(self):
+        """Asks for a drag frame, after a pause of a quarter of the last drag frame's
+        render time (at least 5 ms). The kernel takes the events that arrived meanwhile
+        (each only patches the scene, microseconds) and the next frame shows the
+        latest of them: without the pause, a frame slower than the events drew once
+        per event and the events queued up behind the frames (seconds of lag within a
+        few seconds of dragging; scripts/bench/bench-notebook-drag).
+        """
+        wait = self._next_draw_at - time.perf_counter()
+        if wait <= 0:
+            self.canvas.request_draw()
+            return
+        if self._pace_handle is not None:
+            return
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:
+            self.canvas.request_draw()
+            return
+        self._pace_handle = loop.call_later(wait, self._paced)
+
+    def _paced(self):
+        self._pace_handle = None
+        self.canvas.request_draw()
 
     def _later(self, seconds):
         try:
@@ -202,9 +231,13 @@ class Viewer(_w.HBox):
             self.canvas.request_draw()
 
     def _frame(self):
+        started = time.perf_counter()
         frame = self._session.next_frame()
         if frame is None:
             return None
+        if frame[1] == "interactive":
+            ended = time.perf_counter()
+            self._next_draw_at = ended + max(0.005, (ended - started) / 4)
         self._shown(frame)
         # A `path` scene still refining owes the next frame: asked for after this one
         # is sent, so input that arrives meanwhile is handled first.
