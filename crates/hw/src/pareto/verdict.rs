@@ -319,6 +319,17 @@ fn pair_text(k: &Point, l: &Point, t: usize) -> String {
     cost_text_of(c, hard, t)
 }
 
+/// The header of a budget table: one column per cost target.
+fn budget_header(s: &mut String) {
+    let mut head = String::from("| budget (LSB) |");
+    let mut rule = String::from("|---|");
+    for t in COST_TARGETS {
+        let _ = write!(head, " {} |", t.label());
+        rule.push_str("---|");
+    }
+    let _ = writeln!(s, "{head}\n{rule}");
+}
+
 /// The table over `n` 1-1023 with K_v's `n < 16` path costed.
 fn n1_table(s: &mut String, points: &[Point], out_bits: u32) {
     let _ = writeln!(
@@ -330,13 +341,7 @@ fn n1_table(s: &mut String, points: &[Point], out_bits: u32) {
          the budget over n 16-1023 + that path / cheapest exact unit within the budget over \
          n 1-1023 (ids, cost), and the ratio; the K_v-only ratios above are the lower bound.\n"
     );
-    let mut head = String::from("| budget (LSB) |");
-    let mut rule = String::from("|---|");
-    for t in COST_TARGETS {
-        let _ = write!(head, " {} |", t.label());
-        rule.push_str("---|");
-    }
-    let _ = writeln!(s, "{head}\n{rule}");
+    budget_header(s);
     for &b in budgets(out_bits) {
         let mut line = format!("| {b} |");
         for t in 0..COST_TARGETS.len() {
@@ -366,13 +371,7 @@ fn budget_table(s: &mut String, points: &[Point], out_bits: u32, from_n1: bool) 
          / cheapest exact unit within each budget (id, cost, error), and K_v's cost over \
          the exact unit's (< 1: K_v is cheaper).\n"
     );
-    let mut head = String::from("| budget (LSB) |");
-    let mut rule = String::from("|---|");
-    for t in COST_TARGETS {
-        let _ = write!(head, " {} |", t.label());
-        rule.push_str("---|");
-    }
-    let _ = writeln!(s, "{head}\n{rule}");
+    budget_header(s);
     for &b in budgets(out_bits) {
         let mut line = format!("| {b} |");
         for t in 0..COST_TARGETS.len() {
