@@ -64,6 +64,6 @@ pub use raycast::{
     FrameSettings, Kernel, LabelLook, LabelVolume, VolumeHit, PICK_OPACITY, TERMINATION_OPACITY,
 };
 pub use transport::{
-    check_spp, LightingModel, Occluders, PathImage, PathSettings, ShadowField, ShadowSettings,
-    MAX_BOUNCES, MAX_SPP,
+    check_spp, LightingModel, Occluders, PathImage, PathSettings, Sampler, ShadowField,
+    ShadowSettings, MAX_BOUNCES, MAX_SPP,
 };

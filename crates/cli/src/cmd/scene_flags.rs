@@ -11,8 +11,8 @@ use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
     Clip, ClipPlane, ColorMap, CropBox, Input, Light, LightingModel, MeshSpec, Overlay, Phantom,
-    Prefilter, Projection, RenderMode, Sampling, Scene, SceneLobe, TransferFunctionFile, View,
-    WindowLevel,
+    Prefilter, Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, TransferFunctionFile,
+    View, WindowLevel,
 };
 
 use super::choice::choice;
@@ -209,6 +209,11 @@ pub struct SceneFlags {
     /// Path lighting: radiance of the uniform white environment [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]
     pub environment: Option<f32>,
+    /// Path lighting: where the random numbers come from: sobol (Owen-scrambled Sobol
+    /// points for the first dimensions of each path: less noise for the same --spp)
+    /// or independent (PCG32 numbers throughout) [default: sobol].
+    #[arg(long, value_parser = choice::<Sampler>(Sampler::ALL.map(|m| m.name())))]
+    pub sampler: Option<Sampler>,
     /// Shadows and path lighting: anisotropy g of the medium's Henyey-Greenstein phase
     /// function, -0.95..=0.95 (> 0 scatters forwards) [default: 0].
     #[arg(long, allow_negative_numbers = true)]
@@ -442,6 +447,7 @@ impl SceneFlags {
         set(&mut l.seed, self.seed.map(Some));
         set(&mut l.environment, self.environment.map(Some));
         set(&mut l.anisotropy, self.anisotropy.map(Some));
+        set(&mut l.sampler, self.sampler.map(Some));
         if self.occlusion {
             l.occlusion = Some(true);
         }
@@ -647,12 +653,15 @@ mod tests {
             "0.3",
             "--anisotropy",
             "-0.2",
+            "--sampler",
+            "independent",
         ])
         .unwrap();
         let l = &s.lighting;
         assert_eq!(l.model, LightingModel::Path);
         assert_eq!((l.spp, l.bounces, l.seed), (Some(16), Some(3), Some(7)));
         assert_eq!((l.environment, l.anisotropy), (Some(0.3), Some(-0.2)));
+        assert_eq!(l.sampler, Some(Sampler::Independent));
         // Switching a path scene to shadows keeps what shadows uses.
         let mut next = s.clone();
         let flags = SceneFlags {

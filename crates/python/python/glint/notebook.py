@@ -310,6 +310,7 @@ class Viewer(_w.HBox):
             "environment": None,
             "anisotropy": None,
             "occlusion": None,
+            "sampler": None,
         }
         self._from_panel(lighting=patch)
 

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use glint_core::{RenderError, RenderMode, MAX_ANISOTROPY};
-use glint_volume::{check_spp, LightingModel, PathSettings, ShadowSettings};
+use glint_volume::{check_spp, LightingModel, PathSettings, Sampler, ShadowSettings};
 
 /// Samples per pixel of a `path` scene that does not say (a few seconds at 512x512
 /// on two cores; docs/lighting.md).
@@ -62,6 +62,9 @@ pub struct Lighting {
     /// `shadows`: local ambient occlusion on the ambient term [default: false].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub occlusion: Option<bool>,
+    /// `path`: where the paths' random numbers come from [default: `sobol`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampler: Option<Sampler>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -75,7 +78,7 @@ pub enum Transport {
     Path {
         /// Samples per pixel.
         spp: u32,
-        /// Bounces, seed, environment.
+        /// Bounces, seed, environment, sampler.
         settings: PathSettings,
     },
 }
@@ -88,7 +91,7 @@ impl Lighting {
     }
 
     /// The fields that are set, with their names.
-    fn set_fields(&self) -> [(&'static str, bool); 6] {
+    fn set_fields(&self) -> [(&'static str, bool); 7] {
         [
             ("spp", self.spp.is_some()),
             ("bounces", self.bounces.is_some()),
@@ -96,6 +99,7 @@ impl Lighting {
             ("environment", self.environment.is_some()),
             ("anisotropy", self.anisotropy.is_some()),
             ("occlusion", self.occlusion.is_some()),
+            ("sampler", self.sampler.is_some()),
         ]
     }
 
@@ -104,7 +108,14 @@ impl Lighting {
         match model {
             LightingModel::Local => &[],
             LightingModel::Shadows => &["anisotropy", "occlusion"],
-            LightingModel::Path => &["spp", "bounces", "seed", "environment", "anisotropy"],
+            LightingModel::Path => &[
+                "spp",
+                "bounces",
+                "seed",
+                "environment",
+                "anisotropy",
+                "sampler",
+            ],
         }
     }
 
@@ -121,6 +132,7 @@ impl Lighting {
             environment: self.environment.filter(|_| keep("environment")),
             anisotropy: self.anisotropy.filter(|_| keep("anisotropy")),
             occlusion: self.occlusion.filter(|_| keep("occlusion")),
+            sampler: self.sampler.filter(|_| keep("sampler")),
         }
     }
 
@@ -174,6 +186,7 @@ impl Lighting {
                     bounces: *self.bounces.get_or_insert(DEFAULT_BOUNCES),
                     seed: *self.seed.get_or_insert(0),
                     environment: *self.environment.get_or_insert(DEFAULT_ENVIRONMENT),
+                    sampler: *self.sampler.get_or_insert(Sampler::default()),
                 };
                 settings.validate()?;
                 Transport::Path { spp, settings }

@@ -14,8 +14,9 @@
 //!   [`Transport::Path`](crate::Transport::Path)): delta
 //!   tracking against the macro cells' majorants, the lights by next-event estimation
 //!   with ratio tracking, a uniform environment, importance-sampled lobe and phase
-//!   function, Russian roulette. The same seed and sample count give the same image
-//!   bit for bit on any thread count.
+//!   function, Russian roulette; the first dimensions of each path from an
+//!   Owen-scrambled Sobol sequence by default ([`Sampler`]). The same seed, sampler
+//!   and sample count give the same image bit for bit on any thread count.
 
 use glint_core::RenderError;
 
@@ -34,6 +35,7 @@ pub use crate::light::ShadowField;
 pub use occluders::Occluders;
 pub use path::PathImage;
 pub(crate) use path::PathTracer;
+pub use rng::{Sampler, SOBOL_DIMS};
 pub use shadows::ShadowSettings;
 
 /// Most samples per pixel a path-traced image takes.
@@ -100,6 +102,8 @@ pub struct PathSettings {
     pub seed: u64,
     /// Radiance of the uniform white environment that paths leaving the volume see.
     pub environment: f32,
+    /// Where the paths' random numbers come from.
+    pub sampler: Sampler,
 }
 
 impl PathSettings {

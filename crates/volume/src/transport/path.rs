@@ -13,7 +13,7 @@ use glint_core::camera::Camera;
 use glint_core::{Bsdf, Image, RenderStats, Shader, Vec3};
 
 use super::occluders::Occluders;
-use super::rng::Rng;
+use super::rng::{dims, Rng};
 use super::tracking::{IndexRay, Tracker};
 use super::PathSettings;
 use crate::classification::Medium;
@@ -205,9 +205,10 @@ impl<'a> PathTracer<'a> {
     pub(crate) fn trace(&self, x: u32, y: u32, sample: u32, far: f32) -> PathSample {
         let [w, h] = self.size;
         let pixel = u64::from(y) * u64::from(w) + u64::from(x);
-        let mut rng = Rng::new(self.settings.seed, pixel, u64::from(sample));
+        let mut rng = Rng::for_path(self.settings.sampler, self.settings.seed, pixel, sample);
         // A point of the pixel's square, uniformly (anti-aliasing).
-        let (jx, jy) = (rng.uniform() - 0.5, rng.uniform() - 0.5);
+        let jx = rng.dim(dims::JITTER) - 0.5;
+        let jy = rng.dim(dims::JITTER + 1) - 0.5;
         let (eye, dir) = self.camera.ray(x as f32 + jx, y as f32 + jy, w, h);
         let field = self.track.field;
         let mut ray = IndexRay::from_world(field, eye, dir);
@@ -225,7 +226,12 @@ impl<'a> PathTracer<'a> {
             } else {
                 None
             };
-            let Some(t) = self.track.free_path(&ray, t0, mesh.unwrap_or(t1), &mut rng) else {
+            // This event's block of dimensions (the sampler's layout, `rng::dims`).
+            let block = dims::event(events);
+            rng.window(block + dims::FREE_PATH, 2);
+            let hit = self.track.free_path(&ray, t0, mesh.unwrap_or(t1), &mut rng);
+            rng.close();
+            let Some(t) = hit else {
                 if events > 0 && mesh.is_none() {
                     for c in 0..3 {
                         radiance[c] += beta[c] * env;
@@ -248,9 +254,16 @@ impl<'a> PathTracer<'a> {
             if let Some(clip) = self.track.clip {
                 grad = clip.cut_gradient(p, grad);
             }
-            let bsdf = self.shader.scattering(color, grad).choose(|| rng.uniform());
-            self.direct(p, &bsdf, wo, &mut rng, beta, &mut radiance);
-            let u = [rng.uniform(), rng.uniform(), rng.uniform()];
+            let bsdf = self
+                .shader
+                .scattering(color, grad)
+                .choose(|| rng.dim(block + dims::CHOOSE));
+            self.direct(p, &bsdf, wo, (&mut rng, block), beta, &mut radiance);
+            let u = [
+                rng.dim(block + dims::LOBE),
+                rng.dim(block + dims::DIRECTION),
+                rng.dim(block + dims::DIRECTION + 1),
+            ];
             let Some(sample) = bsdf.sample(wo, u) else {
                 break;
             };
@@ -260,7 +273,7 @@ impl<'a> PathTracer<'a> {
             }
             if events >= ROULETTE_AFTER {
                 let q = beta[0].max(beta[1]).max(beta[2]).min(MAX_SURVIVAL);
-                if rng.uniform() >= q || q.is_nan() {
+                if rng.dim(block + dims::ROULETTE) >= q || q.is_nan() {
                     break;
                 }
                 for b in &mut beta {
@@ -288,14 +301,15 @@ impl<'a> PathTracer<'a> {
 
     /// Adds the lights' direct contribution at `p` through `bsdf` towards `wo`
     /// (next-event estimation), each light's transmittance estimated by ratio
-    /// tracking.
+    /// tracking (the first light's first tentative collision from the event `block`'s
+    /// dimensions).
     #[inline]
     fn direct(
         &self,
         p: Vec3,
         bsdf: &Bsdf<'_>,
         wo: Vec3,
-        rng: &mut Rng,
+        (rng, block): (&mut Rng, u32),
         beta: [f32; 3],
         radiance: &mut [f32; 3],
     ) {
@@ -304,7 +318,7 @@ impl<'a> PathTracer<'a> {
         } else {
             0.0
         };
-        for &(l, l_index, intensity) in &self.lights {
+        for (i, &(l, l_index, intensity)) in self.lights.iter().enumerate() {
             let response = bsdf.f(wo, l);
             if response == [0.0; 3] || intensity == 0.0 {
                 continue;
@@ -313,7 +327,11 @@ impl<'a> PathTracer<'a> {
             if self.mesh_hit(&shadow, t0, f32::INFINITY).is_some() {
                 continue;
             }
+            if i == 0 {
+                rng.window(block + dims::TRANSMIT, 2);
+            }
             let tr = self.track.transmittance(&shadow, t0, f32::INFINITY, rng);
+            rng.close();
             if tr > 0.0 {
                 for c in 0..3 {
                     radiance[c] += beta[c] * response[c] * (intensity * tr);

@@ -229,7 +229,11 @@ fn a_white_furnace_shows_the_environment() {
         background: [env; 3],
         ..Default::default()
     };
-    for g in [0.0f32, 0.6] {
+    for (g, sampler) in [
+        (0.0f32, Sampler::Sobol),
+        (0.6, Sampler::Sobol),
+        (0.6, Sampler::Independent),
+    ] {
         let shader = albedo_one(vec![Light::HEADLIGHT], 0.0)
             .with_anisotropy(g)
             .unwrap();
@@ -251,6 +255,7 @@ fn a_white_furnace_shows_the_environment() {
             bounces: MAX_BOUNCES,
             seed: 9,
             environment: env,
+            sampler,
         };
         let mut img = PathImage::new(12, 12);
         path_frame(&class, &shader, &frame, &settings, &mut img, 256).unwrap();
@@ -268,7 +273,7 @@ fn a_white_furnace_shows_the_environment() {
             "{covered} pixels' worth of paths met the matter"
         );
         let mean = scattered / covered;
-        eprintln!("furnace, g = {g}: mean {mean:.5}, environment {env}");
+        eprintln!("furnace, g = {g}, {sampler:?}: mean {mean:.5}, environment {env}");
         assert!(
             (mean - f64::from(env)).abs() < 0.01 * f64::from(env),
             "g = {g}: mean radiance {mean}, environment {env}"
@@ -471,11 +476,18 @@ fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
 
 #[test]
 fn path_images_depend_on_the_seed_and_sample_count_alone() {
+    for sampler in Sampler::ALL {
+        path_images_depend_on_the_seed_and_sample_count_alone_with(sampler);
+    }
+}
+
+fn path_images_depend_on_the_seed_and_sample_count_alone_with(sampler: Sampler) {
     let (class, shader, frame) = small_scene();
     let settings = PathSettings {
         bounces: 4,
         seed: 3,
         environment: 0.5,
+        sampler,
     };
     let trace = |threads: usize, batches: &[u32]| {
         on_threads(threads, || {
@@ -607,6 +619,7 @@ fn light_volumes_refuse_other_lights_and_mip() {
         bounces: 2,
         seed: 0,
         environment: 1.0,
+        sampler: Sampler::default(),
     };
     assert!(path_frame(&mip, &shader, &frame, &settings, &mut img, 1).is_err());
 }
@@ -743,6 +756,7 @@ fn a_mesh_shadows_the_path_traced_volume() {
             bounces,
             seed: 21,
             environment: 0.0,
+            sampler: Sampler::default(),
         };
         on_threads(threads, || {
             let mut img = PathImage::new(24, 24);
