@@ -311,6 +311,8 @@ class Viewer(_w.HBox):
             "anisotropy": None,
             "occlusion": None,
             "sampler": None,
+            "time_budget": None,
+            "show_environment": None,
         }
         self._from_panel(lighting=patch)
 
