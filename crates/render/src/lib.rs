@@ -93,7 +93,8 @@ pub use glint_volume::{
     MACRO_CELL, MAX_FIELD_VOXELS, PICK_OPACITY, PRESETS, TERMINATION_OPACITY,
 };
 pub use glint_volume::{
-    LightingModel, PathImage, PathSettings, ShadowField, ShadowSettings, MAX_BOUNCES, MAX_SPP,
+    LightingModel, PathImage, PathSettings, Sampler, ShadowField, ShadowSettings, MAX_BOUNCES,
+    MAX_SPP,
 };
 pub use labels::{label_read_options, LabelSpec, LabelsAs, PickLabel, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};

@@ -42,7 +42,7 @@ struct OccluderCache {
 }
 
 /// A path-traced image being accumulated, for the scene it renders (the resolved
-/// scene's JSON without its sample count).
+/// scene's JSON without its sample count and time budget).
 #[derive(Clone)]
 struct PathAccumulation {
     key: String,
@@ -590,6 +590,7 @@ impl Renderer {
                 Transport::Path { spp, settings } => {
                     let mut key = scene.clone();
                     key.lighting.spp = None;
+                    key.lighting.time_budget = None;
                     key.derived = None;
                     let key = key.to_json()?;
                     let size = [frame.width, frame.height];

@@ -3,18 +3,16 @@
 //! ([`Classification::shadow_field`]): above both the ray caster (`raycast`) and the
 //! light transport (`transport`), which it joins.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use rayon::prelude::*;
-
-use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader, Vec3};
+use glint_core::{Image, RenderError, RenderMode, Shader, Vec3};
 
 use crate::classification::{occlusion_grid, Classification, LIGHT_CELL};
 use crate::clip::{IndexClip, CUT_DEPTH_STEPS};
 use crate::raycast::FrameSettings;
 use crate::transport::{
-    check_spp, Occluders, PathImage, PathSettings, PathTracer, ShadowField, ShadowSettings,
+    check_spp, Occluders, Pass, PathImage, PathSettings, PathTracer, ShadowField, ShadowSettings,
 };
 
 /// How the light of a frame is computed, with what each lighting model
@@ -29,7 +27,10 @@ pub enum Transport<'a> {
     /// modes.
     Shadows(&'a ShadowField),
     /// `path`: samples added to a progressive path-traced image until it holds `spp`
-    /// per pixel (nothing when it already does). Composite mode only.
+    /// per pixel (nothing when it already does), or with a time budget
+    /// ([`PathSettings::time_budget`]) passes of samples, where the noise is once
+    /// each pixel holds a few, until the budget is spent or no pixel below `spp`
+    /// is noisy. Composite mode only.
     ///
     /// Each pixel's samples are added in sample order, each from its own generator
     /// (seed, pixel, sample index), so the image is the same bit for bit for a seed
@@ -37,7 +38,8 @@ pub enum Transport<'a> {
     Path {
         /// The image the samples are added to (its size is the frame's).
         image: &'a mut PathImage,
-        /// Samples per pixel it holds when the frame returns.
+        /// Samples per pixel it holds when the frame returns (without a time budget;
+        /// with one, the most a pixel takes).
         spp: u32,
         /// Bounces, seed and environment.
         settings: PathSettings,
@@ -219,7 +221,7 @@ impl Classification {
                 "the path image holds {from} samples, more than the {spp} asked: start a new one"
             )));
         }
-        if spp == from {
+        if spp == from && settings.time_budget.is_none() {
             return Ok(());
         }
         let camera = self.camera(frame)?;
@@ -228,41 +230,12 @@ impl Classification {
         let tracer = PathTracer::new(self.field(), self.medium(), &placed, camera, size, settings)?
             .occluded_by(occluders)?
             .clipped_by(clip.as_ref());
-        let w = frame.width as usize;
-        let stats = image
-            .sums_mut()
-            .par_chunks_mut(w)
-            .enumerate()
-            .map(|(y, row)| {
-                let mut stats = RenderStats::default();
-                if cancel.load(Ordering::Relaxed) {
-                    return stats;
-                }
-                for (x, sum) in row.iter_mut().enumerate() {
-                    let limit = far.map_or(f32::INFINITY, |f| f[y * w + x]);
-                    for s in from..spp {
-                        let r = tracer.trace(x as u32, y as u32, s, limit);
-                        for (acc, &x) in sum.iter_mut().zip(&r.radiance) {
-                            *acc += f64::from(x);
-                        }
-                        sum[3] += f64::from(r.coverage);
-                        stats.samples += 1;
-                        stats.shaded += u64::from(r.events);
-                    }
-                }
-                progress(w as u64);
-                stats
-            })
-            .reduce(RenderStats::default, |a, b| RenderStats {
-                samples: a.samples + b.samples,
-                shaded: a.shaded + b.shaded,
-                skips: a.skips + b.skips,
-            });
-        if cancel.load(Ordering::Relaxed) {
-            return Err(RenderError::Cancelled);
-        }
-        image.finish_batch(spp, stats);
-        Ok(())
+        let pass = Pass {
+            far,
+            cancel,
+            progress,
+        };
+        image.trace(&tracer, spp, &pass)
     }
 }
 

@@ -64,6 +64,7 @@ pub use raycast::{
     FrameSettings, Kernel, LabelLook, LabelVolume, VolumeHit, PICK_OPACITY, TERMINATION_OPACITY,
 };
 pub use transport::{
-    check_spp, LightingModel, Occluders, PathImage, PathSettings, ShadowField, ShadowSettings,
-    MAX_BOUNCES, MAX_SPP,
+    check_spp, check_time_budget, LightingModel, Occluders, PathImage, PathSettings, Sampler,
+    ShadowField, ShadowSettings, ADAPTIVE_MIN_SAMPLES, ADAPTIVE_THRESHOLD, MAX_BOUNCES, MAX_SPP,
+    MAX_TIME_BUDGET_MS,
 };

@@ -11,8 +11,8 @@ use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
     Clip, ClipPlane, ColorMap, CropBox, Input, Light, LightingModel, MeshSpec, Overlay, Phantom,
-    Prefilter, Projection, RenderMode, Sampling, Scene, SceneLobe, TransferFunctionFile, View,
-    WindowLevel,
+    Prefilter, Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, TransferFunctionFile,
+    View, WindowLevel,
 };
 
 use super::choice::choice;
@@ -209,6 +209,21 @@ pub struct SceneFlags {
     /// Path lighting: radiance of the uniform white environment [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]
     pub environment: Option<f32>,
+    /// Path lighting: camera rays that meet no matter see the environment (opaque)
+    /// instead of the background.
+    #[arg(long)]
+    pub show_environment: bool,
+    /// Path lighting: where the random numbers come from: sobol (Owen-scrambled Sobol
+    /// points for the first dimensions of each path: less noise for the same --spp)
+    /// or independent (PCG32 numbers throughout) [default: sobol].
+    #[arg(long, value_parser = choice::<Sampler>(Sampler::ALL.map(|m| m.name())))]
+    pub sampler: Option<Sampler>,
+    /// Path lighting: a time budget per frame in milliseconds: passes of samples,
+    /// spent where the noise is once every pixel holds a few, until the budget is
+    /// spent; --spp is then the most a pixel takes (more than 0, at most one hour)
+    /// [default: none: every pixel takes --spp].
+    #[arg(long, value_name = "MS", allow_negative_numbers = true)]
+    pub time_budget: Option<f64>,
     /// Shadows and path lighting: anisotropy g of the medium's Henyey-Greenstein phase
     /// function, -0.95..=0.95 (> 0 scatters forwards) [default: 0].
     #[arg(long, allow_negative_numbers = true)]
@@ -419,8 +434,12 @@ impl SceneFlags {
             scene
                 .lights
                 .retain(|l| (l.azimuth, l.elevation) != (0.0, 0.0));
-            if self.lights.is_empty() && scene.lights.is_empty() {
-                bail!("--no-headlight leaves no light: add at least one --light AZ,EL");
+            let path = scene.lighting.model == LightingModel::Path;
+            if self.lights.is_empty() && scene.lights.is_empty() && !path {
+                bail!(
+                    "--no-headlight leaves no light: add at least one --light AZ,EL \
+                     (path lighting may be lit by its --environment alone)"
+                );
             }
         }
         scene.lights.extend(self.lights.iter().copied());
@@ -442,8 +461,13 @@ impl SceneFlags {
         set(&mut l.seed, self.seed.map(Some));
         set(&mut l.environment, self.environment.map(Some));
         set(&mut l.anisotropy, self.anisotropy.map(Some));
+        set(&mut l.sampler, self.sampler.map(Some));
+        set(&mut l.time_budget, self.time_budget.map(Some));
         if self.occlusion {
             l.occlusion = Some(true);
+        }
+        if self.show_environment {
+            l.show_environment = Some(true);
         }
     }
 }
@@ -647,12 +671,20 @@ mod tests {
             "0.3",
             "--anisotropy",
             "-0.2",
+            "--sampler",
+            "independent",
+            "--time-budget",
+            "250",
+            "--show-environment",
         ])
         .unwrap();
         let l = &s.lighting;
         assert_eq!(l.model, LightingModel::Path);
         assert_eq!((l.spp, l.bounces, l.seed), (Some(16), Some(3), Some(7)));
         assert_eq!((l.environment, l.anisotropy), (Some(0.3), Some(-0.2)));
+        assert_eq!(l.sampler, Some(Sampler::Independent));
+        assert_eq!(l.time_budget, Some(250.0));
+        assert_eq!(l.show_environment, Some(true));
         // Switching a path scene to shadows keeps what shadows uses.
         let mut next = s.clone();
         let flags = SceneFlags {

@@ -17,12 +17,13 @@
 //!   the path.
 //!
 //! Units: `f(wo, wi)` is what a directional light of intensity 1 from `wi` sends
-//! towards `wo`, so a light of intensity `I` adds `I·f`: for a surface
-//! `c·diffuse·N·L + specular·lobe(cos γ)` (π times the BRDF times `N·wi`), for the
-//! medium `c·diffuse·4π·p(wi, wo)` (4π times the albedo times the phase function).
-//! [`Bsdf::pdf`] is a density per steradian and a sample's weight is the path
-//! throughput factor `BRDF·cos/pdf = f/(π·pdf)` (surface) or `albedo·p/pdf = albedo`
-//! (medium: its directions are drawn exactly by the phase function).
+//! towards `wo`, so a light of intensity `I` adds `I·f`; the light is the irradiance
+//! `π·I` for both parts: for a surface `c·diffuse·N·L + specular·lobe(cos γ)` (π
+//! times the BRDF times `N·wi`), for the medium `c·diffuse·π·p(wi, wo)` (π times the
+//! albedo times the phase function). [`Bsdf::pdf`] is a density per steradian and a
+//! sample's weight is the path throughput factor `f/(π·pdf)`: `BRDF·cos/pdf`
+//! (surface) or `albedo·p/pdf = albedo` (medium: its directions are drawn exactly by
+//! the phase function).
 //!
 //! The sums over the lights of the scalar models are written once
 //! ([`Shader::light_sums`], generic over each light's effective intensity) and the

@@ -171,9 +171,9 @@ fn densities_integrate_to_one_and_samples_carry_their_density_and_weight() {
                     assert!((s.wi.length() - 1.0).abs() < 1e-4);
                     assert!(close(s.pdf, bsdf.pdf(wo, s.wi), 1e-4), "{name}");
                     let f = bsdf.f(wo, s.wi);
-                    let over = if bsdf.is_surface() { PI } else { 4.0 * PI };
+                    // One irradiance π·I for both parts: f/π is the BSDF (times N·wi).
                     for (w, f) in s.weight.iter().zip(f) {
-                        assert!(close(*w, f / (over * s.pdf), 2e-4), "{name}");
+                        assert!(close(*w, f / (PI * s.pdf), 2e-4), "{name}");
                     }
                 }
             }
@@ -184,7 +184,7 @@ fn densities_integrate_to_one_and_samples_carry_their_density_and_weight() {
 #[test]
 fn sampled_albedo_matches_f_integrated_over_the_sphere() {
     // The estimator a path tracer forms, the mean of the weights, against the
-    // directional albedo ∫ f/π dω (surface) or ∫ f/4π dω (medium) by quadrature.
+    // directional albedo ∫ f/π dω (surface and medium alike) by quadrature.
     let base = [0.9, 0.7, 0.4];
     let wo = Vec3::new(0.3, -0.2, 0.9).normalize_or_zero();
     let normal = Vec3::new(0.0, 0.0, 1.0);
@@ -193,7 +193,7 @@ fn sampled_albedo_matches_f_integrated_over_the_sphere() {
         let shader = shader.with_anisotropy(0.6).unwrap();
         let surface = shader.scattering_normal(base, normal).choose(|| 0.0);
         let medium = shader.scattering(base, Vec3::ZERO).choose(|| 0.0);
-        for (bsdf, over) in [(surface, PI64), (medium, 4.0 * PI64)] {
+        for (bsdf, over) in [(surface, PI64), (medium, PI64)] {
             let want = sphere_integral(400, |wi| f64::from(bsdf.f(wo, wi)[0]) / over);
             let n = 200_000;
             let got: f64 = (0..n)

@@ -12,15 +12,20 @@
 //! Exposure Render draws the surface with probability `1 - exp(-s·|∇I|)`: the same
 //! idea, gated as glint's local model already is.
 //!
-//! Units: a light of intensity `I` from direction `L` sends a surface sample
-//! `I·(c·diffuse·N·L + specular·lobe)` and a medium sample `I·c·diffuse·4π·p(L, V)`,
-//! so with one light of intensity 1 that nothing shadows, an isotropic medium
-//! (`g = 0`) gives the local model's flat colour `c·diffuse`, and
-//! [`Shader::shade_shadowed`] gives [`Shader::shade`] (tested). As a BSDF in a path
-//! tracer this is `f·cos θ_i = response / π` for the surface (Lambert's `c·diffuse/π`
-//! and the lobe over π) and `f = response / 4π` for the medium (`c·diffuse` times the
-//! normalised phase function): energy-conserving for `c·diffuse <= 1`, so a white
-//! furnace stays at the environment's radiance.
+//! Units: a directional light of intensity `I` is an irradiance `E = π·I` (on a
+//! plane facing it) at every sample it reaches, surface or medium alike, so a scene
+//! with both parts means what a physical renderer's light of irradiance `π·I` means.
+//! It sends a surface sample the radiance `E·f_r·N·L = I·(c·diffuse·N·L +
+//! specular·lobe)` (Lambert's BRDF `c·diffuse/π`, the lobe over π: the `local`
+//! model's shading, unchanged) and a medium sample the radiance `E·albedo·p(L, V) =
+//! I·c·diffuse·π·p(L, V)` per unit of scattering, `p` the normalised phase function:
+//! [`MEDIUM_IRRADIANCE`] times `c·diffuse·4π·p`. An isotropic medium (`g = 0`) under
+//! one light of intensity 1 thus shows a quarter of the `local` model's flat colour
+//! `c·diffuse` (the `local` model itself keeps its flat colour). As a BSDF in a path
+//! tracer this is `f·cos θ_i = response / π` for the surface and `f = response / π`
+//! for the medium, both per unit of `E`; the environment is a radiance seen alike by
+//! both: energy-conserving for `c·diffuse <= 1`, so a white furnace stays at the
+//! environment's radiance.
 
 use crate::error::RenderError;
 use crate::math::Vec3;
@@ -39,6 +44,11 @@ pub fn phase_hg(g: f32, l_dot_v: f32) -> f32 {
     let denom = 1.0 + g2 + 2.0 * g * l_dot_v;
     (1.0 - g2) / (denom * denom.sqrt())
 }
+
+/// The factor of a medium's response to a light over `c·diffuse·4π·p` ([`phase_hg`]):
+/// `π/4π`, a light of intensity `I` being the irradiance `π·I` for the medium as for
+/// the surface (see the module docs).
+pub const MEDIUM_IRRADIANCE: f32 = 0.25;
 
 /// Largest `|g|` of the phase function a shader takes (at `|g| = 1` it is a delta).
 pub const MAX_ANISOTROPY: f32 = 0.95;
@@ -131,11 +141,12 @@ impl Shader {
     }
 
     /// What a scattering medium of colour `base` sends towards unit `wo` per unit of
-    /// light from unit `wi`: `c·diffuse·4π·p(wi, wo)` ([`phase_hg`]). Divided by 4π it
-    /// is the albedo `c·diffuse` times the normalised phase function.
+    /// light from unit `wi`: `c·diffuse·π·p(wi, wo)` ([`MEDIUM_IRRADIANCE`] times
+    /// [`phase_hg`]'s `4π·p`). Divided by π it is the albedo `c·diffuse` times the
+    /// normalised phase function.
     #[inline]
     pub fn medium_response(&self, base: [f32; 3], wo: Vec3, wi: Vec3) -> [f32; 3] {
-        let p = phase_hg(self.anisotropy, wi.dot(wo));
+        let p = MEDIUM_IRRADIANCE * phase_hg(self.anisotropy, wi.dot(wo));
         base.map(|b| b * self.material.diffuse * p)
     }
 
@@ -149,15 +160,16 @@ impl Shader {
 }
 
 /// The flat part of a sample that is all medium: `ambient·occlusion +
-/// diffuse·phase`.
+/// diffuse·phase/4` (`phase` the lights' sum of `I·T·4π·p`, [`MEDIUM_IRRADIANCE`]).
 #[inline(always)]
 pub(super) fn medium_factor(m: &Material, occlusion: f32, phase: f32) -> f32 {
-    m.ambient * occlusion + m.diffuse * phase
+    m.ambient * occlusion + m.diffuse * (MEDIUM_IRRADIANCE * phase)
 }
 
 /// The factors of a volume sample's colour `c·lit + spec` from its shadowed sums
 /// `[diffuse, specular, phase]`, the ambient occlusion and the surface weight `w`:
-/// `lit = ambient·occ + diffuse·(w·D + (1-w)·P)`, `spec = w·specular·S`.
+/// `lit = ambient·occ + diffuse·(w·D + (1-w)·P/4)`, `spec = w·specular·S`
+/// ([`MEDIUM_IRRADIANCE`]).
 #[inline(always)]
 pub(super) fn hybrid_terms(
     m: &Material,
@@ -165,7 +177,8 @@ pub(super) fn hybrid_terms(
     occlusion: f32,
     w: f32,
 ) -> (f32, f32) {
-    let lit = m.ambient * occlusion + m.diffuse * (w * diffuse + (1.0 - w) * phase);
+    let lit =
+        m.ambient * occlusion + m.diffuse * (w * diffuse + (1.0 - w) * (MEDIUM_IRRADIANCE * phase));
     let spec = w * (m.specular * specular);
     (lit, spec)
 }
@@ -215,7 +228,10 @@ mod tests {
     }
 
     #[test]
-    fn unshadowed_isotropic_light_is_the_local_model() {
+    fn unshadowed_isotropic_light_is_the_local_model_but_for_the_mediums_irradiance() {
+        // The surface part is the local model's; the medium part takes the light's
+        // irradiance π·I (a quarter of the local model's flat diffuse term, which is
+        // 4π·I·p): local - shadowed = (1 - w)·c·diffuse·3/4.
         let s = shader(0.0, 0.3, vec![Light::HEADLIGHT]);
         let view = Vec3::new(0.2, -0.1, 1.0).normalize_or_zero();
         let ray = s.for_ray(view);
@@ -229,11 +245,11 @@ mod tests {
             let base = [0.8, 0.5, 0.3];
             let local = s.shade(base, grad, &ray);
             let lit = s.shade_shadowed(base, grad, &ray, &[1.0], 1.0);
+            let w = s.surface_at(grad).map_or(0.0, |p| p.weight);
+            let d = Material::default().diffuse;
             for c in 0..3 {
-                assert!(
-                    (local[c] - lit[c]).abs() < 1e-6,
-                    "{grad:?}: {local:?} {lit:?}"
-                );
+                let want = local[c] - (1.0 - w) * base[c] * d * (1.0 - MEDIUM_IRRADIANCE);
+                assert!((want - lit[c]).abs() < 1e-6, "{grad:?}: {local:?} {lit:?}");
             }
         }
     }
@@ -288,9 +304,10 @@ mod tests {
         // The back side of the normal gives the same (two-sided), light behind gives 0.
         assert_eq!(s.surface_response(base, -n, l, l), r);
         assert_eq!(s.surface_response(base, n, l, -l), [0.0; 3]);
+        // The medium's: c·diffuse·π·p, at g = 0 c·diffuse/4 (one irradiance π·I).
         let med = s.medium_response(base, l, Vec3::new(0.0, 1.0, 0.0));
         for c in 0..3 {
-            assert!((med[c] - base[c] * m.diffuse).abs() < 1e-7);
+            assert!((med[c] - base[c] * m.diffuse * 0.25).abs() < 1e-7);
         }
         assert!(s.surface_at(Vec3::ZERO).is_none());
         let part = s.surface_at(n * -2.0).unwrap();

@@ -310,6 +310,9 @@ class Viewer(_w.HBox):
             "environment": None,
             "anisotropy": None,
             "occlusion": None,
+            "sampler": None,
+            "time_budget": None,
+            "show_environment": None,
         }
         self._from_panel(lighting=patch)
 

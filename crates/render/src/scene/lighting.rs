@@ -4,7 +4,9 @@
 use serde::{Deserialize, Serialize};
 
 use glint_core::{RenderError, RenderMode, MAX_ANISOTROPY};
-use glint_volume::{check_spp, LightingModel, PathSettings, ShadowSettings};
+use glint_volume::{
+    check_spp, check_time_budget, LightingModel, PathSettings, Sampler, ShadowSettings,
+};
 
 /// Samples per pixel of a `path` scene that does not say (a few seconds at 512x512
 /// on two cores; docs/lighting.md).
@@ -62,6 +64,20 @@ pub struct Lighting {
     /// `shadows`: local ambient occlusion on the ambient term [default: false].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub occlusion: Option<bool>,
+    /// `path`: where the paths' random numbers come from [default: `sobol`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampler: Option<Sampler>,
+    /// `path`: a time budget per frame in milliseconds (more than 0, at most one
+    /// hour): the frame adds passes of samples, one per pixel until each holds a
+    /// few, then where the noise is, until the budget is spent or no pixel below
+    /// `spp` is noisy; `spp` is then the most a pixel takes [default: none: every
+    /// pixel takes `spp`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_budget: Option<f64>,
+    /// `path`: camera rays that meet no matter see the environment (opaque) instead
+    /// of the background [default: false].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub show_environment: Option<bool>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -75,7 +91,7 @@ pub enum Transport {
     Path {
         /// Samples per pixel.
         spp: u32,
-        /// Bounces, seed, environment.
+        /// Bounces, seed, environment, sampler, time budget.
         settings: PathSettings,
     },
 }
@@ -88,7 +104,7 @@ impl Lighting {
     }
 
     /// The fields that are set, with their names.
-    fn set_fields(&self) -> [(&'static str, bool); 6] {
+    fn set_fields(&self) -> [(&'static str, bool); 9] {
         [
             ("spp", self.spp.is_some()),
             ("bounces", self.bounces.is_some()),
@@ -96,6 +112,9 @@ impl Lighting {
             ("environment", self.environment.is_some()),
             ("anisotropy", self.anisotropy.is_some()),
             ("occlusion", self.occlusion.is_some()),
+            ("sampler", self.sampler.is_some()),
+            ("time_budget", self.time_budget.is_some()),
+            ("show_environment", self.show_environment.is_some()),
         ]
     }
 
@@ -104,7 +123,16 @@ impl Lighting {
         match model {
             LightingModel::Local => &[],
             LightingModel::Shadows => &["anisotropy", "occlusion"],
-            LightingModel::Path => &["spp", "bounces", "seed", "environment", "anisotropy"],
+            LightingModel::Path => &[
+                "spp",
+                "bounces",
+                "seed",
+                "environment",
+                "anisotropy",
+                "sampler",
+                "time_budget",
+                "show_environment",
+            ],
         }
     }
 
@@ -121,6 +149,9 @@ impl Lighting {
             environment: self.environment.filter(|_| keep("environment")),
             anisotropy: self.anisotropy.filter(|_| keep("anisotropy")),
             occlusion: self.occlusion.filter(|_| keep("occlusion")),
+            sampler: self.sampler.filter(|_| keep("sampler")),
+            time_budget: self.time_budget.filter(|_| keep("time_budget")),
+            show_environment: self.show_environment.filter(|_| keep("show_environment")),
         }
     }
 
@@ -174,6 +205,9 @@ impl Lighting {
                     bounces: *self.bounces.get_or_insert(DEFAULT_BOUNCES),
                     seed: *self.seed.get_or_insert(0),
                     environment: *self.environment.get_or_insert(DEFAULT_ENVIRONMENT),
+                    sampler: *self.sampler.get_or_insert(Sampler::default()),
+                    time_budget: self.time_budget.map(check_time_budget).transpose()?,
+                    show_environment: *self.show_environment.get_or_insert(false),
                 };
                 settings.validate()?;
                 Transport::Path { spp, settings }

@@ -10,7 +10,8 @@ use glint_core::{
 };
 use glint_raster::{SurfaceSettings, Surfaces, SURFACE_COLOR};
 use glint_volume::{
-    preset, ClassifySettings, Field, FrameSettings, Kernel, LabelVolume, TransferFunction,
+    preset, ClassifySettings, Field, FrameSettings, Kernel, LabelVolume, LightingModel,
+    TransferFunction,
 };
 
 use super::{Input, Scene, Transport, DEFAULT_SHININESS};
@@ -151,11 +152,13 @@ fn over(behind: &mut Image, front: &Image, bg: [f32; 3]) {
     behind.stats.samples += front.stats.samples;
 }
 
-/// The lights of a scene: at least one, at most [`MAX_LIGHTS`].
-fn check_lights(lights: &[Light]) -> Result<(), RenderError> {
-    if lights.is_empty() {
+/// The lights of a scene: at most [`MAX_LIGHTS`], and at least one unless the
+/// environment may light it alone (`path` lighting).
+fn check_lights(lights: &[Light], environment_alone: bool) -> Result<(), RenderError> {
+    if lights.is_empty() && !environment_alone {
         return Err(RenderError::Parameter(
-            "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0)"
+            "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0), \
+             or light it by the environment alone with path lighting"
                 .into(),
         ));
     }
@@ -202,7 +205,7 @@ impl Scene {
                 "an iso value needs a volume to extract the isosurface from".into(),
             ));
         }
-        check_lights(&scene.lights)?;
+        check_lights(&scene.lights, false)?;
         scene.clip().validate()?;
         scene.lighting.resolve(RenderMode::Surface)?;
         let material = scene.material.apply(SURFACE_MATERIAL);
@@ -343,7 +346,7 @@ impl Scene {
             }
             (_, None) => 0.0,
         };
-        check_lights(&scene.lights)?;
+        check_lights(&scene.lights, scene.lighting.model == LightingModel::Path)?;
         if !scene.gate.is_finite() || !(0.0..=1.0).contains(&scene.gate) {
             return Err(RenderError::Parameter(format!(
                 "gate {}: expected a fraction in 0..=1",

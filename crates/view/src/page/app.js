@@ -219,7 +219,7 @@ $("light-el").oninput = light;
 // refused by the scene), the sample count with `path`.
 $("lighting").onchange = (e) => {
   const model = e.target.value;
-  const patch = { model, spp: null, bounces: null, seed: null, environment: null, anisotropy: null, occlusion: null };
+  const patch = { model, spp: null, bounces: null, seed: null, environment: null, anisotropy: null, occlusion: null, sampler: null, time_budget: null, show_environment: null };
   if (model === "path") patch.spp = Number($("spp").value);
   update({ lighting: patch });
 };

@@ -14,8 +14,11 @@
 //!   [`Transport::Path`](crate::Transport::Path)): delta
 //!   tracking against the macro cells' majorants, the lights by next-event estimation
 //!   with ratio tracking, a uniform environment, importance-sampled lobe and phase
-//!   function, Russian roulette. The same seed and sample count give the same image
-//!   bit for bit on any thread count.
+//!   function, Russian roulette; the first dimensions of each path from an
+//!   Owen-scrambled Sobol sequence by default ([`Sampler`]). The same seed, sampler
+//!   and sample count give the same image bit for bit on any thread count.
+
+use std::time::Duration;
 
 use glint_core::RenderError;
 
@@ -33,7 +36,9 @@ pub use crate::classification::LIGHT_CELL;
 pub use crate::light::ShadowField;
 pub use occluders::Occluders;
 pub use path::PathImage;
-pub(crate) use path::PathTracer;
+pub(crate) use path::{Pass, PathTracer};
+pub use path::{ADAPTIVE_MIN_SAMPLES, ADAPTIVE_THRESHOLD};
+pub use rng::{Sampler, SOBOL_DIMS};
 pub use shadows::ShadowSettings;
 
 /// Most samples per pixel a path-traced image takes.
@@ -100,6 +105,15 @@ pub struct PathSettings {
     pub seed: u64,
     /// Radiance of the uniform white environment that paths leaving the volume see.
     pub environment: f32,
+    /// Where the paths' random numbers come from.
+    pub sampler: Sampler,
+    /// Whether camera rays that meet no matter see the environment (opaque) rather
+    /// than the frame's background.
+    pub show_environment: bool,
+    /// With a time budget a frame adds passes of samples, spent where the noise is,
+    /// until the budget is spent ([`check_time_budget`]); without one every pixel
+    /// takes the frame's samples.
+    pub time_budget: Option<Duration>,
 }
 
 impl PathSettings {
@@ -117,8 +131,25 @@ impl PathSettings {
                 self.environment
             )));
         }
+        if let Some(b) = self.time_budget {
+            check_time_budget(b.as_secs_f64() * 1000.0)?;
+        }
         Ok(())
     }
+}
+
+/// The longest time budget a frame takes: one hour.
+pub const MAX_TIME_BUDGET_MS: f64 = 3_600_000.0;
+
+/// A time budget of `ms` milliseconds, checked: more than 0, at most
+/// [`MAX_TIME_BUDGET_MS`].
+pub fn check_time_budget(ms: f64) -> Result<Duration, RenderError> {
+    if !(ms > 0.0 && ms <= MAX_TIME_BUDGET_MS) {
+        return Err(RenderError::Parameter(format!(
+            "time budget {ms} ms: expected more than 0 and at most {MAX_TIME_BUDGET_MS} (one hour)"
+        )));
+    }
+    Ok(Duration::from_secs_f64(ms / 1000.0))
 }
 
 /// Checks a sample count.

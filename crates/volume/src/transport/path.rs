@@ -9,11 +9,16 @@
 //! its weight (`Scattering::choose`), as Exposure Render chooses its BRDF (Kroes et
 //! al. 2012).
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
 use glint_core::camera::Camera;
-use glint_core::{Bsdf, Image, RenderStats, Shader, Vec3};
+use glint_core::{Bsdf, Image, RenderError, RenderStats, Shader, Vec3};
 
 use super::occluders::Occluders;
-use super::rng::Rng;
+use super::rng::{dims, Rng};
 use super::tracking::{IndexRay, Tracker};
 use super::PathSettings;
 use crate::classification::Medium;
@@ -27,16 +32,32 @@ const ROULETTE_AFTER: u32 = 2;
 /// sometimes, so a white furnace's paths end before `bounces`).
 const MAX_SURVIVAL: f32 = 0.95;
 
+/// Samples every pixel takes before its variance decides whether it takes more, under
+/// a time budget (the variance of fewer is too unsure to steer by).
+pub const ADAPTIVE_MIN_SAMPLES: u32 = 4;
+
+/// The relative standard error of a pixel's mean luminance (standard error over the
+/// mean) below which adaptive passes leave it: about 1/4 of a just visible step of a
+/// mid-grey (Cycles' adaptive threshold is 0.01 by default on a similar measure).
+pub const ADAPTIVE_THRESHOLD: f64 = 0.02;
+
 /// The running sums of a progressive path-traced image: per pixel the sums of the
-/// samples' radiance and coverage, in sample order, and how many samples each holds.
-/// The image of `n` samples is the same bit for bit however they were added (one
-/// batch or many), since each pixel adds its samples one by one in sample order.
+/// samples' radiance and coverage and of their luminance squared, in sample order,
+/// and how many samples each holds. The image is the same bit for bit for the same
+/// samples per pixel however they were added (one batch or many), since each pixel
+/// adds its samples one by one in sample order, sample `s` of pixel `p` the same
+/// path whenever it is taken.
 #[derive(Clone, Debug)]
 pub struct PathImage {
     width: u32,
     height: u32,
     /// Per pixel: radiance (premultiplied by coverage) and coverage, summed.
     sums: Vec<[f64; 4]>,
+    /// Per pixel: the sum of the samples' luminance squared (their variance).
+    squares: Vec<f64>,
+    /// Per pixel: samples taken.
+    counts: Vec<u32>,
+    /// The fewest samples a pixel holds.
     samples: u32,
     stats: RenderStats,
 }
@@ -44,10 +65,13 @@ pub struct PathImage {
 impl PathImage {
     /// An image of no samples.
     pub fn new(width: u32, height: u32) -> PathImage {
+        let n = width as usize * height as usize;
         PathImage {
             width,
             height,
-            sums: vec![[0.0; 4]; width as usize * height as usize],
+            sums: vec![[0.0; 4]; n],
+            squares: vec![0.0; n],
+            counts: vec![0; n],
             samples: 0,
             stats: RenderStats::default(),
         }
@@ -58,19 +82,43 @@ impl PathImage {
         [self.width, self.height]
     }
 
-    /// Samples per pixel so far.
+    /// Samples per pixel so far: the fewest any pixel holds (every pixel holds as
+    /// many unless a time budget spent samples where the noise is).
     pub fn samples(&self) -> u32 {
         self.samples
+    }
+
+    /// Samples each pixel holds, row by row.
+    pub fn sample_counts(&self) -> &[u32] {
+        &self.counts
+    }
+
+    /// The relative standard error of pixel `i`'s mean luminance: the standard error
+    /// `sqrt(var / n)` over the mean (0 for a pixel of no light or fewer than two
+    /// samples).
+    pub fn relative_error(&self, i: usize) -> f64 {
+        let n = f64::from(self.counts[i]);
+        if n < 2.0 {
+            return 0.0;
+        }
+        let [r, g, b, _] = self.sums[i];
+        let mean = (0.2126 * r + 0.7152 * g + 0.0722 * b) / n;
+        if mean <= 0.0 {
+            return 0.0;
+        }
+        let var = ((self.squares[i] / n - mean * mean) * n / (n - 1.0)).max(0.0);
+        (var / n).sqrt() / mean
     }
 
     /// The mean of the samples over `background` (linear RGB): the rendered image.
     /// `stats.samples` counts paths, `stats.shaded` scattering events.
     pub fn image(&self, background: [f32; 3]) -> Image {
-        let n = f64::from(self.samples.max(1));
         let (rgb, alpha) = self
             .sums
             .iter()
-            .map(|s| {
+            .zip(&self.counts)
+            .map(|(s, &n)| {
+                let n = f64::from(n.max(1));
                 let a = (s[3] / n) as f32;
                 let c = |i: usize| (s[i] / n) as f32 + (1.0 - a) * background[i];
                 ([c(0), c(1), c(2)], a)
@@ -85,18 +133,127 @@ impl PathImage {
         }
     }
 
-    /// The per-pixel sums, for a batch to continue (crate-internal).
-    pub(crate) fn sums_mut(&mut self) -> &mut [[f64; 4]] {
-        &mut self.sums
-    }
-
-    /// Records a finished batch that brought every pixel to `samples`.
-    pub(crate) fn finish_batch(&mut self, samples: u32, stats: RenderStats) {
-        self.samples = samples;
+    /// Adds samples to each pixel until it holds `targets[pixel]` (no fewer than it
+    /// holds), rows in parallel; rows not begun when `pass.cancel` is set are left.
+    fn add_pass(&mut self, tracer: &PathTracer<'_>, targets: &[u32], pass: &Pass<'_>) {
+        let w = self.width as usize;
+        let stats = self
+            .sums
+            .par_chunks_mut(w)
+            .zip(self.squares.par_chunks_mut(w))
+            .zip(self.counts.par_chunks_mut(w))
+            .enumerate()
+            .map(|(y, ((sums, squares), counts))| {
+                let mut stats = RenderStats::default();
+                if pass.cancel.load(Ordering::Relaxed) {
+                    return stats;
+                }
+                let row = (sums.iter_mut().zip(squares).zip(counts.iter_mut())).enumerate();
+                for (x, ((sum, square), count)) in row {
+                    let i = y * w + x;
+                    let limit = pass.far.map_or(f32::INFINITY, |f| f[i]);
+                    for s in *count..targets[i] {
+                        let r = tracer.trace(x as u32, y as u32, s, limit);
+                        for (acc, &x) in sum.iter_mut().zip(&r.radiance) {
+                            *acc += f64::from(x);
+                        }
+                        sum[3] += f64::from(r.coverage);
+                        let [cr, cg, cb] = r.radiance.map(f64::from);
+                        let lum = 0.2126 * cr + 0.7152 * cg + 0.0722 * cb;
+                        *square += lum * lum;
+                        stats.samples += 1;
+                        stats.shaded += u64::from(r.events);
+                    }
+                    *count = (*count).max(targets[i]);
+                }
+                (pass.progress)(w as u64);
+                stats
+            })
+            .reduce(RenderStats::default, |a, b| RenderStats {
+                samples: a.samples + b.samples,
+                shaded: a.shaded + b.shaded,
+                skips: a.skips + b.skips,
+            });
+        self.samples = self.counts.iter().copied().min().unwrap_or(0);
         self.stats.samples += stats.samples;
         self.stats.shaded += stats.shaded;
         self.stats.skips += stats.skips;
     }
+
+    /// Adds samples with `tracer` (its size this image's): every pixel to `spp`
+    /// without a time budget (`tracer`'s settings); with one, passes until the
+    /// budget is spent ([`PathImage::adaptive`]). Errors with
+    /// [`RenderError::Cancelled`] when `pass.cancel` was set (the image then holds
+    /// part of a pass and must be dropped).
+    pub(crate) fn trace(
+        &mut self,
+        tracer: &PathTracer<'_>,
+        spp: u32,
+        pass: &Pass<'_>,
+    ) -> Result<(), RenderError> {
+        match tracer.settings.time_budget {
+            None => {
+                let targets: Vec<u32> = self.counts.iter().map(|&n| n.max(spp)).collect();
+                self.add_pass(tracer, &targets, pass);
+            }
+            Some(budget) => self.adaptive(tracer, spp, budget, pass),
+        }
+        if pass.cancel.load(Ordering::Relaxed) {
+            return Err(RenderError::Cancelled);
+        }
+        Ok(())
+    }
+
+    /// Passes of samples until `budget` is spent, each a deterministic function of
+    /// the image before it: one sample to every pixel until each holds
+    /// [`ADAPTIVE_MIN_SAMPLES`] (or `spp`), then one more to each pixel below `spp`
+    /// whose [`PathImage::relative_error`] is above [`ADAPTIVE_THRESHOLD`]. A pass
+    /// starts only when the last one's time per sample says it ends within the budget
+    /// (the first always runs); none starts once no pixel needs one.
+    fn adaptive(&mut self, tracer: &PathTracer<'_>, spp: u32, budget: Duration, pass: &Pass<'_>) {
+        let start = Instant::now();
+        let mut per_sample: Option<f64> = None;
+        loop {
+            let uniform = ADAPTIVE_MIN_SAMPLES.min(spp);
+            let targets: Vec<u32> = if self.samples < uniform {
+                self.counts
+                    .iter()
+                    .map(|&n| n.max(self.samples + 1))
+                    .collect()
+            } else {
+                let over = |i: usize| self.relative_error(i) > ADAPTIVE_THRESHOLD;
+                (self.counts.iter().enumerate())
+                    .map(|(i, &n)| if n < spp && over(i) { n + 1 } else { n })
+                    .collect()
+            };
+            let added: u64 = (targets.iter().zip(&self.counts))
+                .map(|(&t, &n)| u64::from(t - n))
+                .sum();
+            if added == 0 {
+                return;
+            }
+            if let Some(cost) = per_sample {
+                let left = budget.as_secs_f64() - start.elapsed().as_secs_f64();
+                if cost * added as f64 > left {
+                    return;
+                }
+            }
+            let t = Instant::now();
+            self.add_pass(tracer, &targets, pass);
+            if pass.cancel.load(Ordering::Relaxed) {
+                return;
+            }
+            per_sample = Some(t.elapsed().as_secs_f64() / added as f64);
+        }
+    }
+}
+
+/// What a frame's passes read besides the tracer: the rays' limits, the cancel flag,
+/// the progress callback (rows).
+pub(crate) struct Pass<'a> {
+    pub(crate) far: Option<&'a [f32]>,
+    pub(crate) cancel: &'a AtomicBool,
+    pub(crate) progress: &'a (dyn Fn(u64) + Sync),
 }
 
 /// Everything a path needs that does not change during a frame.
@@ -205,9 +362,10 @@ impl<'a> PathTracer<'a> {
     pub(crate) fn trace(&self, x: u32, y: u32, sample: u32, far: f32) -> PathSample {
         let [w, h] = self.size;
         let pixel = u64::from(y) * u64::from(w) + u64::from(x);
-        let mut rng = Rng::new(self.settings.seed, pixel, u64::from(sample));
+        let mut rng = Rng::for_path(self.settings.sampler, self.settings.seed, pixel, sample);
         // A point of the pixel's square, uniformly (anti-aliasing).
-        let (jx, jy) = (rng.uniform() - 0.5, rng.uniform() - 0.5);
+        let jx = rng.dim(dims::JITTER) - 0.5;
+        let jy = rng.dim(dims::JITTER + 1) - 0.5;
         let (eye, dir) = self.camera.ray(x as f32 + jx, y as f32 + jy, w, h);
         let field = self.track.field;
         let mut ray = IndexRay::from_world(field, eye, dir);
@@ -225,11 +383,24 @@ impl<'a> PathTracer<'a> {
             } else {
                 None
             };
-            let Some(t) = self.track.free_path(&ray, t0, mesh.unwrap_or(t1), &mut rng) else {
-                if events > 0 && mesh.is_none() {
+            // This event's block of dimensions (the sampler's layout, `rng::dims`).
+            let block = dims::event(events);
+            rng.window(block + dims::FREE_PATH, 2);
+            let hit = self.track.free_path(&ray, t0, mesh.unwrap_or(t1), &mut rng);
+            rng.close();
+            let Some(t) = hit else {
+                // A scattered path that leaves sees the environment; a camera ray
+                // sees it (opaque) where the scene shows it and no mesh is behind.
+                let seen = if events == 0 {
+                    self.settings.show_environment && t1 == f32::INFINITY
+                } else {
+                    mesh.is_none()
+                };
+                if seen {
                     for c in 0..3 {
                         radiance[c] += beta[c] * env;
                     }
+                    coverage = 1.0;
                 }
                 break;
             };
@@ -248,9 +419,16 @@ impl<'a> PathTracer<'a> {
             if let Some(clip) = self.track.clip {
                 grad = clip.cut_gradient(p, grad);
             }
-            let bsdf = self.shader.scattering(color, grad).choose(|| rng.uniform());
-            self.direct(p, &bsdf, wo, &mut rng, beta, &mut radiance);
-            let u = [rng.uniform(), rng.uniform(), rng.uniform()];
+            let bsdf = self
+                .shader
+                .scattering(color, grad)
+                .choose(|| rng.dim(block + dims::CHOOSE));
+            self.direct(p, &bsdf, wo, (&mut rng, block), beta, &mut radiance);
+            let u = [
+                rng.dim(block + dims::LOBE),
+                rng.dim(block + dims::DIRECTION),
+                rng.dim(block + dims::DIRECTION + 1),
+            ];
             let Some(sample) = bsdf.sample(wo, u) else {
                 break;
             };
@@ -260,7 +438,7 @@ impl<'a> PathTracer<'a> {
             }
             if events >= ROULETTE_AFTER {
                 let q = beta[0].max(beta[1]).max(beta[2]).min(MAX_SURVIVAL);
-                if rng.uniform() >= q || q.is_nan() {
+                if rng.dim(block + dims::ROULETTE) >= q || q.is_nan() {
                     break;
                 }
                 for b in &mut beta {
@@ -288,14 +466,15 @@ impl<'a> PathTracer<'a> {
 
     /// Adds the lights' direct contribution at `p` through `bsdf` towards `wo`
     /// (next-event estimation), each light's transmittance estimated by ratio
-    /// tracking.
+    /// tracking (the first light's first tentative collision from the event `block`'s
+    /// dimensions).
     #[inline]
     fn direct(
         &self,
         p: Vec3,
         bsdf: &Bsdf<'_>,
         wo: Vec3,
-        rng: &mut Rng,
+        (rng, block): (&mut Rng, u32),
         beta: [f32; 3],
         radiance: &mut [f32; 3],
     ) {
@@ -304,7 +483,7 @@ impl<'a> PathTracer<'a> {
         } else {
             0.0
         };
-        for &(l, l_index, intensity) in &self.lights {
+        for (i, &(l, l_index, intensity)) in self.lights.iter().enumerate() {
             let response = bsdf.f(wo, l);
             if response == [0.0; 3] || intensity == 0.0 {
                 continue;
@@ -313,7 +492,11 @@ impl<'a> PathTracer<'a> {
             if self.mesh_hit(&shadow, t0, f32::INFINITY).is_some() {
                 continue;
             }
+            if i == 0 {
+                rng.window(block + dims::TRANSMIT, 2);
+            }
             let tr = self.track.transmittance(&shadow, t0, f32::INFINITY, rng);
+            rng.close();
             if tr > 0.0 {
                 for c in 0..3 {
                     radiance[c] += beta[c] * response[c] * (intensity * tr);

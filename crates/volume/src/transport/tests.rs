@@ -229,7 +229,11 @@ fn a_white_furnace_shows_the_environment() {
         background: [env; 3],
         ..Default::default()
     };
-    for g in [0.0f32, 0.6] {
+    for (g, sampler) in [
+        (0.0f32, Sampler::Sobol),
+        (0.6, Sampler::Sobol),
+        (0.6, Sampler::Independent),
+    ] {
         let shader = albedo_one(vec![Light::HEADLIGHT], 0.0)
             .with_anisotropy(g)
             .unwrap();
@@ -251,6 +255,9 @@ fn a_white_furnace_shows_the_environment() {
             bounces: MAX_BOUNCES,
             seed: 9,
             environment: env,
+            sampler,
+            time_budget: None,
+            show_environment: false,
         };
         let mut img = PathImage::new(12, 12);
         path_frame(&class, &shader, &frame, &settings, &mut img, 256).unwrap();
@@ -268,7 +275,7 @@ fn a_white_furnace_shows_the_environment() {
             "{covered} pixels' worth of paths met the matter"
         );
         let mean = scattered / covered;
-        eprintln!("furnace, g = {g}: mean {mean:.5}, environment {env}");
+        eprintln!("furnace, g = {g}, {sampler:?}: mean {mean:.5}, environment {env}");
         assert!(
             (mean - f64::from(env)).abs() < 0.01 * f64::from(env),
             "g = {g}: mean radiance {mean}, environment {env}"
@@ -471,11 +478,20 @@ fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
 
 #[test]
 fn path_images_depend_on_the_seed_and_sample_count_alone() {
+    for sampler in Sampler::ALL {
+        path_images_depend_on_the_seed_and_sample_count_alone_with(sampler);
+    }
+}
+
+fn path_images_depend_on_the_seed_and_sample_count_alone_with(sampler: Sampler) {
     let (class, shader, frame) = small_scene();
     let settings = PathSettings {
         bounces: 4,
         seed: 3,
         environment: 0.5,
+        sampler,
+        time_budget: None,
+        show_environment: false,
     };
     let trace = |threads: usize, batches: &[u32]| {
         on_threads(threads, || {
@@ -515,6 +531,194 @@ fn path_images_depend_on_the_seed_and_sample_count_alone() {
     let mut img = PathImage::new(20, 16);
     path_frame(&class, &shader, &frame, &settings, &mut img, 2).unwrap();
     assert!(path_frame(&class, &shader, &frame, &settings, &mut img, 1).is_err());
+}
+
+/// The mean luminance of an image's pixels.
+fn mean_luminance(img: &glint_core::Image) -> f64 {
+    let sum: f64 = (img.rgb.iter())
+        .map(|c| 0.2126 * f64::from(c[0]) + 0.7152 * f64::from(c[1]) + 0.0722 * f64::from(c[2]))
+        .sum();
+    sum / img.rgb.len() as f64
+}
+
+#[test]
+fn sobol_and_independent_samplers_agree_and_sobol_is_less_noisy() {
+    // Both estimate the same image: the mean over the image at 64 spp agrees with a
+    // 512-spp reference for each; Sobol's per-pixel error to the reference is lower.
+    let (class, shader, frame) = small_scene();
+    let run = |sampler, seed, spp| {
+        let settings = PathSettings {
+            bounces: 4,
+            seed,
+            environment: 0.5,
+            sampler,
+            time_budget: None,
+            show_environment: false,
+        };
+        let mut img = PathImage::new(20, 16);
+        path_frame(&class, &shader, &frame, &settings, &mut img, spp).unwrap()
+    };
+    let reference = run(Sampler::Independent, 100, 512);
+    let rms = |img: &glint_core::Image| {
+        let sq: f64 = (img.rgb.iter().zip(&reference.rgb))
+            .map(|(a, b)| {
+                (0..3)
+                    .map(|c| (f64::from(a[c]) - f64::from(b[c])).powi(2))
+                    .sum::<f64>()
+            })
+            .sum();
+        (sq / (3 * img.rgb.len()) as f64).sqrt()
+    };
+    let want = mean_luminance(&reference);
+    let mut errors = Vec::new();
+    for sampler in Sampler::ALL {
+        // Over several seeds, so the comparison is not one draw's luck.
+        let images: Vec<_> = (1..=4).map(|seed| run(sampler, seed, 16)).collect();
+        let error = images.iter().map(rms).sum::<f64>() / 4.0;
+        let mean = images.iter().map(mean_luminance).sum::<f64>() / 4.0;
+        eprintln!("{sampler:?}: rms {error:.5}, mean {mean:.5} (reference {want:.5})");
+        assert!(
+            (mean - want).abs() < 0.02 * want,
+            "{sampler:?}: {mean} against {want}"
+        );
+        errors.push(error);
+    }
+    assert!(
+        errors[0] < errors[1],
+        "sobol {} against independent {}",
+        errors[0],
+        errors[1]
+    );
+}
+
+#[test]
+fn adaptive_sampling_converges_to_the_same_mean_and_is_deterministic() {
+    let (class, shader, frame) = small_scene();
+    let settings = |time_budget| PathSettings {
+        bounces: 4,
+        seed: 5,
+        environment: 0.5,
+        sampler: Sampler::Sobol,
+        time_budget,
+        show_environment: false,
+    };
+    let uniform = {
+        let mut img = PathImage::new(20, 16);
+        path_frame(&class, &shader, &frame, &settings(None), &mut img, 256).unwrap()
+    };
+    // A budget far longer than the passes take: they stop when no pixel below the
+    // sample cap is noisy, so the counts, and the image, depend on nothing else.
+    let budget = Some(std::time::Duration::from_secs(600));
+    let adaptive = |threads| {
+        on_threads(threads, || {
+            let mut img = PathImage::new(20, 16);
+            let image = path_frame(&class, &shader, &frame, &settings(budget), &mut img, 256);
+            (image.unwrap(), img.sample_counts().to_vec())
+        })
+    };
+    let (one, counts) = adaptive(1);
+    let (two, counts2) = adaptive(2);
+    assert_eq!(counts, counts2);
+    assert_eq!(one.rgb, two.rgb, "1 thread against 2");
+    let (min, max) = (counts.iter().min().unwrap(), counts.iter().max().unwrap());
+    let total: u64 = counts.iter().map(|&n| u64::from(n)).sum();
+    eprintln!("adaptive: {min}..={max} samples per pixel, {total} in all");
+    assert!(*min >= ADAPTIVE_MIN_SAMPLES, "{min}");
+    assert!(*max > *min, "every pixel took as many samples: {min}");
+    assert!(
+        total < 256 * 20 * 16,
+        "{total} samples: no fewer than uniform"
+    );
+    // Pixels still noisy are those at the cap.
+    let held = {
+        let mut img = PathImage::new(20, 16);
+        path_frame(&class, &shader, &frame, &settings(budget), &mut img, 256).unwrap();
+        img
+    };
+    for (i, &n) in counts.iter().enumerate() {
+        assert!(n == 256 || held.relative_error(i) <= ADAPTIVE_THRESHOLD);
+    }
+    let (a, u) = (mean_luminance(&one), mean_luminance(&uniform));
+    eprintln!("mean luminance: adaptive {a:.5}, uniform {u:.5}");
+    assert!((a - u).abs() < 0.01 * u, "adaptive {a} against uniform {u}");
+    // A tiny budget still takes the first pass: one sample per pixel.
+    let mut img = PathImage::new(20, 16);
+    let tiny = Some(std::time::Duration::from_nanos(1));
+    path_frame(&class, &shader, &frame, &settings(tiny), &mut img, 256).unwrap();
+    assert_eq!(img.samples(), 1);
+    assert_eq!(img.sample_counts().iter().max(), Some(&1));
+}
+
+/// The mean radiance (green) of the central 8x8 pixels of a 16x16 `path` frame
+/// looking down (superior) at `vol` under a headlight of intensity 1, single
+/// scattering, no environment, albedo 1, the surface part under `gate`.
+fn single_scattering_from_above(vol: &Volume, opacity: f64, gate: f32) -> f64 {
+    let class = classify(vol, &white(&[(0.0, 0.0), (1.0, opacity)]));
+    let frame = FrameSettings {
+        width: 16,
+        height: 16,
+        camera: glint_core::CameraSpec {
+            view: glint_core::View::Superior,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let shader = albedo_one(vec![Light::HEADLIGHT], gate);
+    let settings = PathSettings {
+        bounces: 1,
+        seed: 2,
+        environment: 0.0,
+        sampler: Sampler::Sobol,
+        time_budget: None,
+        show_environment: false,
+    };
+    let mut img = PathImage::new(16, 16);
+    let image = path_frame(&class, &shader, &frame, &settings, &mut img, 256).unwrap();
+    let mut sum = 0.0;
+    for y in 4..12 {
+        for x in 4..12 {
+            sum += f64::from(image.rgb[y * 16 + x][1]);
+        }
+    }
+    sum / 64.0
+}
+
+#[test]
+fn one_light_is_one_irradiance_for_the_medium_and_the_surface() {
+    // A light of intensity I is the irradiance E = π·I on both parts.
+    // Surface only: a white Lambertian floor facing the light and the camera
+    // (gate 0: every sample with a gradient is surface) sends ρ·E·cos/π = I.
+    let floor = volume(
+        [24, 24, 24],
+        [1.0; 3],
+        |_, _, k| if k <= 12.0 { 1.0 } else { 0.0 },
+    );
+    let surface = single_scattering_from_above(&floor, 0.999, 0.0);
+    // Medium only: a uniform cube of depth D (gate far above any gradient), seen and
+    // lit along its depth, sends by single scattering
+    // ∫ σ e^{-σt} · E/(4π) · e^{-σt} dt = I·(1 - e^{-2σD})/8.
+    let cube = volume([24, 24, 24], [1.0; 3], |_, _, _| 1.0);
+    let medium = single_scattering_from_above(&cube, 0.03, 1e6);
+    let tau = -(0.97f64).ln() * 23.0;
+    let want = (1.0 - (-2.0 * tau).exp()) / 8.0;
+    eprintln!("surface {surface:.4} (want 1); medium {medium:.5} (want {want:.5}, τ {tau:.3})");
+    assert!((surface - 1.0).abs() < 0.02, "surface: {surface}");
+    assert!(
+        (medium - want).abs() < 0.03 * want,
+        "medium: {medium} against {want}"
+    );
+}
+
+#[test]
+fn time_budgets_are_checked() {
+    for bad in [0.0, -5.0, f64::NAN, f64::INFINITY, MAX_TIME_BUDGET_MS + 1.0] {
+        let e = check_time_budget(bad).unwrap_err().to_string();
+        assert!(e.contains("time budget") && !e.contains('\n'), "{e}");
+    }
+    assert_eq!(
+        check_time_budget(250.0).unwrap(),
+        std::time::Duration::from_millis(250)
+    );
 }
 
 #[test]
@@ -607,6 +811,9 @@ fn light_volumes_refuse_other_lights_and_mip() {
         bounces: 2,
         seed: 0,
         environment: 1.0,
+        sampler: Sampler::default(),
+        time_budget: None,
+        show_environment: false,
     };
     assert!(path_frame(&mip, &shader, &frame, &settings, &mut img, 1).is_err());
 }
@@ -743,6 +950,9 @@ fn a_mesh_shadows_the_path_traced_volume() {
             bounces,
             seed: 21,
             environment: 0.0,
+            sampler: Sampler::default(),
+            time_budget: None,
+            show_environment: false,
         };
         on_threads(threads, || {
             let mut img = PathImage::new(24, 24);
