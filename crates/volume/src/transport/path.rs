@@ -208,7 +208,14 @@ impl<'a> PathTracer<'a> {
         let mut rng = Rng::new(self.settings.seed, pixel, u64::from(sample));
         // A point of the pixel's square, uniformly (anti-aliasing).
         let (jx, jy) = (rng.uniform() - 0.5, rng.uniform() - 0.5);
-        let (eye, dir) = self.camera.ray(x as f32 + jx, y as f32 + jy, w, h);
+        // A point of the lens (thin-lens depth of field; a pinhole draws none).
+        let lens = self
+            .camera
+            .has_lens()
+            .then(|| [rng.uniform(), rng.uniform()]);
+        let (eye, dir) = self
+            .camera
+            .lens_ray(x as f32 + jx, y as f32 + jy, w, h, lens);
         let field = self.track.field;
         let mut ray = IndexRay::from_world(field, eye, dir);
         let (mut wdir, mut t0, mut t1) = (dir, 0.0f32, far);
