@@ -113,49 +113,49 @@ fn aces(x: f32) -> f32 {
 }
 
 /// AgX's inset matrix (rows), from Wrensch's minimal fit.
-const AGX_INSET: [[f32; 3]; 3] = [
-    [0.842_479_06, 0.078_433_6, 0.079_223_745],
-    [0.042_328_242, 0.878_468_6, 0.079_166_13],
-    [0.042_375_655, 0.078_433_6, 0.879_142_97],
+const AGX_INSET: [[f64; 3]; 3] = [
+    [0.842479062253094, 0.0784335999999992, 0.0792237451477643],
+    [0.0423282422610123, 0.878468636469772, 0.0791661274605434],
+    [0.0423756549057051, 0.0784336, 0.879142973793104],
 ];
 
 /// AgX's outset matrix (rows), the inverse of the inset matrix as Wrensch gives it.
-const AGX_OUTSET: [[f32; 3]; 3] = [
-    [1.196_879, -0.098_020_88, -0.099_029_74],
-    [-0.052_896_85, 1.151_903_1, -0.098_961_18],
-    [-0.052_971_635, -0.098_043_45, 1.151_073_7],
+const AGX_OUTSET: [[f64; 3]; 3] = [
+    [1.19687900512017, -0.0980208811401368, -0.0990297440797205],
+    [-0.0528968517574562, 1.15190312990417, -0.0989611768448433],
+    [-0.0529716355144438, -0.0980434501171241, 1.15107367264116],
 ];
 
 /// The log2 range AgX encodes, stops relative to 1.
-const AGX_MIN_EV: f32 = -12.473_93;
+const AGX_MIN_EV: f64 = -12.47393;
 /// See [`AGX_MIN_EV`].
-const AGX_MAX_EV: f32 = 4.026_069;
+const AGX_MAX_EV: f64 = 4.026069;
 
-fn mul(m: &[[f32; 3]; 3], v: [f32; 3]) -> [f32; 3] {
+fn mul(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
     m.map(|r| r[0] * v[0] + r[1] * v[1] + r[2] * v[2])
 }
 
 /// Wrensch's sixth-order polynomial fit of AgX's default contrast curve, on the
 /// log-encoded value in `[0, 1]`.
 #[inline]
-fn agx_contrast(x: f32) -> f32 {
+fn agx_contrast(x: f64) -> f64 {
     let x2 = x * x;
     let x4 = x2 * x2;
     15.5 * x4 * x2 - 40.14 * x4 * x + 31.96 * x4 - 6.868 * x2 * x + 0.4298 * x2 + 0.1191 * x
         - 0.00232
 }
 
-/// AgX of one pixel: display-referred linear RGB in `[0, 1]`.
+/// AgX of one pixel: display-referred linear RGB in `[0, 1]` (computed in f64).
 fn agx(rgb: [f32; 3]) -> [f32; 3] {
-    let v = mul(&AGX_INSET, rgb.map(|c| c.max(0.0)));
+    let v = mul(&AGX_INSET, rgb.map(|c| f64::from(c.max(0.0))));
     let encoded = v.map(|c| {
         let ev = c
-            .max(f32::MIN_POSITIVE)
+            .max(f64::MIN_POSITIVE)
             .log2()
             .clamp(AGX_MIN_EV, AGX_MAX_EV);
         agx_contrast((ev - AGX_MIN_EV) / (AGX_MAX_EV - AGX_MIN_EV))
     });
-    mul(&AGX_OUTSET, encoded).map(|c| srgb_to_linear(f64::from(c.clamp(0.0, 1.0))) as f32)
+    mul(&AGX_OUTSET, encoded).map(|c| srgb_to_linear(c.clamp(0.0, 1.0)) as f32)
 }
 
 #[cfg(test)]

@@ -791,20 +791,39 @@ fn a_thin_lens_keeps_the_plane_in_focus_sharp_and_blurs_the_rest() {
     lens.camera.aperture = 4.0;
     let focused = render(&volume, &lens);
     let eye = focused.scene.derived.as_ref().unwrap().eye;
-    let focus = focused.scene.derived.as_ref().unwrap().focus_mm.expect("auto focus");
+    let focus = focused
+        .scene
+        .derived
+        .as_ref()
+        .unwrap()
+        .focus_mm
+        .expect("auto focus");
     // The front face (y = 17.5 mm, between the last voxel of 1 and the first of 0) lies that far from the eye, along the view (-y).
-    assert!((focus - f64::from(eye[1] - 17.5)).abs() < 1.5, "{focus} vs {eye:?}");
-    assert!(edge_width(&focused.image) <= sharp + 2, "{}", edge_width(&focused.image));
+    assert!(
+        (focus - f64::from(eye[1] - 17.5)).abs() < 1.5,
+        "{focus} vs {eye:?}"
+    );
+    assert!(
+        edge_width(&focused.image) <= sharp + 2,
+        "{}",
+        edge_width(&focused.image)
+    );
     // Focused at half the distance, the face's edges spread over many pixels.
     lens.camera.focus = Some(glint_render::Focus::Distance(focus / 2.0));
     let blurred = edge_width(&render(&volume, &lens).image);
-    assert!(blurred >= sharp + 8, "out of focus: {blurred} px, pinhole {sharp}");
+    assert!(
+        blurred >= sharp + 8,
+        "out of focus: {blurred} px, pinhole {sharp}"
+    );
     // Local lighting renders a pinhole, lens or not.
     let mut local = lens.clone();
     local.lighting = Default::default();
     let mut local_pinhole = slab_scene(1);
     local_pinhole.lighting = Default::default();
-    assert_eq!(render(&volume, &local).image, render(&volume, &local_pinhole).image);
+    assert_eq!(
+        render(&volume, &local).image,
+        render(&volume, &local_pinhole).image
+    );
 }
 
 #[test]
@@ -829,5 +848,42 @@ fn the_tone_curve_maps_the_radiance_and_keeps_the_path_samples() {
         glint_render::tone_map(&mut expected, 1.0, *tone);
         assert_eq!(shown, expected, "{tone}");
         assert_ne!(shown, radiance, "{tone}");
+    }
+}
+
+#[test]
+fn film_and_lens_fields_patch_and_stay_out_of_default_scenes() {
+    let scene = Scene::default();
+    let json = scene.to_json().unwrap();
+    for key in ["exposure", "tone", "aperture", "focus"] {
+        assert!(!json.contains(key), "{key} in {json}");
+    }
+    let patch = serde_json::json!({
+        "exposure": -1.5,
+        "tone": "agx",
+        "camera": {"aperture": 2.5, "focus": "auto"}
+    });
+    let next = scene.patch(patch.as_object().unwrap()).unwrap();
+    assert_eq!((next.exposure, next.tone), (-1.5, glint_render::Tone::Agx));
+    assert_eq!(next.camera.aperture, 2.5);
+    assert_eq!(next.camera.focus, Some(glint_render::Focus::AUTO));
+    assert_eq!(next.camera.view, scene.camera.view);
+    assert_eq!(Scene::from_json(&next.to_json().unwrap()).unwrap(), next);
+    let next = next
+        .patch(
+            serde_json::json!({"camera": {"focus": 300}})
+                .as_object()
+                .unwrap(),
+        )
+        .unwrap();
+    assert_eq!(
+        next.camera.focus,
+        Some(glint_render::Focus::Distance(300.0))
+    );
+    for bad in [
+        serde_json::json!({"tone": "filmic"}),
+        serde_json::json!({"camera": {"focus": "near"}}),
+    ] {
+        assert!(scene.patch(bad.as_object().unwrap()).is_err(), "{bad}");
     }
 }
