@@ -146,6 +146,56 @@ pub struct Camera {
     /// Perspective: tangent of half the vertical field of view. Orthographic: half the
     /// image height in mm.
     pub half_height: f32,
+    /// Thin lens: the lens's radius in mm; 0 is a pinhole ([`Camera::lens_ray`]).
+    pub lens_radius: f32,
+    /// Thin lens: distance in mm from the eye (the image plane's centre, orthographic)
+    /// along `forward` to the plane in focus; unused by a pinhole.
+    pub focus_distance: f32,
+}
+
+/// Where a thin-lens camera focuses ([`CameraSpec::focus`]): a distance in mm from
+/// the eye along the view axis, or `auto`: the first opaque point under the image's
+/// centre (found by the renderer, which picks it). In JSON a number or `"auto"`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Focus {
+    /// Focus at this distance, mm.
+    Distance(f64),
+    /// Focus on what the image's centre shows.
+    Auto(AutoFocus),
+}
+
+/// The word `auto` of [`Focus::Auto`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AutoFocus {
+    /// `"auto"`.
+    Auto,
+}
+
+impl Focus {
+    /// Autofocus.
+    pub const AUTO: Focus = Focus::Auto(AutoFocus::Auto);
+}
+
+impl std::str::FromStr for Focus {
+    type Err = RenderError;
+
+    /// `auto`, or a distance in mm (checked by [`CameraSpec::validate`]).
+    fn from_str(s: &str) -> Result<Focus, RenderError> {
+        let s = s.trim();
+        if s.eq_ignore_ascii_case("auto") {
+            return Ok(Focus::AUTO);
+        }
+        s.parse::<f64>().map(Focus::Distance).map_err(|_| {
+            RenderError::Parameter(format!("focus '{s}': expected a distance in mm or 'auto'"))
+        })
+    }
+}
+
+/// Whether `x` is zero (serde's `skip_serializing_if` for the pinhole's aperture).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// How to place a camera around a bounding sphere.
@@ -162,6 +212,14 @@ pub struct CameraSpec {
     pub zoom: f64,
     /// Projection.
     pub projection: Projection,
+    /// Thin-lens depth of field (`path` lighting only): the lens's radius in mm; 0,
+    /// the default, is a pinhole. Left out of the JSON while 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub aperture: f64,
+    /// Where a lens of [`aperture`](Self::aperture) > 0 focuses (default: `auto`).
+    /// Left out of the JSON when absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub focus: Option<Focus>,
 }
 
 impl Default for CameraSpec {
@@ -172,13 +230,29 @@ impl Default for CameraSpec {
             elevation: 0.0,
             zoom: 1.0,
             projection: Projection::Perspective,
+            aperture: 0.0,
+            focus: None,
         }
     }
 }
 
 impl CameraSpec {
-    /// Checks the angles (finite, within ±3600°) and the zoom (0.001..=1000).
+    /// Checks the angles (finite, within ±3600°), the zoom (0.001..=1000), the
+    /// aperture (finite, 0..=10000 mm) and a focus distance (finite, > 0).
     pub fn validate(&self) -> Result<(), RenderError> {
+        if !self.aperture.is_finite() || !(0.0..=1e4).contains(&self.aperture) {
+            return Err(RenderError::Parameter(format!(
+                "aperture = {}: expected a lens radius in mm, 0 (a pinhole) to 10000",
+                self.aperture
+            )));
+        }
+        if let Some(Focus::Distance(d)) = self.focus {
+            if !d.is_finite() || d <= 0.0 {
+                return Err(RenderError::Parameter(format!(
+                    "focus = {d}: expected a distance in mm greater than 0, or 'auto'"
+                )));
+            }
+        }
         for (name, x) in [("azimuth", self.azimuth), ("elevation", self.elevation)] {
             if !x.is_finite() || x.abs() > 3600.0 {
                 return Err(RenderError::Parameter(format!(
@@ -245,6 +319,12 @@ impl Camera {
             up,
             projection: spec.projection,
             half_height,
+            lens_radius: spec.aperture as f32,
+            focus_distance: match spec.focus {
+                Some(Focus::Distance(d)) => d as f32,
+                // Resolved by the renderer before a lens ray is traced.
+                _ => 0.0,
+            },
         })
     }
 
@@ -278,6 +358,53 @@ impl Camera {
             Projection::Orthographic => (self.eye + self.right * u + self.up * v, self.forward),
         }
     }
+
+    /// Whether the camera has a lens (a radius > 0): [`Camera::lens_ray`] then needs
+    /// a point of the lens.
+    #[inline]
+    pub fn has_lens(&self) -> bool {
+        self.lens_radius > 0.0
+    }
+
+    /// The ray through pixel `(x, y)` ([`Camera::ray`]) of a thin lens (Kolb,
+    /// Mitchell and Hanrahan 1995; pbrt-v4's `PerspectiveCamera`): it leaves the point
+    /// of the lens `lens` (two uniform numbers in `[0, 1)`, mapped to the disc of
+    /// radius [`lens_radius`](Self::lens_radius) concentrically, Shirley and Chiu
+    /// 1997) towards where the pinhole ray meets the plane in focus, at
+    /// [`focus_distance`](Self::focus_distance) along `forward`. A pinhole, or `None`,
+    /// gives [`Camera::ray`] exactly.
+    #[inline]
+    pub fn lens_ray(&self, x: f32, y: f32, w: u32, h: u32, lens: Option<[f32; 2]>) -> (Vec3, Vec3) {
+        let (o, d) = self.ray(x, y, w, h);
+        let Some(lens) = lens.filter(|_| self.has_lens()) else {
+            return (o, d);
+        };
+        let along = d.dot(self.forward);
+        if along <= 0.0 {
+            return (o, d);
+        }
+        let focus = o + d * (self.focus_distance / along);
+        let [lx, ly] = concentric_disc(lens);
+        let origin = o + (self.right * lx + self.up * ly) * self.lens_radius;
+        (origin, (focus - origin).normalize_or_zero())
+    }
+}
+
+/// Shirley and Chiu's concentric map of the unit square onto the unit disc (area
+/// preserving, low distortion), as pbrt-v4's `SampleUniformDiskConcentric`.
+#[inline]
+fn concentric_disc([u, v]: [f32; 2]) -> [f32; 2] {
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return [0.0, 0.0];
+    }
+    let quarter = std::f32::consts::FRAC_PI_4;
+    let (r, theta) = if a.abs() > b.abs() {
+        (a, quarter * (b / a))
+    } else {
+        (b, 2.0 * quarter - quarter * (a / b))
+    };
+    [r * theta.cos(), r * theta.sin()]
 }
 
 #[cfg(test)]
@@ -407,5 +534,70 @@ mod tests {
         assert!(Camera::frame(&bad, Vec3::ZERO, 1.0, 8, 8).is_err());
         assert!("sideways".parse::<View>().is_err());
         assert_eq!("L".parse::<View>().unwrap(), View::Left);
+    }
+
+    #[test]
+    fn a_thin_lens_focuses_its_rays_on_the_plane_in_focus() {
+        let spec = CameraSpec {
+            aperture: 5.0,
+            focus: Some(Focus::Distance(120.0)),
+            ..Default::default()
+        };
+        for projection in [Projection::Perspective, Projection::Orthographic] {
+            let spec = CameraSpec { projection, ..spec };
+            let c = Camera::frame(&spec, Vec3::ZERO, 50.0, 40, 30).unwrap();
+            assert_eq!((c.lens_radius, c.focus_distance), (5.0, 120.0));
+            let (o, d) = c.ray(7.0, 21.0, 40, 30);
+            // No lens point: the pinhole ray, bit for bit.
+            assert_eq!(c.lens_ray(7.0, 21.0, 40, 30, None), (o, d));
+            let focus = o + d * (120.0 / d.dot(c.forward));
+            for lens in [[0.0, 0.0], [0.9, 0.1], [0.5, 0.5], [0.25, 0.999]] {
+                let (lo, ld) = c.lens_ray(7.0, 21.0, 40, 30, Some(lens));
+                // The lens point lies on the lens's disc, in the plane of the eye.
+                let off = lo - o;
+                assert!(off.length() <= 5.0 + 1e-4 && off.dot(c.forward).abs() < 1e-4);
+                // Every ray meets the pinhole ray on the plane in focus.
+                let t = (focus - lo).dot(c.forward) / ld.dot(c.forward);
+                assert!(close(lo + ld * t, focus), "{projection:?} {lens:?}");
+            }
+        }
+        // A pinhole ignores the lens point.
+        let c = Camera::frame(&CameraSpec::default(), Vec3::ZERO, 50.0, 40, 30).unwrap();
+        assert_eq!(
+            c.lens_ray(3.0, 4.0, 40, 30, Some([0.9, 0.9])),
+            c.ray(3.0, 4.0, 40, 30)
+        );
+    }
+
+    #[test]
+    fn aperture_and_focus_are_checked_and_parsed() {
+        let bad = |aperture, focus| {
+            CameraSpec {
+                aperture,
+                focus,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err()
+            .to_string()
+        };
+        assert!(bad(-1.0, None).contains("aperture = -1"));
+        assert!(bad(f64::NAN, None).contains("aperture"));
+        assert!(bad(1.0, Some(Focus::Distance(0.0))).contains("focus = 0"));
+        assert!(bad(1.0, Some(Focus::Distance(-5.0))).contains("focus = -5"));
+        assert_eq!("auto".parse::<Focus>().unwrap(), Focus::AUTO);
+        assert_eq!("250".parse::<Focus>().unwrap(), Focus::Distance(250.0));
+        assert!("near".parse::<Focus>().is_err());
+        // JSON: a number or "auto"; the defaults are left out.
+        let spec: CameraSpec =
+            serde_json::from_str(r#"{"aperture": 2.5, "focus": "auto"}"#).unwrap();
+        assert_eq!((spec.aperture, spec.focus), (2.5, Some(Focus::AUTO)));
+        let spec: CameraSpec = serde_json::from_str(r#"{"focus": 300}"#).unwrap();
+        assert_eq!(spec.focus, Some(Focus::Distance(300.0)));
+        let json = serde_json::to_string(&CameraSpec::default()).unwrap();
+        assert!(
+            !json.contains("aperture") && !json.contains("focus"),
+            "{json}"
+        );
     }
 }

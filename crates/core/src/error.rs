@@ -114,6 +114,9 @@ pub enum RenderError {
     /// Encoding the image as PNG failed.
     #[error("cannot encode the PNG")]
     Encode(#[source] png::EncodingError),
+    /// Encoding the image as OpenEXR failed.
+    #[error("cannot encode the OpenEXR image: {0}")]
+    EncodeExr(String),
     /// Writing the image failed (the io error names the file).
     #[error(transparent)]
     Write(glint_io::IoError),

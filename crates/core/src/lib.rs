@@ -29,18 +29,21 @@ mod clip;
 pub mod color;
 mod colormap;
 mod error;
+mod float_image;
 mod image;
 mod legend;
 pub mod lighting;
 pub mod math;
 mod mode;
 mod timings;
+pub mod tone;
 
-pub use camera::{Camera, CameraSpec, Projection, View};
+pub use camera::{Camera, CameraSpec, Focus, Projection, View};
 pub use clip::{Clip, ClipPlane, CropBox, HalfSpace};
 pub use color::{linear_to_srgb, luminance, luminance_f32, srgb_to_linear, REC709_LUMA};
 pub use colormap::{ColorMap, ScalarColors, COLORMAP_TABLE};
 pub use error::{unknown_name, BoxedError, RenderError};
+pub use float_image::FloatFormat;
 pub use image::{
     Depth, Image, RenderStats, MAX_IMAGE_SIDE, RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
@@ -52,3 +55,4 @@ pub use lighting::{
 pub use math::Vec3;
 pub use mode::RenderMode;
 pub use timings::Timings;
+pub use tone::{tone_map, Tone};

@@ -116,10 +116,10 @@ impl Renderer {
                 .inner
                 .lock()
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
-            r.render(&scene, &|_| {})
+            r.render_linear(&scene, &|_| {})
         })?
         .map_err(|e| render_error(py, e))?;
-        Ok(Image { rendered })
+        Ok(Image::from_radiance(rendered))
     }
 }
 
@@ -184,19 +184,27 @@ impl Renderer {
 
 /// Renders a volume (a `glint.Volume` or a path; None: the scene's own input) with a
 /// scene: an sRGB uint8 array of shape (height, width, 3), as `glint render` writes
-/// it to PNG. Keyword arguments replace scene fields. The GIL is released throughout.
+/// it to PNG; with `linear=True` the linear radiance instead, float32 (height, width,
+/// 3), before the scene's exposure and tone curve (what `glint render -o x.exr`
+/// writes). Keyword arguments replace scene fields. The GIL is released throughout.
 #[pyfunction]
-#[pyo3(signature = (volume=None, scene=None, **fields))]
+#[pyo3(signature = (volume=None, scene=None, linear=false, **fields))]
 pub fn render<'py>(
     py: Python<'py>,
     volume: Option<&Bound<'py, PyAny>>,
     scene: Option<&Bound<'py, Scene>>,
+    linear: bool,
     fields: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let base = scene.map(|s| s.get().inner.clone()).unwrap_or_default();
     let scene = with_fields(&base, fields)?;
     let renderer = Renderer::for_scene(py, volume, &scene)?;
-    renderer.render_scene(py, scene)?.array(py)
+    let image = renderer.render_scene(py, scene)?;
+    if linear {
+        image.linear(py)
+    } else {
+        image.array(py)
+    }
 }
 
 /// Renders a turntable of a scene: `frames` views whose camera azimuth steps
@@ -322,7 +330,28 @@ pub fn compare<'py>(
 /// PNG bytes; shows inline in Jupyter.
 #[pyclass(module = "glint", frozen)]
 pub struct Image {
+    /// The image as shown: the radiance through the scene's exposure and tone curve.
     rendered: Rendered,
+    /// The linear radiance, when the exposure and tone curve changed it (else it is
+    /// `rendered`'s image).
+    radiance: Option<glint_render::Image>,
+}
+
+impl Image {
+    /// The image of a render's linear radiance ([`glint_render::Renderer::render_linear`]):
+    /// tone mapped for display, the radiance kept for `linear` and float files.
+    fn from_radiance(mut rendered: Rendered) -> Image {
+        let s = &rendered.scene;
+        let same = s.exposure == 0.0 && s.tone == glint_render::Tone::Linear;
+        let radiance = (!same).then(|| rendered.image.clone());
+        rendered.tone_map();
+        Image { rendered, radiance }
+    }
+
+    /// The linear radiance.
+    fn radiance(&self) -> &glint_render::Image {
+        self.radiance.as_ref().unwrap_or(&self.rendered.image)
+    }
 }
 
 #[pymethods]
@@ -335,6 +364,17 @@ impl Image {
         let shape = [img.height as usize, img.width as usize, 3];
         let bytes = crate::pool::detach(py, || img.encode_srgb(Depth::Eight))?;
         Ok(PyArray1::from_vec(py, bytes).reshape(shape)?.into_any())
+    }
+
+    /// Linear radiance, float32 (height, width, 3): the rendered light before the
+    /// scene's exposure, tone curve and sRGB encoding (what `.exr` and `.pfm` files
+    /// hold).
+    #[getter]
+    fn linear<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let img = self.radiance();
+        let shape = [img.height as usize, img.width as usize, 3];
+        let flat: Vec<f32> = img.rgb.iter().flatten().copied().collect();
+        Ok(PyArray1::from_vec(py, flat).reshape(shape)?.into_any())
     }
 
     /// Accumulated opacity per pixel, float32 (height, width).
@@ -417,9 +457,15 @@ impl Image {
     }
 
     /// Writes an sRGB PNG atomically (no partial file on failure); `sixteen_bit` for
-    /// 16 bits per channel.
+    /// 16 bits per channel. A path ending in `.exr` or `.pfm` gets the linear
+    /// radiance ([`Image::linear`]) as OpenEXR (RGBA f32) or a Portable Float Map.
     #[pyo3(signature = (path, sixteen_bit=false))]
     fn save(&self, py: Python<'_>, path: PathBuf, sixteen_bit: bool) -> PyResult<()> {
+        if let Some(format) = glint_render::FloatFormat::of_path(&path) {
+            let img = self.radiance();
+            return crate::pool::detach(py, || img.write_float(&path, format))?
+                .map_err(|e| render_error(py, e));
+        }
         let depth = if sixteen_bit {
             Depth::Sixteen
         } else {

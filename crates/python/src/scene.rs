@@ -132,6 +132,9 @@ impl Scene {
             }
             // Omitted while off.
             None if name == "clip_caps" => json::to_py(py, &Value::Bool(false)),
+            // Omitted while at their defaults.
+            None if name == "exposure" => json::to_py(py, &Value::from(0.0)),
+            None if name == "tone" => json::to_py(py, &Value::from("linear")),
             None => Err(PyAttributeError::new_err(format!(
                 "'Scene' object has no attribute '{name}'"
             ))),
@@ -144,6 +147,8 @@ impl Scene {
         names.push("meshes".into());
         names.push("clip".into());
         names.push("clip_caps".into());
+        names.push("exposure".into());
+        names.push("tone".into());
         names.extend(
             ["from_json", "to_json", "to_dict", "replace", "load", "save"]
                 .iter()

@@ -189,3 +189,31 @@ def test_lighting_round_trips_and_renders_deterministically(glint_bin, tmp_path,
     if lighting["model"] == "path":
         other = scene.replace(lighting={**lighting, "seed": 6})
         assert not np.array_equal(first, glint.render(None, other))
+
+
+def test_linear_radiance_exposure_and_tone(glint_bin, tmp_path):
+    scene = glint.Scene(input={"phantom": {"name": "head", "size": 20}}, size=(20, 16),
+                        lighting={"model": "path", "spp": 2})
+    radiance = glint.render(None, scene, linear=True)
+    assert radiance.dtype == np.float32 and radiance.shape == (16, 20, 3)
+    # The exposure and tone curve change the display image, not the radiance.
+    agx = scene.replace(exposure=1.5, tone="agx")
+    assert agx.tone == "agx" and scene.tone == "linear" and scene.exposure == 0.0
+    assert np.array_equal(glint.render(None, agx, linear=True), radiance)
+    assert not np.array_equal(glint.render(None, agx), glint.render(None, scene))
+    # Linear at exposure 0 is the radiance encoded as sRGB, clipped.
+    srgb = np.where(radiance <= 0.0031308, 12.92 * radiance,
+                    1.055 * np.clip(radiance, 0, 1) ** (1 / 2.4) - 0.055)
+    assert np.abs(np.clip(srgb, 0, 1) * 255 - glint.render(None, scene)).max() <= 1
+    # A float file holds the radiance; the command writes the same floats.
+    out = tmp_path / "x.pfm"
+    (tmp_path / "s.json").write_text(scene.to_json())
+    proc = run_glint(glint_bin, "render", "-q", "--scene", str(tmp_path / "s.json"), "-o", str(out))
+    assert proc.returncode == 0, proc.stderr
+    data = out.read_bytes()
+    header = b"PF\n20 16\n-1.0\n"
+    assert data.startswith(header)
+    floats = np.frombuffer(data[len(header):], dtype="<f4").reshape(16, 20, 3)[::-1]
+    assert np.array_equal(floats, radiance)
+    with pytest.raises(ValueError):
+        glint.Scene(tone="filmic")

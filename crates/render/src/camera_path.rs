@@ -200,6 +200,7 @@ impl CameraPath {
             elevation: lerp(a.elevation, b.elevation),
             zoom,
             projection: a.projection.unwrap_or(base.projection),
+            ..*base
         }
     }
 }

@@ -79,6 +79,7 @@ pub use glint_core::{
     ScalarColors, Shader, Timings, View, COLORMAP_TABLE, MAX_IMAGE_SIDE, MAX_LIGHTS,
     RING_BLUR_SIGMA, RING_ERODE_PX, RING_OBJECT_ALPHA,
 };
+pub use glint_core::{tone_map, FloatFormat, Focus, Tone};
 pub use glint_core::{Clip, ClipPlane, CropBox, HalfSpace};
 pub use glint_io::ReadOptions;
 pub use glint_labels as label_maps;

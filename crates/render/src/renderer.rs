@@ -5,7 +5,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glint_core::camera::{Camera, Projection};
+use glint_core::camera::{Camera, Focus, Projection};
 use glint_core::{Image, Legend, RenderError, RenderMode, ScalarColors, Shader, Timings};
 use glint_io::{ReadOptions, Volume};
 use glint_volume::Transport as VolumeTransport;
@@ -131,6 +131,15 @@ pub struct Rendered {
 }
 
 impl Rendered {
+    /// Maps the image's radiance to display light with the scene's exposure and tone
+    /// curve ([`Scene::exposure`], [`Scene::tone`]; nothing changes at exposure 0
+    /// with the `linear` curve): what [`Renderer::render`] does after rendering, and
+    /// what a caller of [`Renderer::render_linear`] does after working on the
+    /// radiance.
+    pub fn tone_map(&mut self) {
+        glint_core::tone_map(&mut self.image, self.scene.exposure, self.scene.tone);
+    }
+
     /// Draws the colour bar ([`Rendered::colors`]) and the legend
     /// ([`Rendered::legend`]) into the image, as `glint render` writes it.
     pub fn draw_overlays(&mut self) {
@@ -482,8 +491,33 @@ impl Renderer {
         self.render_resolved(resolved, progress)
     }
 
-    /// Renders a scene resolved by [`Renderer::resolve`].
+    /// Renders a scene resolved by [`Renderer::resolve`], its radiance mapped to
+    /// display light by the scene's exposure and tone curve ([`Rendered::tone_map`]).
     pub fn render_resolved(
+        &mut self,
+        resolved: Resolved,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Rendered, RenderError> {
+        let mut rendered = self.render_resolved_linear(resolved, progress)?;
+        rendered.tone_map();
+        Ok(rendered)
+    }
+
+    /// Renders `scene` as [`Renderer::render`] does, but leaves the image as linear
+    /// radiance: no exposure, no tone curve (what `.exr` and `.pfm` output write, and
+    /// what a denoiser works on before [`Rendered::tone_map`]).
+    pub fn render_linear(
+        &mut self,
+        scene: &Scene,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Rendered, RenderError> {
+        let resolved = self.resolve(scene)?;
+        self.render_resolved_linear(resolved, progress)
+    }
+
+    /// [`Renderer::render_resolved`] without the exposure and tone curve: linear
+    /// radiance ([`Renderer::render_linear`]).
+    pub fn render_resolved_linear(
         &mut self,
         resolved: Resolved,
         progress: &(dyn Fn(u64) + Sync),
@@ -494,7 +528,7 @@ impl Renderer {
             Plan::Volume {
                 tf,
                 classify,
-                frame,
+                mut frame,
                 meshes,
                 transport,
             } => {
@@ -503,6 +537,7 @@ impl Renderer {
                 if built {
                     timings.record("classify", start.elapsed());
                 }
+                let focus = self.focus(&scene, &mut frame, transport)?;
                 let camera = class.camera(&frame)?;
                 let legend = meshes.as_ref().and_then(|m| m.legend.clone());
                 let occluders = self.occluders(&class, meshes.as_ref(), transport, &mut timings);
@@ -523,6 +558,7 @@ impl Renderer {
                 d.step_mm = Some(step_mm);
                 d.min_spacing_mm = Some(field.min_spacing());
                 d.transfer_function = Some(tf);
+                d.focus_mm = focus;
                 (image, d, None, legend)
             }
             Plan::Surface {
@@ -592,6 +628,9 @@ impl Renderer {
                     key.lighting.spp = None;
                     key.lighting.time_budget = None;
                     key.derived = None;
+                    // The display transform does not change the radiance traced.
+                    key.exposure = 0.0;
+                    key.tone = glint_core::Tone::Linear;
                     let key = key.to_json()?;
                     let size = [frame.width, frame.height];
                     let acc = match self.paths.take() {
@@ -624,6 +663,39 @@ impl Renderer {
             None => volume(None),
             Some(layer) => layer.render(v.camera, shader, |far| volume(Some(far))),
         }
+    }
+
+    /// The distance in focus of a thin-lens camera in `path` lighting, written into
+    /// `frame`'s camera: its own, or for `auto` (or none given) the depth of the
+    /// first opaque point under the image's centre ([`Renderer::pick`]); an error
+    /// when nothing is there. `None` for a pinhole or another lighting model (which
+    /// renders a pinhole).
+    fn focus(
+        &mut self,
+        scene: &Scene,
+        frame: &mut FrameSettings,
+        transport: Transport,
+    ) -> Result<Option<f64>, RenderError> {
+        let lens = frame.camera.aperture > 0.0;
+        if !lens || !matches!(transport, Transport::Path { .. }) {
+            return Ok(None);
+        }
+        let d = match frame.camera.focus {
+            Some(Focus::Distance(d)) => d,
+            _ => {
+                let (x, y) = (f64::from(frame.width) / 2.0, f64::from(frame.height) / 2.0);
+                match self.pick(scene, x, y)? {
+                    Some(hit) if hit.depth_mm > 0.0 => hit.depth_mm,
+                    _ => {
+                        return Err(RenderError::Parameter(
+                            "autofocus: nothing opaque under the image centre; give the focus distance in mm (--focus MM)".into(),
+                        ))
+                    }
+                }
+            }
+        };
+        frame.camera.focus = Some(Focus::Distance(d));
+        Ok(Some(d))
     }
 
     /// The light volumes of the frame's lights for its camera, its meshes opaque: the
@@ -727,6 +799,7 @@ fn derived(camera: &Camera) -> Derived {
             Projection::Orthographic => glint_core::camera::FIELD_OF_VIEW_DEG,
         },
         parallel_scale: camera.half_height,
+        focus_mm: None,
         step_mm: None,
         min_spacing_mm: None,
         transfer_function: None,

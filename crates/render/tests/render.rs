@@ -731,3 +731,159 @@ fn default_image_has_no_rings_and_is_deterministic() {
     let png_a = a.encode_png(glint_render::Depth::Eight).unwrap();
     assert_eq!(png_a, b.encode_png(glint_render::Depth::Eight).unwrap());
 }
+
+/// A slab facing the anterior camera on `n`^3 (1 mm voxels): value 1 over the middle
+/// half in x and z, four voxels thick in y; its front face is a plane at one depth.
+fn slab(n: usize) -> Volume {
+    let inside = |a: usize| (n / 4..3 * n / 4).contains(&a);
+    let mut v = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let on = inside(i) && inside(k) && (n / 2 - 2..n / 2 + 2).contains(&j);
+                v.push(if on { 1.0 } else { 0.0 });
+            }
+        }
+    }
+    Volume::new([n; 3], [1.0; 3], Samples::F32(v)).unwrap()
+}
+
+/// A path-traced scene of the opaque slab, unshaded, `spp` samples, 48x48.
+fn slab_scene(spp: u32) -> Scene {
+    let tf = TransferFunction::from_flat(
+        &[0.0, 0.0, 0.4, 0.0, 0.6, 1.0, 1.0, 1.0],
+        &[0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+    )
+    .unwrap();
+    let mut scene = scene(48, 48);
+    scene.transfer_function = Some(tf);
+    scene.material = flat_material();
+    scene.lighting = glint_render::Lighting {
+        model: glint_render::LightingModel::Path,
+        spp: Some(spp),
+        ..Default::default()
+    };
+    scene
+}
+
+/// Pixels of the middle row whose coverage is between 0.1 and 0.9: the width of the
+/// slab's two edges, blurred.
+fn edge_width(image: &glint_render::Image) -> usize {
+    let y = image.height / 2;
+    (0..image.width)
+        .filter(|&x| (0.1..0.9).contains(&image.alpha[(y * image.width + x) as usize]))
+        .count()
+}
+
+#[test]
+fn a_thin_lens_keeps_the_plane_in_focus_sharp_and_blurs_the_rest() {
+    let volume = slab(32);
+    let pinhole = render(&volume, &slab_scene(16));
+    // Aperture 0 is the pinhole bit for bit, whatever the focus.
+    let mut zero = slab_scene(16);
+    zero.camera.aperture = 0.0;
+    zero.camera.focus = Some(glint_render::Focus::Distance(20.0));
+    assert_eq!(render(&volume, &zero).image, pinhole.image);
+    let sharp = edge_width(&pinhole.image);
+    assert!(sharp <= 4, "pinhole edges {sharp} px wide");
+    // Autofocus on the front face under the centre: its edges stay sharp.
+    let mut lens = slab_scene(16);
+    lens.camera.aperture = 4.0;
+    let focused = render(&volume, &lens);
+    let eye = focused.scene.derived.as_ref().unwrap().eye;
+    let focus = focused
+        .scene
+        .derived
+        .as_ref()
+        .unwrap()
+        .focus_mm
+        .expect("auto focus");
+    // The front face (y = 17.5 mm, between the last voxel of 1 and the first of 0) lies that far from the eye, along the view (-y).
+    assert!(
+        (focus - f64::from(eye[1] - 17.5)).abs() < 1.5,
+        "{focus} vs {eye:?}"
+    );
+    assert!(
+        edge_width(&focused.image) <= sharp + 2,
+        "{}",
+        edge_width(&focused.image)
+    );
+    // Focused at half the distance, the face's edges spread over many pixels.
+    lens.camera.focus = Some(glint_render::Focus::Distance(focus / 2.0));
+    let blurred = edge_width(&render(&volume, &lens).image);
+    assert!(
+        blurred >= sharp + 8,
+        "out of focus: {blurred} px, pinhole {sharp}"
+    );
+    // Local lighting renders a pinhole, lens or not.
+    let mut local = lens.clone();
+    local.lighting = Default::default();
+    let mut local_pinhole = slab_scene(1);
+    local_pinhole.lighting = Default::default();
+    assert_eq!(
+        render(&volume, &local).image,
+        render(&volume, &local_pinhole).image
+    );
+}
+
+#[test]
+fn the_tone_curve_maps_the_radiance_and_keeps_the_path_samples() {
+    let volume = shepp_logan(24);
+    let mut scene = slab_scene(3);
+    scene.transfer_function = None;
+    scene.material = MaterialOverrides::default();
+    let mut renderer = Renderer::from_source(volume, None).unwrap();
+    let radiance = renderer.render_linear(&scene, &|_| {}).unwrap().image;
+    assert_eq!(renderer.render(&scene, &|_| {}).unwrap().image, radiance);
+    for tone in glint_render::Tone::ALL {
+        let toned = Scene {
+            exposure: 1.0,
+            tone: *tone,
+            ..scene.clone()
+        };
+        let shown = renderer.render(&toned, &|_| {}).unwrap().image;
+        // The same samples (none traced again), through the curve.
+        assert_eq!(renderer.path_samples(), 3);
+        let mut expected = radiance.clone();
+        glint_render::tone_map(&mut expected, 1.0, *tone);
+        assert_eq!(shown, expected, "{tone}");
+        assert_ne!(shown, radiance, "{tone}");
+    }
+}
+
+#[test]
+fn film_and_lens_fields_patch_and_stay_out_of_default_scenes() {
+    let scene = Scene::default();
+    let json = scene.to_json().unwrap();
+    for key in ["exposure", "tone", "aperture", "focus"] {
+        assert!(!json.contains(key), "{key} in {json}");
+    }
+    let patch = serde_json::json!({
+        "exposure": -1.5,
+        "tone": "agx",
+        "camera": {"aperture": 2.5, "focus": "auto"}
+    });
+    let next = scene.patch(patch.as_object().unwrap()).unwrap();
+    assert_eq!((next.exposure, next.tone), (-1.5, glint_render::Tone::Agx));
+    assert_eq!(next.camera.aperture, 2.5);
+    assert_eq!(next.camera.focus, Some(glint_render::Focus::AUTO));
+    assert_eq!(next.camera.view, scene.camera.view);
+    assert_eq!(Scene::from_json(&next.to_json().unwrap()).unwrap(), next);
+    let next = next
+        .patch(
+            serde_json::json!({"camera": {"focus": 300}})
+                .as_object()
+                .unwrap(),
+        )
+        .unwrap();
+    assert_eq!(
+        next.camera.focus,
+        Some(glint_render::Focus::Distance(300.0))
+    );
+    for bad in [
+        serde_json::json!({"tone": "filmic"}),
+        serde_json::json!({"camera": {"focus": "near"}}),
+    ] {
+        assert!(scene.patch(bad.as_object().unwrap()).is_err(), "{bad}");
+    }
+}

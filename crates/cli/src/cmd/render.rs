@@ -10,7 +10,8 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context};
 use glint_io::ReadOptions;
 use glint_render::{
-    Depth, Input, Kernel, Rendered, Renderer, Scene, SceneLobe, Turntable, DEFAULT_TURNTABLE_FPS,
+    Depth, FloatFormat, Input, Kernel, Rendered, Renderer, Scene, SceneLobe, Turntable,
+    DEFAULT_TURNTABLE_FPS,
 };
 
 use super::choice::choice;
@@ -30,6 +31,8 @@ use super::spinner::Spinner;
     glint render mni152.nii.gz --mode surface --iso 60 --view left -o surface.png\n  \
     glint render brain.nii.gz --dump-scene brain.json -o a.png   # then:\n  \
     glint render --scene brain.json --lobe exact -o b.png        # flags override the file\n  \
+    glint render --lighting path --spp 256 -o radiance.exr   # linear float (or .pfm)\n  \
+    glint render head.nii.gz --lighting path --aperture 4 --focus auto --tone agx -o dof.png\n  \
     glint render --phantom shepp-logan --size 256x256 --turntable 36 -o spin.gif\n  \
     glint render head.nii.gz --preset ct-bone --turntable 120 --fps 30 -o spin.mp4   # needs ffmpeg\n  \
     glint render head.nii.gz --turntable 8 -o frames/   # frames/frame-0000.png ...\n  \
@@ -70,7 +73,9 @@ pub struct Args {
 struct Options {
     #[command(flatten)]
     scene: SceneFlags,
-    /// Output PNG (written atomically); with --turntable or --camera-path, an animated
+    /// Output PNG (written atomically), or linear float radiance (before --exposure
+    /// and --tone, without colour bar or legend) as OpenEXR (.exr: RGBA f32) or a
+    /// Portable Float Map (.pfm: RGB f32); with --turntable or --camera-path, an animated
     /// GIF (.gif), an animated WebP (.webp), an MP4 (.mp4, through ffmpeg) or a
     /// directory of PNG frames (ending in '/', or an existing directory).
     #[arg(short, long, default_value = "render.png")]
@@ -158,13 +163,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             b.inc(n);
         }
     };
-    let mut rendered = renderer.render_resolved(resolved.clone(), &progress)?;
+    // Linear float output takes the radiance, before the exposure and tone curve.
+    let float = FloatFormat::of_path(&args.output);
+    let render = |renderer: &mut Renderer| match float {
+        Some(_) => renderer.render_resolved_linear(resolved.clone(), &progress),
+        None => renderer.render_resolved(resolved.clone(), &progress),
+    };
+    let mut rendered = render(&mut renderer)?;
     let mut frames = Vec::with_capacity(args.repeat as usize);
     for _ in 1..args.repeat {
         // A path-traced frame repeated is traced again, not taken from the last one.
         renderer.forget_paths();
         let start = Instant::now();
-        rendered = renderer.render_resolved(resolved.clone(), &progress)?;
+        rendered = render(&mut renderer)?;
         frames.push(start.elapsed());
     }
     if let Some(b) = &bar {
@@ -173,15 +184,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.repeat > 1 {
         print_repeat(&rendered, &mut frames);
     }
-    rendered.draw_overlays();
     let start = Instant::now();
-    let png = rendered
-        .image
-        .encode_png(depth(&args))
-        .context("encoding the PNG")?;
+    let bytes = match float {
+        // The radiance alone: no colour bar or legend drawn into it.
+        Some(format) => rendered.image.encode_float(format)?,
+        None => {
+            rendered.draw_overlays();
+            rendered
+                .image
+                .encode_png(depth(&args))
+                .context("encoding the PNG")?
+        }
+    };
     let encode = start.elapsed();
     let start = Instant::now();
-    glint_io::write_atomic(&args.output, |w| w.write_all(&png))?;
+    glint_io::write_atomic(&args.output, |w| w.write_all(&bytes))?;
     let write = start.elapsed();
     if let Some(path) = &args.dump_scene {
         rendered.scene.save(path)?;
@@ -489,6 +506,30 @@ mod tests {
             (vec!["--no-headlight".into()], "no light"),
             (vec!["--specular".into(), "NaN".into()], "specular"),
             (vec!["--sampling".into(), "linear".into()], "--sampling"),
+            (vec!["--tone".into(), "filmic".into()], "--tone"),
+            (vec!["--exposure".into(), "NaN".into()], "exposure"),
+            (vec!["--aperture".into(), "-1".into()], "aperture = -1"),
+            (vec!["--focus".into(), "near".into()], "--focus"),
+            (
+                ["--lighting", "path", "--aperture", "2", "--focus", "0"]
+                    .map(String::from)
+                    .to_vec(),
+                "focus = 0",
+            ),
+            // Autofocus with nothing under the image centre (a plane cuts it all away).
+            (
+                [
+                    "--lighting",
+                    "path",
+                    "--aperture",
+                    "2",
+                    "--clip",
+                    "1000,0,0,1,0,0",
+                ]
+                .map(String::from)
+                .to_vec(),
+                "autofocus",
+            ),
         ];
         for (extra, needle) in cases {
             let extra: Vec<&str> = extra.iter().map(|s| s.as_str()).collect();
@@ -497,6 +538,45 @@ mod tests {
             assert!(err.contains(needle), "{extra:?}: '{err}' lacks '{needle}'");
             assert!(!err.contains('\n'), "{extra:?}: one line expected: {err}");
             assert!(!left, "{extra:?} left a file");
+        }
+    }
+
+    #[test]
+    fn float_output_is_the_radiance_before_the_tone_curve() {
+        let dir = tempfile::tempdir().unwrap();
+        let small = ["--size", "12x10", "--phantom-size", "16"];
+        let pfm = |name: &str, extra: &[&str]| {
+            let mut argv = small.to_vec();
+            argv.extend_from_slice(extra);
+            let bytes = render_to(dir.path(), name, &argv);
+            let header = b"PF\n12 10\n-1.0\n";
+            assert_eq!(&bytes[..header.len()], header);
+            bytes[header.len()..].to_vec()
+        };
+        let plain = pfm("a.pfm", &[]);
+        assert_eq!(plain.len(), 12 * 10 * 3 * 4);
+        // The exposure and tone curve change the PNG, not the radiance.
+        assert_eq!(pfm("b.pfm", &["--exposure", "2", "--tone", "agx"]), plain);
+        let png = |name: &str, extra: &[&str]| {
+            let mut argv = small.to_vec();
+            argv.extend_from_slice(extra);
+            render_to(dir.path(), name, &argv)
+        };
+        assert_ne!(png("a.png", &[]), png("b.png", &["--tone", "aces"]));
+        // Exposure 0 and the linear curve given explicitly: today's PNG, bit for bit.
+        assert_eq!(
+            png("c.png", &[]),
+            png("d.png", &["--exposure", "0", "--tone", "linear"])
+        );
+        // OpenEXR: its magic number, from every lighting model.
+        for model in ["local", "shadows", "path"] {
+            let mut argv = small.to_vec();
+            argv.extend(["--lighting", model]);
+            if model == "path" {
+                argv.extend(["--spp", "2"]);
+            }
+            let exr = render_to(dir.path(), "x.exr", &argv);
+            assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01], "{model}");
         }
     }
 

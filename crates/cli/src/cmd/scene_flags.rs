@@ -10,9 +10,9 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    Clip, ClipPlane, ColorMap, CropBox, Input, Light, LightingModel, MeshSpec, Overlay, Phantom,
-    Prefilter, Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, TransferFunctionFile,
-    View, WindowLevel,
+    Clip, ClipPlane, ColorMap, CropBox, Focus, Input, Light, LightingModel, MeshSpec, Overlay,
+    Phantom, Prefilter, Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, Tone,
+    TransferFunctionFile, View, WindowLevel,
 };
 
 use super::choice::choice;
@@ -103,6 +103,24 @@ pub struct SceneFlags {
     /// Projection (perspective: 30° field of view) [default: perspective].
     #[arg(long, value_parser = choice::<Projection>(["perspective", "orthographic"]))]
     pub projection: Option<Projection>,
+    /// Path lighting: thin-lens depth of field, the lens's radius in mm (0: a pinhole;
+    /// local and shadows lighting always render a pinhole, with a note) [default: 0].
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    pub aperture: Option<f64>,
+    /// Path lighting with --aperture: the distance in focus, mm from the eye along the
+    /// view axis, or auto (the first opaque point under the image centre)
+    /// [default: auto].
+    #[arg(long, value_name = "MM|auto", allow_negative_numbers = true, value_parser = |s: &str| s.parse::<Focus>().map_err(|e| e.to_string()))]
+    pub focus: Option<Focus>,
+    /// Exposure in stops: the radiance is scaled by 2^EV before the tone curve (not
+    /// in .exr/.pfm output, which is the radiance) [default: 0].
+    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
+    pub exposure: Option<f64>,
+    /// Tone curve from radiance to display light, before the sRGB encoding: linear
+    /// (clips at 1), aces (Narkowicz's fit), agx (Blender 4's view transform)
+    /// [default: linear].
+    #[arg(long, value_parser = choice::<Tone>(Tone::NAMES.iter().copied()))]
+    pub tone: Option<Tone>,
     /// Sample distance along rays, in voxels of the smallest spacing [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
@@ -292,6 +310,18 @@ impl SceneFlags {
         set(&mut camera.elevation, self.elevation);
         set(&mut camera.zoom, self.zoom);
         set(&mut camera.projection, self.projection);
+        set(&mut camera.aperture, self.aperture);
+        if self.focus.is_some() {
+            camera.focus = self.focus;
+        }
+        if camera.aperture > 0.0 && scene.lighting.model != LightingModel::Path {
+            eprintln!(
+                "glint: note: --aperture (depth of field) applies to path lighting; {} lighting renders a pinhole",
+                scene.lighting.model.name()
+            );
+        }
+        set(&mut scene.exposure, self.exposure);
+        set(&mut scene.tone, self.tone);
         set(&mut scene.size, self.size);
         scene.clip.extend(self.clip.iter().copied());
         if self.crop.is_some() {

@@ -124,6 +124,9 @@ class Scene:
     sampling: Literal["point", "pre-integrated"]
     opacity_unit: Optional[float]
     background: List[float]
+    # Stops: the radiance scaled by 2**exposure before the tone curve.
+    exposure: float
+    tone: Literal["linear", "aces", "agx"]
     derived: Optional[Dict[str, Any]]
     def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
 
@@ -133,6 +136,9 @@ class Image:
     @property
     def array(self) -> npt.NDArray[np.uint8]:
         """sRGB uint8, shape (height, width, 3): the pixels of glint render's PNG."""
+    @property
+    def linear(self) -> npt.NDArray[np.float32]:
+        """Linear radiance, float32 (height, width, 3): before exposure, tone curve, sRGB."""
     @property
     def alpha(self) -> npt.NDArray[np.float32]: ...
     @property
@@ -173,9 +179,13 @@ class Renderer:
         nothing shows. A point off the image raises ValueError."""
 
 def render(
-    volume: Union[Volume, _Path, None] = None, scene: Optional[Scene] = None, **fields: Any
-) -> npt.NDArray[np.uint8]:
-    """Renders volume (None: the scene's input) with scene: sRGB uint8 (H, W, 3)."""
+    volume: Union[Volume, _Path, None] = None,
+    scene: Optional[Scene] = None,
+    linear: bool = False,
+    **fields: Any,
+) -> npt.NDArray[Any]:
+    """Renders volume (None: the scene's input) with scene: sRGB uint8 (H, W, 3);
+    linear=True: the linear radiance, float32 (H, W, 3), before exposure and tone."""
 
 def turntable(
     scene: Optional[Scene],

@@ -10,7 +10,7 @@
 use std::path::PathBuf;
 
 use glint_core::{
-    CameraSpec, Clip, ClipPlane, CropBox, Light, MaterialOverrides, RenderError, RenderMode,
+    CameraSpec, Clip, ClipPlane, CropBox, Light, MaterialOverrides, RenderError, RenderMode, Tone,
 };
 use glint_io::{open_volume, ReadOptions, Volume};
 use glint_volume::{Field, Phantom, Prefilter, Sampling, TransferFunction, WindowLevel};
@@ -137,6 +137,16 @@ pub struct Scene {
     pub opacity_unit: Option<f64>,
     /// Background colour, linear RGB.
     pub background: [f32; 3],
+    /// Exposure in stops: the rendered radiance is scaled by `2^exposure` before the
+    /// tone curve ([`Scene::tone`]) and the sRGB encoding; linear float output
+    /// (`.exr`, `.pfm`) is the radiance before it. Left out of the JSON while 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub exposure: f64,
+    /// The tone curve from radiance to display light ([`Tone`]: `linear`, the
+    /// default, clips at 1 as glint always did; `aces`; `agx`). Left out of the JSON
+    /// while `linear`.
+    #[serde(skip_serializing_if = "is_linear")]
+    pub tone: Tone,
     /// Clip planes (world mm), each keeping the side its normal points to: the
     /// volume, its light, a label map (as a volume or as surfaces) and the meshes are
     /// cut in every mode and lighting model; cut faces of the volume are lit with the
@@ -187,6 +197,8 @@ impl Default for Scene {
             sampling: Sampling::default(),
             opacity_unit: None,
             background: [0.0; 3],
+            exposure: 0.0,
+            tone: Tone::Linear,
             clip: Vec::new(),
             crop: None,
             clip_caps: false,
@@ -198,6 +210,16 @@ impl Default for Scene {
 /// Whether `b` is false (serde's `skip_serializing_if` for flags off by default).
 fn is_false(b: &bool) -> bool {
     !*b
+}
+
+/// Whether `x` is zero (serde's `skip_serializing_if` for the exposure).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+/// Whether `t` is the default curve (serde's `skip_serializing_if`).
+fn is_linear(t: &Tone) -> bool {
+    *t == Tone::Linear
 }
 
 /// Where the volume comes from.
@@ -279,6 +301,10 @@ pub struct Derived {
     pub view_up: [f32; 3],
     /// Perspective: full vertical view angle, degrees.
     pub view_angle_deg: f64,
+    /// The distance in focus, mm from the eye along the view axis, of a thin-lens
+    /// camera in `path` lighting (an `auto` focus as found under the image centre).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_mm: Option<f64>,
     /// Orthographic: half the image height, mm.
     pub parallel_scale: f32,
     /// Sample distance, mm (ray-cast volumes).

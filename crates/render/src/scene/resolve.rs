@@ -227,6 +227,7 @@ impl Scene {
             }
         };
         scene.camera.validate()?;
+        glint_core::tone::check_exposure(scene.exposure)?;
         let specular = scene.lobe.specular(n, hw)?;
         let shader = Shader::with_specular(
             specular,
@@ -373,6 +374,7 @@ impl Scene {
         };
         frame.validate()?;
         scene.camera.validate()?;
+        glint_core::tone::check_exposure(scene.exposure)?;
         let (transport, anisotropy) = scene.lighting.resolve(scene.mode)?;
         let specular = scene.lobe.specular(n, hw)?;
         let shader = Shader::with_specular(

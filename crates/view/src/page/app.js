@@ -121,6 +121,10 @@ function showScene(s) {
   const l = s.lighting || { model: "local" };
   $("lighting").value = l.model;
   if (l.spp !== undefined) $("spp").value = l.spp;
+  $("exposure").value = s.exposure || 0;
+  $("tone").value = s.tone || "linear";
+  $("aperture").value = s.camera.aperture || 0;
+  $("focus").value = s.camera.focus === undefined ? "auto" : s.camera.focus;
 }
 
 // The legend of the label map: a checkbox per label present (colour, name, voxel
@@ -224,6 +228,16 @@ $("lighting").onchange = (e) => {
   update({ lighting: patch });
 };
 $("spp").onchange = (e) => { if ($("lighting").value === "path") update({ lighting: { spp: Number(e.target.value) } }); };
+// Film: the exposure and tone curve map the radiance for display (a path image keeps
+// its samples); the thin lens (path lighting) focuses at a distance in mm or "auto".
+$("exposure").oninput = (e) => update({ exposure: Number(e.target.value) }, true);
+$("exposure").onchange = (e) => update({ exposure: Number(e.target.value) });
+$("tone").onchange = (e) => update({ tone: e.target.value });
+$("aperture").onchange = (e) => update({ camera: { aperture: Number(e.target.value) } });
+$("focus").onchange = (e) => {
+  const v = e.target.value.trim().toLowerCase();
+  update({ camera: { focus: v === "" || v === "auto" ? "auto" : Number(v) } });
+};
 $("save").onclick = () => { glint.saving = true; send({ type: "save" }); };
 $("labels-all").onclick = () => tickAll(true);
 $("labels-none").onclick = () => tickAll(false);

@@ -366,7 +366,14 @@ impl<'a> PathTracer<'a> {
         // A point of the pixel's square, uniformly (anti-aliasing).
         let jx = rng.dim(dims::JITTER) - 0.5;
         let jy = rng.dim(dims::JITTER + 1) - 0.5;
-        let (eye, dir) = self.camera.ray(x as f32 + jx, y as f32 + jy, w, h);
+        // A point of the lens (thin-lens depth of field; a pinhole draws none).
+        let lens = self
+            .camera
+            .has_lens()
+            .then(|| [rng.dim(dims::LENS), rng.dim(dims::LENS + 1)]);
+        let (eye, dir) = self
+            .camera
+            .lens_ray(x as f32 + jx, y as f32 + jy, w, h, lens);
         let field = self.track.field;
         let mut ray = IndexRay::from_world(field, eye, dir);
         let (mut wdir, mut t0, mut t1) = (dir, 0.0f32, far);
