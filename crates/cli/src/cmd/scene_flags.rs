@@ -180,8 +180,8 @@ pub struct SceneFlags {
     pub prefilter: Option<Prefilter>,
     /// Reconstruction between voxels, of the values and their gradients, in every
     /// lighting model: trilinear, or tricubic (the cubic B-spline, Sigg and Hadwiger
-    /// 2005: no stair steps of the voxel grid at a close zoom; it smooths slightly and
-    /// costs about twice the frame time in local) [default: trilinear].
+    /// 2005: no stair steps of the voxel grid at a close zoom; it smooths slightly, and
+    /// costs several times the frame time: docs/lighting.md) [default: trilinear].
     #[arg(long, value_parser = choice::<Filter>(Filter::NAMES.iter().copied()))]
     pub filter: Option<Filter>,
     /// Composite mode: point (the transfer function at each sample) or pre-integrated

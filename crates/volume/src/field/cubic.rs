@@ -29,9 +29,9 @@
 //!   takes the derivative weights there (both of each pair have the same sign), so the
 //!   gradient is 24 more.
 //!
-//! Measured on this machine (docs/lighting.md, "Smooth reconstruction"): the direct 64
-//! taps cost less than the eight fetches (one brick look-up instead of eight, and the
-//! gradient from the same loads), so they are used wherever the block lies in a brick.
+//! The direct 64 taps take one brick look-up instead of eight, and the gradient from
+//! the same loads, so they are used wherever the block lies in a brick (the two were
+//! not timed apart; the frame cost is in docs/lighting.md, "Smooth reconstruction").
 
 use crossbeam_epoch::Guard;
 
