@@ -89,9 +89,9 @@ pub use glint_raster::{SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
 pub use glint_volume::{memory_limit, set_memory_limit};
 pub use glint_volume::{phantom, presets};
 pub use glint_volume::{
-    preset, Classification, ClassifySettings, Field, FrameSettings, Kernel, Phantom, Prefilter,
-    Preset, Sampling, Source, TfFormat, TransferFunction, TransferFunctionFile, WindowLevel,
-    MACRO_CELL, MAX_FIELD_VOXELS, PICK_OPACITY, PRESETS, TERMINATION_OPACITY,
+    preset, Classification, ClassifySettings, Field, Filter, FrameSettings, Kernel, Phantom,
+    Prefilter, Preset, Sampling, Source, TfFormat, TransferFunction, TransferFunctionFile,
+    WindowLevel, MACRO_CELL, MAX_FIELD_VOXELS, PICK_OPACITY, PRESETS, TERMINATION_OPACITY,
 };
 pub use glint_volume::{
     LightingModel, PathImage, PathSettings, Sampler, ShadowField, ShadowSettings, MAX_BOUNCES,

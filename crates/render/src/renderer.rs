@@ -10,8 +10,8 @@ use glint_core::{Image, Legend, RenderError, RenderMode, ScalarColors, Shader, T
 use glint_io::{ReadOptions, Volume};
 use glint_volume::Transport as VolumeTransport;
 use glint_volume::{
-    Classification, ClassifySettings, ColourVolume, Field, FrameSettings, Kernel, Occluders,
-    PathImage, Prefilter, ShadowField, ShadowSettings, Source, TransferFunction,
+    Classification, ClassifySettings, ColourVolume, Field, Filter, FrameSettings, Kernel,
+    Occluders, PathImage, Prefilter, ShadowField, ShadowSettings, Source, TransferFunction,
 };
 
 use crate::hwlobe::HwCache;
@@ -317,8 +317,21 @@ impl Renderer {
     /// Builds the field with `prefilter` when it is not built yet or was built with
     /// another one (and forgets what depended on it); nothing without a volume.
     fn use_prefilter(&mut self, prefilter: Prefilter) -> Result<(), RenderError> {
+        let filter = self
+            .field
+            .as_ref()
+            .map_or(Filter::default(), |f| f.filter());
+        self.use_field(prefilter, filter)
+    }
+
+    /// Makes the field one with `prefilter` and `filter`: built when there is none or
+    /// its prefilter differs, reconstructed with `filter` when only that differs
+    /// (the same bricks when no classification or frame holds the field, else built
+    /// again), forgetting what depended on it; nothing without a volume. A field given
+    /// to the renderer ([`InMemory::Field`]) is refused another prefilter or filter.
+    fn use_field(&mut self, prefilter: Prefilter, filter: Filter) -> Result<(), RenderError> {
         if let Some(field) = &self.field {
-            if field.prefilter() == prefilter {
+            if field.prefilter() == prefilter && field.filter() == filter {
                 return Ok(());
             }
         }
@@ -326,20 +339,30 @@ impl Renderer {
             (Some(source), _) => source,
             (None, None) => return Ok(()),
             (None, Some(field)) => {
+                let (what, want, have) = if field.prefilter() != prefilter {
+                    ("prefilter", prefilter.name(), field.prefilter().name())
+                } else {
+                    ("filter", filter.name(), field.filter().name())
+                };
                 return Err(RenderError::Parameter(format!(
-                    "prefilter {}: this renderer was given a field built with prefilter {}",
-                    prefilter.name(),
-                    field.prefilter().name()
-                )))
+                    "{what} {want}: this renderer was given a field built with {what} {have}"
+                )));
             }
         };
-        let field = source.field(prefilter)?;
-        self.opened.extend(field.timings());
-        self.field = Some(Arc::new(field));
         self.classification = None;
         self.meshes = None;
         self.shadows = None;
         self.paths = None;
+        let same_prefilter = self.field.as_ref().map(|f| f.prefilter()) == Some(prefilter);
+        let field = match self.field.take().map(Arc::try_unwrap) {
+            Some(Ok(field)) if same_prefilter => field,
+            _ => {
+                let field = source.field(prefilter)?;
+                self.opened.extend(field.timings());
+                field
+            }
+        };
+        self.field = Some(Arc::new(field.with_filter(filter)));
         Ok(())
     }
 
@@ -412,7 +435,7 @@ impl Renderer {
     /// for a surface scene, its meshes (read now if the scene names others); a `hw`
     /// lobe's table is built once per (configuration, n) and kept.
     pub fn resolve(&mut self, scene: &Scene) -> Result<Resolved, RenderError> {
-        self.use_prefilter(scene.prefilter)?;
+        self.use_field(scene.prefilter, scene.filter)?;
         if scene.is_surface() || self.field.is_none() {
             let set = self.mesh_set(scene)?;
             return scene.resolve_surface(self.field.as_deref(), &set, &self.hw);

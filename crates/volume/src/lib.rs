@@ -54,7 +54,7 @@ pub use classification::{
     TransferFunctionFile, WindowLevel, LUT_SIZE,
 };
 pub use field::{
-    memory_limit, open_zarr, set_memory_limit, Field, Prefilter, Source, MACRO_CELL,
+    memory_limit, open_zarr, set_memory_limit, Field, Filter, Prefilter, Source, MACRO_CELL,
     MAX_FIELD_VOXELS, MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
 };
 pub use frames::Transport;

@@ -10,8 +10,8 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    Clip, ClipPlane, ColorMap, CropBox, Focus, Input, Light, LightingModel, MeshSpec, Overlay,
-    Phantom, Prefilter, Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, Tone,
+    Clip, ClipPlane, ColorMap, CropBox, Filter, Focus, Input, Light, LightingModel, MeshSpec,
+    Overlay, Phantom, Prefilter, Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, Tone,
     TransferFunctionFile, View, WindowLevel,
 };
 
@@ -196,6 +196,12 @@ pub struct SceneFlags {
     /// samples as stored) [default: binomial].
     #[arg(long, value_parser = choice::<Prefilter>(Prefilter::NAMES.iter().copied()))]
     pub prefilter: Option<Prefilter>,
+    /// Reconstruction between voxels, of the values and their gradients, in every
+    /// lighting model: trilinear, or tricubic (the cubic B-spline, Sigg and Hadwiger
+    /// 2005: no stair steps of the voxel grid at a close zoom; it smooths slightly, and
+    /// costs several times the frame time: docs/lighting.md) [default: trilinear].
+    #[arg(long, value_parser = choice::<Filter>(Filter::NAMES.iter().copied()))]
+    pub filter: Option<Filter>,
     /// Composite mode: point (the transfer function at each sample) or pre-integrated
     /// (integrated between samples, Engel et al. 2001: shells of opacity thinner than
     /// the step show without slicing rings, for about a third more frame time on the
@@ -330,6 +336,7 @@ impl SceneFlags {
         scene.clip_caps |= self.clip_caps;
         set(&mut scene.step, self.step);
         set(&mut scene.prefilter, self.prefilter);
+        set(&mut scene.filter, self.filter);
         set(&mut scene.sampling, self.sampling);
         if self.opacity_unit.is_some() {
             scene.opacity_unit = self.opacity_unit;

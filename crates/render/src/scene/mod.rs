@@ -13,7 +13,7 @@ use glint_core::{
     CameraSpec, Clip, ClipPlane, CropBox, Light, MaterialOverrides, RenderError, RenderMode, Tone,
 };
 use glint_io::{open_volume, ReadOptions, Volume};
-use glint_volume::{Field, Phantom, Prefilter, Sampling, TransferFunction, WindowLevel};
+use glint_volume::{Field, Filter, Phantom, Prefilter, Sampling, TransferFunction, WindowLevel};
 use serde::{Deserialize, Serialize};
 
 use crate::labels::LabelSpec;
@@ -127,6 +127,12 @@ pub struct Scene {
     /// How the volume's samples are filtered before trilinear reconstruction
     /// ([`Prefilter`]; `binomial` by default: no "wood grain" rings).
     pub prefilter: Prefilter,
+    /// How the field is reconstructed between voxels, its values and gradients, in
+    /// every lighting model ([`Filter`]: `trilinear` by default; `tricubic`, the cubic
+    /// B-spline, smooths away the voxel grid at a close zoom). Left out of the JSON
+    /// while it is the default.
+    #[serde(skip_serializing_if = "Filter::is_trilinear")]
+    pub filter: Filter,
     /// Composite mode: the transfer function read at each sample (`point`, the
     /// default) or integrated over the segments between samples (`pre-integrated`:
     /// thin shells of opacity show whatever the step) ([`Sampling`]).
@@ -194,6 +200,7 @@ impl Default for Scene {
             gate: 0.01,
             skip_empty: true,
             prefilter: Prefilter::default(),
+            filter: Filter::default(),
             sampling: Sampling::default(),
             opacity_unit: None,
             background: [0.0; 3],

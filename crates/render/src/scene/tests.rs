@@ -54,6 +54,61 @@ fn the_field_follows_the_scenes_prefilter() {
     assert_eq!(opened.field().unwrap().prefilter(), Prefilter::None);
 }
 
+/// The scene's filter: trilinear by default and then absent from the JSON; tricubic
+/// (set by a patch, as the viewer and Python do) reconstructs the same field's bricks
+/// (no second field built) with another image in every lighting model, and back to
+/// trilinear gives the first image bit for bit; a given field refuses another filter.
+#[test]
+fn the_field_follows_the_scenes_filter() {
+    let scene = small();
+    assert_eq!(scene.filter, Filter::Trilinear);
+    assert!(!serde_json::to_string(&scene)
+        .unwrap()
+        .contains("\"filter\""));
+    let cubic_scene = scene
+        .patch(
+            serde_json::json!({"filter": "tricubic"})
+                .as_object()
+                .unwrap(),
+        )
+        .unwrap();
+    assert_eq!(cubic_scene.filter, Filter::Tricubic);
+    assert!(serde_json::to_string(&cubic_scene)
+        .unwrap()
+        .contains("\"filter\":\"tricubic\""));
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+    for lighting in [
+        LightingModel::Local,
+        LightingModel::Shadows,
+        LightingModel::Path,
+    ] {
+        let with = |s: &Scene| Scene {
+            lighting: Lighting {
+                model: lighting,
+                spp: (lighting == LightingModel::Path).then_some(2),
+                ..Lighting::default()
+            },
+            ..s.clone()
+        };
+        let linear = r.render(&with(&scene), &|_| {}).unwrap();
+        let cubic = r.render(&with(&cubic_scene), &|_| {}).unwrap();
+        assert_eq!(r.field().unwrap().filter(), Filter::Tricubic);
+        assert_ne!(linear.image.rgb, cubic.image.rgb, "{lighting:?}");
+        let again = r.render(&with(&scene), &|_| {}).unwrap();
+        assert_eq!(linear.image.rgb, again.image.rgb, "{lighting:?}");
+    }
+    let last = r.render(&cubic_scene, &|_| {}).unwrap();
+    assert_eq!(fields_built(&last.timings), 1);
+    let volume = scene.input.open().unwrap();
+    let mut fixed = Renderer::from_source(Field::new(&volume).unwrap(), None).unwrap();
+    let raw = Scene {
+        prefilter: Prefilter::None,
+        ..cubic_scene
+    };
+    let err = fixed.render(&raw, &|_| {}).unwrap_err();
+    assert!(err.to_string().contains("filter tricubic"), "{err}");
+}
+
 /// How many times `timings` built a field.
 fn fields_built(timings: &Timings) -> usize {
     let stages = timings.stages().iter();

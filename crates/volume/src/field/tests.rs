@@ -509,3 +509,170 @@ fn a_frame_under_memory_pressure_is_the_same_frame() {
     }
     assert!(tight.brick_counts().1 > 0, "the tight cache evicted bricks");
 }
+
+/// A volume of `dims` (spacing 2, 1, 0.5 mm) with the values `f(i, j, k)`.
+fn volume_of(dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f32) -> Volume {
+    let mut v = Vec::new();
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                v.push(f(i, j, k));
+            }
+        }
+    }
+    Volume::new(dims, [2.0, 1.0, 0.5], Samples::F32(v)).unwrap()
+}
+
+/// Sample points spread over `dims` (index units), many near brick faces (16, 32),
+/// inside `margin` of the volume's faces.
+fn spread(dims: [usize; 3], margin: f32) -> Vec<Vec3> {
+    let mut out = Vec::new();
+    for n in 0..400u32 {
+        let r = |a: u32| {
+            ((n.wrapping_mul(2654435761).wrapping_add(a * 40503)) % 10007) as f32 / 10007.0
+        };
+        let at = |a: usize, u: f32| margin + u * (dims[a] as f32 - 1.0 - 2.0 * margin);
+        out.push(Vec3::new(at(0, r(1)), at(1, r(2)), at(2, r(3))));
+    }
+    for x in [15.0, 15.5, 16.0, 16.25, 16.99, 17.0, 31.7, 32.0] {
+        out.push(Vec3::new(x, x.min(dims[1] as f32 - 1.0 - margin), 2.5));
+    }
+    out
+}
+
+/// The cubic B-spline of the raw samples with clamp-to-edge, tap by tap (the oracle).
+fn spline_oracle(v: &Volume, p: Vec3) -> f32 {
+    let w = |t: f64| {
+        let s = 1.0 - t;
+        [
+            s * s * s / 6.0,
+            (3.0 * t * t * t - 6.0 * t * t + 4.0) / 6.0,
+            (-3.0 * t * t * t + 3.0 * t * t + 3.0 * t + 1.0) / 6.0,
+            t * t * t / 6.0,
+        ]
+    };
+    let p = [p.x, p.y, p.z].map(f64::from);
+    let i = [0, 1, 2].map(|a| (p[a].floor() as isize).min(v.dims[a] as isize - 2));
+    let ws = [0, 1, 2].map(|a| w(p[a] - i[a] as f64));
+    let mut sum = 0.0;
+    for c in 0..4 {
+        for b in 0..4 {
+            for a in 0..4 {
+                let at = |x: usize, o: usize| {
+                    (i[x] + o as isize - 1).clamp(0, v.dims[x] as isize - 1) as usize
+                };
+                sum += ws[0][a] * ws[1][b] * ws[2][c] * v.value(at(0, a), at(1, b), at(2, c));
+            }
+        }
+    }
+    sum as f32
+}
+
+#[test]
+fn tricubic_reproduces_a_linear_field_and_its_constant_gradient() {
+    // 40x36x20 voxels: bricks of 16 cells, so samples read one brick, or span two
+    // or more (the eight-fetch path).
+    let dims = [40, 36, 20];
+    let volume = volume_of(dims, |i, j, k| (2 * i + 3 * j) as f32 - k as f32);
+    let f = Field::new(&volume).unwrap().with_filter(Filter::Tricubic);
+    assert_eq!(f.filter(), Filter::Tricubic);
+    // Away from the faces (where clamping the taps bends the line).
+    for p in spread(dims, 1.0) {
+        let want = 2.0 * p.x + 3.0 * p.y - p.z;
+        assert!(
+            (f.value(p) - want).abs() < 2e-4,
+            "{p:?}: {} vs {want}",
+            f.value(p)
+        );
+        // World gradient: (2/2, 3/1, -1/0.5).
+        let g = f.gradient(p);
+        let err = (g.x - 1.0)
+            .abs()
+            .max((g.y - 3.0).abs())
+            .max((g.z + 2.0).abs());
+        assert!(err < 1e-4, "{p:?}: {g:?}");
+    }
+}
+
+#[test]
+fn tricubic_of_a_constant_field_is_constant_everywhere() {
+    let dims = [20, 18, 34];
+    let f = Field::new(&volume_of(dims, |_, _, _| 7.5))
+        .unwrap()
+        .with_filter(Filter::Tricubic);
+    for p in spread(dims, 0.0) {
+        assert!((f.value(p) - 7.5).abs() < 1e-5, "{p:?}: {}", f.value(p));
+        let g = f.gradient(p);
+        assert!(
+            g.x.abs().max(g.y.abs()).max(g.z.abs()) < 1e-5,
+            "{p:?}: {g:?}"
+        );
+    }
+}
+
+/// On a rough field: the tap-by-tap spline (both evaluations: within a brick and by
+/// eight fetches across bricks), within the (min, max) of its 4^3 taps, and within
+/// the dilated macro cell's range that light transport bounds it by.
+#[test]
+fn tricubic_is_the_spline_within_its_taps_and_its_macro_cell() {
+    let dims = [37, 21, 19];
+    let rough = |i: usize, j: usize, k: usize| {
+        (((i * 7919 + j * 104729 + k * 1299709) % 1013) as f32).sqrt() - 10.0
+    };
+    let volume = volume_of(dims, rough);
+    let f = Field::new(&volume).unwrap().with_filter(Filter::Tricubic);
+    let guard = crossbeam_epoch::pin();
+    for p in spread(dims, 0.0) {
+        let loc = f.locate(p);
+        let v = f.value_at(&loc, &guard);
+        let want = spline_oracle(&volume, p);
+        assert!((v - want).abs() < 1e-4, "{p:?}: {v} vs {want}");
+        // The eight fetches agree with the 64 taps wherever those apply.
+        assert!(
+            (f.fetched(&loc, &guard, [false; 3]) - v).abs() < 1e-4,
+            "{p:?}"
+        );
+        let mut taps = (f32::INFINITY, f32::NEG_INFINITY);
+        for c in 0..4 {
+            for b in 0..4 {
+                for a in 0..4 {
+                    let at =
+                        |x: usize, o: usize| (loc.ijk[x] + o).saturating_sub(1).min(dims[x] - 1);
+                    let t = volume.value(at(0, a), at(1, b), at(2, c)) as f32;
+                    taps = (taps.0.min(t), taps.1.max(t));
+                }
+            }
+        }
+        assert!(
+            v >= taps.0 - 1e-5 && v <= taps.1 + 1e-5,
+            "{p:?}: {v} outside {taps:?}"
+        );
+        let cell = f.macro_cells().1[f.cell_index(&loc)];
+        assert!(
+            v >= cell.0 - 1e-5 && v <= cell.1 + 1e-5,
+            "{p:?}: {v} outside cell {cell:?}"
+        );
+    }
+}
+
+/// Trilinear stays the default, bit for bit, and a field set to tricubic and back is
+/// the trilinear field again (values, gradients, macro cells).
+#[test]
+fn trilinear_is_the_default_bit_for_bit() {
+    let dims = [37, 21, 19];
+    let volume = volume_of(dims, |i, j, k| ((i * 31 + j * 17 + k * 7) % 23) as f32);
+    let plain = Field::new(&volume).unwrap();
+    assert_eq!(plain.filter(), Filter::Trilinear);
+    assert_eq!(Filter::default(), Filter::Trilinear);
+    let back = Field::new(&volume)
+        .unwrap()
+        .with_filter(Filter::Tricubic)
+        .with_filter(Filter::Trilinear);
+    assert_eq!(back.cells, plain.cells);
+    for p in spread(dims, 0.0) {
+        assert_eq!(back.value(p).to_bits(), plain.value(p).to_bits(), "{p:?}");
+        assert_eq!(back.gradient(p), plain.gradient(p), "{p:?}");
+    }
+    assert_eq!("Tricubic".parse::<Filter>().unwrap(), Filter::Tricubic);
+    assert!("catmull".parse::<Filter>().is_err());
+}
