@@ -50,7 +50,7 @@ pub use image::{
 pub use legend::Legend;
 pub use lighting::{
     phase_hg, Bsdf, BsdfSample, Light, Material, MaterialOverrides, RayLighting, Scattering,
-    ShadeBatch, Shader, SurfacePart, MAX_ANISOTROPY, MAX_LIGHTS,
+    ShadeBatch, Shader, SurfacePart, MAX_ANISOTROPY, MAX_LIGHTS, MEDIUM_IRRADIANCE,
 };
 pub use math::Vec3;
 pub use mode::RenderMode;

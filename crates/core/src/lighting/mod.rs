@@ -44,7 +44,7 @@ mod transport;
 pub use batch::ShadeBatch;
 pub use material::{Material, MaterialOverrides};
 pub use scatter::{cosine_hemisphere, sample_phase, Bsdf, BsdfSample, Scattering};
-pub use transport::{phase_hg, SurfacePart, MAX_ANISOTROPY};
+pub use transport::{phase_hg, SurfacePart, MAX_ANISOTROPY, MEDIUM_IRRADIANCE};
 
 /// A directional light given relative to the camera: `azimuth` degrees towards the
 /// image's right and `elevation` degrees towards its top, from the viewing direction.
