@@ -234,6 +234,22 @@ def test_viewer_refines_path_frames_while_the_mouse_rests(mni_path):
     assert snap.shape == (32, 32, 3)
 
 
+def test_viewer_close_ends_its_session(mni_path):
+    _modules()
+    import glint
+
+    v = glint.Viewer(str(mni_path), size=(16, 16), lighting={"model": "path", "spp": 64})
+    shown = v.snapshot()
+    assert v._session.pending()  # a path scene refining
+    v.close()
+    assert v._session.closed and not v._session.pending()
+    assert v._frame() is None and v._session.next_frame() is None
+    # The last frame still reads; a change is taken but nothing more is rendered.
+    assert np.array_equal(v.snapshot(), shown)
+    v.update(camera={"azimuth": 40})
+    assert v._session.next_frame() is None and v.scene.camera["azimuth"] == 40
+
+
 def test_viewer_bad_input_is_one_clear_message(tmp_path, mni_path):
     _modules()
     import glint

@@ -148,6 +148,7 @@ class Viewer(_w.HBox):
                 handle.cancel()
         self._settle_handle = self._pace_handle = None
         _LIVE.discard(self)
+        self.canvas.close()
         super().close()
 
     # -- the live scene ----------------------------------------------------------
@@ -308,6 +309,8 @@ class Viewer(_w.HBox):
             self.canvas.request_draw()
 
     def _frame(self):
+        if self._session.closed:
+            return None
         started = time.perf_counter()
         frame = self._session.next_frame()
         if frame is None:
