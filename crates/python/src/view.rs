@@ -3,14 +3,17 @@
 //! frames refined while the scene holds still) for `glint.Viewer`, the notebook
 //! viewer (python/glint/notebook.py), which only carries events and frames.
 
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use numpy::{PyArray1, PyArrayMethods as _};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use glint_render::{Depth, Input, LightingModel, ReadOptions, Renderer as RRenderer, SceneLobe};
+use glint_render::{
+    Depth, Input, LightingModel, ReadOptions, RenderError, Renderer as RRenderer, SceneLobe,
+};
 use glint_view::protocol::Purpose;
 use glint_view::Session;
 
@@ -21,6 +24,9 @@ use crate::scene::Scene;
 #[pyclass(module = "glint", frozen)]
 pub struct ViewSession {
     inner: Mutex<Session>,
+    /// Set by `close` (from any thread, without the lock a render
+    /// holds): the renderer's cancel flag, so a `path` frame in flight stops.
+    closed: Arc<AtomicBool>,
 }
 
 impl ViewSession {
@@ -74,8 +80,10 @@ impl ViewSession {
             },
             None => None,
         };
+        let closed = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&closed);
         let session = crate::pool::detach(py, move || {
-            let renderer = match memory {
+            let mut renderer = match memory {
                 Some(v) => {
                     let mut r = RRenderer::from_source(v, None)?;
                     // Meshes and the label map of the scene, as a file's renderer
@@ -85,12 +93,28 @@ impl ViewSession {
                 }
                 None => RRenderer::open(&scene, &ReadOptions::default())?,
             };
+            renderer.set_cancel(Some(flag));
             Session::new(renderer, &scene, settle)
         })?
         .map_err(|e| render_error(py, e))?;
         Ok(ViewSession {
             inner: Mutex::new(session),
+            closed,
         })
+    }
+
+    /// Ends the session: a `path` frame rendering now (on another thread) stops
+    /// within a batch of rows and no frame is owed or rendered after it. Safe from
+    /// any thread at any time (the kernel's shutdown, while its main thread renders);
+    /// the scene still reads.
+    fn close(&self) {
+        self.closed.store(true, Ordering::SeqCst);
+    }
+
+    /// Whether `close` was called.
+    #[getter]
+    fn closed(&self) -> bool {
+        self.closed.load(Ordering::SeqCst)
     }
 
     /// The live scene.
@@ -129,17 +153,26 @@ impl ViewSession {
 
     /// The frame owed now, if any, rendered (GIL released): a tuple of the sRGB
     /// uint8 array (height, width, 3), its purpose ("interactive", "full") and its
-    /// path samples per pixel (0 unless `path`); None when nothing is owed.
+    /// path samples per pixel (0 unless `path`); None when nothing is owed, and
+    /// once the session is closed (a frame cancelled by the close included).
     fn next_frame<'py>(
         &self,
         py: Python<'py>,
     ) -> PyResult<Option<(Bound<'py, PyAny>, &'static str, u32)>> {
         let frame = crate::pool::detach(py, || {
             let mut s = self.lock();
+            if self.closed.load(Ordering::SeqCst) {
+                return Ok(None);
+            }
             let Some(purpose) = s.next(Instant::now()) else {
                 return Ok(None);
             };
-            let f = s.render(purpose)?;
+            let f = match s.render(purpose) {
+                Err(RenderError::Cancelled) if self.closed.load(Ordering::SeqCst) => {
+                    return Ok(None)
+                }
+                f => f?,
+            };
             let rgb = f.image.encode_srgb(Depth::Eight);
             Ok(Some((
                 rgb,
@@ -160,6 +193,9 @@ impl ViewSession {
     /// Whether the live scene is progressive and still owes refinements, or a drag
     /// owes its full frame.
     fn pending(&self) -> bool {
+        if self.closed.load(Ordering::SeqCst) {
+            return false;
+        }
         let s = self.lock();
         s.settle_at().is_some() || s.owes()
     }

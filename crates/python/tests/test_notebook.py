@@ -11,6 +11,7 @@ JupyterLab screenshot is made by scripts/notebook-screenshot.
 import json
 import pathlib
 import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -86,10 +87,16 @@ def test_viewer_in_a_kernel_streams_frames_and_follows_a_drag(mni_path, tmp_path
         BROWSER,
         f"""
         viewer = glint.Viewer({str(mni_path)!r}, size=(96, 96))
+        # Run All: a snapshot before the browser shows the widget is not sent then
+        # (it could be lost), but when a view appears, though no new frame is owed.
+        snap = viewer.snapshot()
+        unseen = viewer.canvas._rfb_frame_index
         comm_update(viewer.canvas, {{"_has_visible_views": True}})
         """,
         """
         await settle(viewer)
+        shown = [unseen, viewer.canvas._rfb_frame_index,
+                 bool(np.array_equal(viewer.canvas._rfb_last_frame, snap))]
         first = viewer.canvas._rfb_last_frame.copy()
         sent_before = viewer.canvas._rfb_frame_index
         az0 = viewer.scene.camera["azimuth"]
@@ -107,6 +114,7 @@ def test_viewer_in_a_kernel_streams_frames_and_follows_a_drag(mni_path, tmp_path
             "diff": float(np.abs(first.astype(int) - after.astype(int)).mean()),
             "az": [az0, viewer.scene.camera["azimuth"]],
             "elevation": viewer.scene.camera["elevation"],
+            "shown": shown,
         }))
         """.replace("json.dumps", "__import__('json').dumps"),
         """
@@ -119,6 +127,8 @@ def test_viewer_in_a_kernel_streams_frames_and_follows_a_drag(mni_path, tmp_path
     ], tmp_path)
     drag = json.loads(_output(nb, 2))
     assert drag["first_shape"] == [96, 96, 3] and drag["after_shape"] == [96, 96, 3]
+    # The snapshot's frame: not sent before a view was visible, sent once one was.
+    assert drag["shown"][0] == 0 and drag["shown"][1] >= 1 and drag["shown"][2], drag
     # Frames arrived before the drag and during it (several reduced ones, then a full).
     assert drag["sent"][0] >= 1 and drag["sent"][1] - drag["sent"][0] >= 3, drag
     assert drag["diff"] > 1.0, drag
@@ -129,6 +139,80 @@ def test_viewer_in_a_kernel_streams_frames_and_follows_a_drag(mni_path, tmp_path
     # A change made in Python shows in the panel and the scene.
     assert after == {"panel": "shadows", "az": 10.0, "snap": [96, 96, 3]}
     ran("notebook viewer in a kernel (nbclient)")
+
+
+# A viewer busy refining a large `path` frame, as a widget on screen keeps it (every
+# frame acknowledged at once by a task standing in for the browser).
+BUSY_VIEWER = '''
+import asyncio, time, glint
+viewer = glint.Viewer({path!r}, size=(1024, 1024), lighting={{"model": "path", "spp": 1024}})
+canvas = viewer.canvas
+canvas._has_visible_views = True
+
+async def browser():
+    while True:
+        canvas._frame_feedback = {{"index": canvas._rfb_frame_index,
+                                   "timestamp": time.time(), "localtime": time.time()}}
+        await asyncio.sleep(0.01)
+
+task = asyncio.ensure_future(browser())
+canvas.request_draw()
+print("viewer")
+'''
+
+
+def test_kernel_restart_with_a_viewer_open(mni_path):
+    """A kernel restart (and a shutdown) while a viewer renders: the kernel stops by
+    itself, without jupyter_client's SIGTERM (sent half-way through its 5 s wait) or
+    SIGKILL, and the new kernel answers and makes a viewer again. Every wait bounded."""
+    _modules()
+    from jupyter_client import KernelManager
+
+    km = KernelManager(kernel_name="python3")
+    km.start_kernel()
+    kc = km.client()
+    kc.start_channels()
+
+    def run(code, timeout=60):
+        """Runs code in the kernel; its stdout (an error fails the test)."""
+        msg_id = kc.execute(code)
+        out = []
+        end = time.monotonic() + timeout
+        while True:
+            msg = kc.get_iopub_msg(timeout=max(0.1, end - time.monotonic()))
+            if msg["parent_header"].get("msg_id") != msg_id:
+                continue
+            kind, content = msg["msg_type"], msg["content"]
+            if kind == "stream":
+                out.append(content["text"])
+            elif kind == "error":
+                pytest.fail(f"{content['ename']}: {content['evalue']}")
+            elif kind == "status" and content["execution_state"] == "idle":
+                return "".join(out)
+
+    try:
+        kc.wait_for_ready(timeout=60)
+        assert run(BUSY_VIEWER.format(path=str(mni_path))) == "viewer\n"
+        # The first frame renders now, on the kernel's event loop.
+        time.sleep(0.5)
+        old = km.provisioner.process
+        km.restart_kernel(now=False)
+        # Exited by itself (0), not terminated (-15) or killed (-9).
+        assert old.returncode == 0, f"the kernel ended with {old.returncode}"
+        kc.wait_for_ready(timeout=60)
+        code = f"import glint\nprint(glint.Viewer({str(mni_path)!r}, size=(16, 16)).snapshot().shape)"
+        assert run(code) == "(16, 16, 3)\n"
+        # A shutdown with a busy viewer: the same.
+        assert run(BUSY_VIEWER.format(path=str(mni_path))) == "viewer\n"
+        time.sleep(0.5)
+        old = km.provisioner.process
+        km.shutdown_kernel(now=False)
+        assert old.returncode == 0, f"the kernel ended with {old.returncode}"
+    finally:
+        kc.stop_channels()
+        if km.has_kernel:
+            km.shutdown_kernel(now=True)
+    ran("notebook viewer: kernel restart (jupyter_client)")
 
 
 def test_viewer_refines_path_frames_while_the_mouse_rests(mni_path):
@@ -148,6 +232,22 @@ def test_viewer_refines_path_frames_while_the_mouse_rests(mni_path):
     assert v._session.settle_in() is not None
     snap = v.snapshot()
     assert snap.shape == (32, 32, 3)
+
+
+def test_viewer_close_ends_its_session(mni_path):
+    _modules()
+    import glint
+
+    v = glint.Viewer(str(mni_path), size=(16, 16), lighting={"model": "path", "spp": 64})
+    shown = v.snapshot()
+    assert v._session.pending()  # a path scene refining
+    v.close()
+    assert v._session.closed and not v._session.pending()
+    assert v._frame() is None and v._session.next_frame() is None
+    # The last frame still reads; a change is taken but nothing more is rendered.
+    assert np.array_equal(v.snapshot(), shown)
+    v.update(camera={"azimuth": 40})
+    assert v._session.next_frame() is None and v.scene.camera["azimuth"] == 40
 
 
 def test_viewer_bad_input_is_one_clear_message(tmp_path, mni_path):

@@ -11,6 +11,13 @@ frames (half size, a ``path`` scene in ``local`` light); once the input has been
 quiet for ``settle`` seconds, a full frame; a ``path`` scene then refines, each frame
 adding samples (1, 2, 4, 8, then 8 at a time) up to its ``spp``, while the mouse
 rests. This module carries events in and frames out.
+
+A kernel asked to shut down or restart while a viewer renders a ``path`` frame (seconds
+at full size) would stop only once that frame is done: the render runs on the kernel's
+main thread, and jupyter_client sends SIGTERM half-way through its 5 s wait. So every
+viewer's session is closed as soon as the kernel is told to stop (IPython's
+``exit_now``, set by the kernel's shutdown handler on its control thread): the frame in
+flight is cancelled and the kernel exits by itself.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from __future__ import annotations
 import asyncio
 import math
 import time
+import weakref
 
 import numpy as np
 
@@ -37,6 +45,34 @@ DEGREES_PER_PIXEL = 0.5
 #: Seconds of quiet after a drag before the full frame (``glint view``'s 150 ms).
 SETTLE = 0.15
 
+# The live viewers, closed when the kernel is told to stop (_close_on_exit).
+_LIVE: "weakref.WeakSet[Viewer]" = weakref.WeakSet()
+_WATCHING: list = []
+
+
+def _close_all(change):
+    """IPython's ``exit_now`` became true (the kernel's shutdown or restart handler,
+    on its control thread, or ``exit`` in a cell): every viewer's session is closed,
+    cancelling a frame the main thread renders now."""
+    if change.get("new"):
+        for viewer in list(_LIVE):
+            viewer._session.close()
+
+
+def _close_on_exit(viewer):
+    """Registers ``viewer`` for :func:`_close_all` (watching the shell once)."""
+    _LIVE.add(viewer)
+    if _WATCHING:
+        return
+    try:
+        from IPython import get_ipython
+    except ImportError:  # pragma: no cover - ipywidgets needs IPython
+        return
+    shell = get_ipython()
+    if shell is not None and shell.has_trait("exit_now"):
+        shell.observe(_close_all, names="exit_now")
+        _WATCHING.append(shell)
+
 
 class _Canvas(_RFB):
     """The frame buffer: mouse events to the viewer, frames from its session."""
@@ -44,6 +80,11 @@ class _Canvas(_RFB):
     def __init__(self, viewer, **kwargs):
         super().__init__(**kwargs)
         self._viewer = viewer
+        self.observe(self._on_visible, names="_has_visible_views")
+
+    def _on_visible(self, change):
+        if change["new"]:
+            self._viewer._view_shown()
 
     def handle_event(self, event):
         self._viewer._event(event)
@@ -82,6 +123,8 @@ class Viewer(_w.HBox):
         self._pace_handle = None
         self._next_draw_at = 0.0
         self._frames = 0
+        # The last frame is to be sent again (a view appeared that may not have it).
+        self._resend = False
         self._syncing = False
         self.canvas = _Canvas(
             self,
@@ -93,7 +136,20 @@ class Viewer(_w.HBox):
         self.panel = self._make_panel()
         super().__init__([self.canvas, self.panel])
         self._show_scene()
+        _close_on_exit(self)
         self.canvas.request_draw()
+
+    def close(self):
+        """Closes the widget and ends its session: a frame in flight is cancelled
+        and no more are rendered (``snapshot()`` then returns the last frame)."""
+        self._session.close()
+        for handle in (self._settle_handle, self._pace_handle):
+            if handle is not None:
+                handle.cancel()
+        self._settle_handle = self._pace_handle = None
+        _LIVE.discard(self)
+        self.canvas.close()
+        super().close()
 
     # -- the live scene ----------------------------------------------------------
 
@@ -136,6 +192,10 @@ class Viewer(_w.HBox):
         """The frame shown now, an sRGB uint8 array (height, width, 3): a frame still
         owed (a change not yet drawn, a drag's full frame) is rendered first, at full
         size, and shown in the widget too."""
+        if self._session.closed:
+            if self._last is None:
+                raise RuntimeError("this glint.Viewer is closed and never showed a frame")
+            return np.array(self._last[0])
         drawn = False
         while True:
             frame = self._session.next_frame()
@@ -148,16 +208,34 @@ class Viewer(_w.HBox):
         if self._last is None or self._last[1] == "interactive":
             # A drag not yet settled: its full frame now.
             self._session.update({}, False)
-            self._shown(self._session.next_frame())
-            drawn = True
+            frame = self._session.next_frame()
+            if frame is not None:  # None: closed meanwhile (the kernel stopping)
+                self._shown(frame)
+                drawn = True
         if drawn:
             self._send(self._last[0])
+        if self._last is None:
+            raise RuntimeError("this glint.Viewer was closed before its first frame")
         return np.array(self._last[0])
 
     def _send(self, array):
-        """Shows a frame rendered outside the widget's draw (a snapshot)."""
-        if self.canvas.comm is not None:
+        """Shows a frame rendered outside the widget's draw (a snapshot): sent now
+        when a view shows the widget, else when one appears (:meth:`_view_shown`)."""
+        if self.canvas.comm is not None and self.canvas._has_visible_views:
             self.canvas.send_frame(array)
+        else:
+            self._resend = True
+
+    def _view_shown(self):
+        """A view of the canvas became visible: it gets the last frame, even when
+        no new one is owed. Without this, a notebook run with Run All left the
+        canvas grey: the snapshot cell took the frame owed and sent it before the
+        browser's view existed (a frame that reaches the page before the widget's
+        script has loaded is lost, and a view starts as a grey pixel), so the draw
+        asked for when the view appeared had nothing new to send."""
+        if self._last is not None:
+            self._resend = True
+        self.canvas.request_draw()
 
     # -- events and frames ---------------------------------------------------------
 
@@ -231,10 +309,16 @@ class Viewer(_w.HBox):
             self.canvas.request_draw()
 
     def _frame(self):
+        if self._session.closed:
+            return None
         started = time.perf_counter()
         frame = self._session.next_frame()
         if frame is None:
+            if self._resend and self._last is not None:
+                self._resend = False
+                return self._last[0]
             return None
+        self._resend = False
         if frame[1] == "interactive":
             ended = time.perf_counter()
             self._next_draw_at = ended + max(0.005, (ended - started) / 4)
