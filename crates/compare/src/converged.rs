@@ -111,6 +111,8 @@ fn reference_scene(scene: &Scene, spp: u32) -> Result<(Scene, u64), CompareError
         )));
     }
     let seed = l.seed.unwrap_or(0).wrapping_add(REFERENCE_SEED_OFFSET);
+    // The reference is the mean of its samples: never denoised.
+    l.denoise = None;
     l.spp = Some(spp);
     l.seed = Some(seed);
     Ok((s, seed))
@@ -208,11 +210,35 @@ pub fn convergence_schedule(max: u32) -> Vec<u32> {
 /// each step as it is measured. Stops after the first step whose mean ꟻLIP is below
 /// `stop_below`, if given.
 pub fn convergence(
+    renderer: Renderer,
+    scene: &Scene,
+    reference_spp: u32,
+    schedule: &[u32],
+    stop_below: Option<f64>,
+    progress: &dyn Fn(&ConvergenceStep),
+) -> Result<Convergence, CompareError> {
+    convergence_with(
+        renderer,
+        scene,
+        reference_spp,
+        schedule,
+        stop_below,
+        false,
+        progress,
+    )
+}
+
+/// [`convergence`], with `cold` steps when asked: each step then traces its samples
+/// from none (the renderer forgets its samples first, as a frame after a camera move
+/// does), and its time is its own render's (with its denoising, when the scene asks
+/// for it), not the sum so far.
+pub fn convergence_with(
     mut renderer: Renderer,
     scene: &Scene,
     reference_spp: u32,
     schedule: &[u32],
     stop_below: Option<f64>,
+    cold: bool,
     progress: &dyn Fn(&ConvergenceStep),
 ) -> Result<Convergence, CompareError> {
     if schedule.is_empty() || schedule.windows(2).any(|w| w[0] >= w[1]) {
@@ -232,6 +258,10 @@ pub fn convergence(
     let mut elapsed = Duration::ZERO;
     for &spp in schedule {
         progressive.lighting.spp = Some(spp);
+        if cold {
+            renderer.forget_paths();
+            elapsed = Duration::ZERO;
+        }
         let start = Instant::now();
         let test = shoot(&mut renderer, &progressive)?;
         elapsed += start.elapsed();

@@ -81,6 +81,11 @@ struct Options {
     /// With --convergence: stop at the first step whose mean FLIP is below this.
     #[arg(long, requires = "convergence")]
     flip_below: Option<f64>,
+    /// With --convergence: trace each step from no samples (a cold start of the
+    /// frame, denoising included with --denoise) and print its own time, not the
+    /// cumulative one.
+    #[arg(long, requires = "convergence")]
+    cold: bool,
     /// No progress messages on stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -220,20 +225,22 @@ fn run_convergence(o: &Options, scene: Scene) -> anyhow::Result<()> {
     if !o.quiet {
         eprintln!("glint compare: tracing the reference, {reference} spp");
     }
-    println!("spp  seconds  mean dE  FLIP");
-    let conv = glint_compare::convergence(
+    println!("spp  seconds  mean dE  FLIP     SSIM");
+    let conv = glint_compare::convergence_with(
         renderer,
         &scene,
         reference,
         &glint_compare::convergence_schedule(max),
         o.flip_below,
+        o.cold,
         &|s| {
             println!(
-                "{:<4} {:<8.3} {:<8.4} {:.5}",
+                "{:<4} {:<8.3} {:<8.4} {:.5}  {:.5}",
                 s.spp,
                 s.elapsed.as_secs_f64(),
                 s.image.delta_e.map_or(f64::NAN, |d| d.mean),
-                s.image.flip.unwrap_or(f64::NAN)
+                s.image.flip.unwrap_or(f64::NAN),
+                s.image.ssim.unwrap_or(f64::NAN)
             );
         },
     )?;

@@ -10,9 +10,9 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    Clip, ClipPlane, ColorMap, CropBox, Input, Light, LightingModel, MeshSpec, Overlay, Phantom,
-    Prefilter, Projection, RenderMode, Sampling, Scene, SceneLobe, TransferFunctionFile, View,
-    WindowLevel,
+    Clip, ClipPlane, ColorMap, CropBox, Denoise, Input, Light, LightingModel, MeshSpec, Overlay,
+    Phantom, Prefilter, Projection, RenderMode, Sampling, Scene, SceneLobe, TransferFunctionFile,
+    View, WindowLevel,
 };
 
 use super::choice::choice;
@@ -216,6 +216,12 @@ pub struct SceneFlags {
     /// Shadows lighting: local ambient occlusion on the ambient term.
     #[arg(long)]
     pub occlusion: bool,
+    /// Path lighting: denoise the image, guided by the albedo, normal and depth of
+    /// each pixel's first hit: none, atrous (the built-in edge-avoiding wavelet
+    /// filter), oidn (Intel Open Image Denoise; builds with --features oidn, after
+    /// scripts/fetch-oidn) or auto (oidn when built in, else atrous) [default: none].
+    #[arg(long, value_parser = choice::<Denoise>(Denoise::ALL.map(|d| d.name())))]
+    pub denoise: Option<Denoise>,
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     pub no_skip: bool,
@@ -442,6 +448,7 @@ impl SceneFlags {
         set(&mut l.seed, self.seed.map(Some));
         set(&mut l.environment, self.environment.map(Some));
         set(&mut l.anisotropy, self.anisotropy.map(Some));
+        set(&mut l.denoise, self.denoise.map(Some));
         if self.occlusion {
             l.occlusion = Some(true);
         }

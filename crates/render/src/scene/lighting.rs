@@ -6,6 +6,8 @@ use serde::{Deserialize, Serialize};
 use glint_core::{RenderError, RenderMode, MAX_ANISOTROPY};
 use glint_volume::{check_spp, LightingModel, PathSettings, ShadowSettings};
 
+use crate::denoise::Denoise;
+
 /// Samples per pixel of a `path` scene that does not say (a few seconds at 512x512
 /// on two cores; docs/lighting.md).
 pub const DEFAULT_SPP: u32 = 64;
@@ -62,6 +64,11 @@ pub struct Lighting {
     /// `shadows`: local ambient occlusion on the ambient term [default: false].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub occlusion: Option<bool>,
+    /// `path`: how the image is denoised ([`Denoise`]: `none`, `atrous`, `oidn`,
+    /// `auto`) [default: none, the mean of the samples]. Left unset by a resolve
+    /// when not given, so scenes without it keep their JSON.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub denoise: Option<Denoise>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -77,6 +84,8 @@ pub enum Transport {
         spp: u32,
         /// Bounces, seed, environment.
         settings: PathSettings,
+        /// How the image is denoised ([`Denoise::effective`]: `auto` resolved).
+        denoise: Denoise,
     },
 }
 
@@ -88,7 +97,7 @@ impl Lighting {
     }
 
     /// The fields that are set, with their names.
-    fn set_fields(&self) -> [(&'static str, bool); 6] {
+    fn set_fields(&self) -> [(&'static str, bool); 7] {
         [
             ("spp", self.spp.is_some()),
             ("bounces", self.bounces.is_some()),
@@ -96,6 +105,7 @@ impl Lighting {
             ("environment", self.environment.is_some()),
             ("anisotropy", self.anisotropy.is_some()),
             ("occlusion", self.occlusion.is_some()),
+            ("denoise", self.denoise.is_some()),
         ]
     }
 
@@ -104,7 +114,14 @@ impl Lighting {
         match model {
             LightingModel::Local => &[],
             LightingModel::Shadows => &["anisotropy", "occlusion"],
-            LightingModel::Path => &["spp", "bounces", "seed", "environment", "anisotropy"],
+            LightingModel::Path => &[
+                "spp",
+                "bounces",
+                "seed",
+                "environment",
+                "anisotropy",
+                "denoise",
+            ],
         }
     }
 
@@ -121,6 +138,7 @@ impl Lighting {
             environment: self.environment.filter(|_| keep("environment")),
             anisotropy: self.anisotropy.filter(|_| keep("anisotropy")),
             occlusion: self.occlusion.filter(|_| keep("occlusion")),
+            denoise: self.denoise.filter(|_| keep("denoise")),
         }
     }
 
@@ -176,7 +194,12 @@ impl Lighting {
                     environment: *self.environment.get_or_insert(DEFAULT_ENVIRONMENT),
                 };
                 settings.validate()?;
-                Transport::Path { spp, settings }
+                let denoise = self.denoise.unwrap_or_default().effective()?;
+                Transport::Path {
+                    spp,
+                    settings,
+                    denoise,
+                }
             }
         };
         Ok((transport, anisotropy))

@@ -121,6 +121,7 @@ function showScene(s) {
   const l = s.lighting || { model: "local" };
   $("lighting").value = l.model;
   if (l.spp !== undefined) $("spp").value = l.spp;
+  if (l.model === "path") $("denoise").checked = (l.denoise || "none") !== "none";
 }
 
 // The legend of the label map: a checkbox per label present (colour, name, voxel
@@ -219,9 +220,16 @@ $("light-el").oninput = light;
 // refused by the scene), the sample count with `path`.
 $("lighting").onchange = (e) => {
   const model = e.target.value;
-  const patch = { model, spp: null, bounces: null, seed: null, environment: null, anisotropy: null, occlusion: null };
-  if (model === "path") patch.spp = Number($("spp").value);
+  const patch = { model, spp: null, bounces: null, seed: null, environment: null, anisotropy: null, occlusion: null, denoise: null };
+  if (model === "path") {
+    patch.spp = Number($("spp").value);
+    // Denoised by default (the toggle starts on): OIDN in builds with it, else à-trous.
+    patch.denoise = $("denoise").checked ? "auto" : "none";
+  }
   update({ lighting: patch });
+};
+$("denoise").onchange = (e) => {
+  if ($("lighting").value === "path") update({ lighting: { denoise: e.target.checked ? "auto" : "none" } });
 };
 $("spp").onchange = (e) => { if ($("lighting").value === "path") update({ lighting: { spp: Number(e.target.value) } }); };
 $("save").onclick = () => { glint.saving = true; send({ type: "save" }); };
