@@ -2,13 +2,13 @@
 //! HDR radiance with the frame's albedo and normal, which are noise-free
 //! (`cleanAux`), on a CPU device.
 //!
-//! Determinism: OIDN's CPU device runs its network with oneDNN/ISPC kernels chosen
-//! for the CPU's instruction set, on a oneTBB arena of `numThreads` threads. The
-//! device is created with `numThreads` set to the Rayon pool's size and thread
-//! affinity off, so a run on one machine with one thread count gives the same image
-//! bit for bit; OIDN documents no guarantee across instruction sets or thread
-//! counts, and glint promises none (the built-in `atrous` filter is bit-identical on
-//! any thread count).
+//! Determinism: OIDN's CPU device runs its network with kernels chosen for the CPU's
+//! instruction set, on a oneTBB arena of `numThreads` threads; its API documentation
+//! promises no bit-identical output. The device is created with `numThreads` set to
+//! the Rayon pool's size and thread affinity off (its parameters `numThreads` and
+//! `setAffinity`), so runs on one machine at one thread count are meant to repeat;
+//! glint promises no more (the built-in `atrous` filter is bit-identical on any
+//! thread count).
 
 use std::ffi::CString;
 
@@ -64,7 +64,8 @@ pub(super) fn denoise(image: &Image, f: &PathFeatures) -> Result<Image, RenderEr
         .collect();
     let (albedo, normal) = (flat(&albedo), flat(&f.normal));
     let mut output = vec![0.0f32; 3 * w * h];
-    let mut filter = oidn::RayTracing::new(&device);
+    let mut filter = oidn::RayTracing::try_new(&device)
+        .map_err(|e| RenderError::Parameter(format!("Open Image Denoise: {e:?}")))?;
     filter
         .image_dimensions(w, h)
         .hdr(true)
