@@ -219,15 +219,27 @@ pub fn convergence(
     stop_below: Option<f64>,
     progress: &dyn Fn(&ConvergenceStep),
 ) -> Result<Convergence, CompareError> {
-    convergence_with(
-        renderer,
-        scene,
-        reference_spp,
+    let steps = Steps {
         schedule,
         stop_below,
-        false,
-        progress,
-    )
+        cold: false,
+        denoisers: &[],
+    };
+    convergence_with(renderer, scene, reference_spp, &steps, progress)
+}
+
+/// The steps of [`convergence_with`].
+#[derive(Clone, Copy, Debug)]
+pub struct Steps<'a> {
+    /// Samples per pixel of each step, increasing.
+    pub schedule: &'a [u32],
+    /// Stop (each denoiser's run) after the first step whose mean ꟻLIP is below it.
+    pub stop_below: Option<f64>,
+    /// Each step from no samples, timed alone (a cold start of the frame).
+    pub cold: bool,
+    /// The schedule is run once per denoiser (the scene's `lighting.denoise`), against
+    /// the one reference; empty: once, with the scene's own.
+    pub denoisers: &'a [Option<Denoise>],
 }
 
 /// [`convergence`] with more [`Steps`]: `cold` steps trace their samples from none
