@@ -10,7 +10,7 @@
 use std::time::{Duration, Instant};
 
 use glint_analysis::image::{compare, ImageMetrics};
-use glint_render::{LightingModel, Renderer, Scene};
+use glint_render::{Denoise, LightingModel, Renderer, Scene};
 
 use crate::{shoot, CompareError, Comparison, Experiment, Reference, Shot};
 
@@ -111,6 +111,8 @@ fn reference_scene(scene: &Scene, spp: u32) -> Result<(Scene, u64), CompareError
         )));
     }
     let seed = l.seed.unwrap_or(0).wrapping_add(REFERENCE_SEED_OFFSET);
+    // The reference is the mean of its samples: never denoised.
+    l.denoise = None;
     l.spp = Some(spp);
     l.seed = Some(seed);
     Ok((s, seed))
@@ -154,6 +156,8 @@ impl Experiment {
 pub struct ConvergenceStep {
     /// Samples per pixel accumulated.
     pub spp: u32,
+    /// The step's denoiser (the scene's `lighting.denoise`).
+    pub denoise: Option<Denoise>,
     /// Wall time of all the steps' renders so far (not of the metrics).
     pub elapsed: Duration,
     /// Metrics against the reference over the whole image.
@@ -208,13 +212,53 @@ pub fn convergence_schedule(max: u32) -> Vec<u32> {
 /// each step as it is measured. Stops after the first step whose mean ꟻLIP is below
 /// `stop_below`, if given.
 pub fn convergence(
-    mut renderer: Renderer,
+    renderer: Renderer,
     scene: &Scene,
     reference_spp: u32,
     schedule: &[u32],
     stop_below: Option<f64>,
     progress: &dyn Fn(&ConvergenceStep),
 ) -> Result<Convergence, CompareError> {
+    let steps = Steps {
+        schedule,
+        stop_below,
+        cold: false,
+        denoisers: &[],
+    };
+    convergence_with(renderer, scene, reference_spp, &steps, progress)
+}
+
+/// The steps of [`convergence_with`].
+#[derive(Clone, Copy, Debug)]
+pub struct Steps<'a> {
+    /// Samples per pixel of each step, increasing.
+    pub schedule: &'a [u32],
+    /// Stop (each denoiser's run) after the first step whose mean ꟻLIP is below it.
+    pub stop_below: Option<f64>,
+    /// Each step from no samples, timed alone (a cold start of the frame).
+    pub cold: bool,
+    /// The schedule is run once per denoiser (the scene's `lighting.denoise`), against
+    /// the one reference; empty: once, with the scene's own.
+    pub denoisers: &'a [Option<Denoise>],
+}
+
+/// [`convergence`] with more [`Steps`]: `cold` steps trace their samples from none
+/// (the renderer forgets its samples first, as a frame after a camera move does),
+/// each step's time its own render's (its denoising included), not the sum so far;
+/// several denoisers measured against one reference.
+pub fn convergence_with(
+    mut renderer: Renderer,
+    scene: &Scene,
+    reference_spp: u32,
+    steps_asked: &Steps,
+    progress: &dyn Fn(&ConvergenceStep),
+) -> Result<Convergence, CompareError> {
+    let Steps {
+        schedule,
+        stop_below,
+        cold,
+        denoisers,
+    } = *steps_asked;
     if schedule.is_empty() || schedule.windows(2).any(|w| w[0] >= w[1]) {
         return Err(CompareError::Invalid(
             "the progressive steps' samples per pixel must increase".into(),
@@ -229,22 +273,36 @@ pub fn convergence(
     let shot = shoot(&mut renderer, &reference)?;
     let reference_time = start.elapsed();
     let mut steps = Vec::new();
-    let mut elapsed = Duration::ZERO;
-    for &spp in schedule {
-        progressive.lighting.spp = Some(spp);
-        let start = Instant::now();
-        let test = shoot(&mut renderer, &progressive)?;
-        elapsed += start.elapsed();
-        let (image, _) = compare(&shot.srgb, &test.srgb, None)?;
-        let step = ConvergenceStep {
-            spp,
-            elapsed,
-            image,
-        };
-        progress(&step);
-        steps.push(step);
-        if stop_below.is_some_and(|t| image.flip.is_some_and(|f| f < t)) {
-            break;
+    let own = [scene.lighting.denoise];
+    for &denoise in if denoisers.is_empty() {
+        &own[..]
+    } else {
+        denoisers
+    } {
+        progressive.lighting.denoise = denoise;
+        renderer.forget_paths();
+        let mut elapsed = Duration::ZERO;
+        for &spp in schedule {
+            progressive.lighting.spp = Some(spp);
+            if cold {
+                renderer.forget_paths();
+                elapsed = Duration::ZERO;
+            }
+            let start = Instant::now();
+            let test = shoot(&mut renderer, &progressive)?;
+            elapsed += start.elapsed();
+            let (image, _) = compare(&shot.srgb, &test.srgb, None)?;
+            let step = ConvergenceStep {
+                spp,
+                denoise,
+                elapsed,
+                image,
+            };
+            progress(&step);
+            steps.push(step);
+            if stop_below.is_some_and(|t| image.flip.is_some_and(|f| f < t)) {
+                break;
+            }
         }
     }
     Ok(Convergence {

@@ -40,8 +40,9 @@ use glint_analysis::AnalysisError;
 use glint_render::{luminance_f32, Depth, RenderError, Rendered, Renderer, Scene, SceneLobe};
 
 pub use converged::{
-    convergence, convergence_schedule, path_defaults, reference_spp, Converged, ConvergedRow,
-    Convergence, ConvergenceStep, PATH_SIZE, PATH_SPP, REFERENCE_SEED_OFFSET, REFERENCE_SPP_FACTOR,
+    convergence, convergence_schedule, convergence_with, path_defaults, reference_spp, Converged,
+    ConvergedRow, Convergence, ConvergenceStep, Steps, PATH_SIZE, PATH_SPP, REFERENCE_SEED_OFFSET,
+    REFERENCE_SPP_FACTOR,
 };
 pub use glint_analysis::image::{DELTA_E_SCALE_MAX, HIGHLIGHT_FRACTION};
 pub use sweep::{sweep, Sweep, SweepRow, SweepSpec, SWEEP_LOBES, SWEEP_N, SWEEP_V};

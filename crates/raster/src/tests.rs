@@ -255,6 +255,7 @@ fn tiled_render_is_the_per_sample_reference_bit_for_bit() {
                 elevation: 30.0,
                 zoom: 1.8,
                 projection,
+                ..Default::default()
             },
             background: [0.2, 0.1, 0.05],
             mesh_colors: vec![[0.9, 0.5, 0.3]],
@@ -508,6 +509,7 @@ fn culling_cases() -> Vec<SurfaceSettings> {
                     elevation,
                     zoom: 1.3,
                     projection,
+                    ..Default::default()
                 },
                 // Black (the default) too, which the bands zero rather than fill.
                 background: if view == View::Inferior {
@@ -817,6 +819,7 @@ fn scalar_and_avx2_agree_on_clipped_and_capped_meshes() {
                 azimuth: 200.0,
                 elevation: 25.0,
                 projection,
+                ..Default::default()
                 ..Default::default()
             },
             ..Default::default()

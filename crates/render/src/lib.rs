@@ -53,10 +53,14 @@
 //! It re-exports what front ends use, so they depend on it alone.
 
 #![warn(missing_docs)]
-#![forbid(unsafe_code)]
+// No unsafe code, but for the `oidn` feature's device creation (src/denoise/oidn.rs),
+// whose raw calls set OIDN's thread count.
+#![cfg_attr(not(feature = "oidn"), forbid(unsafe_code))]
+#![cfg_attr(feature = "oidn", deny(unsafe_code))]
 
 mod animation;
 mod camera_path;
+pub mod denoise;
 mod hwlobe;
 mod labels;
 mod meshes;
@@ -71,6 +75,7 @@ pub use animation::{
     MAX_TURNTABLE_FPS, MAX_TURNTABLE_FRAMES,
 };
 pub use camera_path::{CameraKey, CameraPath, CameraPathError, MAX_CAMERA_KEYS};
+pub use denoise::Denoise;
 pub use glint_core::Legend;
 pub use glint_core::{camera, math};
 pub use glint_core::{
@@ -97,6 +102,7 @@ pub use glint_volume::{
     LightingModel, PathImage, PathSettings, Sampler, ShadowField, ShadowSettings, MAX_BOUNCES,
     MAX_SPP,
 };
+pub use glint_volume::{PathFeatures, FEATURE_OPACITY};
 pub use labels::{label_read_options, LabelSpec, LabelsAs, PickLabel, DEFAULT_LABEL_SMOOTHING};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use pick::{image_point, Pick, PickedObject};

@@ -11,9 +11,11 @@ use glint_io::{ReadOptions, Volume};
 use glint_volume::Transport as VolumeTransport;
 use glint_volume::{
     Classification, ClassifySettings, ColourVolume, Field, Filter, FrameSettings, Kernel,
-    Occluders, PathImage, Prefilter, ShadowField, ShadowSettings, Source, TransferFunction,
+    Occluders, PathFeatures, PathImage, Prefilter, ShadowField, ShadowSettings, Source,
+    TransferFunction,
 };
 
+use crate::denoise::Denoise;
 use crate::hwlobe::HwCache;
 use crate::labels::LabelMeshes;
 use crate::meshes::{MeshKey, MeshSet};
@@ -47,6 +49,8 @@ struct OccluderCache {
 struct PathAccumulation {
     key: String,
     image: PathImage,
+    /// The frame's feature buffers, once a denoised frame asked for them.
+    features: Option<Arc<PathFeatures>>,
 }
 
 /// Data in memory a renderer can be made of ([`Renderer::from_source`]); each is
@@ -646,10 +650,17 @@ impl Renderer {
                         progress,
                     )
                 }
-                Transport::Path { spp, settings } => {
+                Transport::Path {
+                    spp,
+                    settings,
+                    denoise,
+                } => {
                     let mut key = scene.clone();
                     key.lighting.spp = None;
                     key.lighting.time_budget = None;
+                    // Denoising is applied to the accumulated samples: turning it on
+                    // or off keeps them.
+                    key.lighting.denoise = None;
                     key.derived = None;
                     // The display transform does not change the radiance traced.
                     key.exposure = 0.0;
@@ -661,6 +672,7 @@ impl Renderer {
                         _ => PathAccumulation {
                             key,
                             image: PathImage::new(size[0], size[1]),
+                            features: None,
                         },
                     };
                     let cancel = self.cancel.clone();
@@ -672,13 +684,28 @@ impl Renderer {
                         occluders: v.occluders.map(|o| &**o),
                         cancel: cancel.as_deref(),
                     };
-                    let traced = class.frame(shader, frame, far, light, progress);
-                    if traced.is_err() {
-                        // A cancelled batch left some rows with more samples than
-                        // others: the image cannot be continued.
-                        self.paths = None;
+                    let traced = match class.frame(shader, frame, far, light, progress) {
+                        Ok(image) => image,
+                        Err(e) => {
+                            // A cancelled batch left some rows with more samples than
+                            // others: the image cannot be continued.
+                            self.paths = None;
+                            return Err(e);
+                        }
+                    };
+                    if denoise == Denoise::None {
+                        return Ok(traced);
                     }
-                    traced
+                    // The features depend on the camera and the classification only
+                    // (the key): built once, kept while samples are added.
+                    let features = match &acc.features {
+                        Some(f) => f.clone(),
+                        None => {
+                            let f = Arc::new(class.path_features(shader, frame, far)?);
+                            acc.features.insert(f).clone()
+                        }
+                    };
+                    crate::denoise::denoise(&traced, &features, spp, denoise)
                 }
             }
         };

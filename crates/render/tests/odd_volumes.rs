@@ -82,3 +82,62 @@ fn a_strongly_sheared_grid_is_framed_on_the_object() {
     let span = (b[2] - b[0]).max(b[3] - b[1]);
     assert!(span > 70, "{b:?}");
 }
+
+#[test]
+fn nan_and_1e30_voxels_give_finite_features_and_denoised_path_images() {
+    use glint_render::{Denoise, Lighting, LightingModel};
+    let mut odd = ball();
+    if let Samples::F32(v) = &mut odd.samples {
+        let n = v.len();
+        for k in 0..200 {
+            v[(k * 7919) % n] = if k % 2 == 0 { f32::NAN } else { 1e30 };
+        }
+    }
+    let mut renderer = Renderer::from_source(odd, None).unwrap();
+    for denoise in [Denoise::Atrous, Denoise::Auto] {
+        let scene = Scene {
+            input: Input::Path("ball.nii".into()),
+            preset: Some("mr-default".into()),
+            size: [40, 40],
+            lighting: Lighting {
+                model: LightingModel::Path,
+                spp: Some(1),
+                denoise: Some(denoise),
+                ..Lighting::default()
+            },
+            ..Scene::default()
+        };
+        let image = renderer.render(&scene, &|_| {}).unwrap().image;
+        assert!(
+            image.rgb.iter().flatten().all(|v| v.is_finite()),
+            "{denoise:?}: a value that is not finite"
+        );
+        assert!(
+            image.alpha.iter().any(|&a| a > 0.5),
+            "the ball is not drawn"
+        );
+    }
+    // The feature buffers themselves are finite, with the ball hit.
+    let resolved = renderer
+        .resolve(&Scene {
+            input: Input::Path("ball.nii".into()),
+            preset: Some("mr-default".into()),
+            size: [40, 40],
+            ..Scene::default()
+        })
+        .unwrap();
+    let glint_render::Plan::Volume {
+        tf,
+        classify,
+        frame,
+        ..
+    } = resolved.plan
+    else {
+        panic!("a volume plan");
+    };
+    let (class, _) = renderer.classification(&tf, &classify).unwrap();
+    let f = class.path_features(&resolved.shader, &frame, None).unwrap();
+    let values = f.albedo.iter().chain(&f.normal).flatten().chain(&f.depth);
+    assert!(values.into_iter().all(|v| v.is_finite()));
+    assert!((0..f.depth.len()).any(|i| f.hit(i)), "no first hit");
+}

@@ -61,7 +61,8 @@ pub use frames::Transport;
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{
-    FrameSettings, Kernel, LabelLook, LabelVolume, VolumeHit, PICK_OPACITY, TERMINATION_OPACITY,
+    FrameSettings, Kernel, LabelLook, LabelVolume, PathFeatures, VolumeHit, FEATURE_OPACITY,
+    PICK_OPACITY, TERMINATION_OPACITY,
 };
 pub use transport::{
     check_spp, check_time_budget, LightingModel, Occluders, PathImage, PathSettings, Sampler,

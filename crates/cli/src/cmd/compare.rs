@@ -10,7 +10,7 @@ use anyhow::bail;
 use glint_analysis::{fmt_num, Staging};
 use glint_compare::{SweepSpec, DELTA_E_SCALE_MAX};
 use glint_lobe::LobeKind;
-use glint_render::{LightingModel, Scene, SceneLobe};
+use glint_render::{Denoise, LightingModel, Scene, SceneLobe};
 
 use super::choice::choice;
 use super::render::{check_output_dir, open_renderer as open};
@@ -81,6 +81,16 @@ struct Options {
     /// With --convergence: stop at the first step whose mean FLIP is below this.
     #[arg(long, requires = "convergence")]
     flip_below: Option<f64>,
+    /// With --convergence: trace each step from no samples (a cold start of the
+    /// frame, denoising included with --denoise) and print its own time, not the
+    /// cumulative one.
+    #[arg(long, requires = "convergence")]
+    cold: bool,
+    /// With --convergence: run the steps once per denoiser (comma-separated: none,
+    /// atrous, oidn, auto) against the one reference [default: --denoise's, or none].
+    #[arg(long, value_delimiter = ',', requires = "convergence",
+          value_parser = choice::<Denoise>(Denoise::ALL.map(|d| d.name())))]
+    denoisers: Vec<Denoise>,
     /// No progress messages on stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -220,23 +230,25 @@ fn run_convergence(o: &Options, scene: Scene) -> anyhow::Result<()> {
     if !o.quiet {
         eprintln!("glint compare: tracing the reference, {reference} spp");
     }
-    println!("spp  seconds  mean dE  FLIP");
-    let conv = glint_compare::convergence(
-        renderer,
-        &scene,
-        reference,
-        &glint_compare::convergence_schedule(max),
-        o.flip_below,
-        &|s| {
-            println!(
-                "{:<4} {:<8.3} {:<8.4} {:.5}",
-                s.spp,
-                s.elapsed.as_secs_f64(),
-                s.image.delta_e.map_or(f64::NAN, |d| d.mean),
-                s.image.flip.unwrap_or(f64::NAN)
-            );
-        },
-    )?;
+    let denoisers: Vec<_> = o.denoisers.iter().map(|&d| Some(d)).collect();
+    let steps = glint_compare::Steps {
+        schedule: &glint_compare::convergence_schedule(max),
+        stop_below: o.flip_below,
+        cold: o.cold,
+        denoisers: &denoisers,
+    };
+    println!("denoise spp  seconds  mean dE  FLIP     SSIM");
+    let conv = glint_compare::convergence_with(renderer, &scene, reference, &steps, &|s| {
+        println!(
+            "{:<7} {:<4} {:<8.3} {:<8.4} {:.5}  {:.5}",
+            s.denoise.unwrap_or_default().name(),
+            s.spp,
+            s.elapsed.as_secs_f64(),
+            s.image.delta_e.map_or(f64::NAN, |d| d.mean),
+            s.image.flip.unwrap_or(f64::NAN),
+            s.image.ssim.unwrap_or(f64::NAN)
+        );
+    })?;
     println!(
         "reference: {} spp, seed {}, {:.1} s, {}x{}",
         conv.reference_spp,
@@ -245,14 +257,28 @@ fn run_convergence(o: &Options, scene: Scene) -> anyhow::Result<()> {
         scene.size[0],
         scene.size[1]
     );
-    match o.flip_below.map(|t| (t, conv.first_below(t))) {
-        Some((t, Some(s))) => println!(
-            "mean FLIP below {t} at {} spp after {:.3} s",
-            s.spp,
-            s.elapsed.as_secs_f64()
-        ),
-        Some((t, None)) => println!("mean FLIP not below {t} by {max} spp"),
-        None => {}
+    if let Some(t) = o.flip_below {
+        let mut names: Vec<Option<Denoise>> = Vec::new();
+        for s in &conv.steps {
+            if !names.contains(&s.denoise) {
+                names.push(s.denoise);
+            }
+        }
+        for d in names {
+            let name = d.unwrap_or_default().name();
+            let first = conv
+                .steps
+                .iter()
+                .find(|s| s.denoise == d && s.image.flip.is_some_and(|f| f < t));
+            match first {
+                Some(s) => println!(
+                    "{name}: mean FLIP below {t} at {} spp after {:.3} s",
+                    s.spp,
+                    s.elapsed.as_secs_f64()
+                ),
+                None => println!("{name}: mean FLIP not below {t} by {max} spp"),
+            }
+        }
     }
     Ok(())
 }

@@ -581,6 +581,41 @@ mod tests {
     }
 
     #[test]
+    fn denoise_oidn_without_the_feature_is_one_line_and_no_file() {
+        let path = [
+            "--size",
+            "16x16",
+            "--phantom-size",
+            "16",
+            "--lighting",
+            "path",
+            "--spp",
+            "1",
+        ];
+        let with = |d: &'static str| {
+            let mut a = path.to_vec();
+            a.extend(["--denoise", d]);
+            run_in_tmp(&a)
+        };
+        let (result, left, _dir) = with("atrous");
+        result.unwrap();
+        assert!(left);
+        let (result, left, _dir) = with("oidn");
+        if glint_render::denoise::HAS_OIDN {
+            result.unwrap();
+            return;
+        }
+        let err = format!("{:#}", result.expect_err("oidn without the feature"));
+        for part in ["`oidn` feature", "scripts/fetch-oidn", "--features oidn"] {
+            assert!(err.contains(part), "'{err}' lacks '{part}'");
+        }
+        assert!(!err.contains('\n'), "one line expected: {err}");
+        assert!(!left, "a file was left");
+        let (result, left, _dir) = with("fast");
+        assert!(result.is_err() && !left);
+    }
+
+    #[test]
     fn negative_light_angles_are_values_not_flags() {
         let (result, left, _dir) = run_in_tmp(&[
             "--size",

@@ -10,9 +10,9 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    Clip, ClipPlane, ColorMap, CropBox, Filter, Focus, Input, Light, LightingModel, MeshSpec,
-    Overlay, Phantom, Prefilter, Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, Tone,
-    TransferFunctionFile, View, WindowLevel,
+    Clip, ClipPlane, ColorMap, CropBox, Denoise, Filter, Focus, Input, Light, LightingModel,
+    MeshSpec, Overlay, Phantom, Prefilter, Projection, RenderMode, Sampler, Sampling, Scene,
+    SceneLobe, Tone, TransferFunctionFile, View, WindowLevel,
 };
 
 use super::choice::choice;
@@ -255,6 +255,12 @@ pub struct SceneFlags {
     /// Shadows lighting: local ambient occlusion on the ambient term.
     #[arg(long)]
     pub occlusion: bool,
+    /// Path lighting: denoise the image, guided by the albedo, normal and depth of
+    /// each pixel's first hit: none, atrous (the built-in edge-avoiding wavelet
+    /// filter), oidn (Intel Open Image Denoise; builds with --features oidn, after
+    /// scripts/fetch-oidn) or auto (oidn when built in, else atrous) [default: none].
+    #[arg(long, value_parser = choice::<Denoise>(Denoise::ALL.map(|d| d.name())))]
+    pub denoise: Option<Denoise>,
     /// Testing: turn empty-space skipping off.
     #[arg(long, hide = true)]
     pub no_skip: bool,
@@ -500,6 +506,7 @@ impl SceneFlags {
         set(&mut l.anisotropy, self.anisotropy.map(Some));
         set(&mut l.sampler, self.sampler.map(Some));
         set(&mut l.time_budget, self.time_budget.map(Some));
+        set(&mut l.denoise, self.denoise.map(Some));
         if self.occlusion {
             l.occlusion = Some(true);
         }

@@ -8,6 +8,8 @@ use glint_volume::{
     check_spp, check_time_budget, LightingModel, PathSettings, Sampler, ShadowSettings,
 };
 
+use crate::denoise::Denoise;
+
 /// Samples per pixel of a `path` scene that does not say (a few seconds at 512x512
 /// on two cores; docs/lighting.md).
 pub const DEFAULT_SPP: u32 = 64;
@@ -78,6 +80,11 @@ pub struct Lighting {
     /// of the background [default: false].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub show_environment: Option<bool>,
+    /// `path`: how the image is denoised ([`Denoise`]: `none`, `atrous`, `oidn`,
+    /// `auto`) [default: none, the mean of the samples]. Left unset by a resolve
+    /// when not given, so scenes without it keep their JSON.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub denoise: Option<Denoise>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -93,6 +100,8 @@ pub enum Transport {
         spp: u32,
         /// Bounces, seed, environment, sampler, time budget.
         settings: PathSettings,
+        /// How the image is denoised ([`Denoise::effective`]: `auto` resolved).
+        denoise: Denoise,
     },
 }
 
@@ -104,7 +113,7 @@ impl Lighting {
     }
 
     /// The fields that are set, with their names.
-    fn set_fields(&self) -> [(&'static str, bool); 9] {
+    fn set_fields(&self) -> [(&'static str, bool); 10] {
         [
             ("spp", self.spp.is_some()),
             ("bounces", self.bounces.is_some()),
@@ -115,6 +124,7 @@ impl Lighting {
             ("sampler", self.sampler.is_some()),
             ("time_budget", self.time_budget.is_some()),
             ("show_environment", self.show_environment.is_some()),
+            ("denoise", self.denoise.is_some()),
         ]
     }
 
@@ -132,6 +142,7 @@ impl Lighting {
                 "sampler",
                 "time_budget",
                 "show_environment",
+                "denoise",
             ],
         }
     }
@@ -152,6 +163,7 @@ impl Lighting {
             sampler: self.sampler.filter(|_| keep("sampler")),
             time_budget: self.time_budget.filter(|_| keep("time_budget")),
             show_environment: self.show_environment.filter(|_| keep("show_environment")),
+            denoise: self.denoise.filter(|_| keep("denoise")),
         }
     }
 
@@ -210,7 +222,12 @@ impl Lighting {
                     show_environment: *self.show_environment.get_or_insert(false),
                 };
                 settings.validate()?;
-                Transport::Path { spp, settings }
+                let denoise = self.denoise.unwrap_or_default().effective()?;
+                Transport::Path {
+                    spp,
+                    settings,
+                    denoise,
+                }
             }
         };
         Ok((transport, anisotropy))

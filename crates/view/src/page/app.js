@@ -125,6 +125,7 @@ function showScene(s) {
   $("tone").value = s.tone || "linear";
   $("aperture").value = s.camera.aperture || 0;
   $("focus").value = s.camera.focus === undefined ? "auto" : s.camera.focus;
+  if (l.model === "path") $("denoise").checked = (l.denoise || "none") !== "none";
 }
 
 // The legend of the label map: a checkbox per label present (colour, name, voxel
@@ -223,9 +224,16 @@ $("light-el").oninput = light;
 // refused by the scene), the sample count with `path`.
 $("lighting").onchange = (e) => {
   const model = e.target.value;
-  const patch = { model, spp: null, bounces: null, seed: null, environment: null, anisotropy: null, occlusion: null, sampler: null, time_budget: null, show_environment: null };
-  if (model === "path") patch.spp = Number($("spp").value);
+  const patch = { model, spp: null, bounces: null, seed: null, environment: null, anisotropy: null, occlusion: null, sampler: null, time_budget: null, show_environment: null, denoise: null };
+  if (model === "path") {
+    patch.spp = Number($("spp").value);
+    // Denoised by default (the toggle starts on): OIDN in builds with it, else à-trous.
+    patch.denoise = $("denoise").checked ? "auto" : "none";
+  }
   update({ lighting: patch });
+};
+$("denoise").onchange = (e) => {
+  if ($("lighting").value === "path") update({ lighting: { denoise: e.target.checked ? "auto" : "none" } });
 };
 $("spp").onchange = (e) => { if ($("lighting").value === "path") update({ lighting: { spp: Number(e.target.value) } }); };
 // Film: the exposure and tone curve map the radiance for display (a path image keeps

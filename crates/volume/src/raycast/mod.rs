@@ -2,6 +2,7 @@
 //! step, empty-space skipping over macro cells, early ray termination.
 
 mod caster;
+mod features;
 mod frame;
 mod labels;
 mod pick;
@@ -17,6 +18,7 @@ use avx2::Scratch;
 #[cfg(not(target_arch = "x86_64"))]
 type Scratch = ();
 
+pub use features::{PathFeatures, FEATURE_OPACITY};
 pub use labels::{LabelLook, LabelVolume};
 pub use pick::{VolumeHit, PICK_OPACITY};
 pub use settings::{FrameSettings, Kernel};

@@ -1,0 +1,110 @@
+//! Denoising of `path` images ([`Denoise`]): the built-in edge-avoiding à-trous
+//! wavelet filter ([`atrous`]) and, in builds with the `oidn` cargo feature, Intel
+//! Open Image Denoise, both on the linear HDR radiance (before the tone curve and the
+//! 8-bit encoding) and guided by the frame's feature buffers
+//! ([`glint_volume::PathFeatures`]: albedo, normal and depth of a deterministic first
+//! hit, clean at 1 sample per pixel).
+
+use serde::{Deserialize, Serialize};
+
+use glint_core::{Image, RenderError};
+use glint_volume::PathFeatures;
+
+mod atrous;
+#[cfg(feature = "oidn")]
+#[allow(unsafe_code)]
+mod oidn;
+
+pub use atrous::{atrous, AtrousSettings, MAX_RADIANCE};
+
+/// Whether this build has Intel Open Image Denoise (the `oidn` cargo feature).
+pub const HAS_OIDN: bool = cfg!(feature = "oidn");
+
+/// The one line a build without the `oidn` feature gives when asked for it.
+pub const NO_OIDN: &str = "denoise oidn: this glint was built without the `oidn` feature; \
+    run scripts/fetch-oidn and build with --features oidn (or use --denoise atrous)";
+
+/// How a `path` image is denoised (a scene's `lighting.denoise`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Denoise {
+    /// Not denoised: the mean of the samples, as always.
+    #[default]
+    None,
+    /// The built-in edge-avoiding à-trous wavelet filter ([`atrous`]): fast (tens of
+    /// milliseconds at 512x512), in every build.
+    Atrous,
+    /// Intel Open Image Denoise (its `RT` filter, HDR, with albedo and normal, CPU
+    /// device): builds with the `oidn` feature only.
+    Oidn,
+    /// `oidn` in builds that have it, else `atrous`.
+    Auto,
+}
+
+impl Denoise {
+    /// Every choice, the default first.
+    pub const ALL: [Denoise; 4] = [Denoise::None, Denoise::Atrous, Denoise::Oidn, Denoise::Auto];
+
+    /// The name scenes and the command line use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Denoise::None => "none",
+            Denoise::Atrous => "atrous",
+            Denoise::Oidn => "oidn",
+            Denoise::Auto => "auto",
+        }
+    }
+
+    /// The denoiser this build runs for the choice (`auto` resolved); an error naming
+    /// the feature for `oidn` in a build without it ([`NO_OIDN`]).
+    pub fn effective(self) -> Result<Denoise, RenderError> {
+        match self {
+            Denoise::Oidn if !HAS_OIDN => Err(RenderError::Parameter(NO_OIDN.into())),
+            Denoise::Auto if HAS_OIDN => Ok(Denoise::Oidn),
+            Denoise::Auto => Ok(Denoise::Atrous),
+            d => Ok(d),
+        }
+    }
+}
+
+impl std::str::FromStr for Denoise {
+    type Err = RenderError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Denoise::ALL
+            .into_iter()
+            .find(|d| d.name() == s)
+            .ok_or_else(|| {
+                RenderError::Parameter(format!(
+                    "unknown denoiser '{s}': expected none, atrous, oidn or auto"
+                ))
+            })
+    }
+}
+
+/// `image` (a `path` frame of `spp` samples per pixel, linear RGB) denoised by `how`
+/// guided by `features` (the frame's, the same size): the image itself for
+/// [`Denoise::None`]. Every output value is finite.
+pub fn denoise(
+    image: &Image,
+    features: &PathFeatures,
+    spp: u32,
+    how: Denoise,
+) -> Result<Image, RenderError> {
+    if [features.width, features.height] != [image.width, image.height] {
+        return Err(RenderError::Parameter(format!(
+            "{}x{} feature buffers for a {}x{} image",
+            features.width, features.height, image.width, image.height
+        )));
+    }
+    match how.effective()? {
+        Denoise::None | Denoise::Auto => Ok(image.clone()),
+        Denoise::Atrous => Ok(atrous(image, features, spp, &AtrousSettings::default())),
+        #[cfg(feature = "oidn")]
+        Denoise::Oidn => oidn::denoise(image, features),
+        #[cfg(not(feature = "oidn"))]
+        Denoise::Oidn => Err(RenderError::Parameter(NO_OIDN.into())),
+    }
+}
+
+#[cfg(test)]
+mod tests;
