@@ -820,7 +820,6 @@ fn scalar_and_avx2_agree_on_clipped_and_capped_meshes() {
                 elevation: 25.0,
                 projection,
                 ..Default::default()
-                ..Default::default()
             },
             ..Default::default()
         };
