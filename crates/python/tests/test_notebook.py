@@ -10,6 +10,7 @@ JupyterLab screenshot is made by scripts/notebook-screenshot.
 
 import json
 import pathlib
+import queue
 import textwrap
 import time
 
@@ -161,6 +162,25 @@ print("viewer")
 '''
 
 
+def _stopped_message_sent(kc, wait=3.0):
+    """Whether the IOPub messages already sent (before the kernel's restart) hold
+    a widget state update with the viewer's "kernel stopped" text."""
+    from glint.notebook import STOPPED
+
+    end = time.monotonic() + wait
+    while time.monotonic() < end:
+        try:
+            msg = kc.get_iopub_msg(timeout=0.2)
+        except queue.Empty:
+            continue
+        if msg["msg_type"] != "comm_msg":
+            continue
+        state = msg["content"].get("data", {}).get("state", {})
+        if state.get("value") == STOPPED:
+            return True
+    return False
+
+
 def test_kernel_restart_with_a_viewer_open(mni_path):
     """A kernel restart (and a shutdown) while a viewer renders: the kernel stops by
     itself, without jupyter_client's SIGTERM (sent half-way through its 5 s wait) or
@@ -199,6 +219,9 @@ def test_kernel_restart_with_a_viewer_open(mni_path):
         km.restart_kernel(now=False)
         # Exited by itself (0), not terminated (-15) or killed (-9).
         assert old.returncode == 0, f"the kernel ended with {old.returncode}"
+        # Before it exited, it told the page, in the viewer's panel (a widget state
+        # update on IOPub), that the view no longer responds.
+        assert _stopped_message_sent(kc), "no 'kernel stopped' message reached the page"
         kc.wait_for_ready(timeout=60)
         code = f"import glint\nprint(glint.Viewer({str(mni_path)!r}, size=(16, 16)).snapshot().shape)"
         assert run(code) == "(16, 16, 3)\n"

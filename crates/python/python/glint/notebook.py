@@ -45,6 +45,10 @@ DEGREES_PER_PIXEL = 0.5
 #: Seconds of quiet after a drag before the full frame (``glint view``'s 150 ms).
 SETTLE = 0.15
 
+#: What a viewer's panel says once its kernel is told to stop (a restart, a shutdown,
+#: ``exit``): its frame stays, but nothing answers the mouse.
+STOPPED = "The kernel stopped: this view no longer responds. Run its cell again."
+
 # The live viewers, closed when the kernel is told to stop (_close_on_exit).
 _LIVE: "weakref.WeakSet[Viewer]" = weakref.WeakSet()
 _WATCHING: list = []
@@ -57,6 +61,9 @@ def _close_all(change):
     if change.get("new"):
         for viewer in list(_LIVE):
             viewer._session.close()
+            # The one message the page shows: the widget stays with its last frame
+            # but no kernel answers it any more.
+            viewer._status.value = STOPPED
 
 
 def _close_on_exit(viewer):
