@@ -149,6 +149,11 @@ class Viewer(_w.HBox):
     def close(self):
         """Closes the widget and ends its session: a frame in flight is cancelled
         and no more are rendered (``snapshot()`` then returns the last frame)."""
+        if not hasattr(self, "_session"):
+            # The constructor raised (a bad path) before the session existed; the
+            # widget's finaliser still calls this.
+            super().close()
+            return
         self._session.close()
         for handle in (self._settle_handle, self._pace_handle):
             if handle is not None:
