@@ -359,11 +359,12 @@ impl Camera {
         }
     }
 
-    /// Whether the camera has a lens (a radius > 0): [`Camera::lens_ray`] then needs
-    /// a point of the lens.
+    /// Whether the camera has a lens (a radius > 0 and a plane in focus at a finite
+    /// distance > 0): [`Camera::lens_ray`] then needs a point of the lens. A radius with
+    /// no usable focus distance is a pinhole, not a lens focused behind the eye.
     #[inline]
     pub fn has_lens(&self) -> bool {
-        self.lens_radius > 0.0
+        self.lens_radius > 0.0 && self.focus_distance > 0.0 && self.focus_distance.is_finite()
     }
 
     /// The ray through pixel `(x, y)` ([`Camera::ray`]) of a thin lens (Kolb,
@@ -567,6 +568,20 @@ mod tests {
             c.lens_ray(3.0, 4.0, 40, 30, Some([0.9, 0.9])),
             c.ray(3.0, 4.0, 40, 30)
         );
+        // So does a lens with no usable plane in focus (at or behind the eye, or at
+        // infinity): a pinhole, not rays converging behind the camera.
+        for focus_distance in [0.0, -10.0, f32::INFINITY, f32::NAN] {
+            let c = Camera {
+                lens_radius: 5.0,
+                focus_distance,
+                ..c
+            };
+            assert!(!c.has_lens(), "{focus_distance}");
+            assert_eq!(
+                c.lens_ray(3.0, 4.0, 40, 30, Some([0.9, 0.9])),
+                c.ray(3.0, 4.0, 40, 30)
+            );
+        }
     }
 
     #[test]
