@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::labels::LabelSpec;
 use crate::meshes::MeshSpec;
 
+mod envmap;
 mod file;
 mod lighting;
 mod lobe;
@@ -28,6 +29,8 @@ mod resolve;
 mod tests;
 
 pub use lighting::{Lighting, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SPP};
+pub use envmap::{load_environment, ENVIRONMENT_NAMES};
+pub(crate) use envmap::EnvCache;
 pub use lobe::{LobeSpec, SceneLobe};
 pub use patch::MERGED_FIELDS;
 pub use resolve::{MeshLayer, Plan, Resolved};

@@ -22,6 +22,7 @@ use std::time::Duration;
 
 use glint_core::RenderError;
 
+mod envlight;
 mod occluders;
 mod path;
 mod rng;

@@ -7,7 +7,8 @@
 //! Henyey-Greenstein phase function exactly), Russian roulette, and at most `bounces`
 //! scattering events. The surface is chosen at a collision with the probability of
 //! its weight (`Scattering::choose`), as Exposure Render chooses its BRDF (Kroes et
-//! al. 2012).
+//! al. 2012). An environment map, when the scene has one, replaces the uniform
+//! environment and is sampled by MIS with the scattering model (`envlight.rs`).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -15,8 +16,9 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use glint_core::camera::Camera;
-use glint_core::{Bsdf, Image, RenderError, RenderStats, Shader, Vec3};
+use glint_core::{Bsdf, EnvMap, Image, RenderError, RenderStats, Shader, Vec3};
 
+use super::envlight::EnvStrategy;
 use super::occluders::Occluders;
 use super::rng::{dims, Rng};
 use super::tracking::{IndexRay, Tracker};
@@ -274,6 +276,11 @@ pub(crate) struct PathTracer<'a> {
     pub(crate) surface_bias: f32,
     /// Meshes that end shadow rays and scattered paths, when the scene has any.
     pub(crate) occluders: Option<&'a Occluders>,
+    /// The environment map that replaces the uniform environment, when the scene has
+    /// one.
+    pub(crate) env_map: Option<&'a EnvMap>,
+    /// How the map lights the paths (MIS but in tests).
+    pub(crate) env_strategy: EnvStrategy,
 }
 
 /// One path's result: radiance, whether the camera ray met matter, scattering events.
@@ -320,6 +327,8 @@ impl<'a> PathTracer<'a> {
             axes,
             surface_bias: field.min_spacing() as f32,
             occluders: None,
+            env_map: None,
+            env_strategy: EnvStrategy::Mis,
         })
     }
 
@@ -345,6 +354,25 @@ impl<'a> PathTracer<'a> {
     pub(crate) fn clipped_by(mut self, clip: Option<&'a IndexClip>) -> PathTracer<'a> {
         self.track.clip = clip;
         self
+    }
+
+    /// The tracer with `map` (when given) as its environment instead of the uniform
+    /// one.
+    pub(crate) fn lit_by(mut self, map: Option<&'a EnvMap>) -> PathTracer<'a> {
+        self.env_map = map;
+        self
+    }
+
+    /// Where `ray` meets the meshes past `t0` (its first cell excluded).
+    #[inline]
+    pub(super) fn mesh_hit_from(&self, ray: &IndexRay, t0: f32) -> Option<f32> {
+        self.mesh_hit(ray, t0, f32::INFINITY)
+    }
+
+    /// The index-space direction of world direction `v`.
+    #[inline]
+    pub(super) fn index_dir(&self, v: Vec3) -> Vec3 {
+        self.to_index(v)
     }
 
     /// Where `ray` meets the meshes over `[t0, t1]` (its first cell excluded).
@@ -382,6 +410,8 @@ impl<'a> PathTracer<'a> {
         let mut coverage = 0.0;
         let mut events = 0;
         let env = self.settings.environment;
+        // The density of the last scattered direction (MIS with an environment map).
+        let mut scatter_pdf = 0.0f32;
         loop {
             // Camera rays stop at the meshes' depth (`far`); scattered rays at their
             // cells, where the path ends: meshes absorb.
@@ -404,8 +434,18 @@ impl<'a> PathTracer<'a> {
                     mesh.is_none()
                 };
                 if seen {
-                    for c in 0..3 {
-                        radiance[c] += beta[c] * env;
+                    match self.env_map {
+                        None => {
+                            for c in 0..3 {
+                                radiance[c] += beta[c] * env;
+                            }
+                        }
+                        Some(map) => {
+                            let l = self.env_escape(map, wdir, events, scatter_pdf);
+                            for c in 0..3 {
+                                radiance[c] += beta[c] * l[c];
+                            }
+                        }
                     }
                     coverage = 1.0;
                 }
@@ -431,6 +471,10 @@ impl<'a> PathTracer<'a> {
                 .scattering(color, grad)
                 .choose(|| rng.dim(block + dims::CHOOSE));
             self.direct(p, &bsdf, wo, (&mut rng, block), beta, &mut radiance);
+            if let Some(map) = self.env_map {
+                let at = (p, &bsdf, wo);
+                self.env_direct(map, at, (&mut rng, events - 1), beta, &mut radiance);
+            }
             let u = [
                 rng.dim(block + dims::LOBE),
                 rng.dim(block + dims::DIRECTION),
@@ -440,6 +484,7 @@ impl<'a> PathTracer<'a> {
                 break;
             };
             let (wi, weight) = (sample.wi, sample.weight);
+            scatter_pdf = sample.pdf;
             for c in 0..3 {
                 beta[c] *= weight[c];
             }

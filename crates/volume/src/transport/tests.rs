@@ -31,6 +31,7 @@ fn path_frame(
         spp,
         settings: *settings,
         occluders: None,
+        environment: None,
         cancel: None,
     };
     class.frame(shader, frame, None, transport, &|_| {})
@@ -961,6 +962,7 @@ fn a_mesh_shadows_the_path_traced_volume() {
                 spp: 24,
                 settings,
                 occluders,
+                environment: None,
                 cancel: None,
             };
             class.frame(&shader, &frame, None, target, &|_| {}).unwrap();
