@@ -97,7 +97,7 @@ fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
 fn studio() -> Result<EnvMap, RenderError> {
     let (w, h) = (512u32, 256u32);
     // Soft boxes: centre azimuth and elevation (degrees; azimuth from +x, the
-    // patient's right, towards +y, anterior), half sizes (degrees), radiance.
+    // patient's right in RAS+, towards +y, anterior), half sizes (degrees), radiance.
     let boxes: [([f32; 2], [f32; 2], [f32; 3]); 3] = [
         ([120.0, 35.0], [16.0, 11.0], [14.0, 13.0, 12.0]),
         ([45.0, 10.0], [13.0, 13.0], [2.6, 2.8, 3.0]),
