@@ -174,7 +174,10 @@ fn environment_maps_render_and_bad_ones_write_nothing() {
         // One error line (after the reader's note on the geometry it assumed).
         let errors: Vec<_> = err.lines().filter(|l| l.contains("error")).collect();
         assert_eq!(errors.len(), 1, "{err}");
-        assert!(errors[0].contains("environment map") && errors[0].contains(want), "{err}");
+        assert!(
+            errors[0].contains("environment map") && errors[0].contains(want),
+            "{err}"
+        );
         assert!(!out.exists());
     }
 }

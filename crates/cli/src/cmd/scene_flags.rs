@@ -520,8 +520,14 @@ impl SceneFlags {
             }
             None => {}
         }
-        set(&mut l.environment_rotation, self.environment_rotation.map(Some));
-        set(&mut l.environment_intensity, self.environment_intensity.map(Some));
+        set(
+            &mut l.environment_rotation,
+            self.environment_rotation.map(Some),
+        );
+        set(
+            &mut l.environment_intensity,
+            self.environment_intensity.map(Some),
+        );
         set(&mut l.anisotropy, self.anisotropy.map(Some));
         set(&mut l.sampler, self.sampler.map(Some));
         set(&mut l.time_budget, self.time_budget.map(Some));

@@ -121,7 +121,11 @@ impl EnvMap {
 
     /// A map of one radiance everywhere (`width x height` texels).
     pub fn constant(radiance: [f32; 3], width: u32, height: u32) -> Result<EnvMap, RenderError> {
-        EnvMap::new(width, height, vec![radiance; width as usize * height as usize])
+        EnvMap::new(
+            width,
+            height,
+            vec![radiance; width as usize * height as usize],
+        )
     }
 
     /// This map turned by `degrees` about the vertical axis (positive: from `+x`

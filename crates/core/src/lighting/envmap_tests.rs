@@ -23,7 +23,11 @@ fn probe(w: u32, h: u32, sun: f32, radius: f32) -> EnvMap {
         let theta = PI * (y as f32 + 0.5) / h as f32;
         for x in 0..w {
             let phi = 2.0 * PI * (x as f32 + 0.5) / w as f32;
-            let d = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            let d = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
             let sky = 0.1 + 0.2 * theta.cos().max(0.0);
             let mut t = [sky, sky, sky * 1.2];
             if d.dot(patch) > cos_patch {
@@ -62,11 +66,17 @@ fn the_pdf_integrates_to_one_and_matches_the_samples() {
     for rotation in [0.0, 37.0, -200.0] {
         let map = probe(64, 32, 50.0, 8.0).placed(rotation, 2.0).unwrap();
         let total = sphere_integral(512, |d| f64::from(map.pdf(d)));
-        assert!((total - 1.0).abs() < 2e-3, "rotation {rotation}: ∫pdf = {total}");
+        assert!(
+            (total - 1.0).abs() < 2e-3,
+            "rotation {rotation}: ∫pdf = {total}"
+        );
         // Each sample's density is the map's pdf in its direction, its radiance the
         // map's (times the intensity).
         for k in 0..200 {
-            let u = [(k as f32 * 0.618_034).fract(), (k as f32 * 0.414_213 + 0.1).fract()];
+            let u = [
+                (k as f32 * 0.618_034).fract(),
+                (k as f32 * 0.414_213 + 0.1).fract(),
+            ];
             let s = map.sample(u).unwrap();
             assert!((s.wi.length() - 1.0).abs() < 1e-5);
             let pdf = map.pdf(s.wi);
@@ -221,7 +231,9 @@ fn reflected(map: &EnvMap, bsdf: &Bsdf<'_>, wo: Vec3, strategy: u32, n: u32) -> 
     let (mut sum, mut sq) = (0.0f64, 0.0f64);
     let mut state = 99u64;
     let mut next = || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((state >> 40) as f32) / (1u64 << 24) as f32
     };
     for _ in 0..n {
@@ -308,7 +320,10 @@ fn mis_has_the_mean_of_either_strategy_and_less_variance() {
         "variances: light {var_light:.4}, scattering {var_scatter:.4}, MIS {var_mis:.4}: MIS / best single {:.3}",
         var_mis / var_light.min(var_scatter)
     );
-    for (name, m, v) in [("light", light, var_light), ("scatter", scatter, var_scatter)] {
+    for (name, m, v) in [
+        ("light", light, var_light),
+        ("scatter", scatter, var_scatter),
+    ] {
         let tol = 4.0 * (se(v) + se(var_mis));
         assert!((m - mis).abs() < tol, "{name} {m} vs MIS {mis} (±{tol})");
     }

@@ -66,7 +66,11 @@ fn read_hdr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
     let meta = decoder.metadata();
     check_env_size(meta.width, meta.height).map_err(line)?;
     let texels = decoder.read_image_hdr().map_err(line)?;
-    Ok((meta.width, meta.height, texels.into_iter().map(|p| p.0).collect()))
+    Ok((
+        meta.width,
+        meta.height,
+        texels.into_iter().map(|p| p.0).collect(),
+    ))
 }
 
 /// An OpenEXR file's first RGB(A) layer: the header's size checked before any texel

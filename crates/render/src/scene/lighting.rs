@@ -139,7 +139,10 @@ impl Lighting {
             ("denoise", self.denoise.is_some()),
             ("environment_map", self.environment_map.is_some()),
             ("environment_rotation", self.environment_rotation.is_some()),
-            ("environment_intensity", self.environment_intensity.is_some()),
+            (
+                "environment_intensity",
+                self.environment_intensity.is_some(),
+            ),
         ]
     }
 
@@ -182,7 +185,10 @@ impl Lighting {
             time_budget: self.time_budget.filter(|_| keep("time_budget")),
             show_environment: self.show_environment.filter(|_| keep("show_environment")),
             denoise: self.denoise.filter(|_| keep("denoise")),
-            environment_map: self.environment_map.clone().filter(|_| keep("environment_map")),
+            environment_map: self
+                .environment_map
+                .clone()
+                .filter(|_| keep("environment_map")),
             environment_rotation: self
                 .environment_rotation
                 .filter(|_| keep("environment_rotation")),

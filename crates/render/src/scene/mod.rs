@@ -28,9 +28,9 @@ mod resolve;
 #[cfg(test)]
 mod tests;
 
-pub use lighting::{Lighting, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SPP};
-pub use envmap::{load_environment, ENVIRONMENT_NAMES};
 pub(crate) use envmap::EnvCache;
+pub use envmap::{load_environment, ENVIRONMENT_NAMES};
+pub use lighting::{Lighting, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SPP};
 pub use lobe::{LobeSpec, SceneLobe};
 pub use patch::MERGED_FIELDS;
 pub use resolve::{MeshLayer, Plan, Resolved};

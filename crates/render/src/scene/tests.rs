@@ -884,8 +884,12 @@ fn an_environment_map_lights_a_path_scene_and_resolves_its_defaults() {
     let (hdr, exr) = (dir.path().join("c.hdr"), dir.path().join("c.exr"));
     write_hdr(&hdr, 16, 8, |_, _| 0.5);
     write_exr(&exr, 16, 8, |_, _| 0.5);
-    let a = r.render(&env_scene(hdr.to_str().unwrap()), &|_| {}).unwrap();
-    let b = r.render(&env_scene(exr.to_str().unwrap()), &|_| {}).unwrap();
+    let a = r
+        .render(&env_scene(hdr.to_str().unwrap()), &|_| {})
+        .unwrap();
+    let b = r
+        .render(&env_scene(exr.to_str().unwrap()), &|_| {})
+        .unwrap();
     assert_eq!(a.image.rgb, b.image.rgb);
     // The viewer's and Python's patch reaches the field.
     let patched = small()
@@ -912,8 +916,19 @@ fn bad_environment_maps_and_settings_are_one_line_errors() {
         b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n\x01\x02",
     )
     .unwrap();
-    write_exr(&p("nan.exr"), 8, 4, |x, y| if (x, y) == (3, 2) { f32::NAN } else { 1.0 });
-    write_exr(&p("negative.exr"), 8, 4, |x, _| if x == 5 { -1.0 } else { 1.0 });
+    write_exr(&p("nan.exr"), 8, 4, |x, y| {
+        if (x, y) == (3, 2) {
+            f32::NAN
+        } else {
+            1.0
+        }
+    });
+    write_exr(
+        &p("negative.exr"),
+        8,
+        4,
+        |x, _| if x == 5 { -1.0 } else { 1.0 },
+    );
     std::fs::write(p("garbage.exr"), b"v/1\x01 not an exr").unwrap();
     std::fs::write(p("map.png"), b"").unwrap();
     for (file, want) in [
@@ -928,7 +943,10 @@ fn bad_environment_maps_and_settings_are_one_line_errors() {
     ] {
         let e = load_environment(p(file).to_str().unwrap()).unwrap_err();
         let msg = e.to_string();
-        assert!(matches!(e, glint_core::RenderError::EnvironmentMap { .. }), "{file}: {e:?}");
+        assert!(
+            matches!(e, glint_core::RenderError::EnvironmentMap { .. }),
+            "{file}: {e:?}"
+        );
         assert!(!msg.contains('\n') && msg.contains(want), "{file}: {msg}");
         assert!(msg.contains(file), "{file}: {msg}");
     }

@@ -12,26 +12,22 @@ use std::f32::consts::PI;
 
 use glint_core::{power_heuristic, Bsdf, EnvMap, Vec3};
 
-use super::path::PathTracer;
+use super::path::{EnvStrategy, PathTracer};
 use super::rng::Rng;
 use super::tracking::IndexRay;
 
-/// Which strategies light a path by the environment map: both, weighted by multiple
-/// importance sampling (what renders use), or one alone (to measure MIS against).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) enum EnvStrategy {
-    /// The map's sampling and the scattering model's, by the power heuristic.
-    #[default]
-    Mis,
-    /// Next-event estimation of the map only (paths that leave see nothing).
-    #[allow(dead_code)]
-    Light,
-    /// The scattering model's directions only (no next-event estimation of the map).
-    #[allow(dead_code)]
-    Scatter,
-}
-
 impl PathTracer<'_> {
+    /// The radiance seen along unit `wdir` by a path that leaves the volume after
+    /// `events` scattering events (its last direction drawn with density
+    /// `scatter_pdf`): the uniform environment's, or the map's ([`Self::env_escape`]).
+    #[inline]
+    pub(super) fn escaped(&self, wdir: Vec3, events: u32, scatter_pdf: f32) -> [f32; 3] {
+        match self.env_map {
+            None => [self.settings.environment; 3],
+            Some(map) => self.env_escape(map, wdir, events, scatter_pdf),
+        }
+    }
+
     /// Adds the map's direct light at `p` through `bsdf` towards `wo`: one direction
     /// drawn from the map (event `event`'s two numbers), its radiance times the
     /// transmittance towards it, weighted against the scattering model's density.

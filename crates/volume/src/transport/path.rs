@@ -18,7 +18,6 @@ use rayon::prelude::*;
 use glint_core::camera::Camera;
 use glint_core::{Bsdf, EnvMap, Image, RenderError, RenderStats, Shader, Vec3};
 
-use super::envlight::EnvStrategy;
 use super::occluders::Occluders;
 use super::rng::{dims, Rng};
 use super::tracking::{IndexRay, Tracker};
@@ -258,6 +257,22 @@ pub(crate) struct Pass<'a> {
     pub(crate) progress: &'a (dyn Fn(u64) + Sync),
 }
 
+/// Which strategies light a path by the environment map (`envlight.rs`): both,
+/// weighted by multiple importance sampling (what renders use), or one alone (to
+/// measure MIS against).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum EnvStrategy {
+    /// The map's sampling and the scattering model's, by the power heuristic.
+    #[default]
+    Mis,
+    /// Next-event estimation of the map only (paths that leave see nothing).
+    #[allow(dead_code)]
+    Light,
+    /// The scattering model's directions only (no next-event estimation of the map).
+    #[allow(dead_code)]
+    Scatter,
+}
+
 /// Everything a path needs that does not change during a frame.
 pub(crate) struct PathTracer<'a> {
     pub(crate) track: Tracker<'a>,
@@ -409,7 +424,6 @@ impl<'a> PathTracer<'a> {
         let mut radiance = [0.0f32; 3];
         let mut coverage = 0.0;
         let mut events = 0;
-        let env = self.settings.environment;
         // The density of the last scattered direction (MIS with an environment map).
         let mut scatter_pdf = 0.0f32;
         loop {
@@ -434,18 +448,9 @@ impl<'a> PathTracer<'a> {
                     mesh.is_none()
                 };
                 if seen {
-                    match self.env_map {
-                        None => {
-                            for c in 0..3 {
-                                radiance[c] += beta[c] * env;
-                            }
-                        }
-                        Some(map) => {
-                            let l = self.env_escape(map, wdir, events, scatter_pdf);
-                            for c in 0..3 {
-                                radiance[c] += beta[c] * l[c];
-                            }
-                        }
+                    let l = self.escaped(wdir, events, scatter_pdf);
+                    for c in 0..3 {
+                        radiance[c] += beta[c] * l[c];
                     }
                     coverage = 1.0;
                 }

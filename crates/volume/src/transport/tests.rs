@@ -1077,7 +1077,9 @@ fn path_frame_env(
         environment: Some(map),
         cancel: None,
     };
-    class.frame(shader, frame, None, transport, &|_| {}).unwrap()
+    class
+        .frame(shader, frame, None, transport, &|_| {})
+        .unwrap()
 }
 
 #[test]
@@ -1115,7 +1117,10 @@ fn a_constant_environment_map_is_the_uniform_environment() {
     let image = path_frame_env(&class, &shader, &frame, &settings, &map, 128);
     let mean = image.rgb.iter().map(|c| f64::from(c[1])).sum::<f64>() / 144.0;
     eprintln!("furnace under a constant map: mean {mean:.5}, map {env}");
-    assert!((mean - f64::from(env)).abs() < 0.01 * f64::from(env), "{mean}");
+    assert!(
+        (mean - f64::from(env)).abs() < 0.01 * f64::from(env),
+        "{mean}"
+    );
     // A lit scene of surfaces and medium: the constant map's image has the uniform
     // environment's mean, within the noise.
     let (class, shader, frame) = small_scene();
@@ -1164,7 +1169,7 @@ fn small_source_map() -> glint_core::EnvMap {
 
 #[test]
 fn mis_of_the_map_agrees_with_each_strategy_and_is_deterministic() {
-    use super::envlight::EnvStrategy;
+    use super::path::EnvStrategy;
     let (class, shader, frame) = small_scene();
     let shader = Shader::with_specular(
         shader.specular().clone(),
@@ -1192,10 +1197,16 @@ fn mis_of_the_map_agrees_with_each_strategy_and_is_deterministic() {
     // Per strategy: the mean over the pixels and samples of the radiance's green
     // channel, and the variance of one sample (over samples, within each pixel).
     let run = |strategy: EnvStrategy| {
-        let mut tracer =
-            PathTracer::new(class.field(), class.medium(), &placed, camera, size, settings)
-                .unwrap()
-                .lit_by(Some(&map));
+        let mut tracer = PathTracer::new(
+            class.field(),
+            class.medium(),
+            &placed,
+            camera,
+            size,
+            settings,
+        )
+        .unwrap()
+        .lit_by(Some(&map));
         tracer.env_strategy = strategy;
         let (mut sum, mut var) = (0.0f64, 0.0f64);
         for y in 0..size[1] {
@@ -1222,7 +1233,10 @@ fn mis_of_the_map_agrees_with_each_strategy_and_is_deterministic() {
     let n = f64::from(size[0] * size[1] * spp);
     let se = |v: f64| (v / n).sqrt();
     assert!(mis > 0.01, "{mis}");
-    for (name, m, v) in [("light", light, var_light), ("scattering", scatter, var_scatter)] {
+    for (name, m, v) in [
+        ("light", light, var_light),
+        ("scattering", scatter, var_scatter),
+    ] {
         let tol = 4.0 * (se(v) + se(var_mis));
         assert!((m - mis).abs() < tol, "{name}: {m} vs MIS {mis} (±{tol})");
     }
