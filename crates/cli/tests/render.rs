@@ -139,3 +139,45 @@ fn a_zarr_store_with_a_missing_or_corrupt_chunk() {
     );
     assert!(!bad_out.exists());
 }
+
+/// Issue 42: `--environment FILE|NAME` renders a `path` scene; a truncated or
+/// malformed `.hdr`, or an unknown name, is one line, a non-zero exit and no image.
+#[test]
+fn environment_maps_render_and_bad_ones_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("frames.dcm");
+    write_frames_without_positions(&input);
+    // A 4x2 Radiance file, flat scanlines (the decoder reads widths below 8 so) of
+    // RGBE (128, 128, 128, 128): 0.5 everywhere.
+    let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n".to_vec();
+    hdr.extend(std::iter::repeat_n(128u8, 4 * 8));
+    let good = dir.path().join("grey.hdr");
+    std::fs::write(&good, &hdr).unwrap();
+    let truncated = dir.path().join("truncated.hdr");
+    std::fs::write(&truncated, &hdr[..hdr.len() - 9]).unwrap();
+    let path = ["--lighting", "path", "--spp", "2", "--no-headlight"];
+    for map in [good.to_str().unwrap(), "studio"] {
+        let out = dir.path().join("ok.png");
+        let o = render(&[&path[..], &["--environment", map]].concat(), &input, &out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(out.exists());
+        std::fs::remove_file(&out).unwrap();
+    }
+    for (map, want) in [
+        (truncated.to_str().unwrap(), "truncated.hdr"),
+        ("nowhere", "studio"),
+    ] {
+        let out = dir.path().join("bad.png");
+        let o = render(&[&path[..], &["--environment", map]].concat(), &input, &out);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        // One error line (after the reader's note on the geometry it assumed).
+        let errors: Vec<_> = err.lines().filter(|l| l.contains("error")).collect();
+        assert_eq!(errors.len(), 1, "{err}");
+        assert!(
+            errors[0].contains("environment map") && errors[0].contains(want),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+}

@@ -38,6 +38,16 @@ pub enum RenderError {
     /// A transfer function is malformed (unsorted points, values out of range, ...).
     #[error("invalid transfer function: {0}")]
     TransferFunction(String),
+    /// An environment map could not be read or used (a missing, truncated or
+    /// malformed `.hdr` or `.exr` file, an absurd size, NaN or negative texels, an
+    /// unknown built-in name).
+    #[error("environment map {map}: {what}")]
+    EnvironmentMap {
+        /// The file or built-in name.
+        map: String,
+        /// What went wrong.
+        what: String,
+    },
     /// A transfer-function JSON file could not be read or parsed.
     #[error("{path}: {what}")]
     TransferFunctionFile {

@@ -49,8 +49,9 @@ pub use image::{
 };
 pub use legend::Legend;
 pub use lighting::{
-    phase_hg, Bsdf, BsdfSample, Light, Material, MaterialOverrides, RayLighting, Scattering,
-    ShadeBatch, Shader, SurfacePart, MAX_ANISOTROPY, MAX_LIGHTS, MEDIUM_IRRADIANCE,
+    check_env_size, phase_hg, power_heuristic, Bsdf, BsdfSample, EnvMap, EnvSample, Light,
+    Material, MaterialOverrides, RayLighting, Scattering, ShadeBatch, Shader, SurfacePart,
+    MAX_ANISOTROPY, MAX_LIGHTS, MEDIUM_IRRADIANCE,
 };
 pub use math::Vec3;
 pub use mode::RenderMode;

@@ -108,9 +108,9 @@ pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHIN
 pub use pick::{image_point, Pick, PickedObject};
 pub use renderer::{InMemory, Rendered, Renderer};
 pub use scene::{
-    Derived, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe,
-    Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS, DEFAULT_SPP,
-    MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
+    load_environment, Derived, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved,
+    Scene, SceneLobe, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS,
+    DEFAULT_SPP, ENVIRONMENT_NAMES, MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
 };
 pub use turntable::{Turntable, TurntableWritten};
 

@@ -19,7 +19,7 @@ use crate::denoise::Denoise;
 use crate::hwlobe::HwCache;
 use crate::labels::LabelMeshes;
 use crate::meshes::{MeshKey, MeshSet};
-use crate::scene::{Derived, Input, MeshLayer, Plan, Resolved, Scene, Transport};
+use crate::scene::{Derived, EnvCache, Input, MeshLayer, Plan, Resolved, Scene, Transport};
 
 /// The `shadows` model's last light volumes, for the classification and settings they
 /// were built with (reused while the lights point the same way).
@@ -185,6 +185,8 @@ pub struct Renderer {
     /// The path-traced image of the last `path` scene: rendering the same scene with
     /// more samples adds to it; any other change starts again.
     paths: Option<PathAccumulation>,
+    /// The environment map of the last `path` scene with one.
+    environment: EnvCache,
     /// Set by another thread to stop a `path` render in flight ([`Renderer::set_cancel`]).
     cancel: Option<Arc<AtomicBool>>,
     /// A colour volume's colours ([`glint_io::Volume::colour`]), on the field's grid:
@@ -266,6 +268,7 @@ impl Renderer {
             shadows: None,
             occluders: None,
             paths: None,
+            environment: EnvCache::default(),
             cancel: None,
             colours: None,
         }
@@ -635,6 +638,7 @@ impl Renderer {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Image, RenderError> {
         let (class, shader, frame) = (v.class, v.shader, v.frame);
+        let env = self.environment.get(&scene.lighting)?;
         let mut volume = |far: Option<&[f32]>| -> Result<Image, RenderError> {
             match transport {
                 Transport::Local => {
@@ -682,6 +686,7 @@ impl Renderer {
                         spp,
                         settings,
                         occluders: v.occluders.map(|o| &**o),
+                        environment: env.as_deref(),
                         cancel: cancel.as_deref(),
                     };
                     let traced = match class.frame(shader, frame, far, light, progress) {

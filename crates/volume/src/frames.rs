@@ -6,7 +6,7 @@
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use glint_core::{Image, RenderError, RenderMode, Shader, Vec3};
+use glint_core::{EnvMap, Image, RenderError, RenderMode, Shader, Vec3};
 
 use crate::classification::{occlusion_grid, Classification, LIGHT_CELL};
 use crate::clip::{IndexClip, CUT_DEPTH_STEPS};
@@ -46,6 +46,10 @@ pub enum Transport<'a> {
         /// Meshes voxelised on this classification's field ([`Occluders::new`]):
         /// shadow rays and scattered paths end where they enter an occupied cell.
         occluders: Option<&'a Occluders>,
+        /// The environment map that replaces the uniform environment
+        /// ([`PathSettings::environment`]), when given: next-event estimated and
+        /// combined with the scattering model's sampling by MIS.
+        environment: Option<&'a EnvMap>,
         /// When set (by another thread: a viewer whose user moved while samples were
         /// being added), rows not yet begun are left and the frame returns
         /// [`RenderError::Cancelled`]; the image then holds part of a batch and must be
@@ -104,6 +108,7 @@ impl Classification {
                 spp,
                 settings,
                 occluders,
+                environment,
                 cancel,
             } => {
                 let never = AtomicBool::new(false);
@@ -112,6 +117,7 @@ impl Classification {
                     spp,
                     far,
                     occluders,
+                    environment,
                     cancel: cancel.unwrap_or(&never),
                 };
                 self.trace_paths(shader, frame, image, &paths, progress)?;
@@ -194,6 +200,7 @@ impl Classification {
             spp,
             far,
             occluders,
+            environment,
             cancel,
         } = *paths;
         settings.validate()?;
@@ -229,7 +236,8 @@ impl Classification {
         let clip = self.index_clip(shader, frame);
         let tracer = PathTracer::new(self.field(), self.medium(), &placed, camera, size, settings)?
             .occluded_by(occluders)?
-            .clipped_by(clip.as_ref());
+            .clipped_by(clip.as_ref())
+            .lit_by(environment);
         let pass = Pass {
             far,
             cancel,
@@ -247,5 +255,6 @@ struct Paths<'a> {
     spp: u32,
     far: Option<&'a [f32]>,
     occluders: Option<&'a Occluders>,
+    environment: Option<&'a EnvMap>,
     cancel: &'a AtomicBool,
 }

@@ -230,9 +230,18 @@ pub struct SceneFlags {
     /// same image bit for bit) [default: 0].
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Path lighting: radiance of the uniform white environment [default: 0.5].
-    #[arg(long, allow_negative_numbers = true)]
-    pub environment: Option<f32>,
+    /// Path lighting: the environment: a number, the radiance of a uniform white one
+    /// [default: 0.5]; or an environment map replacing it: an equirectangular .hdr
+    /// or .exr file, or a built-in name (studio), importance-sampled with MIS.
+    #[arg(long, allow_negative_numbers = true, value_name = "RADIANCE|FILE|NAME")]
+    pub environment: Option<Environment>,
+    /// Path lighting: degrees the environment map is turned about the vertical
+    /// (superior) axis [default: 0].
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub environment_rotation: Option<f64>,
+    /// Path lighting: the environment map's radiance scale [default: 1].
+    #[arg(long, value_name = "X")]
+    pub environment_intensity: Option<f32>,
     /// Path lighting: camera rays that meet no matter see the environment (opaque)
     /// instead of the background.
     #[arg(long)]
@@ -502,7 +511,23 @@ impl SceneFlags {
         set(&mut l.spp, self.spp.map(Some));
         set(&mut l.bounces, self.bounces.map(Some));
         set(&mut l.seed, self.seed.map(Some));
-        set(&mut l.environment, self.environment.map(Some));
+        match &self.environment {
+            Some(Environment::Uniform(r)) => {
+                (l.environment, l.environment_map) = (Some(*r), None);
+            }
+            Some(Environment::Map(m)) => {
+                (l.environment, l.environment_map) = (None, Some(m.clone()));
+            }
+            None => {}
+        }
+        set(
+            &mut l.environment_rotation,
+            self.environment_rotation.map(Some),
+        );
+        set(
+            &mut l.environment_intensity,
+            self.environment_intensity.map(Some),
+        );
         set(&mut l.anisotropy, self.anisotropy.map(Some));
         set(&mut l.sampler, self.sampler.map(Some));
         set(&mut l.time_budget, self.time_budget.map(Some));
@@ -513,6 +538,23 @@ impl SceneFlags {
         if self.show_environment {
             l.show_environment = Some(true);
         }
+    }
+}
+
+/// `--environment`: a uniform radiance (a number) or a map (a file or built-in name).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    /// The uniform white environment's radiance.
+    Uniform(f32),
+    /// An environment map's file or built-in name.
+    Map(String),
+}
+
+impl std::str::FromStr for Environment {
+    type Err = std::convert::Infallible;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(s.parse::<f32>()
+            .map_or_else(|_| Environment::Map(s.to_string()), Environment::Uniform))
     }
 }
 

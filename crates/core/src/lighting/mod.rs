@@ -33,6 +33,7 @@ use crate::math::Vec3;
 mod avx2;
 mod batch;
 mod dispatch;
+mod envmap;
 #[cfg(test)]
 mod fixtures;
 mod material;
@@ -42,6 +43,10 @@ mod shadowed;
 mod transport;
 
 pub use batch::ShadeBatch;
+pub use envmap::{
+    check_env_size, power_heuristic, EnvMap, EnvSample, MAX_ENV_HEIGHT, MAX_ENV_INTENSITY,
+    MAX_ENV_WIDTH,
+};
 pub use material::{Material, MaterialOverrides};
 pub use scatter::{cosine_hemisphere, sample_phase, Bsdf, BsdfSample, Scattering};
 pub use transport::{phase_hg, SurfacePart, MAX_ANISOTROPY, MEDIUM_IRRADIANCE};

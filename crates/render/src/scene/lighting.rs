@@ -85,6 +85,18 @@ pub struct Lighting {
     /// when not given, so scenes without it keep their JSON.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub denoise: Option<Denoise>,
+    /// `path`: an environment map instead of the uniform environment: an
+    /// equirectangular `.hdr` or `.exr` file, or a built-in name (`studio`;
+    /// [`ENVIRONMENT_NAMES`](crate::ENVIRONMENT_NAMES)) [default: none].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment_map: Option<String>,
+    /// `path`: degrees the environment map is turned about the vertical (superior)
+    /// axis, -360..=360 [default: 0 with a map].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment_rotation: Option<f64>,
+    /// `path`: the environment map's radiance scale [default: 1 with a map].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment_intensity: Option<f32>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -113,7 +125,7 @@ impl Lighting {
     }
 
     /// The fields that are set, with their names.
-    fn set_fields(&self) -> [(&'static str, bool); 10] {
+    fn set_fields(&self) -> [(&'static str, bool); 13] {
         [
             ("spp", self.spp.is_some()),
             ("bounces", self.bounces.is_some()),
@@ -125,6 +137,12 @@ impl Lighting {
             ("time_budget", self.time_budget.is_some()),
             ("show_environment", self.show_environment.is_some()),
             ("denoise", self.denoise.is_some()),
+            ("environment_map", self.environment_map.is_some()),
+            ("environment_rotation", self.environment_rotation.is_some()),
+            (
+                "environment_intensity",
+                self.environment_intensity.is_some(),
+            ),
         ]
     }
 
@@ -143,6 +161,9 @@ impl Lighting {
                 "time_budget",
                 "show_environment",
                 "denoise",
+                "environment_map",
+                "environment_rotation",
+                "environment_intensity",
             ],
         }
     }
@@ -164,6 +185,16 @@ impl Lighting {
             time_budget: self.time_budget.filter(|_| keep("time_budget")),
             show_environment: self.show_environment.filter(|_| keep("show_environment")),
             denoise: self.denoise.filter(|_| keep("denoise")),
+            environment_map: self
+                .environment_map
+                .clone()
+                .filter(|_| keep("environment_map")),
+            environment_rotation: self
+                .environment_rotation
+                .filter(|_| keep("environment_rotation")),
+            environment_intensity: self
+                .environment_intensity
+                .filter(|_| keep("environment_intensity")),
         }
     }
 
@@ -216,7 +247,7 @@ impl Lighting {
                 let settings = PathSettings {
                     bounces: *self.bounces.get_or_insert(DEFAULT_BOUNCES),
                     seed: *self.seed.get_or_insert(0),
-                    environment: *self.environment.get_or_insert(DEFAULT_ENVIRONMENT),
+                    environment: self.resolve_environment()?,
                     sampler: *self.sampler.get_or_insert(Sampler::default()),
                     time_budget: self.time_budget.map(check_time_budget).transpose()?,
                     show_environment: *self.show_environment.get_or_insert(false),
@@ -231,6 +262,30 @@ impl Lighting {
             }
         };
         Ok((transport, anisotropy))
+    }
+}
+
+impl Lighting {
+    /// The uniform environment's radiance (written back), or with a map 0 and the
+    /// map's rotation and intensity written back; a map's settings without a map,
+    /// or a map and a uniform radiance, are refused.
+    fn resolve_environment(&mut self) -> Result<f32, RenderError> {
+        if self.environment_map.is_none() {
+            if self.environment_rotation.is_some() || self.environment_intensity.is_some() {
+                return Err(RenderError::Parameter(
+                    "lighting.environment_rotation and environment_intensity need an environment_map".into(),
+                ));
+            }
+            return Ok(*self.environment.get_or_insert(DEFAULT_ENVIRONMENT));
+        }
+        if let Some(e) = self.environment {
+            return Err(RenderError::Parameter(format!(
+                "lighting.environment {e} and an environment_map: give one (the map replaces the uniform environment)"
+            )));
+        }
+        self.environment_rotation.get_or_insert(0.0);
+        self.environment_intensity.get_or_insert(1.0);
+        Ok(0.0)
     }
 }
 

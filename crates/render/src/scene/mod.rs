@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::labels::LabelSpec;
 use crate::meshes::MeshSpec;
 
+mod envmap;
 mod file;
 mod lighting;
 mod lobe;
@@ -27,6 +28,8 @@ mod resolve;
 #[cfg(test)]
 mod tests;
 
+pub(crate) use envmap::EnvCache;
+pub use envmap::{load_environment, ENVIRONMENT_NAMES};
 pub use lighting::{Lighting, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SPP};
 pub use lobe::{LobeSpec, SceneLobe};
 pub use patch::MERGED_FIELDS;

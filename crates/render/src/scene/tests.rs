@@ -827,3 +827,158 @@ fn window_and_level_remap_the_transfer_function() {
         }))
         .is_err());
 }
+
+/// A path scene of the small phantom lit by `map` alone.
+fn env_scene(map: &str) -> Scene {
+    Scene {
+        lights: vec![],
+        lighting: Lighting {
+            model: LightingModel::Path,
+            spp: Some(2),
+            environment_map: Some(map.into()),
+            ..Lighting::default()
+        },
+        ..small()
+    }
+}
+
+/// A Radiance `.hdr` of `w x h` texels, written flat (no run-length encoding) with
+/// image-rs's encoder.
+fn write_hdr(path: &std::path::Path, w: usize, h: usize, f: impl Fn(usize, usize) -> f32) {
+    let px: Vec<image::Rgb<f32>> = (0..w * h)
+        .map(|i| image::Rgb([f(i % w, i / w); 3]))
+        .collect();
+    let file = std::fs::File::create(path).unwrap();
+    image::codecs::hdr::HdrEncoder::new(file)
+        .encode(&px, w, h)
+        .unwrap();
+}
+
+/// An OpenEXR file of `w x h` texels of radiance `f`.
+fn write_exr(path: &std::path::Path, w: usize, h: usize, f: impl Fn(usize, usize) -> f32 + Sync) {
+    exr::prelude::write_rgb_file(path, w, h, |x, y| (f(x, y), f(x, y), f(x, y))).unwrap();
+}
+
+#[test]
+fn an_environment_map_lights_a_path_scene_and_resolves_its_defaults() {
+    let scene = env_scene("studio");
+    let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+    let out = r.render(&scene, &|_| {}).unwrap();
+    let l = &out.scene.lighting;
+    // The map replaces the uniform environment: its settings written back, the
+    // uniform radiance left unset.
+    assert_eq!(l.environment, None);
+    assert_eq!(l.environment_rotation, Some(0.0));
+    assert_eq!(l.environment_intensity, Some(1.0));
+    assert!(out.image.rgb.iter().any(|c| c[1] > 0.01));
+    // Turned and brighter: another image; the resolved scene renders the same image.
+    let mut turned = scene.clone();
+    turned.lighting.environment_rotation = Some(120.0);
+    turned.lighting.environment_intensity = Some(2.0);
+    let other = r.render(&turned, &|_| {}).unwrap();
+    assert_ne!(other.image.rgb, out.image.rgb);
+    let again = r.render(&out.scene, &|_| {}).unwrap();
+    assert_eq!(again.image.rgb, out.image.rgb);
+    // Files: .hdr and .exr of one constant radiance give the constant map's image.
+    let dir = tempfile::tempdir().unwrap();
+    let (hdr, exr) = (dir.path().join("c.hdr"), dir.path().join("c.exr"));
+    write_hdr(&hdr, 16, 8, |_, _| 0.5);
+    write_exr(&exr, 16, 8, |_, _| 0.5);
+    let a = r
+        .render(&env_scene(hdr.to_str().unwrap()), &|_| {})
+        .unwrap();
+    let b = r
+        .render(&env_scene(exr.to_str().unwrap()), &|_| {})
+        .unwrap();
+    assert_eq!(a.image.rgb, b.image.rgb);
+    // The viewer's and Python's patch reaches the field.
+    let patched = small()
+        .patch(
+            serde_json::json!({"lighting": {"model": "path", "environment_map": "studio"}})
+                .as_object()
+                .unwrap(),
+        )
+        .unwrap();
+    assert_eq!(patched.lighting.environment_map.as_deref(), Some("studio"));
+}
+
+#[test]
+fn bad_environment_maps_and_settings_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    write_hdr(&p("good.hdr"), 16, 8, |x, _| x as f32);
+    let bytes = std::fs::read(p("good.hdr")).unwrap();
+    std::fs::write(p("truncated.hdr"), &bytes[..bytes.len() - 40]).unwrap();
+    std::fs::write(p("garbage.hdr"), b"not a radiance file\n").unwrap();
+    // A header of 100000 x 100000 texels and no data: refused before allocating.
+    std::fs::write(
+        p("huge.hdr"),
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n\x01\x02",
+    )
+    .unwrap();
+    write_exr(&p("nan.exr"), 8, 4, |x, y| {
+        if (x, y) == (3, 2) {
+            f32::NAN
+        } else {
+            1.0
+        }
+    });
+    write_exr(
+        &p("negative.exr"),
+        8,
+        4,
+        |x, _| if x == 5 { -1.0 } else { 1.0 },
+    );
+    std::fs::write(p("garbage.exr"), b"v/1\x01 not an exr").unwrap();
+    std::fs::write(p("map.png"), b"").unwrap();
+    for (file, want) in [
+        ("truncated.hdr", ""),
+        ("garbage.hdr", ""),
+        ("huge.hdr", "100000x100000"),
+        ("nan.exr", "(3, 2)"),
+        ("negative.exr", "(5, 0)"),
+        ("garbage.exr", ""),
+        ("map.png", ".hdr or .exr"),
+        ("missing.hdr", ""),
+    ] {
+        let e = load_environment(p(file).to_str().unwrap()).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            matches!(e, glint_core::RenderError::EnvironmentMap { .. }),
+            "{file}: {e:?}"
+        );
+        assert!(!msg.contains('\n') && msg.contains(want), "{file}: {msg}");
+        assert!(msg.contains(file), "{file}: {msg}");
+    }
+    assert!(load_environment(p("good.hdr").to_str().unwrap()).is_ok());
+    assert!(load_environment("nowhere")
+        .unwrap_err()
+        .to_string()
+        .contains("studio"));
+    // Settings: a map's settings need a map; a map and a uniform radiance conflict;
+    // another model does not take a map; a bad rotation or intensity.
+    let mut r = Renderer::open(&small(), &ReadOptions::default()).unwrap();
+    let mut no_map = env_scene("studio");
+    no_map.lighting.environment_map = None;
+    no_map.lighting.environment_rotation = Some(10.0);
+    let mut both = env_scene("studio");
+    both.lighting.environment = Some(0.5);
+    let mut shadows = env_scene("studio");
+    shadows.lighting.model = LightingModel::Shadows;
+    shadows.lighting.spp = None;
+    shadows.lights = vec![glint_core::Light::HEADLIGHT];
+    let mut rotation = env_scene("studio");
+    rotation.lighting.environment_rotation = Some(1000.0);
+    let mut intensity = env_scene("studio");
+    intensity.lighting.environment_intensity = Some(-1.0);
+    for (scene, want) in [
+        (no_map, "need an environment_map"),
+        (both, "give one"),
+        (shadows, "not used by shadows"),
+        (rotation, "rotation"),
+        (intensity, "intensity"),
+    ] {
+        let msg = r.render(&scene, &|_| {}).unwrap_err().to_string();
+        assert!(!msg.contains('\n') && msg.contains(want), "{msg}");
+    }
+}

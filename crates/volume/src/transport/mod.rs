@@ -13,7 +13,8 @@
 //! - `path`: progressive Monte Carlo volume path tracing ([`PathImage`],
 //!   [`Transport::Path`](crate::Transport::Path)): delta
 //!   tracking against the macro cells' majorants, the lights by next-event estimation
-//!   with ratio tracking, a uniform environment, importance-sampled lobe and phase
+//!   with ratio tracking, a uniform environment or an environment map (next-event
+//!   estimated, combined with the scattering model's sampling by MIS), importance-sampled lobe and phase
 //!   function, Russian roulette; the first dimensions of each path from an
 //!   Owen-scrambled Sobol sequence by default ([`Sampler`]). The same seed, sampler
 //!   and sample count give the same image bit for bit on any thread count.
@@ -22,6 +23,7 @@ use std::time::Duration;
 
 use glint_core::RenderError;
 
+mod envlight;
 mod occluders;
 mod path;
 mod rng;

@@ -7,7 +7,8 @@
 //! Henyey-Greenstein phase function exactly), Russian roulette, and at most `bounces`
 //! scattering events. The surface is chosen at a collision with the probability of
 //! its weight (`Scattering::choose`), as Exposure Render chooses its BRDF (Kroes et
-//! al. 2012).
+//! al. 2012). An environment map, when the scene has one, replaces the uniform
+//! environment and is sampled by MIS with the scattering model (`envlight.rs`).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -15,7 +16,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use glint_core::camera::Camera;
-use glint_core::{Bsdf, Image, RenderError, RenderStats, Shader, Vec3};
+use glint_core::{Bsdf, EnvMap, Image, RenderError, RenderStats, Shader, Vec3};
 
 use super::occluders::Occluders;
 use super::rng::{dims, Rng};
@@ -256,6 +257,22 @@ pub(crate) struct Pass<'a> {
     pub(crate) progress: &'a (dyn Fn(u64) + Sync),
 }
 
+/// Which strategies light a path by the environment map (`envlight.rs`): both,
+/// weighted by multiple importance sampling (what renders use), or one alone (to
+/// measure MIS against).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum EnvStrategy {
+    /// The map's sampling and the scattering model's, by the power heuristic.
+    #[default]
+    Mis,
+    /// Next-event estimation of the map only (paths that leave see nothing).
+    #[allow(dead_code)]
+    Light,
+    /// The scattering model's directions only (no next-event estimation of the map).
+    #[allow(dead_code)]
+    Scatter,
+}
+
 /// Everything a path needs that does not change during a frame.
 pub(crate) struct PathTracer<'a> {
     pub(crate) track: Tracker<'a>,
@@ -274,6 +291,11 @@ pub(crate) struct PathTracer<'a> {
     pub(crate) surface_bias: f32,
     /// Meshes that end shadow rays and scattered paths, when the scene has any.
     pub(crate) occluders: Option<&'a Occluders>,
+    /// The environment map that replaces the uniform environment, when the scene has
+    /// one.
+    pub(crate) env_map: Option<&'a EnvMap>,
+    /// How the map lights the paths (MIS but in tests).
+    pub(crate) env_strategy: EnvStrategy,
 }
 
 /// One path's result: radiance, whether the camera ray met matter, scattering events.
@@ -320,6 +342,8 @@ impl<'a> PathTracer<'a> {
             axes,
             surface_bias: field.min_spacing() as f32,
             occluders: None,
+            env_map: None,
+            env_strategy: EnvStrategy::Mis,
         })
     }
 
@@ -345,6 +369,25 @@ impl<'a> PathTracer<'a> {
     pub(crate) fn clipped_by(mut self, clip: Option<&'a IndexClip>) -> PathTracer<'a> {
         self.track.clip = clip;
         self
+    }
+
+    /// The tracer with `map` (when given) as its environment instead of the uniform
+    /// one.
+    pub(crate) fn lit_by(mut self, map: Option<&'a EnvMap>) -> PathTracer<'a> {
+        self.env_map = map;
+        self
+    }
+
+    /// Where `ray` meets the meshes past `t0` (its first cell excluded).
+    #[inline]
+    pub(super) fn mesh_hit_from(&self, ray: &IndexRay, t0: f32) -> Option<f32> {
+        self.mesh_hit(ray, t0, f32::INFINITY)
+    }
+
+    /// The index-space direction of world direction `v`.
+    #[inline]
+    pub(super) fn index_dir(&self, v: Vec3) -> Vec3 {
+        self.to_index(v)
     }
 
     /// Where `ray` meets the meshes over `[t0, t1]` (its first cell excluded).
@@ -381,7 +424,8 @@ impl<'a> PathTracer<'a> {
         let mut radiance = [0.0f32; 3];
         let mut coverage = 0.0;
         let mut events = 0;
-        let env = self.settings.environment;
+        // The density of the last scattered direction (MIS with an environment map).
+        let mut scatter_pdf = 0.0f32;
         loop {
             // Camera rays stop at the meshes' depth (`far`); scattered rays at their
             // cells, where the path ends: meshes absorb.
@@ -404,8 +448,9 @@ impl<'a> PathTracer<'a> {
                     mesh.is_none()
                 };
                 if seen {
+                    let l = self.escaped(wdir, events, scatter_pdf);
                     for c in 0..3 {
-                        radiance[c] += beta[c] * env;
+                        radiance[c] += beta[c] * l[c];
                     }
                     coverage = 1.0;
                 }
@@ -431,6 +476,10 @@ impl<'a> PathTracer<'a> {
                 .scattering(color, grad)
                 .choose(|| rng.dim(block + dims::CHOOSE));
             self.direct(p, &bsdf, wo, (&mut rng, block), beta, &mut radiance);
+            if let Some(map) = self.env_map {
+                let at = (p, &bsdf, wo);
+                self.env_direct(map, at, (&mut rng, events - 1), beta, &mut radiance);
+            }
             let u = [
                 rng.dim(block + dims::LOBE),
                 rng.dim(block + dims::DIRECTION),
@@ -440,6 +489,7 @@ impl<'a> PathTracer<'a> {
                 break;
             };
             let (wi, weight) = (sample.wi, sample.weight);
+            scatter_pdf = sample.pdf;
             for c in 0..3 {
                 beta[c] *= weight[c];
             }

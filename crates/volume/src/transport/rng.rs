@@ -104,6 +104,12 @@ pub(crate) mod dims {
     pub(crate) const DIRECTION: u32 = 6;
     /// Russian roulette.
     pub(crate) const ROULETTE: u32 = 8;
+    /// The environment map's two numbers of event `k` are dimensions
+    /// `ENV_LIGHT + 2k`, `ENV_LIGHT + 2k + 1`: a pair of their own, outside the event
+    /// blocks, so scenes without a map draw what they drew before ([`Rng::light_dim`]).
+    ///
+    /// [`Rng::light_dim`]: super::Rng::light_dim
+    pub(crate) const ENV_LIGHT: u32 = 1 << 12;
 
     /// The first dimension of event `k`'s block (events counted from 0).
     #[inline(always)]
@@ -177,6 +183,17 @@ impl Rng {
     pub(crate) fn dim(&mut self, d: u32) -> f32 {
         match self.sobol {
             Some(s) if d < SOBOL_DIMS => s.get(d),
+            _ => self.pcg_uniform(),
+        }
+    }
+
+    /// Number `i` (0 or 1) of the environment map's pair at event `event` (counted
+    /// from 0): from the Sobol sequence for the first four events (a pair of its own,
+    /// [`dims::ENV_LIGHT`]; no independent number is drawn), else independent.
+    #[inline]
+    pub(crate) fn light_dim(&mut self, event: u32, i: u32) -> f32 {
+        match self.sobol {
+            Some(s) if event < 4 => s.get(dims::ENV_LIGHT + 2 * event + i),
             _ => self.pcg_uniform(),
         }
     }

@@ -1,7 +1,8 @@
 //! Light transport against closed forms: a slab's transmittance `exp(-τ)`, delta and
 //! ratio tracking in agreement on a heterogeneous medium, a white furnace, an opaque
 //! sphere's shadow where geometry puts it, determinism per seed on any thread count,
-//! and the SIMD loop against the scalar one under shadows. Small volumes, few samples.
+//! the SIMD loop against the scalar one under shadows, an environment map's furnace
+//! and its MIS against each strategy alone. Small volumes, few samples.
 
 use std::sync::Arc;
 
@@ -31,6 +32,7 @@ fn path_frame(
         spp,
         settings: *settings,
         occluders: None,
+        environment: None,
         cancel: None,
     };
     class.frame(shader, frame, None, transport, &|_| {})
@@ -961,6 +963,7 @@ fn a_mesh_shadows_the_path_traced_volume() {
                 spp: 24,
                 settings,
                 occluders,
+                environment: None,
                 cancel: None,
             };
             class.frame(&shader, &frame, None, target, &|_| {}).unwrap();
@@ -1054,4 +1057,201 @@ fn ambient_occlusion_treats_clipped_space_as_empty() {
     }
     // The ball's removed half no longer occludes the kept half and the floor by it.
     assert!(brighter > 100, "{brighter}");
+}
+
+/// The `path` model's frame lit by the environment `map` (no meshes).
+fn path_frame_env(
+    class: &Classification,
+    shader: &Shader,
+    frame: &FrameSettings,
+    settings: &PathSettings,
+    map: &glint_core::EnvMap,
+    spp: u32,
+) -> glint_core::Image {
+    let mut img = PathImage::new(frame.width, frame.height);
+    let transport = Transport::Path {
+        image: &mut img,
+        spp,
+        settings: *settings,
+        occluders: None,
+        environment: Some(map),
+        cancel: None,
+    };
+    class
+        .frame(shader, frame, None, transport, &|_| {})
+        .unwrap()
+}
+
+#[test]
+fn a_constant_environment_map_is_the_uniform_environment() {
+    // The white furnace under a constant map: every pixel's radiance is the map's
+    // (next-event estimation of the map and the paths that leave, by MIS).
+    let vol = volume([16, 16, 16], [1.0; 3], |_, _, _| 1.0);
+    let class = classify(&vol, &white(&[(0.0, 0.15)]));
+    let env = 0.7f32;
+    let map = glint_core::EnvMap::constant([env; 3], 32, 16).unwrap();
+    let frame = FrameSettings {
+        width: 12,
+        height: 12,
+        background: [env; 3],
+        ..Default::default()
+    };
+    let shader = Shader::with_specular(
+        albedo_one(vec![], 0.0).specular().clone(),
+        Geometry::Phong,
+        *albedo_one(vec![], 0.0).material(),
+        vec![],
+        0.0,
+    )
+    .unwrap()
+    .with_anisotropy(0.6)
+    .unwrap();
+    let settings = PathSettings {
+        bounces: MAX_BOUNCES,
+        seed: 9,
+        environment: 0.0,
+        sampler: Sampler::Sobol,
+        time_budget: None,
+        show_environment: true,
+    };
+    let image = path_frame_env(&class, &shader, &frame, &settings, &map, 128);
+    let mean = image.rgb.iter().map(|c| f64::from(c[1])).sum::<f64>() / 144.0;
+    eprintln!("furnace under a constant map: mean {mean:.5}, map {env}");
+    assert!(
+        (mean - f64::from(env)).abs() < 0.01 * f64::from(env),
+        "{mean}"
+    );
+    // A lit scene of surfaces and medium: the constant map's image has the uniform
+    // environment's mean, within the noise.
+    let (class, shader, frame) = small_scene();
+    let uniform = PathSettings {
+        bounces: 4,
+        seed: 5,
+        environment: 0.5,
+        sampler: Sampler::Sobol,
+        time_budget: None,
+        show_environment: true,
+    };
+    let mut img = PathImage::new(20, 16);
+    let a = path_frame(&class, &shader, &frame, &uniform, &mut img, 64).unwrap();
+    let map = glint_core::EnvMap::constant([0.5; 3], 64, 32).unwrap();
+    let mapped = PathSettings {
+        environment: 0.0,
+        ..uniform
+    };
+    let b = path_frame_env(&class, &shader, &frame, &mapped, &map, 64);
+    let (ma, mb) = (mean_luminance(&a), mean_luminance(&b));
+    eprintln!("uniform environment {ma:.5}, constant map {mb:.5}");
+    assert!((ma - mb).abs() < 0.01 * ma, "{ma} vs {mb}");
+}
+
+/// A map of a dim sky and one small bright source (5° in radius, radiance 200) above
+/// and to the right.
+fn small_source_map() -> glint_core::EnvMap {
+    let (w, h) = (128u32, 64u32);
+    let c = Vec3::new(0.5, 0.3, 0.81).normalize_or_zero();
+    let mut texels = Vec::new();
+    for y in 0..h {
+        let t = std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
+        for x in 0..w {
+            let p = std::f32::consts::TAU * (x as f32 + 0.5) / w as f32;
+            let d = Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+            let l = if d.dot(c) > 5f32.to_radians().cos() {
+                200.0
+            } else {
+                0.05
+            };
+            texels.push([l; 3]);
+        }
+    }
+    glint_core::EnvMap::new(w, h, texels).unwrap()
+}
+
+#[test]
+fn mis_of_the_map_agrees_with_each_strategy_and_is_deterministic() {
+    use super::path::EnvStrategy;
+    let (class, shader, frame) = small_scene();
+    let shader = Shader::with_specular(
+        shader.specular().clone(),
+        Geometry::Blinn,
+        *shader.material(),
+        vec![],
+        shader.gate(),
+    )
+    .unwrap()
+    .with_anisotropy(0.3)
+    .unwrap();
+    let map = small_source_map();
+    let settings = PathSettings {
+        bounces: 3,
+        seed: 2,
+        environment: 0.0,
+        sampler: Sampler::Independent,
+        time_budget: None,
+        show_environment: false,
+    };
+    let camera = class.camera(&frame).unwrap();
+    let placed = shader.placed(&camera);
+    let size = [frame.width, frame.height];
+    let spp = 48u32;
+    // Per strategy: the mean over the pixels and samples of the radiance's green
+    // channel, and the variance of one sample (over samples, within each pixel).
+    let run = |strategy: EnvStrategy| {
+        let mut tracer = PathTracer::new(
+            class.field(),
+            class.medium(),
+            &placed,
+            camera,
+            size,
+            settings,
+        )
+        .unwrap()
+        .lit_by(Some(&map));
+        tracer.env_strategy = strategy;
+        let (mut sum, mut var) = (0.0f64, 0.0f64);
+        for y in 0..size[1] {
+            for x in 0..size[0] {
+                let v: Vec<f64> = (0..spp)
+                    .map(|s| f64::from(tracer.trace(x, y, s, f32::INFINITY).radiance[1]))
+                    .collect();
+                let m = v.iter().sum::<f64>() / f64::from(spp);
+                sum += m;
+                var += v.iter().map(|a| (a - m) * (a - m)).sum::<f64>() / f64::from(spp - 1);
+            }
+        }
+        let pixels = f64::from(size[0] * size[1]);
+        (sum / pixels, var / pixels)
+    };
+    let (mis, var_mis) = run(EnvStrategy::Mis);
+    let (light, var_light) = run(EnvStrategy::Light);
+    let (scatter, var_scatter) = run(EnvStrategy::Scatter);
+    eprintln!(
+        "path under a small source: mean MIS {mis:.4}, light {light:.4}, scattering {scatter:.4}; \
+         variance per sample MIS {var_mis:.4}, light {var_light:.4}, scattering {var_scatter:.4}"
+    );
+    // Standard errors of the means over all samples (pixels independent).
+    let n = f64::from(size[0] * size[1] * spp);
+    let se = |v: f64| (v / n).sqrt();
+    assert!(mis > 0.01, "{mis}");
+    for (name, m, v) in [
+        ("light", light, var_light),
+        ("scattering", scatter, var_scatter),
+    ] {
+        let tol = 4.0 * (se(v) + se(var_mis));
+        assert!((m - mis).abs() < tol, "{name}: {m} vs MIS {mis} (±{tol})");
+    }
+    assert!(var_mis < var_scatter, "{var_mis} vs {var_scatter}");
+    // The same image on any thread count, with the map.
+    let sobol = PathSettings {
+        sampler: Sampler::Sobol,
+        ..settings
+    };
+    let img = |threads| {
+        on_threads(threads, || {
+            path_frame_env(&class, &shader, &frame, &sobol, &map, 4)
+        })
+    };
+    let (one, two) = (img(1), img(2));
+    assert_eq!(one.rgb, two.rgb);
+    assert!(mean_luminance(&one) > 0.0);
 }
