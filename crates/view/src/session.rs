@@ -81,11 +81,10 @@ pub fn apply_patch(
 
 /// Most ray samples a viewer frame may take: its pixels times the samples of a ray
 /// along the volume's world diagonal at the scene's step (the most one ray can take;
-/// empty space skipped and early termination make the real count smaller). 2^34:
-/// 512x512 at step 0.01 voxel on a 512x512x256 CT is refused; 2048x2048 at step
-/// 0.5 on it, or any scene at 512x512 down to step 0.05 on a 100 mm, 1 mm volume
-/// and 2048x2048 down to 0.2, render. Issue 41's request (2048x2048 at step 0.01 on
-/// the head CT, 46 s of work before) is over 20 times the limit.
+/// empty space skipped and early termination make the real count smaller). 2^34: on
+/// the head CT of `scripts/fetch-samples` (256x256x108 voxels), 512x512 frames at
+/// any step (down to the floor, 0.01) and 2048x2048 frames from step 0.1 render;
+/// issue 41's request (2048x2048 at step 0.01: 1.7e11) is refused.
 pub const MAX_FRAME_RAY_SAMPLES: f64 = (1u64 << 34) as f64;
 
 /// The ray samples a frame of the resolved `scene` on `renderer`'s volume may take
