@@ -667,10 +667,11 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     let (renderer, cancel) = client_renderer(&viewer, stage.as_deref());
     // The finer level, read since and not yet swapped in (when the camera rests).
     let mut finer: Option<Arc<Stage>> = None;
-    // What the frame in flight is for: input stops a full frame (a progressive
-    // refinement or not), not a drag's reduced one (each input of a drag would stop
-    // the last and none would be shown; those are small and bounded).
-    let mut inflight_for: Option<Purpose> = None;
+    // What the frame in flight is for, and whether it refines a `path` state: any
+    // message stops a refinement (issue 29), a change of the scene or split any other
+    // full frame; a drag's reduced frames are left to finish (each input of a drag
+    // would stop the last and none would be shown; they are small and bounded).
+    let mut inflight_for: Option<(Purpose, bool)> = None;
     // The client leaving (any return below) stops the frame in flight.
     let _stop = StopOnDrop(cancel.clone());
     let mut state = ClientState {
@@ -696,7 +697,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         }
         if inflight.is_none() {
             if let Some(purpose) = pending.schedule.take() {
-                inflight_for = Some(purpose);
+                inflight_for = Some((purpose, state.progressive().is_some()));
                 let job = spawn_frame(
                     &viewer,
                     &renderer,
@@ -721,7 +722,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                     }
                     _ => continue,
                 };
-                if inflight.is_some() && inflight_for == Some(Purpose::Full) {
+                if inflight.is_some() && stops(inflight_for, text.as_str()) {
                     cancel.store(true, Ordering::Relaxed);
                 }
                 let outcome = {
@@ -765,6 +766,21 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
             event = recording.next() => if !record::forward(&mut socket, event).await { return },
             Ok(()) = stages.changed() => finer = stages.borrow_and_update().clone(),
         }
+    }
+}
+
+/// Whether message `text` stops the frame in flight, made for `inflight` (its
+/// purpose, and whether it refines a `path` state): any message stops a refinement, a
+/// change of the scene or of the split another full frame; nothing stops a drag's
+/// reduced frame or a save.
+fn stops(inflight: Option<(Purpose, bool)>, text: &str) -> bool {
+    match inflight {
+        Some((Purpose::Full, true)) => true,
+        Some((Purpose::Full, false)) => matches!(
+            serde_json::from_str::<ClientMessage>(text),
+            Ok(ClientMessage::Update { .. } | ClientMessage::Split { .. })
+        ),
+        _ => false,
     }
 }
 
