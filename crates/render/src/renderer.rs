@@ -187,7 +187,7 @@ pub struct Renderer {
     paths: Option<PathAccumulation>,
     /// The environment map of the last `path` scene with one.
     environment: EnvCache,
-    /// Set by another thread to stop a `path` render in flight ([`Renderer::set_cancel`]).
+    /// Set by another thread to stop a volume render in flight ([`Renderer::set_cancel`]).
     cancel: Option<Arc<AtomicBool>>,
     /// A colour volume's colours ([`glint_io::Volume::colour`]), on the field's grid:
     /// its samples take their colour from them, their opacity from the transfer
@@ -639,19 +639,28 @@ impl Renderer {
     ) -> Result<Image, RenderError> {
         let (class, shader, frame) = (v.class, v.shader, v.frame);
         let env = self.environment.get(&scene.lighting)?;
+        // Every model stops when the flag is set ([`Renderer::set_cancel`]).
+        let stop = self.cancel.clone();
+        let stop = stop.as_deref();
         let mut volume = |far: Option<&[f32]>| -> Result<Image, RenderError> {
             match transport {
-                Transport::Local => {
-                    class.frame(shader, frame, far, VolumeTransport::Local, progress)
-                }
+                Transport::Local => class.frame_cancellable(
+                    shader,
+                    frame,
+                    far,
+                    VolumeTransport::Local,
+                    progress,
+                    stop,
+                ),
                 Transport::Shadows(settings) => {
                     let lights = self.shadow_field(class, v, settings)?;
-                    class.frame(
+                    class.frame_cancellable(
                         shader,
                         frame,
                         far,
                         VolumeTransport::Shadows(&lights),
                         progress,
+                        stop,
                     )
                 }
                 Transport::Path {
@@ -821,9 +830,10 @@ impl Renderer {
         Some(occluders)
     }
 
-    /// Gives the renderer a flag that stops a `path` render in flight when another
-    /// thread sets it: that render returns [`RenderError::Cancelled`] and the samples
-    /// it held are dropped. The flag is the caller's to clear before the next render.
+    /// Gives the renderer a flag that stops a volume render in flight, under every
+    /// lighting model, when another thread sets it: the ray caster leaves the tiles
+    /// not begun, the path tracer the rows; that render returns
+    /// [`RenderError::Cancelled`] and the path samples it held are dropped. The flag is the caller's to clear before the next render.
     /// A clone keeps the flag; give each clone its own (one per viewer client).
     pub fn set_cancel(&mut self, flag: Option<Arc<AtomicBool>>) {
         self.cancel = flag;

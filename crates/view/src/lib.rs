@@ -52,7 +52,7 @@ pub mod schedule;
 mod session;
 
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -73,7 +73,8 @@ pub use levels::PyramidLevel;
 pub use pick::MAX_MARKS;
 pub use schedule::{next_samples, Schedule};
 pub use session::{
-    apply_patch, render_frame, render_image, Frame, FrameImage, Session, MAX_VIEW_SIDE,
+    apply_patch, frame_ray_samples, render_frame, render_frame_counted, render_image, Frame,
+    FrameImage, Session, MAX_FRAME_RAY_SAMPLES, MAX_VIEW_SIDE,
 };
 
 use levels::Stage;
@@ -176,6 +177,10 @@ pub struct Viewer {
     config: ViewerConfig,
     clients: AtomicUsize,
     cancelled: AtomicUsize,
+    /// Pixels the clients' frames finished (a split frame's two renders both count).
+    pixels: Arc<AtomicU64>,
+    /// Frames that stopped before they were done (input or the client leaving).
+    stopped: Arc<AtomicUsize>,
 }
 
 impl Viewer {
@@ -224,6 +229,8 @@ impl Viewer {
             config,
             clients: AtomicUsize::new(0),
             cancelled: AtomicUsize::new(0),
+            pixels: Arc::new(AtomicU64::new(0)),
+            stopped: Arc::new(AtomicUsize::new(0)),
         })
     }
 
@@ -264,7 +271,8 @@ impl Viewer {
         }
     }
 
-    /// Progressive refinements stopped by a client's input, over all clients.
+    /// Full frames (progressive refinements or not) stopped by a client's input,
+    /// over all clients (frames stopped by a client leaving are not counted).
     pub fn cancelled(&self) -> usize {
         self.cancelled.load(Ordering::SeqCst)
     }
@@ -272,6 +280,18 @@ impl Viewer {
     /// The labels of the scene's label map (`None` without one).
     pub fn labels(&self) -> Option<&LabelList> {
         self.labels.as_ref()
+    }
+
+    /// Pixels the clients' frames have finished so far, over all clients: the work
+    /// done, counted per tile of the ray caster and per row of the path tracer.
+    pub fn pixels_rendered(&self) -> u64 {
+        self.pixels.load(Ordering::SeqCst)
+    }
+
+    /// Frames stopped before they were done, over all clients: by input (as
+    /// [`Viewer::cancelled`] counts) or because their client left.
+    pub fn frames_stopped(&self) -> usize {
+        self.stopped.load(Ordering::SeqCst)
     }
 
     /// Clients connected now.
@@ -425,15 +445,16 @@ fn hello(viewer: &Viewer, stage: Option<&Stage>) -> ServerMessage {
 /// Starts rendering `state` for `purpose` on the blocking pool; a full frame of a
 /// progressive (`path`) state takes the sample count `schedule` gives it.
 fn spawn_frame(
+    viewer: &Viewer,
     renderer: &Arc<Mutex<Renderer>>,
     cancel: &Arc<AtomicBool>,
     state: &ClientState,
     purpose: Purpose,
     schedule: &Schedule,
-    labels: Option<&LabelList>,
 ) -> FrameJob {
     let (r, mut s) = (renderer.clone(), state.clone());
-    if let Some(list) = labels {
+    let (pixels, stopped) = (viewer.pixels.clone(), viewer.stopped.clone());
+    if let Some(list) = viewer.labels() {
         s.scene = list.visible(&s.scene);
     }
     if purpose == Purpose::Full {
@@ -447,7 +468,14 @@ fn spawn_frame(
     cancel.store(false, Ordering::Relaxed);
     tokio::task::spawn_blocking(move || {
         let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
-        render_frame(&mut r, &s.scene, s.split, purpose, s.seq).map(|f| (f, purpose))
+        let count = |n| {
+            pixels.fetch_add(n, Ordering::Relaxed);
+        };
+        let done = render_frame_counted(&mut r, &s.scene, s.split, purpose, s.seq, &count);
+        if matches!(done, Err(RenderError::Cancelled)) {
+            stopped.fetch_add(1, Ordering::SeqCst);
+        }
+        done.map(|f| (f, purpose))
     })
 }
 
@@ -639,8 +667,13 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
     let (renderer, cancel) = client_renderer(&viewer, stage.as_deref());
     // The finer level, read since and not yet swapped in (when the camera rests).
     let mut finer: Option<Arc<Stage>> = None;
-    // Whether the frame in flight is a progressive refinement (which input cancels).
-    let mut refining = false;
+    // What the frame in flight is for, and whether it refines a `path` state: any
+    // message stops a refinement (issue 29), a change of the scene or split any other
+    // full frame; a drag's reduced frames are left to finish (each input of a drag
+    // would stop the last and none would be shown; they are small and bounded).
+    let mut inflight_for: Option<(Purpose, bool)> = None;
+    // The client leaving (any return below) stops the frame in flight.
+    let _stop = StopOnDrop(cancel.clone());
     let mut state = ClientState {
         scene: viewer.scene.clone(),
         split: Split::Off,
@@ -664,15 +697,14 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         }
         if inflight.is_none() {
             if let Some(purpose) = pending.schedule.take() {
-                refining = purpose == Purpose::Full && state.progressive().is_some();
-                let labels = viewer.labels();
+                inflight_for = Some((purpose, state.progressive().is_some()));
                 let job = spawn_frame(
+                    &viewer,
                     &renderer,
                     &cancel,
                     &state,
                     purpose,
                     &pending.schedule,
-                    labels,
                 );
                 inflight = Some(job);
             }
@@ -690,7 +722,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                     }
                     _ => continue,
                 };
-                if inflight.is_some() && refining {
+                if inflight.is_some() && stops(inflight_for, text.as_str()) {
                     cancel.store(true, Ordering::Relaxed);
                 }
                 let outcome = {
@@ -734,6 +766,32 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
             event = recording.next() => if !record::forward(&mut socket, event).await { return },
             Ok(()) = stages.changed() => finer = stages.borrow_and_update().clone(),
         }
+    }
+}
+
+/// Whether message `text` stops the frame in flight, made for `inflight` (its
+/// purpose, and whether it refines a `path` state): any message stops a refinement, a
+/// change of the scene or of the split another full frame; nothing stops a drag's
+/// reduced frame or a save.
+fn stops(inflight: Option<(Purpose, bool)>, text: &str) -> bool {
+    match inflight {
+        Some((Purpose::Full, true)) => true,
+        Some((Purpose::Full, false)) => matches!(
+            serde_json::from_str::<ClientMessage>(text),
+            Ok(ClientMessage::Update { .. } | ClientMessage::Split { .. })
+        ),
+        _ => false,
+    }
+}
+
+/// Sets a client's cancel flag when dropped: its connection ended, so the frame it
+/// has in flight on the blocking pool stops (at its next tile or row) instead of
+/// running on for nobody.
+struct StopOnDrop(Arc<AtomicBool>);
+
+impl Drop for StopOnDrop {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
     }
 }
 

@@ -74,8 +74,49 @@ pub fn apply_patch(
         )));
     }
     // A clone shares the volume and meshes (resolving may read meshes it lacks).
-    renderer.clone().resolve(&check)?;
+    let resolved = renderer.clone().resolve(&check)?.scene;
+    check_cost(renderer, &resolved)?;
     Ok(next)
+}
+
+/// Most ray samples a viewer frame may take: its pixels times the samples of a ray
+/// along the volume's world diagonal at the scene's step (the most one ray can take;
+/// empty space skipped and early termination make the real count smaller). 2^34: on
+/// the head CT of `scripts/fetch-samples` (256x256x108 voxels), 512x512 frames at
+/// any step (down to the floor, 0.01) and 2048x2048 frames from step 0.1 render;
+/// issue 41's request (2048x2048 at step 0.01: 1.7e11) is refused.
+pub const MAX_FRAME_RAY_SAMPLES: f64 = (1u64 << 34) as f64;
+
+/// The ray samples a frame of the resolved `scene` on `renderer`'s volume may take
+/// ([`MAX_FRAME_RAY_SAMPLES`]); `None` for a scene without a volume.
+pub fn frame_ray_samples(renderer: &Renderer, scene: &Scene) -> Option<f64> {
+    let field = renderer.field()?;
+    let d = field.dims().map(|n| n.saturating_sub(1) as f64);
+    // The longest diagonal of the (possibly sheared) grid box.
+    let diagonal = (0..4)
+        .map(|n| {
+            let a = [0, 1, 2].map(|i| if n & (1 << i) != 0 { d[i] } else { 0.0 });
+            let b = [0, 1, 2].map(|i| d[i] - a[i]);
+            let (p, q) = (field.index_to_world(a), field.index_to_world(b));
+            (0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f64>().sqrt()
+        })
+        .fold(0.0f64, f64::max);
+    let dt = scene.step * field.min_spacing();
+    let pixels = f64::from(scene.size[0]) * f64::from(scene.size[1]);
+    Some(pixels * (diagonal / dt).ceil().max(1.0))
+}
+
+/// Refuses a frame of the resolved `scene` that could take more than
+/// [`MAX_FRAME_RAY_SAMPLES`], saying how to bring it within.
+fn check_cost(renderer: &Renderer, scene: &Scene) -> Result<(), ViewError> {
+    match frame_ray_samples(renderer, scene) {
+        Some(n) if n > MAX_FRAME_RAY_SAMPLES => Err(ViewError::Message(format!(
+            "a {}x{} frame at step {} takes up to {n:.2e} ray samples: the viewer renders \
+             at most {MAX_FRAME_RAY_SAMPLES:.2e} per frame (raise the step or lower the size)",
+            scene.size[0], scene.size[1], scene.step
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// A rendered frame, ready to send.
@@ -113,12 +154,25 @@ pub fn render_frame(
     purpose: Purpose,
     seq: u32,
 ) -> Result<Frame, RenderError> {
+    render_frame_counted(renderer, scene, split, purpose, seq, &|_| {})
+}
+
+/// [`render_frame`] calling `progress` (from worker threads) with the pixels each
+/// tile or row of its renders finished: the work a frame did, stopped or not.
+pub fn render_frame_counted(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    split: Split,
+    purpose: Purpose,
+    seq: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Frame, RenderError> {
     let FrameImage {
         image,
         scene,
         samples,
         render_ms,
-    } = render_image(renderer, scene, split, purpose)?;
+    } = render_image_counted(renderer, scene, split, purpose, progress)?;
     let (format, bytes) = match purpose {
         Purpose::Save => (
             Format::Png,
@@ -154,6 +208,17 @@ pub fn render_image(
     split: Split,
     purpose: Purpose,
 ) -> Result<FrameImage, RenderError> {
+    render_image_counted(renderer, scene, split, purpose, &|_| {})
+}
+
+/// [`render_image`] calling `progress` as [`render_frame_counted`] does.
+fn render_image_counted(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    split: Split,
+    purpose: Purpose,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<FrameImage, RenderError> {
     let mut s = scene.clone();
     if purpose == Purpose::Interactive {
         s.size = s.size.map(|x| (x / 2).max(1));
@@ -165,12 +230,12 @@ pub fn render_image(
         }
     }
     let start = Instant::now();
-    let main = renderer.render(&s, &|_| {})?;
+    let main = renderer.render(&s, progress)?;
     let image = match split {
         Split::Off => main.image,
         Split::Side | Split::Diff => {
             let reference = renderer
-                .render(&main.scene.with_exact_lobe(), &|_| {})?
+                .render(&main.scene.with_exact_lobe(), progress)?
                 .image;
             if split == Split::Side {
                 side_by_side(&reference, &main.image)
@@ -533,6 +598,66 @@ mod tests {
             .to_string();
         assert!(err.contains("colour"), "{err}");
         assert!(session.scene() == &before && !session.owes());
+    }
+
+    /// Issue 41: the ray caster's frames (`local`, `shadows`, MIP) stop at the next
+    /// tile once the cancel flag is set (here when the first tile is done): most
+    /// pixels are never rendered, and the frame is an error, not a partial image.
+    #[test]
+    fn a_cancelled_ray_cast_frame_stops_early() {
+        use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+        use std::sync::Arc;
+        let mut s = Scene::phantom(Phantom::SheppLogan, 24, [128, 128]);
+        let mut r = Renderer::open(&s, &ReadOptions::default()).unwrap();
+        let flag = Arc::new(AtomicBool::new(false));
+        r.set_cancel(Some(flag.clone()));
+        let total = 128 * 128;
+        for model in [LightingModel::Local, LightingModel::Shadows] {
+            s.lighting = s.lighting.for_model(model);
+            let pixels = AtomicU64::new(0);
+            let stop = |n| {
+                pixels.fetch_add(n, Ordering::SeqCst);
+                flag.store(true, Ordering::SeqCst);
+            };
+            flag.store(false, Ordering::SeqCst);
+            let f = render_frame_counted(&mut r, &s, Split::Off, Purpose::Full, 1, &stop);
+            assert!(matches!(f, Err(RenderError::Cancelled)), "{model:?}");
+            let done = pixels.load(Ordering::SeqCst);
+            // The tiles begun before the flag was seen finish: a few of 64.
+            assert!(done < total / 4, "{model:?}: {done} of {total} pixels");
+            // The flag cleared, the same renderer renders the whole frame.
+            flag.store(false, Ordering::SeqCst);
+            let whole = AtomicU64::new(0);
+            let count = |n| {
+                whole.fetch_add(n, Ordering::SeqCst);
+            };
+            render_frame_counted(&mut r, &s, Split::Off, Purpose::Full, 2, &count).unwrap();
+            assert_eq!(whole.load(Ordering::SeqCst), total, "{model:?}");
+        }
+    }
+
+    /// Issue 41: the issue's request (2048x2048 at step 0.01, here of a 32^3
+    /// phantom) is over the bound of ray samples: refused with one line saying what to
+    /// change, the scene unchanged; one within the bound is taken.
+    #[test]
+    fn a_frame_over_the_ray_sample_bound_is_refused() {
+        let small = Scene::phantom(Phantom::SheppLogan, 32, [24, 24]);
+        let r = Renderer::open(&small, &ReadOptions::default()).unwrap();
+        let patch = |j: &str| serde_json::from_str::<Map<String, Value>>(j).unwrap();
+        let big = patch(r#"{"size": [2048, 2048], "step": 0.01}"#);
+        let err = apply_patch(&r, &small, &big, None).unwrap_err().to_string();
+        assert!(
+            err.contains("a 2048x2048 frame at step 0.01 takes up to")
+                && err.contains("raise the step or lower the size")
+                && !err.contains('\n'),
+            "{err}"
+        );
+        let fine = patch(r#"{"size": [2048, 2048], "step": 0.5}"#);
+        let s = apply_patch(&r, &small, &fine, None).unwrap();
+        assert!(frame_ray_samples(&r, &s).unwrap() <= MAX_FRAME_RAY_SAMPLES);
+        // 2048^2 pixels, the phantom's diagonal (31 sqrt(3) voxels) over 0.5.
+        let n = frame_ray_samples(&r, &s).unwrap() / (2048.0 * 2048.0);
+        assert!((100.0..115.0).contains(&n), "{n} samples per ray");
     }
 
     #[test]

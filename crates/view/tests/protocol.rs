@@ -133,6 +133,11 @@ async fn bad_messages_get_an_error_and_the_session_goes_on() {
         ),
         (r#"{"type": "update", "seq": -1}"#.into(), "bad message"),
         (oversize, "bytes refused"),
+        // Issue 41: a legal size at an absurd step is refused before any work.
+        (
+            r#"{"type": "update", "seq": 2, "scene": {"size": [2048, 2048], "step": 0.01}}"#.into(),
+            "a 2048x2048 frame at step 0.01 takes up to",
+        ),
     ];
     for (msg, needle) in cases {
         send(&mut c, &msg).await;
@@ -155,7 +160,75 @@ async fn bad_messages_get_an_error_and_the_session_goes_on() {
     .await;
     let (h, _) = frame(&mut c, Purpose::Full).await;
     assert_eq!(h.seq, 3);
+    // The refused patches changed nothing: the frame is the scene's own size.
+    assert_eq!((h.width, h.height), (48, 40));
     assert_eq!(viewer.clients(), 1);
+}
+
+/// A viewer whose first frame is long (512x512 local frames at step 0.01 of a 48^3
+/// phantom: seconds of work even in a release build); returns it and the ws URL.
+async fn start_slow() -> (Arc<Viewer>, String) {
+    let scene = Scene {
+        step: 0.01,
+        ..Scene::phantom(Phantom::SheppLogan, 48, [512, 512])
+    };
+    let viewer = Arc::new(Viewer::new(scene, ViewerConfig::default()).unwrap());
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
+    let access = Arc::new(Access::new(listener.local_addr().unwrap(), None).unwrap());
+    tokio::spawn(glint_view::serve(listener, viewer.clone(), access));
+    (viewer, url)
+}
+
+/// Waits (up to 60 s) until `viewer` has stopped `n` frames.
+async fn stopped(viewer: &Viewer, n: usize) {
+    for _ in 0..2400 {
+        if viewer.frames_stopped() >= n {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+    panic!("{} frames stopped, not {n}", viewer.frames_stopped());
+}
+
+/// Issue 41: a client that leaves while its frame is rendered stops it: the work
+/// done (pixels finished) is a small part of the frame, not all of it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_leaving_stops_its_frame_in_flight() {
+    let (viewer, url) = start_slow().await;
+    let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    // The server starts the first frame before it reads another message.
+    json_of(&mut c, "hello").await;
+    c.close(None).await.unwrap();
+    drop(c);
+    stopped(&viewer, 1).await;
+    let done = viewer.pixels_rendered();
+    assert!(done < 512 * 512 / 2, "{done} pixels of 262144 rendered");
+    assert_eq!(
+        viewer.cancelled(),
+        0,
+        "stopped by the leaving, not by input"
+    );
+}
+
+/// Issue 41: input stops a full frame of the ray caster (not only a `path`
+/// refinement) in flight; the next frame is the input's.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn input_stops_a_local_frame_in_flight() {
+    let (viewer, url) = start_slow().await;
+    let (mut c, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    json_of(&mut c, "hello").await;
+    // Smaller and coarser: quick. It arrives while the first frame renders.
+    send(
+        &mut c,
+        r#"{"type": "update", "seq": 1, "scene": {"size": [32, 32], "step": 1}}"#,
+    )
+    .await;
+    let (h, _) = frame(&mut c, Purpose::Full).await;
+    assert_eq!((h.seq, h.width), (1, 32), "no frame of the first state");
+    assert_eq!((viewer.cancelled(), viewer.frames_stopped()), (1, 1));
+    let done = viewer.pixels_rendered();
+    assert!(done < 512 * 512 / 2 + 32 * 32, "{done} pixels rendered");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -10,7 +10,7 @@ use glint_core::{EnvMap, Image, RenderError, RenderMode, Shader, Vec3};
 
 use crate::classification::{occlusion_grid, Classification, LIGHT_CELL};
 use crate::clip::{IndexClip, CUT_DEPTH_STEPS};
-use crate::raycast::FrameSettings;
+use crate::raycast::{CastLimits, FrameSettings};
 use crate::transport::{
     check_spp, Occluders, Pass, PathImage, PathSettings, PathTracer, ShadowField, ShadowSettings,
 };
@@ -92,16 +92,41 @@ impl Classification {
         transport: Transport<'_>,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Image, RenderError> {
+        self.frame_cancellable(shader, frame, far, transport, progress, None)
+    }
+
+    /// [`Classification::frame`] that stops early when `cancel` is set (by another
+    /// thread: a viewer whose client moved or left) under every lighting model: the
+    /// ray caster checks it before each tile of 16x16 pixels, the path tracer before
+    /// each row (with [`Transport::Path`]'s own flag, when that is given, in its
+    /// place). A stopped frame returns [`RenderError::Cancelled`] and no image.
+    pub fn frame_cancellable(
+        &self,
+        shader: &Shader,
+        frame: &FrameSettings,
+        far: Option<&[f32]>,
+        transport: Transport<'_>,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: Option<&AtomicBool>,
+    ) -> Result<Image, RenderError> {
         check_far(frame, far)?;
+        let jittered = |shadows| {
+            let limits = CastLimits {
+                far,
+                shadows,
+                cancel,
+            };
+            self.render_jittered(shader, frame, progress, true, limits)
+        };
         match transport {
-            Transport::Local => self.render_jittered(shader, frame, progress, true, far, None),
+            Transport::Local => jittered(None),
             Transport::Shadows(shadows) => {
                 if self.settings().mode == RenderMode::Mip {
                     return Err(RenderError::Parameter(
                         "shadows lighting needs composite or iso mode (MIP is not lit)".into(),
                     ));
                 }
-                self.render_jittered(shader, frame, progress, true, far, Some(shadows))
+                jittered(Some(shadows))
             }
             Transport::Path {
                 image,
@@ -109,7 +134,7 @@ impl Classification {
                 settings,
                 occluders,
                 environment,
-                cancel,
+                cancel: own,
             } => {
                 let never = AtomicBool::new(false);
                 let paths = Paths {
@@ -118,7 +143,7 @@ impl Classification {
                     far,
                     occluders,
                     environment,
-                    cancel: cancel.unwrap_or(&never),
+                    cancel: own.or(cancel).unwrap_or(&never),
                 };
                 self.trace_paths(shader, frame, image, &paths, progress)?;
                 Ok(image.image(frame.background))

@@ -626,10 +626,10 @@ mod jitter_tests {
         )
         .unwrap();
         let on = class
-            .render_jittered(&shader, &settings, &|_| {}, true, None, None)
+            .render_jittered(&shader, &settings, &|_| {}, true, Default::default())
             .unwrap();
         let off = class
-            .render_jittered(&shader, &settings, &|_| {}, false, None, None)
+            .render_jittered(&shader, &settings, &|_| {}, false, Default::default())
             .unwrap();
         assert_ne!(on.rgb, off.rgb, "jitter changed nothing");
         // Away from edges: pixels whose 5x5 neighbourhood is all nearly opaque.

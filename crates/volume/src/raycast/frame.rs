@@ -1,6 +1,8 @@
 //! The ray caster's frames of a classification: the camera it frames, and the
 //! image of its rays (lit locally or by the `shadows` model's light volumes).
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 
 use glint_core::camera::Camera;
@@ -120,18 +122,24 @@ impl Classification {
 
     /// The ray caster's frame ([`Classification::frame`] under the `local` and
     /// `shadows` models) with the per-pixel [`jitter`](super::caster::jitter) on or off
-    /// (off only in tests that compare the two), rays stopped at `far` when given
-    /// (`width * height` long, checked by the caller), and each light scaled by its
-    /// transmittance from `shadows` when given (the `shadows` model).
+    /// (off only in tests that compare the two), within `limits`: rays stopped at
+    /// `far`, each light scaled by its transmittance from `shadows` (the `shadows`
+    /// model), tiles not begun once `cancel` is set left (the frame then returns
+    /// [`RenderError::Cancelled`]).
     pub(crate) fn render_jittered(
         &self,
         shader: &Shader,
         settings: &FrameSettings,
         progress: &(dyn Fn(u64) + Sync),
         jitter: bool,
-        far: Option<&[f32]>,
-        shadows: Option<&ShadowField>,
+        limits: CastLimits<'_>,
     ) -> Result<Image, RenderError> {
+        let CastLimits {
+            far,
+            shadows,
+            cancel,
+        } = limits;
+        let stopped = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
         let camera = self.camera(settings)?;
         let shader = &shader.placed(&camera);
         if let Some(s) = shadows {
@@ -148,6 +156,11 @@ impl Classification {
         let tiles: Vec<(Vec<[f32; 3]>, Vec<f32>, RenderStats)> = (0..tiles_x * tiles_y)
             .into_par_iter()
             .map_init(Scratch::default, |_scratch, t| {
+                if stopped() {
+                    // Cancelled: the tiles not begun are left empty (the frame is
+                    // dropped below).
+                    return Default::default();
+                }
                 // Bricks this tile reads stay in the cache while it holds the guard.
                 let guard = crossbeam_epoch::pin();
                 let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
@@ -191,6 +204,10 @@ impl Classification {
                 (rgb, alpha, stats)
             })
             .collect();
+        // The flag is only ever set during a frame: unset now, no tile was left.
+        if stopped() {
+            return Err(RenderError::Cancelled);
+        }
         let mut rgb = vec![[0.0f32; 3]; w * h];
         let mut alpha = vec![0.0f32; w * h];
         let mut stats = RenderStats::default();
@@ -217,6 +234,19 @@ impl Classification {
             stats,
         })
     }
+}
+
+/// What ends a ray-cast frame's rays besides the volume, and the frame itself
+/// ([`Classification::frame_cancellable`]).
+#[derive(Clone, Copy, Default)]
+pub(crate) struct CastLimits<'a> {
+    /// Per-pixel distances past which the volume is hidden (`width * height` long,
+    /// checked by the caller).
+    pub(crate) far: Option<&'a [f32]>,
+    /// The `shadows` model's light volumes.
+    pub(crate) shadows: Option<&'a ShadowField>,
+    /// Set by another thread to stop the frame: tiles not begun are left.
+    pub(crate) cancel: Option<&'a AtomicBool>,
 }
 
 /// Cuts the start and end bounds of the tile's rays (`xs` x `ys`, row-major) to the

@@ -19,6 +19,7 @@ use avx2::Scratch;
 type Scratch = ();
 
 pub use features::{PathFeatures, FEATURE_OPACITY};
+pub(crate) use frame::CastLimits;
 pub use labels::{LabelLook, LabelVolume};
 pub use pick::{VolumeHit, PICK_OPACITY};
 pub use settings::{FrameSettings, Kernel};
