@@ -85,6 +85,12 @@ pub struct Lighting {
     /// when not given, so scenes without it keep their JSON.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub denoise: Option<Denoise>,
+    /// `shadows` and `path`: scale of the surface part of the hybrid, 0..=1: 1 the
+    /// gradient gate's weight as it is, 0 a pure medium (extinction, albedo and phase
+    /// function only, what Mitsuba 3's `volpath` renders) [default: 1]. Left unset by a
+    /// resolve when not given, so scenes without it keep their JSON.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_weight: Option<f32>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -113,7 +119,7 @@ impl Lighting {
     }
 
     /// The fields that are set, with their names.
-    fn set_fields(&self) -> [(&'static str, bool); 10] {
+    fn set_fields(&self) -> [(&'static str, bool); 11] {
         [
             ("spp", self.spp.is_some()),
             ("bounces", self.bounces.is_some()),
@@ -125,6 +131,7 @@ impl Lighting {
             ("time_budget", self.time_budget.is_some()),
             ("show_environment", self.show_environment.is_some()),
             ("denoise", self.denoise.is_some()),
+            ("surface_weight", self.surface_weight.is_some()),
         ]
     }
 
@@ -132,7 +139,7 @@ impl Lighting {
     fn used_by(model: LightingModel) -> &'static [&'static str] {
         match model {
             LightingModel::Local => &[],
-            LightingModel::Shadows => &["anisotropy", "occlusion"],
+            LightingModel::Shadows => &["anisotropy", "occlusion", "surface_weight"],
             LightingModel::Path => &[
                 "spp",
                 "bounces",
@@ -143,6 +150,7 @@ impl Lighting {
                 "time_budget",
                 "show_environment",
                 "denoise",
+                "surface_weight",
             ],
         }
     }
@@ -164,6 +172,7 @@ impl Lighting {
             time_budget: self.time_budget.filter(|_| keep("time_budget")),
             show_environment: self.show_environment.filter(|_| keep("show_environment")),
             denoise: self.denoise.filter(|_| keep("denoise")),
+            surface_weight: self.surface_weight.filter(|_| keep("surface_weight")),
         }
     }
 
@@ -203,6 +212,11 @@ impl Lighting {
         if !anisotropy.is_finite() || anisotropy.abs() > MAX_ANISOTROPY {
             return Err(RenderError::Parameter(format!(
                 "lighting.anisotropy {anisotropy}: expected -{MAX_ANISOTROPY}..={MAX_ANISOTROPY}"
+            )));
+        }
+        if let Some(w) = self.surface_weight.filter(|w| !(0.0..=1.0).contains(w)) {
+            return Err(RenderError::Parameter(format!(
+                "lighting.surface_weight {w}: expected 0..=1"
             )));
         }
         let transport = match model {
