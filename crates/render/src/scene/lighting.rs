@@ -364,6 +364,20 @@ mod tests {
                 }),
                 "bounces 0",
             ),
+            (
+                small(Lighting {
+                    surface_weight: Some(0.0),
+                    ..Lighting::default()
+                }),
+                "lighting.surface_weight is not used by local",
+            ),
+            (
+                small(Lighting {
+                    surface_weight: Some(1.5),
+                    ..path(2)
+                }),
+                "surface_weight 1.5",
+            ),
         ];
         for (scene, needle) in bad {
             let err = r.resolve(&scene).unwrap_err().to_string();
@@ -380,6 +394,24 @@ mod tests {
             (l.spp, l.occlusion, l.anisotropy),
             (None, Some(true), Some(0.2))
         );
+    }
+
+    #[test]
+    fn a_surface_weight_of_one_is_the_default_and_zero_a_pure_medium() {
+        let render = |w: Option<f32>| {
+            let scene = small(Lighting {
+                surface_weight: w,
+                ..path(2)
+            });
+            let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+            let done = r.render(&scene, &|_| {}).unwrap();
+            assert_eq!(done.scene.lighting.surface_weight, w, "left as given");
+            done.image
+        };
+        let unset = render(None);
+        assert_eq!(render(Some(1.0)), unset, "1 multiplies exactly");
+        // The phantom's edges are surfaces: without them the image changes.
+        assert_ne!(render(Some(0.0)), unset);
     }
 
     #[test]
