@@ -261,6 +261,11 @@ pub struct SceneFlags {
     /// function, -0.95..=0.95 (> 0 scatters forwards) [default: 0].
     #[arg(long, allow_negative_numbers = true)]
     pub anisotropy: Option<f32>,
+    /// Shadows and path lighting: scale of the surface part of the hybrid, 0..=1 (0: a
+    /// pure medium of extinction, albedo and phase function, as Mitsuba 3's volpath
+    /// renders one: docs/lighting.md) [default: 1, the gradient gate's weight].
+    #[arg(long, value_name = "W", allow_negative_numbers = true)]
+    pub surface_weight: Option<f32>,
     /// Shadows lighting: local ambient occlusion on the ambient term.
     #[arg(long)]
     pub occlusion: bool,
@@ -532,6 +537,7 @@ impl SceneFlags {
         set(&mut l.sampler, self.sampler.map(Some));
         set(&mut l.time_budget, self.time_budget.map(Some));
         set(&mut l.denoise, self.denoise.map(Some));
+        set(&mut l.surface_weight, self.surface_weight.map(Some));
         if self.occlusion {
             l.occlusion = Some(true);
         }
@@ -762,6 +768,8 @@ mod tests {
             "--time-budget",
             "250",
             "--show-environment",
+            "--surface-weight",
+            "0",
         ])
         .unwrap();
         let l = &s.lighting;
@@ -771,6 +779,7 @@ mod tests {
         assert_eq!(l.sampler, Some(Sampler::Independent));
         assert_eq!(l.time_budget, Some(250.0));
         assert_eq!(l.show_environment, Some(true));
+        assert_eq!(l.surface_weight, Some(0.0));
         // Switching a path scene to shadows keeps what shadows uses.
         let mut next = s.clone();
         let flags = SceneFlags {

@@ -130,6 +130,9 @@ pub struct Shader {
     /// Henyey-Greenstein anisotropy of the medium's phase function (light transport
     /// only: [`Shader::shade_shadowed`]).
     anisotropy: f32,
+    /// Scale of the surface part's weight in the hybrid, 0..=1 (light transport only:
+    /// 1 keeps the gate's weight, 0 makes every sample a pure medium).
+    surface_weight: f32,
     /// The specular lobe's sampler for path tracing ([`Bsdf::sample`]), built on first
     /// use and shared by the shader's clones.
     sampler: scatter::SamplerCell,
@@ -199,6 +202,7 @@ impl Shader {
             lights: Vec::new(),
             gate,
             anisotropy: 0.0,
+            surface_weight: 1.0,
             sampler: Default::default(),
         })
     }
@@ -301,15 +305,18 @@ impl Shader {
     }
 
     /// The gate's blend weight for gradient magnitude `gm` (above the gate): from 0 at
-    /// the gate to 1 at twice it, so near-zero gradients give no random highlights.
+    /// the gate to 1 at twice it, so near-zero gradients give no random highlights;
+    /// times the surface weight ([`Shader::with_surface_weight`]; 1, exact, by
+    /// default).
     #[inline(always)]
     fn gate_weight(&self, gm: f32) -> f32 {
         let g0 = self.gate;
-        if g0 > 0.0 {
+        let w = if g0 > 0.0 {
             ((gm - g0) / g0).min(1.0)
         } else {
             1.0
-        }
+        };
+        w * self.surface_weight
     }
 }
 

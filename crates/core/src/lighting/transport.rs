@@ -81,6 +81,25 @@ impl Shader {
         self.anisotropy
     }
 
+    /// This shader with the surface part of the hybrid scaled by `w` (0..=1; 1, the
+    /// gate's weight as it is, by default). At 0 every sample is a pure medium (what a
+    /// physical renderer's heterogeneous medium is: extinction, albedo and phase
+    /// function only), so `shadows` and `path` images can be matched to one.
+    pub fn with_surface_weight(mut self, w: f32) -> Result<Shader, RenderError> {
+        if !(0.0..=1.0).contains(&w) {
+            return Err(RenderError::Parameter(format!(
+                "surface weight {w}: expected 0..=1"
+            )));
+        }
+        self.surface_weight = w;
+        Ok(self)
+    }
+
+    /// The scale of the surface part's weight ([`Shader::with_surface_weight`]).
+    pub fn surface_weight(&self) -> f32 {
+        self.surface_weight
+    }
+
     /// Lit linear colour of a volume sample as [`Shader::shade`] lights it, with the
     /// light of light `i` scaled by `transmittance[i]` (what reaches the sample through
     /// the volume; one per placed light) and the ambient term by `occlusion`, and the
@@ -102,11 +121,12 @@ impl Shader {
     }
 
     /// The surface part of a volume sample with world gradient `grad`: its unit normal
-    /// and weight, `None` where the gradient is below the gate (or not finite) or the
-    /// material is unshaded (then the sample is all medium).
+    /// and weight, `None` where the gradient is below the gate (or not finite), the
+    /// material is unshaded or the surface weight is 0 (then the sample is all
+    /// medium).
     #[inline(always)]
     pub fn surface_at(&self, grad: Vec3) -> Option<SurfacePart> {
-        if !self.material.shade {
+        if !self.material.shade || self.surface_weight == 0.0 {
             return None;
         }
         let gm2 = grad.dot(grad);
@@ -330,5 +350,28 @@ mod tests {
         assert!(s.clone().with_anisotropy(0.99).is_err());
         assert!(s.clone().with_anisotropy(f32::NAN).is_err());
         assert_eq!(s.with_anisotropy(-0.5).unwrap().anisotropy(), -0.5);
+    }
+
+    #[test]
+    fn surface_weight_scales_the_surface_part_and_zero_leaves_a_pure_medium() {
+        let s = shader(0.0, 1.0, vec![Light::HEADLIGHT]);
+        let grad = Vec3::new(0.0, 0.0, -1.5);
+        // The gate's ramp: half way from the gate (1) to twice it.
+        assert_eq!(s.surface_at(grad).unwrap().weight, 0.5);
+        let scaled = s.clone().with_surface_weight(0.5).unwrap();
+        assert_eq!(scaled.surface_at(grad).unwrap().weight, 0.25);
+        let medium = s.clone().with_surface_weight(0.0).unwrap();
+        assert!(medium.surface_at(grad).is_none());
+        assert!(medium.surface_at(grad * 100.0).is_none());
+        // A pure medium shades as the medium alone: the shadowed colour of a strong
+        // gradient equals that of no gradient.
+        let ray = medium.for_ray(medium.world_lights()[0].0);
+        let base = [0.8, 0.5, 0.3];
+        let strong = medium.shade_shadowed(base, grad * 100.0, &ray, &[1.0], 1.0);
+        let none = medium.shade_shadowed(base, Vec3::ZERO, &ray, &[1.0], 1.0);
+        assert_eq!(strong, none);
+        for bad in [-0.1, 1.5, f32::NAN] {
+            assert!(s.clone().with_surface_weight(bad).is_err());
+        }
     }
 }

@@ -97,6 +97,12 @@ pub struct Lighting {
     /// `path`: the environment map's radiance scale [default: 1 with a map].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub environment_intensity: Option<f32>,
+    /// `shadows` and `path`: scale of the surface part of the hybrid, 0..=1: 1 the
+    /// gradient gate's weight as it is, 0 a pure medium (extinction, albedo and phase
+    /// function only, what Mitsuba 3's `volpath` renders) [default: 1]. Left unset by a
+    /// resolve when not given, so scenes without it keep their JSON.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_weight: Option<f32>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -125,7 +131,7 @@ impl Lighting {
     }
 
     /// The fields that are set, with their names.
-    fn set_fields(&self) -> [(&'static str, bool); 13] {
+    fn set_fields(&self) -> [(&'static str, bool); 14] {
         [
             ("spp", self.spp.is_some()),
             ("bounces", self.bounces.is_some()),
@@ -143,6 +149,7 @@ impl Lighting {
                 "environment_intensity",
                 self.environment_intensity.is_some(),
             ),
+            ("surface_weight", self.surface_weight.is_some()),
         ]
     }
 
@@ -150,7 +157,7 @@ impl Lighting {
     fn used_by(model: LightingModel) -> &'static [&'static str] {
         match model {
             LightingModel::Local => &[],
-            LightingModel::Shadows => &["anisotropy", "occlusion"],
+            LightingModel::Shadows => &["anisotropy", "occlusion", "surface_weight"],
             LightingModel::Path => &[
                 "spp",
                 "bounces",
@@ -164,6 +171,7 @@ impl Lighting {
                 "environment_map",
                 "environment_rotation",
                 "environment_intensity",
+                "surface_weight",
             ],
         }
     }
@@ -195,6 +203,7 @@ impl Lighting {
             environment_intensity: self
                 .environment_intensity
                 .filter(|_| keep("environment_intensity")),
+            surface_weight: self.surface_weight.filter(|_| keep("surface_weight")),
         }
     }
 
@@ -234,6 +243,11 @@ impl Lighting {
         if !anisotropy.is_finite() || anisotropy.abs() > MAX_ANISOTROPY {
             return Err(RenderError::Parameter(format!(
                 "lighting.anisotropy {anisotropy}: expected -{MAX_ANISOTROPY}..={MAX_ANISOTROPY}"
+            )));
+        }
+        if let Some(w) = self.surface_weight.filter(|w| !(0.0..=1.0).contains(w)) {
+            return Err(RenderError::Parameter(format!(
+                "lighting.surface_weight {w}: expected 0..=1"
             )));
         }
         let transport = match model {
@@ -405,6 +419,20 @@ mod tests {
                 }),
                 "bounces 0",
             ),
+            (
+                small(Lighting {
+                    surface_weight: Some(0.0),
+                    ..Lighting::default()
+                }),
+                "lighting.surface_weight is not used by local",
+            ),
+            (
+                small(Lighting {
+                    surface_weight: Some(1.5),
+                    ..path(2)
+                }),
+                "surface_weight 1.5",
+            ),
         ];
         for (scene, needle) in bad {
             let err = r.resolve(&scene).unwrap_err().to_string();
@@ -421,6 +449,24 @@ mod tests {
             (l.spp, l.occlusion, l.anisotropy),
             (None, Some(true), Some(0.2))
         );
+    }
+
+    #[test]
+    fn a_surface_weight_of_one_is_the_default_and_zero_a_pure_medium() {
+        let render = |w: Option<f32>| {
+            let scene = small(Lighting {
+                surface_weight: w,
+                ..path(2)
+            });
+            let mut r = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+            let done = r.render(&scene, &|_| {}).unwrap();
+            assert_eq!(done.scene.lighting.surface_weight, w, "left as given");
+            done.image
+        };
+        let unset = render(None);
+        assert_eq!(render(Some(1.0)), unset, "1 multiplies exactly");
+        // The phantom's edges are surfaces: without them the image changes.
+        assert_ne!(render(Some(0.0)), unset);
     }
 
     #[test]

@@ -384,7 +384,8 @@ impl Scene {
             scene.lights.clone(),
             gate,
         )?
-        .with_anisotropy(anisotropy)?;
+        .with_anisotropy(anisotropy)?
+        .with_surface_weight(scene.lighting.surface_weight.unwrap_or(1.0))?;
         Ok(Resolved {
             scene,
             shader,
