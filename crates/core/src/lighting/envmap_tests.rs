@@ -4,6 +4,7 @@ use glint_lobe::{Geometry, LobeKind};
 
 use super::*;
 use crate::camera::{Camera, CameraSpec};
+use crate::lighting::fixtures::sphere_integral;
 use crate::lighting::{Bsdf, Material, Shader};
 
 /// A map with structure: a dim sky brighter towards the top, a broad warm patch (30°
@@ -40,25 +41,6 @@ fn probe(w: u32, h: u32, sun: f32, radius: f32) -> EnvMap {
         }
     }
     EnvMap::new(w, h, texels).unwrap()
-}
-
-/// `f(θ, φ)` integrated over the sphere by the midpoint rule on `n x 2n` cells.
-fn sphere_integral(n: usize, f: impl Fn(Vec3) -> f64) -> f64 {
-    let (dt, dp) = (PI64 / n as f64, 2.0 * PI64 / (2 * n) as f64);
-    let mut sum = 0.0;
-    for i in 0..n {
-        let t = (i as f64 + 0.5) * dt;
-        for j in 0..2 * n {
-            let p = (j as f64 + 0.5) * dp;
-            let d = Vec3::new(
-                (t.sin() * p.cos()) as f32,
-                (t.sin() * p.sin()) as f32,
-                t.cos() as f32,
-            );
-            sum += f(d) * t.sin() * dt * dp;
-        }
-    }
-    sum
 }
 
 #[test]

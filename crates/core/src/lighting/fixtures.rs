@@ -1,5 +1,8 @@
 //! Test fixtures shared by the batch forms' tests (`batch.rs`, `shadowed.rs`): the
-//! shaders every path is checked with, deterministic batches and the bit-for-bit check.
+//! shaders every path is checked with, deterministic batches and the bit-for-bit check;
+//! and the sphere quadrature of the scattering and environment-map tests.
+
+use std::f64::consts::PI as PI64;
 
 use glint_lobe::{Geometry, LobeKind};
 
@@ -79,4 +82,24 @@ pub(crate) fn check(got: &ShadeBatch, want: impl Fn(usize) -> [f32; 3], n: usize
             "{what}, sample {k}: {g:?} vs {w:?}"
         );
     }
+}
+
+/// The midpoint rule over the sphere on a `rows × 2·rows` grid in (θ, φ).
+pub(crate) fn sphere_integral(rows: usize, mut f: impl FnMut(Vec3) -> f64) -> f64 {
+    let d = PI64 / rows as f64;
+    let (dt, dp) = (d, d);
+    let mut sum = 0.0;
+    for i in 0..rows {
+        let t = (i as f64 + 0.5) * dt;
+        for j in 0..2 * rows {
+            let p = (j as f64 + 0.5) * dp;
+            let d = Vec3::new(
+                (t.sin() * p.cos()) as f32,
+                (t.sin() * p.sin()) as f32,
+                t.cos() as f32,
+            );
+            sum += f(d) * t.sin() * dt * dp;
+        }
+    }
+    sum
 }

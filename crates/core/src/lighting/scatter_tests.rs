@@ -6,7 +6,7 @@
 use std::f64::consts::PI as PI64;
 
 use super::*;
-use crate::lighting::fixtures::shaders;
+use crate::lighting::fixtures::{shaders, sphere_integral};
 use crate::lighting::Material;
 
 /// A deterministic uniform stream in `[0, 1)` (SplitMix64).
@@ -21,25 +21,6 @@ impl Uniform {
         z ^= z >> 31;
         (z >> 40) as f32 / (1u64 << 24) as f32
     }
-}
-
-/// The midpoint rule over the sphere on a `rows × 2·rows` grid in (θ, φ).
-fn sphere_integral(rows: usize, mut f: impl FnMut(Vec3) -> f64) -> f64 {
-    let (dt, dp) = (PI64 / rows as f64, PI64 / rows as f64);
-    let mut sum = 0.0;
-    for i in 0..rows {
-        let t = (i as f64 + 0.5) * dt;
-        for j in 0..2 * rows {
-            let p = (j as f64 + 0.5) * dp;
-            let d = Vec3::new(
-                (t.sin() * p.cos()) as f32,
-                (t.sin() * p.sin()) as f32,
-                t.cos() as f32,
-            );
-            sum += f(d) * t.sin() * dt * dp;
-        }
-    }
-    sum
 }
 
 fn close(a: f32, b: f32, tol: f32) -> bool {
