@@ -131,6 +131,18 @@ class Cycles:
         return np.load(spec["out"]).astype(np.float64), seconds
 
 
+def equal_time(renderer, label, targets, ref):
+    """Rows of `renderer` at uniform sampling: for each target time, the sample count
+    that fills it (scaled from a 16-spp render's time), its time and error to `ref`."""
+    _, t16 = renderer.render(16)
+    rows = []
+    for target in targets:
+        spp = max(1, int(round(16 * target / t16)))
+        img, t = renderer.render(spp)
+        rows.append((f"{label} ({spp} spp)", target, t, rel_mse(img, ref)))
+    return rows
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--size", type=int, default=128)
@@ -160,22 +172,14 @@ def main() -> int:
             rows.append(("glint (time budget)", target, t, rel_mse(img, ref)))
         # Uniform sampling at the count that fills the target (the budget's adaptive
         # passes stop by themselves once no pixel's relative error is over 0.02).
-        _, t16 = g.render(16)
-        for target in targets:
-            spp = max(1, int(round(16 * target / t16)))
-            img, t = g.render(spp)
-            rows.append((f"glint ({spp} spp)", target, t, rel_mse(img, ref)))
+        rows += equal_time(g, "glint", targets, ref)
     if "mitsuba" not in skip:
         m = Mitsuba(case, derived, size, work)
         m.render(4)  # warm-up: compile the kernels
         ref, t = m.render(args.ref_spp, seed=1000)
         refs["mitsuba"] = ref
         print(f"Mitsuba {m.variant} reference: {t:.1f} s", flush=True)
-        _, t16 = m.render(16)
-        for target in targets:
-            spp = max(1, int(round(16 * target / t16)))
-            img, t = m.render(spp)
-            rows.append((f"Mitsuba 3 {m.variant} ({spp} spp)", target, t, rel_mse(img, ref)))
+        rows += equal_time(m, f"Mitsuba 3 {m.variant}", targets, ref)
     if "cycles" not in skip:
         c = Cycles(case, derived, size, work)
         ref, t = c.render(args.ref_spp, seed=1000)
