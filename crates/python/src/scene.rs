@@ -11,18 +11,29 @@ use glint_render::Scene as RScene;
 use crate::errors;
 use crate::json;
 
-/// Fields the scene JSON omits while they are unset (`Option` fields serialised with
-/// `skip_serializing_if`); reading them gives None.
-const OPTIONAL_FIELDS: [&str; 9] = [
-    "iso",
-    "preset",
-    "transfer_function",
-    "window_level",
-    "derived",
-    "ssaa",
-    "opacity_unit",
-    "lighting",
-    "crop",
+/// Fields the scene JSON omits while they are unset or at their default
+/// (`skip_serializing_if`), with what reading one gives then, as JSON: None for an
+/// unset `Option`, else the field's default. `__getattr__` and `__dir__` both read
+/// this one list; crates/python/tests/test_render.py checks it against the Rust
+/// struct's fields, the type stub and the defaults.
+const OMITTED: [(&str, &str); 16] = [
+    ("iso", "null"),
+    ("preset", "null"),
+    ("transfer_function", "null"),
+    ("window_level", "null"),
+    ("derived", "null"),
+    ("ssaa", "null"),
+    ("opacity_unit", "null"),
+    // None: the default lighting (`local`).
+    ("lighting", "null"),
+    ("crop", "null"),
+    ("labels", "null"),
+    ("meshes", "[]"),
+    ("clip", "[]"),
+    ("clip_caps", "false"),
+    ("exposure", "0.0"),
+    ("tone", "\"linear\""),
+    ("filter", "\"trilinear\""),
 ];
 
 /// A render, described completely (volume, classification, lobe, lights, camera, size).
@@ -125,30 +136,21 @@ impl Scene {
     fn __getattr__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
         match as_object(&self.inner)?.get(name) {
             Some(v) => json::to_py(py, v),
-            None if OPTIONAL_FIELDS.contains(&name) => Ok(py.None().into_bound(py)),
-            // Omitted while empty.
-            None if name == "meshes" || name == "clip" => {
-                json::to_py(py, &Value::Array(Vec::new()))
-            }
-            // Omitted while off.
-            None if name == "clip_caps" => json::to_py(py, &Value::Bool(false)),
-            // Omitted while at their defaults.
-            None if name == "exposure" => json::to_py(py, &Value::from(0.0)),
-            None if name == "tone" => json::to_py(py, &Value::from("linear")),
-            None => Err(PyAttributeError::new_err(format!(
-                "'Scene' object has no attribute '{name}'"
-            ))),
+            None => match OMITTED.iter().find(|(field, _)| *field == name) {
+                Some((_, default)) => json::to_py(
+                    py,
+                    &serde_json::from_str(default).expect("OMITTED holds valid JSON"),
+                ),
+                None => Err(PyAttributeError::new_err(format!(
+                    "'Scene' object has no attribute '{name}'"
+                ))),
+            },
         }
     }
 
     fn __dir__(&self) -> PyResult<Vec<String>> {
         let mut names: Vec<String> = as_object(&RScene::default())?.keys().cloned().collect();
-        names.extend(OPTIONAL_FIELDS.iter().map(|s| s.to_string()));
-        names.push("meshes".into());
-        names.push("clip".into());
-        names.push("clip_caps".into());
-        names.push("exposure".into());
-        names.push("tone".into());
+        names.extend(OMITTED.iter().map(|(field, _)| field.to_string()));
         names.extend(
             ["from_json", "to_json", "to_dict", "replace", "load", "save"]
                 .iter()

@@ -1,7 +1,9 @@
 """glint.Scene, glint.render and glint.Renderer against `glint render`."""
 
+import ast
 import io
 import json
+import pathlib
 import pickle
 import re
 import threading
@@ -217,3 +219,40 @@ def test_linear_radiance_exposure_and_tone(glint_bin, tmp_path):
     assert np.array_equal(floats, radiance)
     with pytest.raises(ValueError):
         glint.Scene(tone="filmic")
+
+
+def scene_struct_fields():
+    """The field names of glint_render::Scene, read from its source (serde names them
+    as written: the struct has no renames)."""
+    src = (pathlib.Path(__file__).resolve().parents[2] / "render" / "src" / "scene"
+           / "mod.rs").read_text()
+    body = re.search(r"pub struct Scene \{(.*?)\n\}", src, flags=re.S).group(1)
+    assert "rename" not in body
+    return set(re.findall(r"^    pub (\w+):", body, flags=re.M))
+
+
+def stub_scene_fields():
+    """The attributes the type stub (glint/__init__.pyi) annotates on Scene."""
+    stub = pathlib.Path(glint.__file__).with_name("__init__.pyi")
+    if not stub.exists():  # an editable install: the stub beside the source
+        stub = (pathlib.Path(__file__).resolve().parents[1] / "python" / "glint"
+                / "__init__.pyi")
+    tree = ast.parse(stub.read_text())
+    cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Scene")
+    return {n.target.id for n in cls.body if isinstance(n, ast.AnnAssign)}
+
+
+def test_every_scene_field_reads_on_a_default_scene_and_the_stub_names_it():
+    scene = glint.Scene()
+    fields = {n for n in dir(scene) if not n.startswith("_") and not hasattr(glint.Scene, n)}
+    assert fields == scene_struct_fields()
+    assert stub_scene_fields() == fields
+    default = json.loads(scene.to_json())
+    for name in sorted(fields):
+        value = getattr(scene, name)  # raises AttributeError where the list misses one
+        if name in default:
+            assert value == default[name], name
+        elif value is not None:
+            # An omitted field reads as its default: setting it to that value leaves
+            # the scene (and its JSON) as it was.
+            assert glint.Scene.from_json(json.dumps({**default, name: value})) == scene, name

@@ -104,6 +104,9 @@ class Scene:
     version: int
     input: Union[Dict[str, Any], Literal["none"]]
     meshes: List[Dict[str, Any]]
+    # A label map drawn over the volume: {"path": ..., "table", "show", "hide",
+    # "smoothing", "legend", "render_as": "surfaces"|"volume"|"both", "opacity"}.
+    labels: Optional[Dict[str, Any]]
     ssaa: Optional[int]
     mode: Literal["composite", "iso", "mip", "surface"]
     iso: Optional[float]
@@ -115,18 +118,30 @@ class Scene:
     material: Dict[str, Any]
     lobe: Dict[str, Any]
     lights: List[Dict[str, float]]
+    # The light-transport model and its settings: {"model": "local"|"shadows"|"path",
+    # "spp", "bounces", "seed", "environment", "anisotropy", "occlusion", "sampler",
+    # "time_budget", "show_environment", "denoise", "environment_map",
+    # "environment_rotation", "environment_intensity", "surface_weight"}; None: `local`.
+    lighting: Optional[Dict[str, Any]]
     camera: Dict[str, Any]
     size: List[int]
     step: float
     gate: float
     skip_empty: bool
     prefilter: Literal["binomial", "none"]
+    # How the field is reconstructed between voxels (tricubic: a cubic B-spline).
+    filter: Literal["trilinear", "tricubic"]
     sampling: Literal["point", "pre-integrated"]
     opacity_unit: Optional[float]
     background: List[float]
     # Stops: the radiance scaled by 2**exposure before the tone curve.
     exposure: float
     tone: Literal["linear", "aces", "agx"]
+    # Clip planes {"point": [x, y, z], "normal": [x, y, z]} in patient mm, the crop box
+    # {"min": [...], "max": [...]}, and whether cut faces are capped.
+    clip: List[Dict[str, Any]]
+    crop: Optional[Dict[str, Any]]
+    clip_caps: bool
     derived: Optional[Dict[str, Any]]
     def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
 
