@@ -39,8 +39,8 @@ const MIN_ALBEDO: f32 = 0.01;
 /// The à-trous filter's parameters ([`atrous`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AtrousSettings {
-    /// Passes, each with twice the previous pass's tap spacing (1, 2, 4, ...): 5
-    /// passes reach 62 pixels across.
+    /// Passes, each with twice the previous pass's tap spacing (1, 2, 4, ...): 3
+    /// passes reach 14 pixels across, 5 reach 62.
     pub iterations: u32,
     /// Colour weight: how many standard errors of the pixel's (demodulated) luminance
     /// a neighbour may differ by before its weight falls to 1/e (SVGF's sigma_l, 4).
@@ -59,11 +59,15 @@ pub struct AtrousSettings {
 
 /// SVGF's colour weight (4) and depth weight (1); the normal and albedo weights were
 /// chosen by the mean squared error to a 512-spp image of the Shepp-Logan phantom at
-/// 2 spp and of the head phantom at 1 and 4 spp (normal 2 to 64, albedo 0.1 to 10).
+/// 2 spp and of the head phantom at 1 and 4 spp (normal 2 to 64, albedo 0.1 to 10);
+/// three passes (reaching 14 pixels across), not SVGF's five, by mean ꟻLIP to a
+/// 256-spp image of the head CT at 128x128 at 1 to 8 spp (passes 2 to 5, colour 2 to
+/// 6, normal 4 to 32, depth 0.5 and 1, albedo 0.1 to 1; docs/lighting.md): more
+/// passes blur the bone's fine detail once the samples are a few.
 impl Default for AtrousSettings {
     fn default() -> AtrousSettings {
         AtrousSettings {
-            iterations: 5,
+            iterations: 3,
             sigma_color: 4.0,
             sigma_normal: 8.0,
             sigma_depth: 1.0,
