@@ -719,7 +719,8 @@ impl Renderer {
                             acc.features.insert(f).clone()
                         }
                     };
-                    crate::denoise::denoise(&traced, &features, spp, denoise)
+                    let variance = acc.image.variance_of_mean();
+                    crate::denoise::denoise(&traced, &features, &variance, denoise)
                 }
             }
         };

@@ -81,13 +81,14 @@ impl std::str::FromStr for Denoise {
     }
 }
 
-/// `image` (a `path` frame of `spp` samples per pixel, linear RGB) denoised by `how`
-/// guided by `features` (the frame's, the same size): the image itself for
-/// [`Denoise::None`]. Every output value is finite.
+/// `image` (a `path` frame, linear RGB) denoised by `how` guided by `features` (the
+/// frame's, the same size) and, for `atrous`, by `variance`, each pixel's variance of
+/// its mean luminance ([`glint_volume::PathImage::variance_of_mean`]; NaN where
+/// unknown): the image itself for [`Denoise::None`]. Every output value is finite.
 pub fn denoise(
     image: &Image,
     features: &PathFeatures,
-    spp: u32,
+    variance: &[f32],
     how: Denoise,
 ) -> Result<Image, RenderError> {
     if [features.width, features.height] != [image.width, image.height] {
@@ -98,7 +99,12 @@ pub fn denoise(
     }
     match how.effective()? {
         Denoise::None | Denoise::Auto => Ok(image.clone()),
-        Denoise::Atrous => Ok(atrous(image, features, spp, &AtrousSettings::default())),
+        Denoise::Atrous => Ok(atrous(
+            image,
+            features,
+            variance,
+            &AtrousSettings::default(),
+        )),
         #[cfg(feature = "oidn")]
         Denoise::Oidn => oidn::denoise(image, features),
         #[cfg(not(feature = "oidn"))]

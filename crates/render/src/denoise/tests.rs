@@ -69,10 +69,57 @@ fn the_filter_keeps_a_constant_image_bit_for_bit() {
         ..features(w, h)
     };
     let flat = image(w, h, |_| [0.3, 0.7, 1.9]);
-    for spp in [1, 16] {
-        let out = atrous(&flat, &f, spp, &AtrousSettings::default());
+    // Variance unknown (one sample: the spatial estimate) and given.
+    for variance in [vec![], vec![0.01; 1200]] {
+        let out = atrous(&flat, &f, &variance, &AtrousSettings::default());
         assert_eq!(out, flat);
     }
+}
+
+#[test]
+fn the_filter_keeps_an_edge_the_variance_calls_signal_and_smooths_noise() {
+    // One surface (constant features), radiance stepping from 1 to 2 halfway.
+    let (w, h) = (32, 24);
+    let n = (w * h) as usize;
+    let f = PathFeatures {
+        albedo: vec![[0.5; 3]; n],
+        normal: vec![[0.0, 0.0, 1.0]; n],
+        depth: vec![50.0; n],
+        ..features(w, h)
+    };
+    let step = |i: usize| {
+        if i % w as usize >= w as usize / 2 {
+            2.0
+        } else {
+            1.0
+        }
+    };
+    let edge = image(w, h, |i| [step(i); 3]);
+    // Converged samples (standard error 1e-3): the step is 1000 errors high, kept.
+    let kept = atrous(&edge, &f, &vec![1e-6; n], &AtrousSettings::default());
+    let moved = (kept.rgb.iter().zip(&edge.rgb))
+        .map(|(a, b)| (a[0] - b[0]).abs())
+        .fold(0.0f32, f32::max);
+    assert!(moved < 1e-3, "a converged edge moved by {moved}");
+    // A standard error of 1 (one noisy sample): the step is noise, smoothed across.
+    let smoothed = atrous(&edge, &f, &vec![1.0; n], &AtrousSettings::default());
+    let (l, r) = (w as usize / 2 - 1, w as usize / 2);
+    let row = 12 * w as usize;
+    let gap = smoothed.rgb[row + r][0] - smoothed.rgb[row + l][0];
+    assert!(gap < 0.5, "a noisy step kept {gap} of 1");
+    // Noise of a known variance is reduced: the filtered pixels scatter less.
+    let noisy = image(w, h, |i| [1.0 + noise(i, 0) - 1.0; 3]);
+    let spread = |im: &Image| {
+        let m = im.rgb.iter().map(|c| c[0]).sum::<f32>() / n as f32;
+        im.rgb.iter().map(|c| (c[0] - m).powi(2)).sum::<f32>() / n as f32
+    };
+    let var = spread(&noisy);
+    let out = atrous(&noisy, &f, &vec![var; n], &AtrousSettings::default());
+    assert!(
+        spread(&out) < 0.1 * var,
+        "variance {var} -> {}",
+        spread(&out)
+    );
 }
 
 #[test]
@@ -85,7 +132,7 @@ fn the_filter_is_the_same_bit_for_bit_on_any_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| atrous(&noisy, &f, 2, &AtrousSettings::default()))
+            .install(|| atrous(&noisy, &f, &[], &AtrousSettings::default()))
     };
     let one = run(1);
     assert_ne!(one, noisy, "the filter changed nothing");
@@ -112,7 +159,7 @@ fn the_filter_gives_finite_values_for_nan_and_huge_input() {
         2 => [f32::NEG_INFINITY, 0.2, 0.1],
         _ => [0.5, 0.5, 0.5],
     });
-    let out = atrous(&odd, &f, 1, &AtrousSettings::default());
+    let out = atrous(&odd, &f, &[f32::NAN; 256], &AtrousSettings::default());
     assert!(out.rgb.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
 }
 

@@ -111,6 +111,22 @@ impl PathImage {
         (var / n).sqrt() / mean
     }
 
+    /// Per pixel, the variance of its mean luminance (the samples' unbiased variance
+    /// over their number), row by row; NaN where a pixel holds fewer than two samples.
+    /// What the denoiser's colour weight measures differences against.
+    pub fn variance_of_mean(&self) -> Vec<f32> {
+        (self.sums.iter().zip(&self.squares).zip(&self.counts))
+            .map(|((&[r, g, b, _], &square), &count)| {
+                let n = f64::from(count);
+                if n < 2.0 {
+                    return f32::NAN;
+                }
+                let mean = (0.2126 * r + 0.7152 * g + 0.0722 * b) / n;
+                (((square / n - mean * mean) * n / (n - 1.0)).max(0.0) / n) as f32
+            })
+            .collect()
+    }
+
     /// The mean of the samples over `background` (linear RGB): the rendered image.
     /// `stats.samples` counts paths, `stats.shaded` scattering events.
     pub fn image(&self, background: [f32; 3]) -> Image {
