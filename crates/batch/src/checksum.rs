@@ -4,18 +4,18 @@
 use std::io::Read;
 use std::path::Path;
 
-use sha2::{Digest, Sha256};
+use blake3::Hasher;
 
 use crate::{os_error, BatchError};
 
-/// `sha256:` and the hex SHA-256 of the input's bytes: of a file, what `sha256sum`
-/// prints for it; of a `.hdr` header, of the header followed by its `.img` data file
+/// `blake3:` and the hex BLAKE3 (256 bits) of the input's bytes: of a file, what
+/// `b3sum` prints for it; of a `.hdr` header, of the header followed by its `.img` data file
 /// when there is one; of a directory (a DICOM series), of its regular files (and links to them) in name
 /// order, each as its name, a NUL byte, its length as 8 little-endian bytes and its
 /// bytes (so renaming or moving bytes between files changes it). An `.nhdr`'s detached
 /// data file is not included.
 pub fn checksum(path: &Path) -> Result<String, BatchError> {
-    let mut hash = Sha256::new();
+    let mut hash = Hasher::new();
     let meta = std::fs::metadata(path).map_err(|e| os_error(path, e))?;
     if meta.is_dir() {
         let mut files = Vec::new();
@@ -40,8 +40,8 @@ pub fn checksum(path: &Path) -> Result<String, BatchError> {
                 .map_err(|e| os_error(&file, e))?
                 .len();
             hash.update(name.as_bytes());
-            hash.update([0]);
-            hash.update(len.to_le_bytes());
+            hash.update(&[0]);
+            hash.update(&len.to_le_bytes());
             feed(&mut hash, &file)?;
         }
     } else {
@@ -59,11 +59,11 @@ pub fn checksum(path: &Path) -> Result<String, BatchError> {
             }
         }
     }
-    Ok(format!("sha256:{:x}", hash.finalize()))
+    Ok(format!("blake3:{}", hash.finalize().to_hex()))
 }
 
 /// Feeds a file's bytes to the hash, in 1 MiB reads.
-fn feed(hash: &mut Sha256, path: &Path) -> Result<(), BatchError> {
+fn feed(hash: &mut Hasher, path: &Path) -> Result<(), BatchError> {
     let mut file = std::fs::File::open(path).map_err(|e| os_error(path, e))?;
     let mut buf = vec![0u8; 1 << 20];
     loop {
@@ -80,14 +80,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_file_hashes_as_sha256sum_does() {
+    fn a_file_hashes_as_b3sum_does() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("abc.nii");
         std::fs::write(&path, b"abc").unwrap();
-        // FIPS 180-2, appendix B.1: SHA-256("abc").
+        // `printf abc | b3sum` (b3sum 1.2.0).
         assert_eq!(
             checksum(&path).unwrap(),
-            "sha256:ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+            "blake3:6437b3ac38465133ffb63b75273a8db548c558465d79db03fd359c6cd5bd9d85"
+        );
+        // More than one 1 MiB read and more than one BLAKE3 chunk (1 KiB), so the
+        // SIMD kernels' paths count: `head -c 3000000 /dev/zero | b3sum`.
+        std::fs::write(&path, vec![0u8; 3_000_000]).unwrap();
+        assert_eq!(
+            checksum(&path).unwrap(),
+            "blake3:72f882f1b5dd958d1b163829c126e1b02e876ea671ce0198bacbdbbf83b16e4d"
         );
     }
 

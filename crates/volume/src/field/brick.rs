@@ -78,6 +78,12 @@ impl Scratch {
             filter: Vec::new(),
         }
     }
+
+    /// Voxels the read buffer holds without growing.
+    #[cfg(test)]
+    pub(crate) fn capacity(&self) -> usize {
+        self.raw.capacity()
+    }
 }
 
 impl Recipe {
