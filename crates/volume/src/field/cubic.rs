@@ -12,8 +12,8 @@
 //! A sample at `i + t` (cell `i`, fraction `t`) weighs the voxels `i-1 ..= i+2` per
 //! axis (clamped to the volume, as a texture with clamp-to-edge addressing), with
 //! non-negative weights that sum to one: the value lies within the (min, max) of its
-//! 4^3 taps, so the macro cells' ranges dilated by one cell on every side (a cell spans
-//! 4 voxels, the taps reach one voxel beyond it) bound it ([`dilate`]); the path
+//! 4^3 taps, so the macro cells' ranges over one voxel more on every side (the taps
+//! reach one voxel beyond the cell) bound it (`prepare::cell_ranges`); the path
 //! tracer's majorants and empty-space skipping stay upper bounds.
 //!
 //! Three evaluations, the same spline up to float rounding:
@@ -42,7 +42,7 @@
 use crossbeam_epoch::Guard;
 
 use super::brick::{BRICK, BRICK_ROW, BRICK_SLICE};
-use super::{Field, Loc, MACRO_CELL};
+use super::{Field, Loc};
 use glint_core::Vec3;
 
 /// The cubic B-spline's weights of the taps at `-1, 0, 1, 2` from a cell's lower
@@ -259,29 +259,4 @@ impl Field {
         }
         sum
     }
-}
-
-/// The macro cells' (min, max) for the tricubic filter: each cell's range widened to
-/// those of its neighbours (3x3x3, clipped to the grid), which hold every voxel a
-/// sample in the cell reads (one voxel beyond the cell's `MACRO_CELL + 1`).
-pub(crate) fn dilate(dims: [usize; 3], cells: &[(f32, f32)]) -> Vec<(f32, f32)> {
-    const _: () = assert!(MACRO_CELL >= 1);
-    let mut cur = cells.to_vec();
-    let stride = [1, dims[0], dims[0] * dims[1]];
-    for axis in 0..3 {
-        let n = dims[axis];
-        let s = stride[axis];
-        let next = (0..cur.len())
-            .map(|c| {
-                let i = (c / s) % n;
-                let lo = if i > 0 { c - s } else { c };
-                let hi = if i + 1 < n { c + s } else { c };
-                [lo, c, hi]
-                    .iter()
-                    .fold(cur[c], |(a, b), &k| (a.min(cur[k].0), b.max(cur[k].1)))
-            })
-            .collect();
-        cur = next;
-    }
-    cur
 }
