@@ -87,8 +87,7 @@ pub(super) unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3
 unsafe fn cubic_gradients(c: &Caster, kept: &Kept, r0: usize, guard: &Guard) -> [__m256; 3] {
     let f = c.field;
     let mut g = [[0.0f32; LANES]; 3];
-    for j in 0..LANES {
-        let s = &kept.0[r0 + j];
+    for (j, s) in kept.0[r0..r0 + LANES].iter().enumerate() {
         let loc = Loc {
             ijk: grid_cell(f.brick_dims, s),
             t: s.t,
