@@ -356,17 +356,25 @@ impl LabelVolume {
         let f = p.map(f32::floor);
         let t = [p[0] - f[0], p[1] - f[1], p[2] - f[2]];
         let b = f.map(|x| x as isize);
-        let (mut slots, mut occupancy, mut n) = ([0u16; 8], [0.0f32; 8], 0);
-        for c in 0..8 {
-            let o = [c & 1, c >> 1 & 1, c >> 2 & 1];
-            let w: f32 = (0..3)
-                .map(|a| if o[a] == 1 { t[a] } else { 1.0 - t[a] })
-                .product();
-            let s = self.slot(
+        let corner = |c: usize| [c & 1, c >> 1 & 1, c >> 2 & 1];
+        let at: [u16; 8] = std::array::from_fn(|c| {
+            let o = corner(c);
+            self.slot(
                 b[0] + o[0] as isize,
                 b[1] + o[1] as isize,
                 b[2] + o[2] as isize,
-            );
+            )
+        });
+        // Inside a label (most samples): no weights needed.
+        if at.iter().all(|&s| s == at[0]) {
+            return at[0];
+        }
+        let (mut slots, mut occupancy, mut n) = ([0u16; 8], [0.0f32; 8], 0);
+        for (c, &s) in at.iter().enumerate() {
+            let o = corner(c);
+            let w: f32 = (0..3)
+                .map(|a| if o[a] == 1 { t[a] } else { 1.0 - t[a] })
+                .product();
             match slots[..n].iter().position(|&x| x == s) {
                 Some(i) => occupancy[i] += w,
                 None => {
