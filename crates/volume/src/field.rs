@@ -350,16 +350,17 @@ impl Field {
     }
 
     /// This field reconstructed with `filter`: the same bricks (nothing is rebuilt);
-    /// for [`Filter::Tricubic`] the macro cells' ranges are widened to their
-    /// neighbours' (a tricubic sample reads one voxel beyond its cell), so what bounds
-    /// the values (empty-space skipping, the path tracer's majorants) still does.
+    /// for [`Filter::Tricubic`] the macro cells' ranges are taken over one voxel more
+    /// on every side (a tricubic sample reads one voxel beyond its cell; a pass over
+    /// the source), so what bounds the values (empty-space skipping,
+    /// the path tracer's majorants) still does.
     pub fn with_filter(mut self, filter: Filter) -> Field {
         if filter == self.filter {
             return self;
         }
         match filter {
             Filter::Tricubic => {
-                let cubic = cubic::dilate(self.cell_dims, &self.cells);
+                let cubic = prepare::cell_ranges(&self.recipe, 1);
                 self.linear_cells = Some(std::mem::replace(&mut self.cells, cubic));
             }
             Filter::Trilinear => {

@@ -12,15 +12,19 @@
 //! A sample at `i + t` (cell `i`, fraction `t`) weighs the voxels `i-1 ..= i+2` per
 //! axis (clamped to the volume, as a texture with clamp-to-edge addressing), with
 //! non-negative weights that sum to one: the value lies within the (min, max) of its
-//! 4^3 taps, so the macro cells' ranges dilated by one cell on every side (a cell spans
-//! 4 voxels, the taps reach one voxel beyond it) bound it ([`dilate`]); the path
+//! 4^3 taps, so the macro cells' ranges over one voxel more on every side (the taps
+//! reach one voxel beyond the cell) bound it (`prepare::cell_ranges`); the path
 //! tracer's majorants and empty-space skipping stay upper bounds.
 //!
-//! Two evaluations, the same spline up to float rounding:
+//! Three evaluations, the same spline up to float rounding:
 //! - inside a brick (the 4^3 taps in one brick's voxels: 14 of 16 cells per axis, two
 //!   thirds of the samples), the 64 taps directly, separably (x, then y, then z), and
 //!   the gradient from the same loads with the derivative weights;
-//! - elsewhere (the taps span bricks), Sigg and Hadwiger's eight trilinear fetches
+//! - elsewhere (the taps span bricks or reach past the volume), the 64 taps gathered
+//!   from the bricks holding them (`Field::gathered`, clamped to the volume), the
+//!   same arithmetic;
+//! - when a brick cannot be built (the cache is full), and in the AVX2 ray caster's
+//!   march for every sample, Sigg and Hadwiger's eight trilinear fetches
 //!   ("Fast third-order texture filtering", GPU Gems 2, ch. 20, 2005): per axis the
 //!   pairs of taps `w0 v0 + w1 v1` are one linear fetch at `i - 1 + w1 / (w0 + w1)`
 //!   weighted by `w0 + w1` (both weights are non-negative, so the position lies between
@@ -29,14 +33,16 @@
 //!   takes the derivative weights there (both of each pair have the same sign), so the
 //!   gradient is 24 more.
 //!
-//! The direct 64 taps take one brick look-up instead of eight, and the gradient from
-//! the same loads, so they are used wherever the block lies in a brick (the two were
-//! not timed apart; the frame cost is in docs/lighting.md, "Smooth reconstruction").
+//! The scalar evaluations read the 64 taps once for the value and all three
+//! derivatives. The AVX2 march reads eight rays' samples as eight vector trilinear
+//! reads, one per fetch, which handles a block across bricks without a special case
+//! (`raycast::avx2`); its kept samples' gradients come from the 64 taps. The frame
+//! cost is in docs/lighting.md, "Smooth reconstruction".
 
 use crossbeam_epoch::Guard;
 
 use super::brick::{BRICK, BRICK_ROW, BRICK_SLICE};
-use super::{Field, Loc, MACRO_CELL};
+use super::{Field, Loc};
 use glint_core::Vec3;
 
 /// The cubic B-spline's weights of the taps at `-1, 0, 1, 2` from a cell's lower
@@ -130,25 +136,85 @@ impl Field {
     pub(crate) fn cubic_value_at(&self, loc: &Loc, guard: &Guard) -> f32 {
         match self.cubic_block(loc, guard) {
             Some(base) => block::<false>(|o| self.tap(base, o), loc.t).0,
-            None => self.fetched(loc, guard, [false; 3]),
+            None => match self.gathered(loc, guard) {
+                Some(taps) => block::<false>(|o| taps[o], loc.t).0,
+                None => self.fetched(loc, guard, [false; 3]),
+            },
         }
     }
 
     /// The tricubic B-spline's analytic world gradient at a located sample (index-space
-    /// derivatives mapped by the inverse transpose of the affine's 3x3 part).
+    /// derivatives mapped by the inverse transpose of the affine's 3x3 part): its three
+    /// derivatives from one read of the 64 taps.
     #[inline(always)]
     pub(crate) fn cubic_gradient_at(&self, loc: &Loc, guard: &Guard) -> Vec3 {
         let g = match self.cubic_block(loc, guard) {
             Some(base) => block::<true>(|o| self.tap(base, o), loc.t).1,
-            None => [
-                self.fetched(loc, guard, [true, false, false]),
-                self.fetched(loc, guard, [false, true, false]),
-                self.fetched(loc, guard, [false, false, true]),
-            ],
+            None => match self.gathered(loc, guard) {
+                Some(taps) => block::<true>(|o| taps[o], loc.t).1,
+                None => [
+                    self.fetched(loc, guard, [true, false, false]),
+                    self.fetched(loc, guard, [false, true, false]),
+                    self.fetched(loc, guard, [false, false, true]),
+                ],
+            },
         };
         let m = &self.recipe.to_world_gradient;
         let row = |r: usize| m[r][0] * g[0] + m[r][1] * g[1] + m[r][2] * g[2];
         Vec3::new(row(0), row(1), row(2))
+    }
+
+    /// The 64 taps of `loc` (`a + 4 b + 16 c`) when they span bricks or reach past the
+    /// volume: each tap's voxel clamped to the volume (clamp-to-edge, as the eight
+    /// fetches clamp), read from the brick holding it. The taps reach at most two
+    /// bricks per axis, so at most eight slot look-ups. `None` when a brick could not
+    /// be built (the cache is full of bricks in use).
+    #[cold]
+    #[inline(never)]
+    fn gathered(&self, loc: &Loc, guard: &Guard) -> Option<[f32; 64]> {
+        let bd = self.brick_dims;
+        // Per axis and tap: its brick along the axis, its voxel in the brick, and
+        // whether the brick is the first tap's.
+        let mut brick = [[0usize; 4]; 3];
+        let mut local = [[0usize; 4]; 3];
+        let mut other = [[0usize; 4]; 3];
+        for a in 0..3 {
+            for n in 0..4 {
+                let v = (loc.ijk[a] + n).saturating_sub(1).min(self.dims[a] - 1);
+                // Voxel `v` lies in brick `v / BRICK` or, at the volume's far face, as
+                // the last brick's apron.
+                let b = (v >> super::brick::BRICK_SHIFT).min(bd[a] - 1);
+                brick[a][n] = b;
+                local[a][n] = v - b * BRICK;
+                other[a][n] = usize::from(b != brick[a][0]);
+            }
+        }
+        let mut slots = [None::<usize>; 8];
+        let values = self.cache.values();
+        let mut taps = [0.0f32; 64];
+        for c in 0..4 {
+            for b in 0..4 {
+                for a in 0..4 {
+                    let key = other[0][a] + 2 * other[1][b] + 4 * other[2][c];
+                    let off = match slots[key] {
+                        Some(o) => o,
+                        None => {
+                            let coords = [brick[0][a], brick[1][b], brick[2][c]];
+                            let bi = coords[0] + bd[0] * (coords[1] + bd[1] * coords[2]);
+                            let o = self.cache.offset(bi, coords, &self.recipe, guard)? as usize;
+                            slots[key] = Some(o);
+                            o
+                        }
+                    };
+                    let at =
+                        off + local[0][a] + BRICK_ROW * local[1][b] + BRICK_SLICE * local[2][c];
+                    // SAFETY: the slot is built and valid while the guard lives; the
+                    // voxel's place is inside the brick (local <= BRICK per axis).
+                    taps[a + 4 * b + 16 * c] = unsafe { *values.add(at) };
+                }
+            }
+        }
+        Some(taps)
     }
 
     /// Tap `o` (`a + 4 b + 16 c`) of the block at slot offset `base`.
@@ -193,29 +259,4 @@ impl Field {
         }
         sum
     }
-}
-
-/// The macro cells' (min, max) for the tricubic filter: each cell's range widened to
-/// those of its neighbours (3x3x3, clipped to the grid), which hold every voxel a
-/// sample in the cell reads (one voxel beyond the cell's `MACRO_CELL + 1`).
-pub(crate) fn dilate(dims: [usize; 3], cells: &[(f32, f32)]) -> Vec<(f32, f32)> {
-    const _: () = assert!(MACRO_CELL >= 1);
-    let mut cur = cells.to_vec();
-    let stride = [1, dims[0], dims[0] * dims[1]];
-    for axis in 0..3 {
-        let n = dims[axis];
-        let s = stride[axis];
-        let next = (0..cur.len())
-            .map(|c| {
-                let i = (c / s) % n;
-                let lo = if i > 0 { c - s } else { c };
-                let hi = if i + 1 < n { c + s } else { c };
-                [lo, c, hi]
-                    .iter()
-                    .fold(cur[c], |(a, b), &k| (a.min(cur[k].0), b.max(cur[k].1)))
-            })
-            .collect();
-        cur = next;
-    }
-    cur
 }

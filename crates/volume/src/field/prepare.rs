@@ -281,7 +281,7 @@ fn slab(
             f[i - fa * sxy]
         })
         .collect();
-    cells(f, dims, fa, cz, cells_out);
+    cells(f, dims, (fa, 0), cz, cells_out);
     Slab {
         range,
         finite,
@@ -396,14 +396,48 @@ fn largest_abs(v: &[f32]) -> f32 {
     lanes.iter().fold(rest, |m, &x| m.max(x))
 }
 
+/// The macro cells' (min, max) of the voxels `reach` beyond each cell's own on every
+/// side (clipped to the volume): for the tricubic filter, whose samples in a cell read
+/// one voxel beyond it (`reach` 1), a pass over the volume like [`prepare`]'s (the
+/// source read again, slab by slab), which bounds its samples far tighter than the
+/// trilinear cells widened to their neighbours' (6 voxels more per axis instead of 2).
+pub(super) fn cell_ranges(recipe: &Recipe, reach: usize) -> Vec<(f32, f32)> {
+    let dims = recipe.dims;
+    let [nx, ny, nz] = dims;
+    let cell_dims = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
+    let layers = layers_per_slab(dims);
+    let mut ranges = vec![(0.0f32, 0.0f32); cell_dims.iter().product()];
+    ranges
+        .par_chunks_mut(layers * cell_dims[0] * cell_dims[1])
+        .enumerate()
+        .for_each_init(
+            || (Scratch::default(), Vec::new()),
+            |(scratch, f), (s, out)| {
+                let cz = (s * layers, ((s + 1) * layers).min(cell_dims[2]));
+                let fa = (cz.0 * MACRO_CELL).saturating_sub(reach);
+                let fb = (cz.1 * MACRO_CELL + reach).min(nz - 1);
+                recipe.values_into([0, 0, fa], [nx - 1, ny - 1, fb], false, scratch, f);
+                cells(f, dims, (fa, reach), cz, out);
+            },
+        );
+    ranges
+}
+
 /// Per macro cell of layers `cz`, the (min, max) of the filtered values `f` (slices
 /// from `fa`) it covers: cell c covers voxels c*B ..= c*B + B (one voxel of overlap, so
-/// every trilinear sample inside the cell's box reads only voxels it covers).
+/// every trilinear sample inside the cell's box reads only voxels it covers), and
+/// `reach` voxels more on every side (clipped to the volume).
 ///
 /// Per row of cells, first the minimum and maximum of each voxel column over the
 /// cells' voxel rows (element-wise over whole rows, which vectorises), then of each
 /// cell's columns: the same sets of values, so the same extremes as a loop per cell.
-fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize), out: &mut [(f32, f32)]) {
+fn cells(
+    f: &[f32],
+    dims: [usize; 3],
+    (fa, reach): (usize, usize),
+    cz: (usize, usize),
+    out: &mut [(f32, f32)],
+) {
     let [nx, ny, nz] = dims;
     let [cx, cy, _] = dims.map(|d| (d - 1).div_ceil(MACRO_CELL));
     debug_assert_eq!(out.len(), cx * cy * (cz.1 - cz.0));
@@ -414,8 +448,11 @@ fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize), out: &mut [
         for cj in 0..cy {
             lo.fill(f32::INFINITY);
             hi.fill(f32::NEG_INFINITY);
-            for k in ck * MACRO_CELL..=((ck + 1) * MACRO_CELL).min(nz - 1) {
-                for j in cj * MACRO_CELL..=((cj + 1) * MACRO_CELL).min(ny - 1) {
+            let span = |c: usize, n: usize| {
+                (c * MACRO_CELL).saturating_sub(reach)..=((c + 1) * MACRO_CELL + reach).min(n - 1)
+            };
+            for k in span(ck, nz) {
+                for j in span(cj, ny) {
                     let row = &f[nx * (j + ny * (k - fa))..][..nx];
                     for ((l, h), &v) in lo.iter_mut().zip(hi.iter_mut()).zip(row) {
                         *l = l.min(v);
@@ -424,7 +461,7 @@ fn cells(f: &[f32], dims: [usize; 3], fa: usize, cz: (usize, usize), out: &mut [
                 }
             }
             for ci in 0..cx {
-                let columns = ci * MACRO_CELL..=((ci + 1) * MACRO_CELL).min(nx - 1);
+                let columns = span(ci, nx);
                 let lo_c = lo[columns.clone()]
                     .iter()
                     .fold(f32::INFINITY, |m, &v| m.min(v));

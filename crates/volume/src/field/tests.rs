@@ -655,6 +655,27 @@ fn tricubic_is_the_spline_within_its_taps_and_its_macro_cell() {
     }
 }
 
+/// The tricubic macro cells reach one voxel beyond the trilinear cells, no more: an
+/// impulse lights up only the cells whose samples read it.
+#[test]
+fn tricubic_macro_cells_reach_one_voxel_beyond_their_cells() {
+    let dims = [30, 26, 22];
+    let at = [10, 12, 5];
+    let volume = volume_of(dims, |i, j, k| f32::from([i, j, k] == at));
+    let f = Field::with_prefilter(&volume, Prefilter::None)
+        .unwrap()
+        .with_filter(Filter::Tricubic);
+    let (cd, cells) = f.macro_cells();
+    for (n, &(lo, hi)) in cells.iter().enumerate() {
+        let c = [n % cd[0], n / cd[0] % cd[1], n / (cd[0] * cd[1])];
+        // Samples in cell c read voxels 4c - 1 ..= 4c + 5 per axis.
+        let reads =
+            (0..3).all(|a| at[a] + 1 >= MACRO_CELL * c[a] && at[a] <= MACRO_CELL * c[a] + 5);
+        assert_eq!(lo, 0.0, "{c:?}");
+        assert_eq!(hi, f32::from(reads), "{c:?}");
+    }
+}
+
 /// Trilinear stays the default, bit for bit, and a field set to tricubic and back is
 /// the trilinear field again (values, gradients, macro cells).
 #[test]

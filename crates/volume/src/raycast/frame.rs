@@ -106,12 +106,7 @@ impl Classification {
             iso_value: self.settings.iso,
             skip_empty: self.settings.skip_empty,
             dt: (self.settings.step * field.min_spacing()) as f32,
-            // The AVX2 kernel reads bricks trilinearly itself: a tricubic field takes
-            // the scalar one.
-            simd: settings.kernel == Kernel::Auto
-                && simd_supported()
-                && self.colour.is_none()
-                && field.filter().is_trilinear(),
+            simd: settings.kernel == Kernel::Auto && simd_supported() && self.colour.is_none(),
             jitter,
             sampling: self.settings.sampling,
             shadows,

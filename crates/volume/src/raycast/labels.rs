@@ -1,7 +1,11 @@
-//! A label map ray cast as a volume ([`LabelVolume`]): nearest-label classification
-//! (a sample takes the label of the voxel it lies in, so two labels are never blended
-//! into a third colour), each label's colour and opacity from a palette, lit by the
-//! scene's shader with the normal of the labels' smoothed opacity boundary.
+//! A label map ray cast as a volume ([`LabelVolume`]): each sample takes one label,
+//! the one with the largest interpolated occupancy (per label, the trilinear weights
+//! of the cell's corner voxels that hold it: between two labels the boundary is where
+//! each covers half), so two labels are never blended into a third colour and their
+//! boundaries are the interpolated indicator's level set rather than the voxels'
+//! faces (nearest-voxel sampling showed a label's surface as stair steps); each
+//! label's colour and opacity from a palette, lit by the scene's shader with the
+//! normal of the labels' smoothed opacity boundary.
 
 use std::collections::BTreeMap;
 
@@ -24,7 +28,8 @@ const NORMAL_SPAN: f32 = 1.0;
 const FLAT_GRADIENT: f32 = 1e-3;
 
 /// A label map prepared for ray casting: per voxel an index into a palette of
-/// colours and opacities (index 0: not drawn), placed in world mm by its affine.
+/// colours and opacities (slots 0, the background, and 1, labels not drawn), placed in world
+/// mm by its affine.
 #[derive(Clone, Debug)]
 pub struct LabelVolume {
     dims: [usize; 3],
@@ -41,6 +46,14 @@ pub struct LabelVolume {
     /// Index box of the voxels drawn (`None`: none), half a voxel wider.
     drawn: Option<([f32; 3], [f32; 3])>,
 }
+
+/// The palette slot of label 0, the background.
+const BACKGROUND: u16 = 0;
+
+/// The palette slot of every other label not drawn: one class apart from the
+/// background, so that hiding a label does not move the boundaries of the labels it
+/// touches (they compete with it as with any label).
+const HIDDEN: u16 = 1;
 
 /// What one label looks like in a [`LabelVolume`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,11 +80,11 @@ impl LabelVolume {
                 labels.len()
             )));
         }
-        if looks.len() >= usize::from(u16::MAX) {
+        if looks.len() >= usize::from(u16::MAX - HIDDEN) {
             return Err(RenderError::Parameter(format!(
                 "{} labels drawn as a volume: at most {}",
                 looks.len(),
-                u16::MAX - 1
+                u16::MAX - HIDDEN - 1
             )));
         }
         if let Some((v, l)) = looks
@@ -85,7 +98,8 @@ impl LabelVolume {
         }
         let inverse = invert(&affine)
             .ok_or_else(|| RenderError::Parameter("the label map's affine is singular".into()))?;
-        let mut palette = vec![[0.0f32; 4]];
+        // Slots BACKGROUND and HIDDEN, transparent.
+        let mut palette = vec![[0.0f32; 4]; usize::from(HIDDEN) + 1];
         let mut slot = BTreeMap::new();
         for (&v, l) in looks {
             if v != 0 && l.opacity > 0.0 {
@@ -102,9 +116,10 @@ impl LabelVolume {
             .enumerate()
             .map(|(i, &v)| {
                 if v != last.0 {
-                    last = (v, slot.get(&v).copied().unwrap_or(0));
+                    let other = if v == 0 { BACKGROUND } else { HIDDEN };
+                    last = (v, slot.get(&v).copied().unwrap_or(other));
                 }
-                if last.1 != 0 {
+                if last.1 > HIDDEN {
                     let p = [i % nx, i / nx % ny, i / (nx * ny)];
                     for a in 0..3 {
                         lo[a] = lo[a].min(p[a]);
@@ -296,8 +311,8 @@ impl LabelVolume {
             k += 1.0;
             stats.samples += 1;
             let p = [0, 1, 2].map(|a| oi[a] + di[a] * t);
-            let slot = self.nearest(p);
-            if slot == 0 {
+            let slot = self.winner(p);
+            if slot <= HIDDEN {
                 continue;
             }
             let e = self.palette[usize::from(slot)];
@@ -330,14 +345,73 @@ impl LabelVolume {
         })
     }
 
-    /// The palette slot of the voxel nearest index-space point `p` (0 outside).
+    /// The palette slot that wins at index-space point `p`: per slot its interpolated
+    /// occupancy, the trilinear weights of the cell's corner voxels holding it (they
+    /// sum to one; voxels outside the grid are background); the largest wins, a tie
+    /// the lower slot. Between two labels the boundary is where each covers half, the
+    /// level set of their interpolated indicator, which follows a sphere far closer
+    /// than the voxels' faces (nearest-voxel sampling; the test below).
     #[inline(always)]
+    fn winner(&self, p: [f32; 3]) -> u16 {
+        let f = p.map(f32::floor);
+        let t = [p[0] - f[0], p[1] - f[1], p[2] - f[2]];
+        let b = f.map(|x| x as isize);
+        let corner = |c: usize| [c & 1, c >> 1 & 1, c >> 2 & 1];
+        let at: [u16; 8] = std::array::from_fn(|c| {
+            let o = corner(c);
+            self.slot(
+                b[0] + o[0] as isize,
+                b[1] + o[1] as isize,
+                b[2] + o[2] as isize,
+            )
+        });
+        // Inside a label (most samples): no weights needed.
+        if at.iter().all(|&s| s == at[0]) {
+            return at[0];
+        }
+        let (mut slots, mut occupancy, mut n) = ([0u16; 8], [0.0f32; 8], 0);
+        for (c, &s) in at.iter().enumerate() {
+            let o = corner(c);
+            let w: f32 = (0..3)
+                .map(|a| if o[a] == 1 { t[a] } else { 1.0 - t[a] })
+                .product();
+            match slots[..n].iter().position(|&x| x == s) {
+                Some(i) => occupancy[i] += w,
+                None => {
+                    (slots[n], occupancy[n]) = (s, w);
+                    n += 1;
+                }
+            }
+        }
+        let mut best = 0;
+        for i in 1..n {
+            let (a, b) = (occupancy[i], occupancy[best]);
+            if a > b || (a == b && slots[i] < slots[best]) {
+                best = i;
+            }
+        }
+        slots[best]
+    }
+
+    /// The palette slot of voxel `(i, j, k)` ([`BACKGROUND`] outside the grid).
+    #[inline(always)]
+    fn slot(&self, i: isize, j: isize, k: isize) -> u16 {
+        let [nx, ny, nz] = self.dims.map(|d| d as isize);
+        if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
+            return BACKGROUND;
+        }
+        self.index[(i + nx * (j + ny * k)) as usize]
+    }
+
+    /// The palette slot of the voxel nearest index-space point `p` (background
+    /// outside): the classification before `LabelVolume::winner`, kept for its test.
+    #[cfg(test)]
     fn nearest(&self, p: [f32; 3]) -> u16 {
         let mut at = [0usize; 3];
         for a in 0..3 {
             let q = (p[a] + 0.5).floor();
             if q < 0.0 || q >= self.dims[a] as f32 {
-                return 0;
+                return BACKGROUND;
             }
             at[a] = q as usize;
         }
@@ -347,12 +421,7 @@ impl LabelVolume {
     /// The opacity of voxel `(i, j, k)` (0 outside the grid).
     #[inline(always)]
     fn opacity(&self, i: isize, j: isize, k: isize) -> f32 {
-        let [nx, ny, nz] = self.dims.map(|d| d as isize);
-        if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
-            return 0.0;
-        }
-        let s = self.index[(i + nx * (j + ny * k)) as usize];
-        self.palette[usize::from(s)][3]
+        self.palette[usize::from(self.slot(i, j, k))][3]
     }
 
     /// The trilinear interpolation of the voxels' opacities at index-space `p`.
@@ -654,6 +723,80 @@ mod tests {
         };
         let (red, green) = draw(&plane);
         assert!(red > 50 && green == 0, "{red} {green}");
+    }
+
+    /// The radius along the ray from `c` in direction `d` where `class` first stops
+    /// giving `from` (stepped by 0.005 voxel up to `r_max`).
+    fn boundary(class: impl Fn([f32; 3]) -> u16, c: [f32; 3], d: [f32; 3], from: u16) -> f32 {
+        let mut r = 0.0f32;
+        while r < 15.0 && class([0, 1, 2].map(|a| c[a] + r * d[a])) == from {
+            r += 0.005;
+        }
+        r
+    }
+
+    #[test]
+    fn label_boundaries_follow_a_sphere_closer_than_the_nearest_voxel() {
+        // Two labels: a ball of radius 5.3 (label 1) in a shell to 9.7 (label 2),
+        // centred off the grid. Along 200 directions, the RMS error of where label 1
+        // gives way to 2 and 2 to the background, nearest-voxel against the
+        // interpolated occupancy.
+        const M: usize = 28;
+        let c = [13.3f32, 13.6, 13.45];
+        let (r1, r2) = (5.3f32, 9.7f32);
+        let mut labels = vec![0u32; M * M * M];
+        for k in 0..M {
+            for j in 0..M {
+                for i in 0..M {
+                    let d = [i, j, k].map(|x| x as f32);
+                    let r = (0..3).map(|a| (d[a] - c[a]).powi(2)).sum::<f32>().sqrt();
+                    labels[i + M * (j + M * k)] = if r < r1 {
+                        1
+                    } else if r < r2 {
+                        2
+                    } else {
+                        0
+                    };
+                }
+            }
+        }
+        let looks = BTreeMap::from([(1, look(RED, 1.0)), (2, look(GREEN, 1.0))]);
+        let affine = [
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ];
+        let vol = LabelVolume::new([M; 3], affine, &labels, &looks).unwrap();
+        let (one, two) = (HIDDEN + 1, HIDDEN + 2);
+        let rms = |class: &dyn Fn([f32; 3]) -> u16| {
+            let (mut inner, mut outer) = (0.0f64, 0.0f64);
+            let n = 200;
+            for s in 0..n {
+                // A spiral of directions over the sphere.
+                let z = 1.0 - 2.0 * (s as f32 + 0.5) / n as f32;
+                let phi = s as f32 * 2.399_963;
+                let q = (1.0 - z * z).sqrt();
+                let d = [q * phi.cos(), q * phi.sin(), z];
+                let a = boundary(class, c, d, one);
+                let p = [0, 1, 2].map(|x| c[x] + (a + 0.01) * d[x]);
+                assert_eq!(class(p), two, "label 2 beyond label 1 along {d:?}");
+                let start = [0, 1, 2].map(|x| c[x] + (a + 0.01) * d[x]);
+                let b = a + 0.01 + boundary(class, start, d, two);
+                inner += f64::from(a - r1).powi(2);
+                outer += f64::from(b - r2).powi(2);
+            }
+            ((inner / n as f64).sqrt(), (outer / n as f64).sqrt())
+        };
+        let nearest = rms(&|p| vol.nearest(p));
+        let smooth = rms(&|p| vol.winner(p));
+        // Nearest: the voxels' faces, 0.29 and 0.30 voxel RMS off the spheres;
+        // interpolated, 0.18 and 0.19.
+        assert!(
+            smooth.0 < 0.7 * nearest.0 && smooth.1 < 0.7 * nearest.1,
+            "interpolated {smooth:?} against nearest {nearest:?}"
+        );
+        assert!(smooth.0 < 0.25 && smooth.1 < 0.25, "{smooth:?}");
     }
 
     #[test]

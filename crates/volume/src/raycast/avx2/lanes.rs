@@ -31,8 +31,8 @@ pub(super) struct Lanes {
     /// A brick could not be built (the cache is full of bricks in use): the tile is
     /// given up and rendered by the reference loop.
     pub(super) failed: bool,
-    /// The lanes' last bricks.
-    pub(super) memo: Memo,
+    /// The lanes' last bricks (per fetch of the tricubic filter as well).
+    pub(super) memo: Memos,
 }
 
 impl Lanes {
@@ -104,7 +104,7 @@ impl Lanes {
     /// # Safety
     /// The CPU must support AVX2 and FMA (inlined into [`composite_lanes`]).
     #[inline(always)]
-    pub(super) unsafe fn step(
+    pub(super) unsafe fn step<const CUBIC: bool>(
         &mut self,
         c: &Caster,
         inv: &Invariants,
@@ -136,14 +136,17 @@ impl Lanes {
                 let last = _mm256_cmpgt_epi32(k_plus, k1);
                 let second = samples & !(_mm256_movemask_ps(_mm256_castsi256_ps(last)) as u8);
                 stats.samples += u64::from(samples.count_ones() + second.count_ones());
-                let Some(first) = probe(c, inv, (p, ijk), (samples, &mut self.memo), guard) else {
+                let Some(first) =
+                    probe::<CUBIC>(c, inv, (p, ijk), (samples, &mut self.memo), guard)
+                else {
                     self.failed = true;
                     return 0;
                 };
                 ended |= self.keep_hits(c.lut, kept, samples & first.opaque, &first, stats);
                 if second != 0 {
                     let (p2, ijk2) = positions(inv, ray, k_plus);
-                    let Some(next) = probe(c, inv, (p2, ijk2), (second, &mut self.memo), guard)
+                    let Some(next) =
+                        probe::<CUBIC>(c, inv, (p2, ijk2), (second, &mut self.memo), guard)
                     else {
                         self.failed = true;
                         return 0;
@@ -171,7 +174,7 @@ impl Lanes {
     /// # Safety
     /// The CPU must support AVX2 and FMA (inlined into [`composite_lanes`]).
     #[inline(always)]
-    pub(super) unsafe fn segment_step(
+    pub(super) unsafe fn segment_step<const CUBIC: bool>(
         &mut self,
         c: &Caster,
         inv: &Invariants,
@@ -209,13 +212,13 @@ impl Lanes {
             let mut ended = 0u8;
             if reads != 0 {
                 let Some(first) =
-                    reads_at(c, inv, (p0, ijk0, first_k), (reads, &mut self.memo), guard)
+                    reads_at::<CUBIC>(c, inv, (p0, ijk0, first_k), (reads, &mut self.memo), guard)
                 else {
                     self.failed = true;
                     return 0;
                 };
                 let second = if seconds != 0 {
-                    match reads_at(
+                    match reads_at::<CUBIC>(
                         c,
                         inv,
                         (p1, ijk1, second_k),

@@ -7,6 +7,7 @@ use glint_core::MAX_LIGHTS;
 use super::*;
 use crate::clip::IndexClip;
 use crate::field::brick::{BRICK, BRICK_ROW, BRICK_SLICE, BRICK_VOXELS};
+use crate::field::Loc;
 use crate::light::ShadowField;
 
 /// Trilinear world gradients of the kept samples `r0 .. r0 + 8`, as
@@ -77,6 +78,33 @@ pub(super) unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3
     }
 }
 
+/// The tricubic B-spline's world gradients of the kept samples `r0 .. r0 + 8`
+/// (`Field::gradient_at`, one read of each sample's 4^3 taps), in component order.
+///
+/// # Safety
+/// AVX2 must be available; `kept` holds at least `r0 + 8` samples.
+#[inline(always)]
+unsafe fn cubic_gradients(c: &Caster, kept: &Kept, r0: usize, guard: &Guard) -> [__m256; 3] {
+    let f = c.field;
+    let mut g = [[0.0f32; LANES]; 3];
+    for (j, s) in kept.0[r0..r0 + LANES].iter().enumerate() {
+        let loc = Loc {
+            ijk: grid_cell(f.brick_dims, s),
+            t: s.t,
+        };
+        let v = f.gradient_at(&loc, guard);
+        (g[0][j], g[1][j], g[2][j]) = (v.x, v.y, v.z);
+    }
+    // SAFETY: AVX2 (this function's contract); each load reads a whole array of eight.
+    unsafe {
+        [
+            _mm256_loadu_ps(g[0].as_ptr()),
+            _mm256_loadu_ps(g[1].as_ptr()),
+            _mm256_loadu_ps(g[2].as_ptr()),
+        ]
+    }
+}
+
 /// Lights the `kept` samples of a tile whose rays have the view vectors `views`, and
 /// adds each one's colour times its weight to its ray's entry of `colors`, in order:
 /// their gradients (eight at a time, [`gradients`]), views and colours gathered into
@@ -92,7 +120,7 @@ pub(super) unsafe fn light(
     kept: &mut Kept,
     views: &[Vec3],
     colors: &mut [[f32; 3]],
-    batch: &mut ShadeBatch,
+    (batch, guard): (&mut ShadeBatch, &Guard),
 ) {
     let n = kept.len();
     if !c.shader.material().shade {
@@ -111,7 +139,7 @@ pub(super) unsafe fn light(
         // SAFETY: this function's contract (AVX2; clamped sample positions); the
         // columns hold `padded` entries, so each store of eight at r0 stays inside,
         // and `kept` holds `padded` samples.
-        unsafe { gather(c, kept, views, batch, r0) };
+        unsafe { gather(c, kept, views, (batch, guard), r0) };
     }
     if let Some(clip) = c.clip {
         cut_faces(c, clip, kept, batch);
@@ -140,11 +168,21 @@ pub(super) unsafe fn light(
 /// AVX2 and FMA must be available; `kept` holds at least `r0 + 8` samples from clamped
 /// positions; the batch's columns hold at least `r0 + 8` entries.
 #[inline(always)]
-unsafe fn gather(c: &Caster, kept: &Kept, views: &[Vec3], batch: &mut ShadeBatch, r0: usize) {
+unsafe fn gather(
+    c: &Caster,
+    kept: &Kept,
+    views: &[Vec3],
+    (batch, guard): (&mut ShadeBatch, &Guard),
+    r0: usize,
+) {
     // SAFETY: this function's contract covers the reads of `kept` and the stores into
     // the columns, and the CPU features.
     unsafe {
-        let g = gradients(c, kept, r0);
+        let g = if c.field.filter().is_trilinear() {
+            gradients(c, kept, r0)
+        } else {
+            cubic_gradients(c, kept, r0, guard)
+        };
         let samples = kept.0.get_unchecked(r0..r0 + LANES);
         let v: [Vec3; LANES] = std::array::from_fn(|j| views[samples[j].ray as usize]);
         let view = [

@@ -39,7 +39,7 @@ use crossbeam_epoch::Guard;
 use super::caster::{Caster, Pixels};
 use super::TERMINATION_OPACITY;
 use crate::classification::{Last, Sampling};
-use crate::field::MACRO_CELL;
+use crate::field::{Filter, MACRO_CELL};
 use glint_core::ShadeBatch;
 use glint_core::Vec3;
 use glint_core::{RenderMode, RenderStats};
@@ -260,6 +260,7 @@ pub(super) unsafe fn finish(
     scratch: &mut Scratch,
     alpha: &[f32],
     rgb: &mut Vec<[f32; 3]>,
+    guard: &Guard,
 ) {
     let Scratch {
         views,
@@ -270,7 +271,7 @@ pub(super) unsafe fn finish(
     } = scratch;
     if kept.len() > 0 {
         // SAFETY: this function's contract.
-        unsafe { light(c, kept, views, colors, buffers) };
+        unsafe { light(c, kept, views, colors, (buffers, guard)) };
     }
     let bg = c.frame.background;
     for (col, &op) in colors.iter().zip(alpha) {
@@ -301,10 +302,20 @@ pub(super) unsafe fn composite_tile(
     // SAFETY: the caller upholds the same contract. One loop per sampling, so neither
     // carries the other's code.
     let done = unsafe {
-        if c.sampling == Sampling::PreIntegrated {
-            composite_lanes::<true>(c, px, scratch, (rgb, alpha), stats, guard)
-        } else {
-            composite_lanes::<false>(c, px, scratch, (rgb, alpha), stats, guard)
+        let out = (&mut *rgb, &mut *alpha);
+        match (c.sampling, c.field.filter()) {
+            (Sampling::PreIntegrated, Filter::Trilinear) => {
+                composite_lanes::<true, false>(c, px, scratch, out, stats, guard)
+            }
+            (Sampling::Point, Filter::Trilinear) => {
+                composite_lanes::<false, false>(c, px, scratch, out, stats, guard)
+            }
+            (Sampling::PreIntegrated, Filter::Tricubic) => {
+                composite_lanes::<true, true>(c, px, scratch, out, stats, guard)
+            }
+            (Sampling::Point, Filter::Tricubic) => {
+                composite_lanes::<false, true>(c, px, scratch, out, stats, guard)
+            }
         }
     };
     if !done {
@@ -317,14 +328,14 @@ pub(super) unsafe fn composite_tile(
 /// Eight rays marched together, one per lane: each lane takes the reference loop's
 /// next step of its own ray (a leap out of an empty macro cell, or samples:
 /// [`Lanes::step`] for point sampling, [`Lanes::segment_step`] pre-integrated when
-/// `PRE`), so a vector's loads belong to eight independent chains. A lane whose ray
-/// ends takes the tile's next ray. Returns `false`, leaving `rgb` as it was, when a
+/// `PRE`; the tricubic B-spline's values when `CUBIC`), so a vector's loads belong to
+/// eight independent chains. A lane whose ray ends takes the tile's next ray. Returns `false`, leaving `rgb` as it was, when a
 /// brick could not be built.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA ([`supported`]).
 #[target_feature(enable = "avx2,fma")]
-pub(super) unsafe fn composite_lanes<const PRE: bool>(
+pub(super) unsafe fn composite_lanes<const PRE: bool, const CUBIC: bool>(
     c: &Caster,
     px: &Pixels,
     scratch: &mut Scratch,
@@ -355,9 +366,9 @@ pub(super) unsafe fn composite_lanes<const PRE: bool>(
                 break;
             }
             let ended = if PRE {
-                lanes.segment_step(c, &inv, kept, stats, guard)
+                lanes.segment_step::<CUBIC>(c, &inv, kept, stats, guard)
             } else {
-                lanes.step(c, &inv, kept, stats, guard)
+                lanes.step::<CUBIC>(c, &inv, kept, stats, guard)
             };
             if lanes.failed {
                 return false;
@@ -366,7 +377,7 @@ pub(super) unsafe fn composite_lanes<const PRE: bool>(
                 alpha[start + lanes.id[l] as usize] = lanes.alpha[l];
             }
         }
-        finish(c, scratch, &alpha[start..], rgb);
+        finish(c, scratch, &alpha[start..], rgb, guard);
         true
     }
 }

@@ -31,18 +31,17 @@ pub(super) struct Reads {
 /// The CPU must support AVX2 (inlined into [`composite_lanes`]); `ijk` must be
 /// clamped to the field's cells.
 #[inline(always)]
-pub(super) unsafe fn reads_at(
+pub(super) unsafe fn reads_at<const CUBIC: bool>(
     c: &Caster,
     inv: &Invariants,
     (p, ijk, k): ([__m256; 3], [__m256i; 3], __m256i),
-    (mask, memo): (u8, &mut Memo),
+    (mask, memos): (u8, &mut Memos),
     guard: &Guard,
 ) -> Option<Reads> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let (base, brick) = bases(c, inv, ijk, (mask, memo), guard)?;
-        let (fr, uv) = values_at(inv, p, ijk, &base);
+        let ((base, brick), fr, uv) = sample::<CUBIC>(c, inv, (p, ijk), (mask, memos), guard)?;
         let mut r = Reads {
             t: [[0.0; LANES]; 3],
             base,
@@ -97,6 +96,23 @@ pub(super) unsafe fn bases(
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
+        let (index, local) = index_local(inv, ijk);
+        let base = resolve(c, inv, (index, local), (mask, memo), guard)?;
+        let mut bricks = [0i32; LANES];
+        _mm256_storeu_si256(bricks.as_mut_ptr().cast(), index);
+        Some((base, bricks))
+    }
+}
+
+/// The grid index of the brick holding each lane's cell `ijk`, and the cell's corner
+/// voxel's place in the brick's slot.
+///
+/// # Safety
+/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
+#[inline(always)]
+unsafe fn index_local(inv: &Invariants, ijk: [__m256i; 3]) -> (__m256i, __m256i) {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
         const SHIFT: i32 = BRICK_SHIFT as i32;
         let b = axes!(|a| _mm256_srli_epi32::<SHIFT>(ijk[a]));
         let l = axes!(|a| _mm256_and_si256(ijk[a], inv.brick_mask));
@@ -114,6 +130,28 @@ pub(super) unsafe fn bases(
                 _mm256_mullo_epi32(l[2], inv.brick_slice),
             ),
         );
+        (index, local)
+    }
+}
+
+/// Each lane's voxel in the brick pool: the slot of its brick `index` (from `memo`, or
+/// the page table, the brick built now if absent) plus `local`, for the lanes `mask`;
+/// every other lane gets its place in the last slot it used (or the dummy slot 0).
+/// `None` when a brick could not be built.
+///
+/// # Safety
+/// As for [`bases`]: `index` and `local` from [`index_local`] of clamped cells.
+#[inline(always)]
+unsafe fn resolve(
+    c: &Caster,
+    inv: &Invariants,
+    (index, local): (__m256i, __m256i),
+    (mask, memo): (u8, &mut Memo),
+    guard: &Guard,
+) -> Option<[i32; LANES]> {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
         let known = _mm256_cmpeq_epi32(index, _mm256_loadu_si256(memo.index.as_ptr().cast()));
         let mut enter = mask & !(_mm256_movemask_ps(_mm256_castsi256_ps(known)) as u8);
         if enter != 0 {
@@ -137,10 +175,9 @@ pub(super) unsafe fn bases(
             }
         }
         let base = _mm256_add_epi32(_mm256_loadu_si256(memo.off.as_ptr().cast()), local);
-        let (mut out, mut bricks) = ([0i32; LANES], [0i32; LANES]);
+        let mut out = [0i32; LANES];
         _mm256_storeu_si256(out.as_mut_ptr().cast(), base);
-        _mm256_storeu_si256(bricks.as_mut_ptr().cast(), index);
-        Some((out, bricks))
+        Some(out)
     }
 }
 
@@ -239,20 +276,61 @@ pub(super) unsafe fn values_at(
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
+        let fr = fractions(inv, p, ijk);
+        let v = trilinear(inv, base, fr);
+        (fr, table_coordinate(inv, v))
+    }
+}
+
+/// The fractions of positions `p` in their cells `ijk`, clamped to `[0, 1]`
+/// (`Field::locate`'s).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[inline(always)]
+unsafe fn fractions(inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3]) -> [__m256; 3] {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
+        axes!(|a| {
+            let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
+            _mm256_min_ps(_mm256_max_ps(t, inv.zero), inv.one)
+        })
+    }
+}
+
+/// `Lut::position` of the values `v`.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[inline(always)]
+unsafe fn table_coordinate(inv: &Invariants, v: __m256) -> __m256 {
+    // SAFETY: the caller runs with AVX2 (this function's contract).
+    unsafe {
         let Invariants {
             zero,
-            one,
             lut_lo,
             lut_scale,
             half,
             lut_max,
-            values,
             ..
         } = *inv;
-        let fr = axes!(|a| {
-            let t = _mm256_sub_ps(p[a], _mm256_cvtepi32_ps(ijk[a]));
-            _mm256_min_ps(_mm256_max_ps(t, zero), one)
-        });
+        let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
+        _mm256_min_ps(_mm256_max_ps(x, zero), lut_max)
+    }
+}
+
+/// The trilinear values of the cells whose corner voxels are `base` in the brick pool,
+/// at fractions `fr`, with the reference loop's arithmetic (`field::trilinear`).
+///
+/// # Safety
+/// The CPU must support AVX2; `base` from [`bases`] (or [`resolve`]) of clamped cells,
+/// with its guard alive.
+#[inline(always)]
+unsafe fn trilinear(inv: &Invariants, base: &[i32; LANES], fr: [__m256; 3]) -> __m256 {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let values = inv.values;
         // SAFETY: each base is a slot's voxel whose cell lies in the slot, so base +
         // BRICK_SLICE + BRICK_ROW + 1 is inside the pool.
         let mut ptrs = [values; LANES];
@@ -270,9 +348,135 @@ pub(super) unsafe fn values_at(
         let x11 = lerp(c011, c111, fr[0]);
         let y0 = lerp(x00, x10, fr[1]);
         let y1 = lerp(x01, x11, fr[1]);
-        let v = lerp(y0, y1, fr[2]);
-        let x = _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(v, lut_lo), lut_scale), half);
-        (fr, _mm256_min_ps(_mm256_max_ps(x, zero), lut_max))
+        lerp(y0, y1, fr[2])
+    }
+}
+
+/// The brick look-ups of the cells a sample reads: its own cell's (for the kept
+/// sample's record) and, for the tricubic filter, those of its eight fetches
+/// ([`cubic`]), each lane's last brick per fetch.
+#[derive(Default)]
+pub(super) struct Memos {
+    pub(super) cell: Memo,
+    pub(super) fetch: [Memo; 8],
+}
+
+/// The tricubic B-spline at positions `p` (cells `ijk`, clamped, fractions `fr`) for
+/// the lanes `mask`: Sigg and Hadwiger's eight trilinear fetches (`field::cubic`),
+/// each one [`trilinear`] read of eight lanes, with the scalar `Field::fetched`'s
+/// arithmetic (no FMA). Every fetch lies in one brick (its cell's), so the block of
+/// 4^3 taps may span bricks without a special case; clamp-to-edge comes from clamping
+/// the fetch positions' cells and fractions as `Field::locate` does. `None` when a
+/// brick could not be built.
+///
+/// # Safety
+/// The CPU must support AVX2; `ijk` clamped to the field's cells; `memos` filled under
+/// `guard`.
+#[inline(always)]
+unsafe fn cubic(
+    c: &Caster,
+    inv: &Invariants,
+    (ijk, fr): ([__m256i; 3], [__m256; 3]),
+    (mask, memos): (u8, &mut [Memo; 8]),
+    guard: &Guard,
+) -> Option<__m256> {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let set = _mm256_set1_ps;
+        let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+        // Per axis, the two fetches: their cells' parts of the brick index and of the
+        // voxel offset, their fractions and weights (`Field::fetched`'s `pairs`).
+        let mut idx = [[_mm256_setzero_si256(); 2]; 3];
+        let mut loc = [[_mm256_setzero_si256(); 2]; 3];
+        let mut frac = [[inv.zero; 2]; 3];
+        let mut wt = [[inv.zero; 2]; 3];
+        for a in 0..3 {
+            let t = fr[a];
+            let s = sub(inv.one, t);
+            let (t2, t3) = (mul(t, t), mul(mul(t, t), t));
+            let six = set(6.0);
+            let w0 = _mm256_div_ps(mul(mul(s, s), s), six);
+            let w1 = _mm256_div_ps(add(sub(mul(set(3.0), t3), mul(six, t2)), set(4.0)), six);
+            let w2 = _mm256_div_ps(
+                add(
+                    add(add(mul(set(-3.0), t3), mul(set(3.0), t2)), mul(set(3.0), t)),
+                    inv.one,
+                ),
+                six,
+            );
+            let w3 = _mm256_div_ps(t3, six);
+            let i = _mm256_cvtepi32_ps(ijk[a]);
+            let (g0, g1) = (add(w0, w1), add(w2, w3));
+            let h = [
+                add(sub(i, inv.one), _mm256_div_ps(w1, g0)),
+                add(add(i, inv.one), _mm256_div_ps(w3, g1)),
+            ];
+            wt[a] = [g0, g1];
+            for (n, &x) in h.iter().enumerate() {
+                let cell =
+                    _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, inv.zero), inv.hi[a]));
+                let tf = sub(x, _mm256_cvtepi32_ps(cell));
+                frac[a][n] = _mm256_min_ps(_mm256_max_ps(tf, inv.zero), inv.one);
+                const SHIFT: i32 = BRICK_SHIFT as i32;
+                let b = _mm256_srli_epi32::<SHIFT>(cell);
+                let l = _mm256_and_si256(cell, inv.brick_mask);
+                (idx[a][n], loc[a][n]) = match a {
+                    0 => (b, l),
+                    1 => (
+                        _mm256_mullo_epi32(inv.bdx, b),
+                        _mm256_mullo_epi32(l, inv.brick_row),
+                    ),
+                    _ => (
+                        _mm256_mullo_epi32(inv.bdx, _mm256_mullo_epi32(inv.bdy, b)),
+                        _mm256_mullo_epi32(l, inv.brick_slice),
+                    ),
+                };
+            }
+        }
+        let mut sum = inv.zero;
+        for (f, memo) in memos.iter_mut().enumerate() {
+            let [x, y, z] = [f & 1, (f >> 1) & 1, f >> 2];
+            let index = _mm256_add_epi32(idx[0][x], _mm256_add_epi32(idx[1][y], idx[2][z]));
+            let local = _mm256_add_epi32(loc[0][x], _mm256_add_epi32(loc[1][y], loc[2][z]));
+            let base = resolve(c, inv, (index, local), (mask, memo), guard)?;
+            let v = trilinear(inv, &base, [frac[0][x], frac[1][y], frac[2][z]]);
+            let w = mul(mul(wt[0][x], wt[1][y]), wt[2][z]);
+            sum = add(sum, mul(w, v));
+        }
+        Some(sum)
+    }
+}
+
+/// The samples at positions `p` (cells `ijk`, clamped) for the lanes `mask`: their
+/// corner voxels and bricks ([`bases`]), fractions, and table coordinates, of the
+/// trilinear value or, with `CUBIC`, of the tricubic B-spline ([`cubic`]). `None` when
+/// a brick could not be built.
+///
+/// # Safety
+/// The CPU must support AVX2; `ijk` clamped to the field's cells; `memos` filled under
+/// `guard`.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+unsafe fn sample<const CUBIC: bool>(
+    c: &Caster,
+    inv: &Invariants,
+    (p, ijk): ([__m256; 3], [__m256i; 3]),
+    (mask, memos): (u8, &mut Memos),
+    guard: &Guard,
+) -> Option<(([i32; LANES], [i32; LANES]), [__m256; 3], __m256)> {
+    // SAFETY: this function's `# Safety` contract, which its callers uphold,
+    // covers every unsafe operation below (CPU features, pointer ranges).
+    unsafe {
+        let (base, brick) = bases(c, inv, ijk, (mask, &mut memos.cell), guard)?;
+        let (fr, uv) = if CUBIC {
+            let fr = fractions(inv, p, ijk);
+            let v = cubic(c, inv, (ijk, fr), (mask, &mut memos.fetch), guard)?;
+            (fr, table_coordinate(inv, v))
+        } else {
+            values_at(inv, p, ijk, &base)
+        };
+        Some(((base, brick), fr, uv))
     }
 }
 
@@ -283,18 +487,17 @@ pub(super) unsafe fn values_at(
 /// # Safety
 /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
 #[inline(always)]
-pub(super) unsafe fn probe(
+pub(super) unsafe fn probe<const CUBIC: bool>(
     c: &Caster,
     inv: &Invariants,
     (p, ijk): ([__m256; 3], [__m256i; 3]),
-    (mask, memo): (u8, &mut Memo),
+    (mask, memos): (u8, &mut Memos),
     guard: &Guard,
 ) -> Option<Probe> {
     // SAFETY: this function's `# Safety` contract, which its callers uphold,
     // covers every unsafe operation below (CPU features, pointer ranges).
     unsafe {
-        let (base, brick) = bases(c, inv, ijk, (mask, memo), guard)?;
-        let (fr, uv) = values_at(inv, p, ijk, &base);
+        let ((base, brick), fr, uv) = sample::<CUBIC>(c, inv, (p, ijk), (mask, memos), guard)?;
         let mut li = [0i32; LANES];
         _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
         let mut opaque = 0u8;
