@@ -1,9 +1,10 @@
 //! Adapters: listing them, choosing one, and the errors of a device that cannot run
 //! glint's shaders.
 
-use wgpu::{Backends, DeviceType, DownlevelFlags};
+use std::sync::Weak;
 
-use crate::local::FieldCache;
+use glint_volume::Field;
+use wgpu::{Backends, DeviceType, DownlevelFlags};
 
 /// Why the GPU back end cannot run: each variant one line for the user.
 #[derive(Debug, thiserror::Error)]
@@ -171,7 +172,7 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        let local = crate::local::pipeline(&device);
+        let local = pipeline(&device);
         Ok(Gpu {
             summary,
             device,
@@ -251,4 +252,28 @@ impl Gpu {
         staging.unmap();
         Ok(bytes)
     }
+}
+
+/// A field's textures on the device, kept while the same field is rendered.
+pub(crate) struct FieldCache {
+    pub(crate) field: Weak<Field>,
+    pub(crate) values: wgpu::TextureView,
+    pub(crate) gradients: wgpu::TextureView,
+    pub(crate) gradient_scale: f32,
+}
+
+/// The `local` compute pipeline (its bind group layout derived from the shader).
+pub(crate) fn pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("glint local"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("local.wgsl").into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("glint local"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    })
 }

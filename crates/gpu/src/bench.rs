@@ -38,7 +38,7 @@ pub fn bench_lobes(
     let bytes = u64::from(count) * 4;
     gpu.need(
         "the largest storage buffer binding",
-        u64::from(gpu.limits.max_storage_buffer_binding_size),
+        gpu.limits.max_storage_buffer_binding_size,
         bytes,
     )?;
     let device = &gpu.device;

@@ -2,14 +2,14 @@
 //! quantised gradients Rgba16Sint, exactly the bricks' data), the lookup table and
 //! the frame's numbers in buffers, one compute invocation per pixel (`local.wgsl`).
 
-use std::sync::{Arc, Weak};
+use std::sync::Arc;
 
 use glint_core::{Image, RenderMode, RenderStats, Shader};
 use glint_lobe::{Geometry, LobeKind, Specular};
 use glint_volume::{Classification, Field, FrameSettings, LocalMarch};
 use wgpu::util::DeviceExt;
 
-use crate::adapter::{Gpu, GpuError};
+use crate::adapter::{FieldCache, Gpu, GpuError};
 
 /// Pixels per workgroup side (`@workgroup_size(8, 8, 1)` in the shader).
 const GROUP: u32 = 8;
@@ -20,30 +20,6 @@ const PARAM_WORDS: usize = 4 * (15 + 2 + 8);
 
 /// Planes of the volume uploaded per `write_texture` (bounds the staging memory).
 const UPLOAD_PLANES: usize = 16;
-
-/// A field's textures on the device, kept while the same field is rendered.
-pub(crate) struct FieldCache {
-    field: Weak<Field>,
-    values: wgpu::TextureView,
-    gradients: wgpu::TextureView,
-    gradient_scale: f32,
-}
-
-/// The `local` compute pipeline (its bind group layout derived from the shader).
-pub(crate) fn pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("glint local"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("local.wgsl").into()),
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("glint local"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    })
-}
 
 /// The lobe as the shader's `[form, n, a, v]`; an error for a table (the `hw` lobe).
 fn lobe_words(specular: &Specular) -> Result<[f32; 4], GpuError> {
@@ -147,7 +123,7 @@ impl Gpu {
         let out_size = u64::from(w) * u64::from(h) * 16;
         self.need(
             "the largest storage buffer binding",
-            u64::from(self.limits.max_storage_buffer_binding_size),
+            self.limits.max_storage_buffer_binding_size,
             out_size,
         )?;
         let scopes = self.scopes();

@@ -33,7 +33,7 @@ pub enum Device {
     /// none or the scene needs what the GPU back end does not render yet.
     Gpu,
     /// A hardware GPU (discrete or integrated) when there is one and the scene is one
-    /// it renders; otherwise the CPU, with a note ([`Renderer::device_notes`]).
+    /// it renders; otherwise the CPU, with a note ([`crate::Renderer::device_notes`]).
     Auto,
 }
 
