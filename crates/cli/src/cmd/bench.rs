@@ -117,7 +117,8 @@ fn gpu_lobes(args: GpuLobesArgs) -> anyhow::Result<()> {
 }
 
 #[cfg(not(feature = "gpu"))]
-fn gpu_lobes(_args: GpuLobesArgs) -> anyhow::Result<()> {
+fn gpu_lobes(args: GpuLobesArgs) -> anyhow::Result<()> {
+    let _ = (args.n, args.count, args.reps, args.runs);
     bail!("this glint was built without its `gpu` feature: no GPU back end")
 }
 

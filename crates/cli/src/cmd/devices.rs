@@ -1,10 +1,9 @@
 //! `glint info --devices`: the GPU adapters the GPU back end can use (docs/gpu.md).
 
-use std::fmt::Write as _;
-
 /// The adapters as text (one line each) or JSON (an array of objects).
 #[cfg(feature = "gpu")]
 pub fn report(json: bool) -> anyhow::Result<String> {
+    use std::fmt::Write as _;
     let adapters = glint_render::gpu::adapters();
     if json {
         let list: Vec<serde_json::Value> = adapters
