@@ -239,6 +239,23 @@ mod tests {
     }
 
     #[test]
+    fn devices_are_listed_as_text_and_json_and_a_file_or_devices_is_required() {
+        let cli = Cli::try_parse_from(["info", "--devices"]).unwrap();
+        assert!(cli.args.devices && cli.args.file.is_none());
+        let text = super::super::devices::report(false).unwrap();
+        let list: Value =
+            serde_json::from_str(&super::super::devices::report(true).unwrap()).unwrap();
+        let list = list.as_array().unwrap();
+        // One line per adapter, or one line saying there is none.
+        assert_eq!(text.lines().count(), list.len().max(1), "{text}");
+        for a in list {
+            assert!(a["name"].is_string() && a["max_texture_3d"].is_u64(), "{a}");
+        }
+        assert!(Cli::try_parse_from(["info"]).is_err());
+        assert!(Cli::try_parse_from(["info", "v.nii", "--devices"]).is_err());
+    }
+
+    #[test]
     fn nifti_text_and_json() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("v.nii.gz");
