@@ -16,7 +16,7 @@ use crate::json;
 /// unset `Option`, else the field's default. `__getattr__` and `__dir__` both read
 /// this one list; crates/python/tests/test_render.py checks it against the Rust
 /// struct's fields, the type stub and the defaults.
-const OMITTED: [(&str, &str); 16] = [
+const OMITTED: [(&str, &str); 17] = [
     ("iso", "null"),
     ("preset", "null"),
     ("transfer_function", "null"),
@@ -34,6 +34,7 @@ const OMITTED: [(&str, &str); 16] = [
     ("exposure", "0.0"),
     ("tone", "\"linear\""),
     ("filter", "\"trilinear\""),
+    ("device", "\"cpu\""),
 ];
 
 /// A render, described completely (volume, classification, lobe, lights, camera, size).

@@ -61,6 +61,7 @@
 mod animation;
 mod camera_path;
 pub mod denoise;
+mod device;
 mod hwlobe;
 mod labels;
 mod meshes;
@@ -86,6 +87,9 @@ pub use glint_core::{
 };
 pub use glint_core::{tone_map, FloatFormat, Focus, Tone};
 pub use glint_core::{Clip, ClipPlane, CropBox, HalfSpace};
+/// The GPU back end (feature `gpu`): adapters, the device, the lobe micro-benchmark.
+#[cfg(feature = "gpu")]
+pub use glint_gpu as gpu;
 pub use glint_io::ReadOptions;
 pub use glint_labels as label_maps;
 pub use glint_mesh as mesh;
@@ -108,8 +112,8 @@ pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHIN
 pub use pick::{image_point, Pick, PickedObject};
 pub use renderer::{InMemory, Rendered, Renderer};
 pub use scene::{
-    load_environment, Derived, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved,
-    Scene, SceneLobe, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS,
+    load_environment, Derived, Device, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan,
+    Resolved, Scene, SceneLobe, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS,
     DEFAULT_SPP, ENVIRONMENT_NAMES, MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
 };
 pub use turntable::{Turntable, TurntableWritten};

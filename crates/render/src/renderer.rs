@@ -194,6 +194,8 @@ pub struct Renderer {
     /// function of its grey samples. (A volume read with
     /// [`ReadOptions::colour`] off has none and renders grey.)
     colours: Option<Arc<ColourVolume>>,
+    /// The GPU of `--device gpu` and `auto` frames (crate::device).
+    gpu: crate::device::GpuSlot,
 }
 
 impl Renderer {
@@ -271,6 +273,7 @@ impl Renderer {
             environment: EnvCache::default(),
             cancel: None,
             colours: None,
+            gpu: Default::default(),
         }
     }
 
@@ -638,6 +641,10 @@ impl Renderer {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Image, RenderError> {
         let (class, shader, frame) = (v.class, v.shader, v.frame);
+        let on = (&**class, shader, frame, v.meshes.is_some());
+        if let Some(image) = self.gpu.frame(scene.device, on, transport)? {
+            return Ok(image);
+        }
         let env = self.environment.get(&scene.lighting)?;
         // Every model stops when the flag is set ([`Renderer::set_cancel`]).
         let stop = self.cancel.clone();
@@ -844,6 +851,11 @@ impl Renderer {
     /// samples (benchmarks repeating one frame).
     pub fn forget_paths(&mut self) {
         self.paths = None;
+    }
+
+    /// Notes, each once, on `--device auto` frames rendered on the CPU instead.
+    pub fn device_notes(&mut self) -> Vec<String> {
+        self.gpu.take_notes()
     }
 
     /// Samples per pixel of the path-traced image the renderer holds (0 when it holds

@@ -41,6 +41,7 @@
 
 mod classification;
 mod clip;
+mod device;
 mod field;
 mod frames;
 mod light;
@@ -53,6 +54,7 @@ pub use classification::{
     Classification, ClassifySettings, ColourVolume, Lut, Sampling, TfFormat, TransferFunction,
     TransferFunctionFile, WindowLevel, LUT_SIZE,
 };
+pub use device::{LocalMarch, VoxelGrids};
 pub use field::{
     memory_limit, open_zarr, set_memory_limit, Field, Filter, Prefilter, Source, MACRO_CELL,
     MAX_FIELD_VOXELS, MIN_BRICK_SLOTS, PROCESS_OVERHEAD,

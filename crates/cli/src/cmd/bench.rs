@@ -14,6 +14,29 @@ pub enum Command {
     /// Evaluations per second of every lobe's batch kernel, single thread, against
     /// libm powf (cos^n) and a plain copy of the same bytes.
     Lobes(LobesArgs),
+    /// Lobe evaluations per second on the GPU adapter (`--device gpu`'s: any adapter,
+    /// lavapipe included): K_v for v = 3..=6 against pow as GPUs compute it,
+    /// exp2(n log2 c) (docs/gpu.md).
+    GpuLobes(GpuLobesArgs),
+}
+
+/// Arguments of `glint bench gpu-lobes`.
+#[derive(clap::Args)]
+#[command(after_help = "Examples:\n  glint bench gpu-lobes\n  \
+glint bench gpu-lobes --count 4194304 --reps 1024   (a datacenter GPU)")]
+pub struct GpuLobesArgs {
+    /// Shininess exponent n of cos^n (0..=10000).
+    #[arg(long, default_value_t = 100.0)]
+    n: f64,
+    /// Cosines in the buffer (one invocation each), 64..=16777216.
+    #[arg(long, default_value_t = 1 << 20)]
+    count: u32,
+    /// Lobe evaluations per invocation, 1..=65536.
+    #[arg(long, default_value_t = 256)]
+    reps: u32,
+    /// Timed dispatches per variant (the fastest is reported), after one warm-up.
+    #[arg(long, default_value_t = 3)]
+    runs: u32,
 }
 
 /// Largest array length accepted by `--len`: 16 Mi elements (64 MiB per array; the
@@ -52,7 +75,51 @@ pub struct LobesArgs {
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Lobes(args) => lobes(args),
+        Command::GpuLobes(args) => gpu_lobes(args),
     }
+}
+
+#[cfg(feature = "gpu")]
+fn gpu_lobes(args: GpuLobesArgs) -> anyhow::Result<()> {
+    use glint_render::gpu::{bench_lobes, Choice, Gpu};
+    if !(64..=1 << 24).contains(&args.count) || !(1..=65536).contains(&args.reps) {
+        bail!(
+            "--count {} --reps {}: expected 64..=16777216 and 1..=65536",
+            args.count,
+            args.reps
+        );
+    }
+    if !(1..=100).contains(&args.runs) {
+        bail!("invalid --runs {}: expected 1..=100", args.runs);
+    }
+    let gpu = Gpu::open(Choice::Any)?;
+    let a = gpu.adapter();
+    println!(
+        "# {} ({}, {}, driver {}); n = {}; {} cosines x {} evaluations; fastest of {}",
+        a.name, a.backend, a.device_type, a.driver, args.n, args.count, args.reps, args.runs
+    );
+    let rates = bench_lobes(&gpu, args.n, args.count, args.reps, args.runs)?;
+    let pow = rates.first().map_or(f64::NAN, |r| r.evals_per_s);
+    println!(
+        "{:<6} {:>14} {:>8} {:>10}",
+        "lobe", "evals/s", "vs pow", "mean"
+    );
+    for r in &rates {
+        println!(
+            "{:<6} {:>14.4e} {:>7.2}x {:>10.6}",
+            r.name,
+            r.evals_per_s,
+            r.evals_per_s / pow,
+            r.mean
+        );
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "gpu"))]
+fn gpu_lobes(args: GpuLobesArgs) -> anyhow::Result<()> {
+    let _ = (args.n, args.count, args.reps, args.runs);
+    bail!("this glint was built without its `gpu` feature: no GPU back end")
 }
 
 struct Row {

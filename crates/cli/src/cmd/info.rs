@@ -18,11 +18,17 @@ use glint_io::{Endian, Format, RawParams, ReadOptions, ScalarType};
     glint info aseg.mgz --labels     (labels, names, voxels, ml)\n  \
     glint info mask.nii.gz --labels --label-table totalsegmentator\n  \
     glint info mask.nii.gz --labels --label-table t.csv --all-labels  (absent ones too)\n  \
-    glint info head.raw --raw-dims 256,256,128 --raw-type u16 --raw-spacing 0.9,0.9,1.5")]
+    glint info head.raw --raw-dims 256,256,128 --raw-type u16 --raw-spacing 0.9,0.9,1.5\n  \
+    glint info --devices             (the GPU adapters, for --device gpu|auto)")]
 pub struct Args {
     /// The file (.nii, .nii.gz, .nrrd, .nhdr, .dcm, DICOM directory, .stl, .obj, .ply,
     /// .gii, .gii.gz, or raw samples with --raw-dims).
-    file: PathBuf,
+    #[arg(required_unless_present = "devices")]
+    file: Option<PathBuf>,
+    /// List the GPU adapters instead (name, backend, device type, driver, largest 3D
+    /// texture side, compute), for `--device gpu|auto` (docs/gpu.md).
+    #[arg(long, conflicts_with = "file")]
+    devices: bool,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -75,8 +81,21 @@ pub struct Args {
     all_labels: bool,
 }
 
+impl Args {
+    /// The file (clap requires it unless --devices, which `run` answers first).
+    fn file(&self) -> &std::path::Path {
+        self.file
+            .as_deref()
+            .expect("clap requires FILE without --devices")
+    }
+}
+
 /// Runs `glint info`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.devices {
+        print!("{}", super::devices::report(args.json)?);
+        return Ok(());
+    }
     print!("{}", report(&args)?);
     Ok(())
 }
@@ -84,17 +103,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// The text or JSON `glint info` prints.
 fn report(args: &Args) -> anyhow::Result<String> {
     let options = read_options(args)?;
-    let is_mesh = options.raw.is_none() && Format::guess(&args.file).is_some_and(Format::is_mesh);
-    if options.raw.is_none() && Format::guess(&args.file) == Some(Format::Raw) {
+    let is_mesh = options.raw.is_none() && Format::guess(args.file()).is_some_and(Format::is_mesh);
+    if options.raw.is_none() && Format::guess(args.file()) == Some(Format::Raw) {
         bail!(
             "{}: a raw file needs --raw-dims (and --raw-type, --raw-spacing)",
-            args.file.display()
+            args.file().display()
         );
     }
     if is_mesh && args.labels {
         bail!(
             "{}: --labels lists a label volume's labels; this is a mesh",
-            args.file.display()
+            args.file().display()
         );
     }
     if is_mesh {
@@ -141,12 +160,12 @@ fn mesh_report(args: &Args) -> anyhow::Result<String> {
     let mut out = String::new();
     // A GIFTI file is read once for its surface and its overlays; one of per-vertex data
     // only (sulcal depth, a parcellation) has no surface, just the overlays.
-    let (file, overlays) = if Format::guess(&args.file) == Some(Format::Gifti) {
-        glint_io::gifti::read_with_data(&args.file)?
+    let (file, overlays) = if Format::guess(args.file()) == Some(Format::Gifti) {
+        glint_io::gifti::read_with_data(args.file())?
     } else {
-        (Some(glint_io::open_mesh(&args.file)?), Vec::new())
+        (Some(glint_io::open_mesh(args.file())?), Vec::new())
     };
-    let info = FileInfo::mesh(&args.file, file.as_ref(), &overlays);
+    let info = FileInfo::mesh(args.file(), file.as_ref(), &overlays);
     if args.json {
         out = serde_json::to_string_pretty(&info.to_json())? + "\n";
     } else {
@@ -158,8 +177,9 @@ fn mesh_report(args: &Args) -> anyhow::Result<String> {
 /// The report of a volume (with a DICOM directory's listing and, asked for, its labels).
 fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
     let mut out = String::new();
-    let reading = super::spinner::Spinner::start(format!("reading {}", args.file.display()), false);
-    let file = glint_io::open_volume(&args.file, options)?;
+    let reading =
+        super::spinner::Spinner::start(format!("reading {}", args.file().display()), false);
+    let file = glint_io::open_volume(args.file(), options)?;
     drop(reading);
     // Assumed geometry is worth a warning even when the output goes to a script.
     for n in file
@@ -167,14 +187,14 @@ fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
         .iter()
         .filter(|n| n.starts_with("geometry assumed") || n.contains("chunks missing"))
     {
-        eprintln!("glint: {}: {n}", args.file.display());
+        eprintln!("glint: {}: {n}", args.file().display());
     }
     // A DICOM directory: every series and every object not read, too.
-    let listing = match args.file.is_dir() && file.format == Format::Dicom {
-        true => Some(glint_io::dicom::list(&args.file, options)?),
+    let listing = match args.file().is_dir() && file.format == Format::Dicom {
+        true => Some(glint_io::dicom::list(args.file(), options)?),
         false => None,
     };
-    let info = FileInfo::volume(&args.file, &file, listing.as_ref());
+    let info = FileInfo::volume(args.file(), &file, listing.as_ref());
     let labels = super::info_labels::Listing {
         table: args.label_table.as_deref(),
         all: args.all_labels,
@@ -182,13 +202,13 @@ fn volume_report(args: &Args, options: &ReadOptions) -> anyhow::Result<String> {
     if args.json {
         let mut v = info.to_json();
         if args.labels {
-            super::info_labels::add_json(&mut v, &args.file, &file.volume, &labels)?;
+            super::info_labels::add_json(&mut v, args.file(), &file.volume, &labels)?;
         }
         out = serde_json::to_string_pretty(&v)? + "\n";
     } else {
         write!(out, "{info}")?;
         if args.labels {
-            super::info_labels::print(&mut out, &args.file, &file.volume, &labels)?;
+            super::info_labels::print(&mut out, args.file(), &file.volume, &labels)?;
         }
     }
     Ok(out)
@@ -216,6 +236,23 @@ mod tests {
         let mut a = argv.to_vec();
         a.push("--json");
         serde_json::from_str(&run(&a).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn devices_are_listed_as_text_and_json_and_a_file_or_devices_is_required() {
+        let cli = Cli::try_parse_from(["info", "--devices"]).unwrap();
+        assert!(cli.args.devices && cli.args.file.is_none());
+        let text = super::super::devices::report(false).unwrap();
+        let list: Value =
+            serde_json::from_str(&super::super::devices::report(true).unwrap()).unwrap();
+        let list = list.as_array().unwrap();
+        // One line per adapter, or one line saying there is none.
+        assert_eq!(text.lines().count(), list.len().max(1), "{text}");
+        for a in list {
+            assert!(a["name"].is_string() && a["max_texture_3d"].is_u64(), "{a}");
+        }
+        assert!(Cli::try_parse_from(["info"]).is_err());
+        assert!(Cli::try_parse_from(["info", "v.nii", "--devices"]).is_err());
     }
 
     #[test]

@@ -5,6 +5,7 @@ pub mod batch;
 pub mod bench;
 pub mod choice;
 pub mod compare;
+pub mod devices;
 pub mod eval;
 pub mod hw;
 pub mod info;

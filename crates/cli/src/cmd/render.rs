@@ -181,6 +181,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    for note in renderer.device_notes() {
+        eprintln!("glint: note: {note}");
+    }
     if args.repeat > 1 {
         print_repeat(&rendered, &mut frames);
     }

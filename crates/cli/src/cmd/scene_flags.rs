@@ -10,9 +10,9 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    Clip, ClipPlane, ColorMap, CropBox, Denoise, Filter, Focus, Input, Light, LightingModel,
-    MeshSpec, Overlay, Phantom, Prefilter, Projection, RenderMode, Sampler, Sampling, Scene,
-    SceneLobe, Tone, TransferFunctionFile, View, WindowLevel,
+    Clip, ClipPlane, ColorMap, CropBox, Denoise, Device, Filter, Focus, Input, Light,
+    LightingModel, MeshSpec, Overlay, Phantom, Prefilter, Projection, RenderMode, Sampler,
+    Sampling, Scene, SceneLobe, Tone, TransferFunctionFile, View, WindowLevel,
 };
 
 use super::choice::choice;
@@ -208,6 +208,11 @@ pub struct SceneFlags {
     /// MNI152 scene) [default: point].
     #[arg(long, value_parser = choice::<Sampling>(Sampling::NAMES.iter().copied()))]
     pub sampling: Option<Sampling>,
+    /// Where frames render: cpu; gpu (any adapter, lavapipe included; an error for
+    /// what it does not render yet: docs/gpu.md); auto (a hardware GPU, else the CPU
+    /// with a note) [default: cpu].
+    #[arg(long, value_parser = choice::<Device>(Device::NAMES.iter().copied()))]
+    pub device: Option<Device>,
     /// The length of matter, in mm, whose opacity the transfer function gives (VTK's
     /// scalar opacity unit distance) [default: one voxel of the smallest spacing].
     #[arg(long, value_name = "MM")]
@@ -358,6 +363,7 @@ impl SceneFlags {
         set(&mut scene.prefilter, self.prefilter);
         set(&mut scene.filter, self.filter);
         set(&mut scene.sampling, self.sampling);
+        set(&mut scene.device, self.device);
         if self.opacity_unit.is_some() {
             scene.opacity_unit = self.opacity_unit;
         }

@@ -142,6 +142,9 @@ class Scene:
     clip: List[Dict[str, Any]]
     crop: Optional[Dict[str, Any]]
     clip_caps: bool
+    # Where frames are rendered (docs/gpu.md); this module's builds have no GPU back
+    # end, so `gpu` is refused and `auto` renders on the CPU.
+    device: Literal["cpu", "gpu", "auto"]
     derived: Optional[Dict[str, Any]]
     def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
 

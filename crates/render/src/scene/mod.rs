@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::labels::LabelSpec;
 use crate::meshes::MeshSpec;
 
+mod device;
 mod envmap;
 mod file;
 mod lighting;
@@ -28,6 +29,7 @@ mod resolve;
 #[cfg(test)]
 mod tests;
 
+pub use device::Device;
 pub(crate) use envmap::EnvCache;
 pub use envmap::{load_environment, ENVIRONMENT_NAMES};
 pub use lighting::{Lighting, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SPP};
@@ -172,6 +174,10 @@ pub struct Scene {
     /// [default: false]. Left out of the JSON while false.
     #[serde(skip_serializing_if = "is_false")]
     pub clip_caps: bool,
+    /// Where frames are rendered ([`Device`]: `cpu`, the default, `gpu` or `auto`).
+    /// Left out of the JSON while `cpu`.
+    #[serde(skip_serializing_if = "Device::is_cpu")]
+    pub device: Device,
     /// Written by a render for other tools (e.g. scripts/bench/bench-vtk.py): the camera
     /// and transfer function that were used, in world units. Ignored on input.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -212,6 +218,7 @@ impl Default for Scene {
             clip: Vec::new(),
             crop: None,
             clip_caps: false,
+            device: Device::Cpu,
             derived: None,
         }
     }

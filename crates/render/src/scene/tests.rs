@@ -982,3 +982,61 @@ fn bad_environment_maps_and_settings_are_one_line_errors() {
         assert!(!msg.contains('\n') && msg.contains(want), "{msg}");
     }
 }
+
+#[test]
+fn the_device_is_cpu_by_default_left_out_of_the_json_and_parsed_by_name() {
+    let scene = small();
+    assert_eq!(scene.device, Device::Cpu);
+    assert!(!scene.to_json().unwrap().contains("device"));
+    let gpu = Scene {
+        device: Device::Gpu,
+        ..small()
+    };
+    let json = gpu.to_json().unwrap();
+    assert!(json.contains("\"device\": \"gpu\""), "{json}");
+    assert_eq!(Scene::from_json(&json).unwrap(), gpu);
+    let bad = json.replace("\"gpu\"", "\"tpu\"");
+    let e = Scene::from_json(&bad).unwrap_err().to_string();
+    assert!(e.contains("tpu") && !e.contains('\n'), "{e}");
+    assert_eq!("AUTO".parse::<Device>().unwrap(), Device::Auto);
+}
+
+#[test]
+fn device_gpu_refuses_what_it_does_not_render_and_auto_falls_back_with_a_note() {
+    let mut renderer = Renderer::open(&small(), &ReadOptions::default()).unwrap();
+    let cpu = renderer.render(&small(), &|_| {}).unwrap().image;
+    // `shadows` is not on the GPU yet: `gpu` is one line naming it, `auto` renders
+    // the CPU's image and says why.
+    let mut shadows = small();
+    shadows.lighting.model = LightingModel::Shadows;
+    let refused = Scene {
+        device: Device::Gpu,
+        ..shadows.clone()
+    };
+    let e = renderer.render(&refused, &|_| {}).unwrap_err().to_string();
+    assert!(
+        e.contains("--device gpu") && e.contains("shadows") && !e.contains('\n'),
+        "{e}"
+    );
+    let auto = Scene {
+        device: Device::Auto,
+        ..shadows.clone()
+    };
+    let got = renderer.render(&auto, &|_| {}).unwrap().image;
+    let want = renderer.render(&shadows, &|_| {}).unwrap().image;
+    assert_eq!(got.rgb, want.rgb);
+    let notes = renderer.device_notes();
+    assert!(notes.iter().any(|n| n.contains("shadows")), "{notes:?}");
+    // Taken: each note is handed out once.
+    assert!(renderer.device_notes().is_empty());
+    // `local` under `auto`: the GPU's frame on a hardware GPU, else (lavapipe, no
+    // adapter, no `gpu` feature) the CPU's image with a note.
+    let auto = Scene {
+        device: Device::Auto,
+        ..small()
+    };
+    let got = renderer.render(&auto, &|_| {}).unwrap().image;
+    if !renderer.device_notes().is_empty() {
+        assert_eq!(got.rgb, cpu.rgb);
+    }
+}

@@ -1,0 +1,259 @@
+//! The `local` model on the GPU: the field as two 3D textures (values R32Float,
+//! quantised gradients Rgba16Sint, exactly the bricks' data), the lookup table and
+//! the frame's numbers in buffers, one compute invocation per pixel (`local.wgsl`).
+
+use std::sync::Arc;
+
+use glint_core::{Image, RenderMode, RenderStats, Shader};
+use glint_lobe::{Geometry, LobeKind, Specular};
+use glint_volume::{Classification, Field, FrameSettings, LocalMarch};
+use wgpu::util::DeviceExt;
+
+use crate::adapter::{FieldCache, Gpu, GpuError};
+
+/// Pixels per workgroup side (`@workgroup_size(8, 8, 1)` in the shader).
+const GROUP: u32 = 8;
+
+/// The shader's `Params` in f32 words (`size` and `dims` as u32 bits): 15 vec4
+/// fields, two vec4<u32> and 8 lights.
+const PARAM_WORDS: usize = 4 * (15 + 2 + 8);
+
+/// Planes of the volume uploaded per `write_texture` (bounds the staging memory).
+const UPLOAD_PLANES: usize = 16;
+
+/// The lobe as the shader's `[form, n, a, v]`; an error for a table (the `hw` lobe).
+fn lobe_words(specular: &Specular) -> Result<[f32; 4], GpuError> {
+    let Some(lobe) = specular.lobe() else {
+        return Err(GpuError::Unsupported(
+            "the GPU back end does not render a specular table (the hw lobe) yet".into(),
+        ));
+    };
+    let n = lobe.n() as f32;
+    Ok(match lobe.kind() {
+        LobeKind::Exact => [0.0, n, 0.0, 0.0],
+        LobeKind::Schlick => [2.0, n, 0.0, 0.0],
+        LobeKind::Gauss => [3.0, n, 0.0, 0.0],
+        LobeKind::EnergyFit | LobeKind::SlopeFit | LobeKind::Minimax => {
+            let a = lobe.coefficient().unwrap_or(0.0) as f32;
+            [1.0, n, a, lobe.v() as f32]
+        }
+    })
+}
+
+/// The shader's `Params` for `m` on a field of `dims` with gradient scale `scale`.
+fn params(
+    m: &LocalMarch,
+    settings: &FrameSettings,
+    dims: [usize; 3],
+    scale: f32,
+) -> Result<Vec<u32>, GpuError> {
+    let shader: &Shader = &m.shader;
+    let mut w: Vec<f32> = Vec::with_capacity(PARAM_WORDS);
+    let v4 = |w: &mut Vec<f32>, a: [f32; 3], b: f32| w.extend([a[0], a[1], a[2], b]);
+    v4(&mut w, m.origin, if m.perspective { 1.0 } else { 0.0 });
+    for axis in m.index_axes.iter().chain(&m.world_axes) {
+        v4(&mut w, *axis, 0.0);
+    }
+    w.extend(m.image_plane);
+    v4(&mut w, m.clip_box.0, m.dt);
+    v4(&mut w, m.clip_box.1, m.termination);
+    w.extend([m.lut_lo, m.lut_scale, scale, m.lut.len() as f32]);
+    let mode = match m.mode {
+        RenderMode::Mip => 1.0,
+        _ => 0.0,
+    };
+    v4(&mut w, m.background, mode);
+    let mat = shader.material();
+    w.extend([
+        mat.ambient,
+        mat.diffuse,
+        mat.specular,
+        f32::from(u8::from(mat.shade)),
+    ]);
+    let lights = shader.world_lights();
+    let geometry = match shader.geometry() {
+        Geometry::Phong => 0.0,
+        Geometry::Blinn => 1.0,
+    };
+    w.extend([
+        shader.gate(),
+        shader.surface_weight(),
+        geometry,
+        lights.len() as f32,
+    ]);
+    w.extend(lobe_words(shader.specular())?);
+    let mut words: Vec<u32> = w.iter().map(|x| x.to_bits()).collect();
+    words.extend([settings.width, settings.height, 0, 0]);
+    words.extend([dims[0] as u32, dims[1] as u32, dims[2] as u32, 0]);
+    for i in 0..8 {
+        let (d, intensity) = lights
+            .get(i)
+            .map_or(([0.0; 3], 0.0), |(d, s)| ([d.x, d.y, d.z], *s));
+        words.extend([d[0], d[1], d[2], intensity].map(f32::to_bits));
+    }
+    debug_assert_eq!(words.len(), PARAM_WORDS);
+    Ok(words)
+}
+
+impl Gpu {
+    /// The `local` frame of `class` for `settings` lit by `shader`, as
+    /// [`Classification::frame`] renders it on the CPU (same rays, samples, lookup
+    /// table, gradients and lighting; floating-point differences only): composite with
+    /// point sampling, or MIP. Errors for what the GPU back end does not render yet
+    /// (pre-integration, iso, tricubic, colour volumes, clips, the hw lobe), for a
+    /// volume past the adapter's 3D texture limit, and for device failures.
+    pub fn render_local(
+        &mut self,
+        class: &Classification,
+        shader: &Shader,
+        settings: &FrameSettings,
+    ) -> Result<Image, GpuError> {
+        let march = class
+            .local_march(shader, settings)
+            .map_err(|e| GpuError::Unsupported(e.to_string()))?;
+        let field = class.field();
+        let dims = field.dims();
+        let side = *dims.iter().max().expect("three dims") as u64;
+        self.need(
+            "the largest 3D texture side",
+            u64::from(self.limits.max_texture_dimension_3d),
+            side,
+        )?;
+        let (w, h) = (settings.width, settings.height);
+        let out_size = u64::from(w) * u64::from(h) * 16;
+        self.need(
+            "the largest storage buffer binding",
+            self.limits.max_storage_buffer_binding_size,
+            out_size,
+        )?;
+        let scopes = self.scopes();
+        self.upload(field)?;
+        let cache = self.field.as_ref().expect("uploaded above");
+        let words = params(&march, settings, dims, cache.gradient_scale)?;
+        let device = &self.device;
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("glint params"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let lut: Vec<f32> = march.lut.iter().flatten().copied().collect();
+        let lut = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("glint lut"),
+            contents: bytemuck::cast_slice(&lut),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let out = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("glint image"),
+            size: out_size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("glint local"),
+            layout: &self.local.get_bind_group_layout(0),
+            entries: &[
+                entry(0, uniform.as_entire_binding()),
+                entry(1, wgpu::BindingResource::TextureView(&cache.values)),
+                entry(2, wgpu::BindingResource::TextureView(&cache.gradients)),
+                entry(3, lut.as_entire_binding()),
+                entry(4, out.as_entire_binding()),
+            ],
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.local);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(w.div_ceil(GROUP), h.div_ceil(GROUP), 1);
+        }
+        self.queue.submit([encoder.finish()]);
+        self.finish(scopes)?;
+        let bytes = self.read(&out, out_size)?;
+        let px: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        Ok(Image {
+            width: w,
+            height: h,
+            rgb: px.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+            alpha: px.iter().map(|p| p[3]).collect(),
+            stats: RenderStats::default(),
+        })
+    }
+
+    /// Uploads `field`'s values and gradients unless they are on the device already.
+    fn upload(&mut self, field: &Arc<Field>) -> Result<(), GpuError> {
+        if let Some(c) = &self.field {
+            if c.field.upgrade().is_some_and(|f| Arc::ptr_eq(&f, field)) {
+                return Ok(());
+            }
+        }
+        // The old textures go first: two fields need not fit at once.
+        self.field = None;
+        let grids = field.voxel_grids();
+        let [nx, ny, nz] = grids.dims;
+        let size = wgpu::Extent3d {
+            width: nx as u32,
+            height: ny as u32,
+            depth_or_array_layers: nz as u32,
+        };
+        let texture = |format, label| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            })
+        };
+        let values = texture(wgpu::TextureFormat::R32Float, "glint values");
+        let gradients = texture(wgpu::TextureFormat::Rgba16Sint, "glint gradients");
+        let plane = nx * ny;
+        for z0 in (0..nz).step_by(UPLOAD_PLANES) {
+            let planes = UPLOAD_PLANES.min(nz - z0);
+            let range = z0 * plane..(z0 + planes) * plane;
+            let write = |t: &wgpu::Texture, bytes: &[u8], texel: usize| {
+                self.queue.write_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: t,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d {
+                            x: 0,
+                            y: 0,
+                            z: z0 as u32,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    bytes,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some((nx * texel) as u32),
+                        rows_per_image: Some(ny as u32),
+                    },
+                    wgpu::Extent3d {
+                        depth_or_array_layers: planes as u32,
+                        ..size
+                    },
+                );
+            };
+            write(
+                &values,
+                bytemuck::cast_slice(&grids.values[range.clone()]),
+                4,
+            );
+            write(&gradients, bytemuck::cast_slice(&grids.gradients[range]), 8);
+        }
+        self.field = Some(FieldCache {
+            field: Arc::downgrade(field),
+            values: values.create_view(&Default::default()),
+            gradients: gradients.create_view(&Default::default()),
+            gradient_scale: grids.gradient_scale,
+        });
+        Ok(())
+    }
+}
+
+fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
+}
