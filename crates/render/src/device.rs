@@ -46,6 +46,20 @@ impl GpuSlot {
         }
     }
 
+    /// A frame the GPU does not render, because of `why`: an error for `gpu`; for
+    /// `auto` a note (kept once) and the CPU.
+    fn decline(
+        &self,
+        device: Device,
+        why: impl std::fmt::Display,
+    ) -> Result<Option<Image>, RenderError> {
+        if device == Device::Gpu {
+            return Err(RenderError::Parameter(format!("--device gpu: {why}")));
+        }
+        self.note(format!("--device auto: {why}; rendering on the CPU"));
+        Ok(None)
+    }
+
     /// The frame of `class` (with meshes or not) on the scene's `device`: `Ok(None)`
     /// when it is rendered on the CPU (`cpu`, or `auto` falling back, with a note),
     /// the GPU's image otherwise; an error for `gpu` when the GPU cannot render it.
@@ -58,16 +72,11 @@ impl GpuSlot {
         if device == Device::Cpu {
             return Ok(None);
         }
-        let refuse = |what: String| -> Result<Option<Image>, RenderError> {
-            Err(RenderError::Parameter(format!("--device gpu: {what}")))
-        };
         if let Some(what) = not_yet(transport, meshes) {
-            let what = format!("the GPU back end does not render {what} yet");
-            if device == Device::Gpu {
-                return refuse(what);
-            }
-            self.note(format!("--device auto: {what}; rendering on the CPU"));
-            return Ok(None);
+            return self.decline(
+                device,
+                format!("the GPU back end does not render {what} yet"),
+            );
         }
         #[cfg(feature = "gpu")]
         {
@@ -76,12 +85,7 @@ impl GpuSlot {
         #[cfg(not(feature = "gpu"))]
         {
             let _ = (class, shader, frame);
-            let what = "this glint was built without its `gpu` feature".to_string();
-            if device == Device::Gpu {
-                return refuse(what);
-            }
-            self.note(format!("--device auto: {what}; rendering on the CPU"));
-            Ok(None)
+            self.decline(device, "this glint was built without its `gpu` feature")
         }
     }
 
@@ -94,17 +98,9 @@ impl GpuSlot {
         frame: &FrameSettings,
     ) -> Result<Option<Image>, RenderError> {
         use glint_gpu::{Choice, Gpu, GpuError};
-        let fall_back = |r: &GpuSlot, e: &GpuError| -> Result<Option<Image>, RenderError> {
-            if device == Device::Gpu {
-                return Err(RenderError::Parameter(format!("--device gpu: {e}")));
-            }
-            r.note(format!("--device auto: {e}; rendering on the CPU"));
-            Ok(None)
-        };
         if self.gpu.is_none() {
             if let (Device::Auto, Some(e)) = (device, &self.unavailable) {
-                self.note(format!("--device auto: {e}; rendering on the CPU"));
-                return Ok(None);
+                return self.decline(device, e);
             }
             let choice = match device {
                 Device::Auto => Choice::Hardware,
@@ -116,7 +112,7 @@ impl GpuSlot {
                     if device == Device::Auto {
                         self.unavailable = Some(e.to_string());
                     }
-                    return fall_back(self, &e);
+                    return self.decline(device, e);
                 }
             }
         }
@@ -127,11 +123,11 @@ impl GpuSlot {
             let e = GpuError::NoHardware {
                 found: gpu.adapter().name.clone(),
             };
-            return fall_back(self, &e);
+            return self.decline(device, e);
         }
         match gpu.render_local(class, shader, frame) {
             Ok(image) => Ok(Some(image)),
-            Err(e) => fall_back(self, &e),
+            Err(e) => self.decline(device, e),
         }
     }
 }
