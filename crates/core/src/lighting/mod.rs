@@ -29,6 +29,8 @@ use crate::camera::Camera;
 use crate::error::RenderError;
 use crate::math::Vec3;
 
+mod area;
+mod area_spec;
 #[cfg(target_arch = "x86_64")]
 mod avx2;
 mod batch;
@@ -42,6 +44,8 @@ mod scratch;
 mod shadowed;
 mod transport;
 
+pub use area::{AreaLight, AreaSample, AreaShape, MAX_AREA_RADIANCE};
+pub use area_spec::{AreaLightSpec, AreaShapeSpec, LightFrame, MAX_AREA_EXTENT, MAX_AREA_LIGHTS};
 pub use batch::ShadeBatch;
 pub use envmap::{
     check_env_size, power_heuristic, EnvMap, EnvSample, MAX_ENV_HEIGHT, MAX_ENV_INTENSITY,
@@ -122,8 +126,16 @@ pub struct Shader {
     /// The lights, relative to the camera.
     relative: Vec<Light>,
     /// World directions towards each light, and their intensities, for the camera the
-    /// shader was last [placed](Shader::placed) for (empty before).
+    /// shader was last [placed](Shader::placed) for (empty before): the directional
+    /// lights, then each area light as the directional light of its irradiance at the
+    /// volume's centre (what `local` and `shadows` take of it).
     lights: Vec<(Vec3, f32)>,
+    /// The scene's area lights and the volume's centre (world mm) they are placed
+    /// about.
+    area: Vec<AreaLightSpec>,
+    anchor: Vec3,
+    /// The area lights in the world for the camera the shader was last placed for.
+    placed_area: Vec<AreaLight>,
     /// Gradient magnitude (value per mm) below which a sample is unshaded; full
     /// shading from twice this value (a linear ramp between).
     gate: f32,
@@ -200,6 +212,9 @@ impl Shader {
             material,
             relative: lights,
             lights: Vec::new(),
+            area: Vec::new(),
+            anchor: Vec3::ZERO,
+            placed_area: Vec::new(),
             gate,
             anisotropy: 0.0,
             surface_weight: 1.0,
@@ -207,16 +222,64 @@ impl Shader {
         })
     }
 
-    /// This shader with its lights placed in the world for `camera`.
+    /// This shader with its lights placed in the world for `camera`: the directional
+    /// lights, and the area lights (each also as the directional light of its
+    /// irradiance at the volume's centre, [`AreaLight::irradiance`], for `local` and
+    /// `shadows`).
     pub fn placed(&self, camera: &Camera) -> Shader {
+        let placed_area: Vec<AreaLight> = (self.area.iter())
+            .filter_map(|a| a.place(camera, self.anchor).ok())
+            .collect();
+        let lights = (self.relative.iter())
+            .map(|l| (l.direction(camera), l.intensity))
+            .chain(placed_area.iter().filter_map(|a| {
+                let (dir, e) = a.irradiance(self.anchor)?;
+                Some((dir, e / std::f32::consts::PI))
+            }))
+            .collect();
         Shader {
-            lights: self
-                .relative
-                .iter()
-                .map(|l| (l.direction(camera), l.intensity))
-                .collect(),
+            lights,
+            placed_area,
             ..self.clone()
         }
+    }
+
+    /// This shader with the scene's area lights, placed about `center` (the volume's
+    /// centre, world mm). Errors for a light [`AreaLightSpec::validate`] refuses, a
+    /// rectangle at the centre, more than [`MAX_AREA_LIGHTS`], or more than
+    /// [`MAX_LIGHTS`] lights in all.
+    pub fn with_area_lights(
+        mut self,
+        area: Vec<AreaLightSpec>,
+        center: Vec3,
+    ) -> Result<Shader, RenderError> {
+        if area.len() > MAX_AREA_LIGHTS || area.len() + self.relative.len() > MAX_LIGHTS {
+            return Err(RenderError::Parameter(format!(
+                "{} area lights and {} lights: at most {MAX_AREA_LIGHTS} area lights and {MAX_LIGHTS} in all",
+                area.len(),
+                self.relative.len()
+            )));
+        }
+        let probe = Camera::frame(&Default::default(), center, 1.0, 1, 1)?;
+        for a in &area {
+            a.place(&probe, center)?;
+        }
+        self.area = area;
+        self.anchor = center;
+        Ok(self)
+    }
+
+    /// The area lights in the world, for the camera the shader was
+    /// [placed](Shader::placed) for (empty before).
+    pub fn area_lights(&self) -> &[AreaLight] {
+        &self.placed_area
+    }
+
+    /// The directional lights alone among [`Shader::world_lights`] (not the area
+    /// lights' directional stand-ins): what `path` lights by next-event estimation
+    /// besides the area lights themselves.
+    pub fn directional_lights(&self) -> &[(Vec3, f32)] {
+        &self.lights[..self.relative.len().min(self.lights.len())]
     }
 
     /// The specular term.
