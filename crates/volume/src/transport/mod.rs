@@ -23,6 +23,7 @@ use std::time::Duration;
 
 use glint_core::RenderError;
 
+mod arealight;
 mod envlight;
 mod occluders;
 mod path;
@@ -30,6 +31,8 @@ mod rng;
 mod shadows;
 mod tracking;
 
+#[cfg(test)]
+mod area_tests;
 #[cfg(test)]
 mod tests;
 

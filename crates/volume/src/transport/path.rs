@@ -312,6 +312,8 @@ pub(crate) struct PathTracer<'a> {
     pub(crate) env_map: Option<&'a EnvMap>,
     /// How the map lights the paths (MIS but in tests).
     pub(crate) env_strategy: EnvStrategy,
+    /// How the shader's area lights light the paths (MIS but in tests).
+    pub(crate) area_strategy: EnvStrategy,
 }
 
 /// One path's result: radiance, whether the camera ray met matter, scattering events.
@@ -340,7 +342,7 @@ impl<'a> PathTracer<'a> {
         .map(|e| field.index_direction(e));
         let to_index = |v: Vec3| axes[0] * v.x + axes[1] * v.y + axes[2] * v.z;
         let lights = shader
-            .world_lights()
+            .directional_lights()
             .iter()
             .map(|&(l, i)| (l, to_index(l), i))
             .collect();
@@ -360,6 +362,7 @@ impl<'a> PathTracer<'a> {
             occluders: None,
             env_map: None,
             env_strategy: EnvStrategy::Mis,
+            area_strategy: EnvStrategy::Mis,
         })
     }
 
@@ -398,6 +401,12 @@ impl<'a> PathTracer<'a> {
     #[inline]
     pub(super) fn mesh_hit_from(&self, ray: &IndexRay, t0: f32) -> Option<f32> {
         self.mesh_hit(ray, t0, f32::INFINITY)
+    }
+
+    /// Where `ray` meets the meshes over `[t0, t1]` (its first cell excluded).
+    #[inline]
+    pub(super) fn mesh_hit_between(&self, ray: &IndexRay, t0: f32, t1: f32) -> Option<f32> {
+        self.mesh_hit(ray, t0, t1)
     }
 
     /// The index-space direction of world direction `v`.
@@ -444,27 +453,28 @@ impl<'a> PathTracer<'a> {
         let mut scatter_pdf = 0.0f32;
         loop {
             // Camera rays stop at the meshes' depth (`far`); scattered rays at their
-            // cells, where the path ends: meshes absorb.
-            let mesh = if events > 0 {
-                self.mesh_hit(&ray, t0, t1)
-            } else {
-                None
-            };
+            // cells, where the path ends (meshes absorb), or at an area light.
+            let (mesh, area) = self.stops(&ray, wdir, (t0, t1), events);
+            let end = area.map_or(mesh.unwrap_or(t1), |(_, t)| t);
             // This event's block of dimensions (the sampler's layout, `rng::dims`).
             let block = dims::event(events);
             rng.window(block + dims::FREE_PATH, 2);
-            let hit = self.track.free_path(&ray, t0, mesh.unwrap_or(t1), &mut rng);
+            let hit = self.track.free_path(&ray, t0, end, &mut rng);
             rng.close();
             let Some(t) = hit else {
-                // A scattered path that leaves sees the environment; a camera ray
-                // sees it (opaque) where the scene shows it and no mesh is behind.
+                // A scattered path that meets an area light ends there; one that
+                // leaves sees the environment; a camera ray sees it (opaque) where the
+                // scene shows it and no mesh is behind.
                 let seen = if events == 0 {
                     self.settings.show_environment && t1 == f32::INFINITY
                 } else {
                     mesh.is_none()
                 };
-                if seen {
-                    let l = self.escaped(wdir, events, scatter_pdf);
+                let l = match area {
+                    Some((i, _)) => Some(self.area_escape(i, ray.o, wdir, scatter_pdf)),
+                    None => seen.then(|| self.escaped(wdir, events, scatter_pdf)),
+                };
+                if let Some(l) = l {
                     for c in 0..3 {
                         radiance[c] += beta[c] * l[c];
                     }
@@ -496,6 +506,7 @@ impl<'a> PathTracer<'a> {
                 let at = (p, &bsdf, wo);
                 self.env_direct(map, at, (&mut rng, events - 1), beta, &mut radiance);
             }
+            self.area_direct((p, &bsdf, wo), &mut rng, beta, &mut radiance);
             let u = [
                 rng.dim(block + dims::LOBE),
                 rng.dim(block + dims::DIRECTION),

@@ -19,7 +19,7 @@ use crate::raycast::{FrameSettings, Kernel};
 use crate::Transport;
 
 /// The `path` model's frame: samples added to `img` until it holds `spp` (no meshes).
-fn path_frame(
+pub(super) fn path_frame(
     class: &Classification,
     shader: &Shader,
     frame: &FrameSettings,
@@ -39,7 +39,7 @@ fn path_frame(
 }
 
 /// The `shadows` model's frame lit through `sf`.
-fn shadows_frame(
+pub(super) fn shadows_frame(
     class: &Classification,
     shader: &Shader,
     frame: &FrameSettings,
@@ -60,7 +60,11 @@ fn local_frame(
 }
 
 /// A volume of `dims` and `spacing` whose value at voxel `(i, j, k)` is `f`.
-fn volume(dims: [usize; 3], spacing: [f64; 3], f: impl Fn(f32, f32, f32) -> f32) -> Volume {
+pub(super) fn volume(
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    f: impl Fn(f32, f32, f32) -> f32,
+) -> Volume {
     let mut v = Vec::with_capacity(dims.iter().product());
     for k in 0..dims[2] {
         for j in 0..dims[1] {
@@ -72,14 +76,14 @@ fn volume(dims: [usize; 3], spacing: [f64; 3], f: impl Fn(f32, f32, f32) -> f32)
     Volume::new(dims, spacing, Samples::F32(v)).unwrap()
 }
 
-fn classify(vol: &Volume, tf: &TransferFunction) -> Classification {
+pub(super) fn classify(vol: &Volume, tf: &TransferFunction) -> Classification {
     let field = Arc::new(Field::new(vol).unwrap());
     Classification::new(field, tf, &ClassifySettings::default()).unwrap()
 }
 
 /// White colour at every value; opacity per unit (one voxel of the smallest spacing)
 /// from the `(value, alpha)` points.
-fn white(opacity: &[(f64, f64)]) -> TransferFunction {
+pub(super) fn white(opacity: &[(f64, f64)]) -> TransferFunction {
     TransferFunction::new(opacity.to_vec(), vec![(0.0, [1.0; 3])]).unwrap()
 }
 
@@ -199,7 +203,7 @@ fn delta_and_ratio_tracking_agree_on_a_heterogeneous_medium() {
 }
 
 /// A shader of white diffuse albedo 1 (no ambient, no specular) and the given lights.
-fn albedo_one(lights: Vec<Light>, gate: f32) -> Shader {
+pub(super) fn albedo_one(lights: Vec<Light>, gate: f32) -> Shader {
     let m = Material {
         ambient: 0.0,
         diffuse: 1.0,
@@ -295,7 +299,7 @@ fn a_white_furnace_shows_the_environment() {
 /// A floor slab (value 1, z in 4..=8) under an opaque ball (value 2, radius 6 at
 /// (24, 24, 24)), 48^3 voxels of 1 mm; opacity 0.5 per voxel for the floor, full for
 /// the ball.
-fn ball_over_floor() -> Classification {
+pub(super) fn ball_over_floor() -> Classification {
     let vol = volume([48, 48, 48], [1.0; 3], |i, j, k| {
         let r = ((i - 24.0).powi(2) + (j - 24.0).powi(2) + (k - 24.0).powi(2)).sqrt();
         if r <= 6.0 {
@@ -436,7 +440,7 @@ fn an_opaque_balls_shadow_falls_where_geometry_puts_it() {
     );
 }
 
-fn small_scene() -> (Classification, Shader, FrameSettings) {
+pub(super) fn small_scene() -> (Classification, Shader, FrameSettings) {
     let class = ball_over_floor();
     let shader = Shader::new(
         LobeKind::EnergyFit,
@@ -654,7 +658,7 @@ fn adaptive_sampling_converges_to_the_same_mean_and_is_deterministic() {
 /// The mean radiance (green) of the central 8x8 pixels of a 16x16 `path` frame
 /// looking down (superior) at `vol` under a headlight of intensity 1, single
 /// scattering, no environment, albedo 1, the surface part under `gate`.
-fn single_scattering_from_above(vol: &Volume, opacity: f64, gate: f32) -> f64 {
+pub(super) fn single_scattering_from_above(vol: &Volume, opacity: f64, gate: f32) -> f64 {
     let class = classify(vol, &white(&[(0.0, 0.0), (1.0, opacity)]));
     let frame = FrameSettings {
         width: 16,
