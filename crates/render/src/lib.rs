@@ -77,6 +77,7 @@ pub use animation::{
 };
 pub use camera_path::{CameraKey, CameraPath, CameraPathError, MAX_CAMERA_KEYS};
 pub use denoise::Denoise;
+pub use glint_core::lighting::{AreaLightSpec, AreaShapeSpec, LightFrame};
 pub use glint_core::Legend;
 pub use glint_core::{camera, math};
 pub use glint_core::{

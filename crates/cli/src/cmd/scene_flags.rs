@@ -10,9 +10,10 @@ use glint_io::zarr::Level;
 use glint_io::{Format, Grey, ReadOptions};
 use glint_lobe::Geometry;
 use glint_render::{
-    Clip, ClipPlane, ColorMap, CropBox, Denoise, Device, Filter, Focus, Input, Light,
-    LightingModel, MeshSpec, Overlay, Phantom, Prefilter, Projection, RenderMode, Sampler,
-    Sampling, Scene, SceneLobe, Tone, TransferFunctionFile, View, WindowLevel,
+    AreaLightSpec, AreaShapeSpec, Clip, ClipPlane, ColorMap, CropBox, Denoise, Device, Filter,
+    Focus, Input, Light, LightFrame, LightingModel, MeshSpec, Overlay, Phantom, Prefilter,
+    Projection, RenderMode, Sampler, Sampling, Scene, SceneLobe, Tone, TransferFunctionFile, View,
+    WindowLevel,
 };
 
 use super::choice::choice;
@@ -151,6 +152,15 @@ pub struct SceneFlags {
     /// image's right and top), optionally with an intensity; repeatable.
     #[arg(long = "light", value_name = "AZ,EL[,I]", allow_hyphen_values = true, value_parser = parse_light)]
     pub lights: Vec<Light>,
+    /// Area light (every lighting model; path samples it with soft shadows, local and
+    /// shadows take it as the directional light of its irradiance at the volume's
+    /// centre), repeatable: KIND:SIZE:X,Y,Z:RADIANCE[:FRAME]. KIND sphere (SIZE its
+    /// radius, mm) or rect (SIZE WxH mm, facing the volume's centre); X,Y,Z its centre
+    /// in mm from the volume's centre, along the camera's right, up and towards the
+    /// viewer (FRAME camera, the default: it orbits with the camera) or the world's
+    /// RAS+ axes (FRAME volume); RADIANCE one number or R,G,B. E.g. sphere:20:150,150,250:10
+    #[arg(long = "area-light", value_name = "KIND:SIZE:X,Y,Z:RADIANCE[:FRAME]", allow_hyphen_values = true, value_parser = parse_area_light)]
+    pub area_lights: Vec<AreaLightSpec>,
     /// Turn the headlight off (then give at least one --light).
     #[arg(long)]
     pub no_headlight: bool,
@@ -498,7 +508,8 @@ impl SceneFlags {
                 .lights
                 .retain(|l| (l.azimuth, l.elevation) != (0.0, 0.0));
             let path = scene.lighting.model == LightingModel::Path;
-            if self.lights.is_empty() && scene.lights.is_empty() && !path {
+            let area = !self.area_lights.is_empty() || !scene.lighting.area_lights.is_empty();
+            if self.lights.is_empty() && scene.lights.is_empty() && !path && !area {
                 bail!(
                     "--no-headlight leaves no light: add at least one --light AZ,EL \
                      (path lighting may be lit by its --environment alone)"
@@ -506,6 +517,7 @@ impl SceneFlags {
             }
         }
         scene.lights.extend(self.lights.iter().copied());
+        (scene.lighting.area_lights).extend(self.area_lights.iter().copied());
         Ok(())
     }
 }
@@ -671,6 +683,59 @@ pub fn parse_light(s: &str) -> Result<Light, String> {
         intensity,
     };
     light.validate().map_err(|e| e.to_string())?;
+    Ok(light)
+}
+
+/// Parses `--area-light KIND:SIZE:X,Y,Z:RADIANCE[:FRAME]` (see the flag's help).
+pub fn parse_area_light(s: &str) -> Result<AreaLightSpec, String> {
+    let bad = |why: &str| {
+        format!("'{s}': {why}; expected KIND:SIZE:X,Y,Z:RADIANCE[:FRAME], e.g. sphere:20:150,150,250:10 or rect:80x40:0,0,300:5,5,4:volume")
+    };
+    let nums = |t: &str| -> Result<Vec<f64>, String> {
+        (t.split(',').map(|p| p.trim().parse::<f64>()))
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad(&format!("'{t}' is not a number list")))
+    };
+    let parts: Vec<&str> = s.split(':').collect();
+    let (kind, size, pos, rad, frame) = match parts[..] {
+        [k, s, p, r] => (k, s, p, r, "camera"),
+        [k, s, p, r, f] => (k, s, p, r, f),
+        _ => return Err(bad("four or five fields")),
+    };
+    let shape = match kind {
+        "sphere" => match nums(size)?[..] {
+            [radius] => AreaShapeSpec::Sphere { radius },
+            _ => return Err(bad("a sphere's SIZE is its radius")),
+        },
+        "rect" => match (size.split_once('x')).map(|(w, h)| (nums(w), nums(h))) {
+            Some((Ok(w), Ok(h))) if w.len() == 1 && h.len() == 1 => {
+                AreaShapeSpec::Rect { size: [w[0], h[0]] }
+            }
+            _ => return Err(bad("a rectangle's SIZE is WxH")),
+        },
+        _ => return Err(bad("KIND is sphere or rect")),
+    };
+    let position = match nums(pos)?[..] {
+        [x, y, z] => [x, y, z],
+        _ => return Err(bad("the position is X,Y,Z")),
+    };
+    let radiance = match nums(rad)?[..] {
+        [l] => [l as f32; 3],
+        [r, g, b] => [r as f32, g as f32, b as f32],
+        _ => return Err(bad("RADIANCE is one number or R,G,B")),
+    };
+    let frame = match frame {
+        "camera" => LightFrame::Camera,
+        "volume" => LightFrame::Volume,
+        _ => return Err(bad("FRAME is camera or volume")),
+    };
+    let light = AreaLightSpec {
+        shape,
+        frame,
+        position,
+        radiance,
+    };
+    light.validate().map_err(|e| format!("'{s}': {e}"))?;
     Ok(light)
 }
 
@@ -865,6 +930,38 @@ mod tests {
         assert_eq!((l.azimuth, l.elevation, l.intensity), (-30.0, 15.0, 1.0));
         assert_eq!(parse_light("10,20,0.5").unwrap().intensity, 0.5);
         assert!(parse_light("1,2,3,4").is_err());
+    }
+
+    #[test]
+    fn area_light_parsing() {
+        let l = parse_area_light("sphere:20:150,-150,250:10").unwrap();
+        assert_eq!(l.shape, AreaShapeSpec::Sphere { radius: 20.0 });
+        assert_eq!(
+            (l.frame, l.position, l.radiance),
+            (LightFrame::Camera, [150.0, -150.0, 250.0], [10.0; 3])
+        );
+        let r = parse_area_light("rect:80x40:0,-300,100:5,4,3:volume").unwrap();
+        assert_eq!(r.shape, AreaShapeSpec::Rect { size: [80.0, 40.0] });
+        assert_eq!((r.frame, r.radiance), (LightFrame::Volume, [5.0, 4.0, 3.0]));
+        // Zero, negative or NaN sizes, bad fields: one line each.
+        for bad in [
+            "sphere:0:0,0,300:1",
+            "sphere:-5:0,0,300:1",
+            "sphere:nan:0,0,300:1",
+            "rect:0x40:0,0,300:1",
+            "rect:80:0,0,300:1",
+            "sphere:20:0,0:1",
+            "sphere:20:0,0,300:-1",
+            "sphere:20:0,0,300:1:world",
+            "cone:20:0,0,300:1",
+            "rect:10x10:0,0,0:1",
+        ] {
+            let e = parse_area_light(bad).unwrap_err();
+            assert!(!e.contains('\n') && e.contains(bad), "{bad}: {e}");
+        }
+        let s = scene(&["--area-light", "sphere:20:150,150,250:10", "--no-headlight"]).unwrap();
+        assert_eq!(s.lighting.area_lights.len(), 1);
+        assert!(s.lights.is_empty());
     }
 }
 

@@ -66,7 +66,8 @@ pub struct AreaLightSpec {
 
 impl AreaLightSpec {
     /// Checks the size (more than 0, finite, at most [`MAX_AREA_EXTENT`]), the
-    /// position and the radiance.
+    /// position (a rectangle not at the centre, which it could not face) and the
+    /// radiance.
     pub fn validate(&self) -> Result<(), RenderError> {
         let sizes: &[f64] = match &self.shape {
             AreaShapeSpec::Sphere { radius } => std::slice::from_ref(radius),
@@ -89,6 +90,12 @@ impl AreaLightSpec {
                 "area light at {:?} mm: expected finite offsets of at most {MAX_AREA_EXTENT}",
                 self.position
             )));
+        }
+        if matches!(self.shape, AreaShapeSpec::Rect { .. }) && self.position == [0.0; 3] {
+            return Err(RenderError::Parameter(
+                "a rectangle light at the volume's centre faces no direction: give it an offset"
+                    .into(),
+            ));
         }
         if self
             .radiance

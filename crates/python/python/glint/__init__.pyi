@@ -121,7 +121,10 @@ class Scene:
     # The light-transport model and its settings: {"model": "local"|"shadows"|"path",
     # "spp", "bounces", "seed", "environment", "anisotropy", "occlusion", "sampler",
     # "time_budget", "show_environment", "denoise", "environment_map",
-    # "environment_rotation", "environment_intensity", "surface_weight"}; None: `local`.
+    # "environment_rotation", "environment_intensity", "surface_weight", "area_lights":
+    # [{"shape": {"sphere": {"radius": mm}} | {"rect": {"size": [w, h]}},
+    #   "frame": "volume"|"camera", "position": [x, y, z], "radiance": [r, g, b]}]};
+    # None: `local`.
     lighting: Optional[Dict[str, Any]]
     camera: Dict[str, Any]
     size: List[int]

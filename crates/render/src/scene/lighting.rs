@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use glint_core::lighting::AreaLightSpec;
 use glint_core::{RenderError, RenderMode, MAX_ANISOTROPY};
 use glint_volume::{
     check_spp, check_time_budget, LightingModel, PathSettings, Sampler, ShadowSettings,
@@ -103,6 +104,12 @@ pub struct Lighting {
     /// resolve when not given, so scenes without it keep their JSON.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub surface_weight: Option<f32>,
+    /// Every model: spheres and rectangles of constant radiance placed about the
+    /// volume's centre ([`AreaLightSpec`]); `path` samples them (soft shadows),
+    /// `local` and `shadows` take each as the directional light of its irradiance at
+    /// the volume's centre [default: none]. Left out of the JSON when empty.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub area_lights: Vec<AreaLightSpec>,
 }
 
 /// The light transport of a resolved volume scene.
@@ -204,6 +211,7 @@ impl Lighting {
                 .environment_intensity
                 .filter(|_| keep("environment_intensity")),
             surface_weight: self.surface_weight.filter(|_| keep("surface_weight")),
+            area_lights: self.area_lights.clone(),
         }
     }
 
@@ -449,6 +457,62 @@ mod tests {
             (l.spp, l.occlusion, l.anisotropy),
             (None, Some(true), Some(0.2))
         );
+    }
+
+    #[test]
+    fn area_lights_round_trip_light_every_model_and_bad_ones_are_one_line() {
+        use glint_core::lighting::{AreaShapeSpec, LightFrame};
+        let light = AreaLightSpec {
+            shape: AreaShapeSpec::Sphere { radius: 10.0 },
+            frame: LightFrame::Camera,
+            position: [0.0, 0.0, 40.0],
+            radiance: [20.0; 3],
+        };
+        let with = |model: LightingModel, area: Vec<AreaLightSpec>| Scene {
+            lights: vec![],
+            ..small(Lighting {
+                model,
+                spp: (model == LightingModel::Path).then_some(2),
+                area_lights: area,
+                ..Lighting::default()
+            })
+        };
+        // The JSON names the lights when there are some, and nothing else changes.
+        let text = with(LightingModel::Path, vec![light]).to_json().unwrap();
+        assert!(text.contains("area_lights"), "{text}");
+        let back = Scene::from_json(&text).unwrap();
+        assert_eq!(back.lighting.area_lights, vec![light]);
+        assert!(!small(path(2)).to_json().unwrap().contains("area_lights"));
+        // Every model is lit by them alone (no directional light).
+        let mut r = Renderer::open(&small(path(2)), &ReadOptions::default()).unwrap();
+        for model in LightingModel::ALL {
+            let done = r.render(&with(model, vec![light]), &|_| {}).unwrap();
+            let lit = done.image.rgb.iter().map(|c| c[1]).fold(0.0f32, f32::max);
+            assert!(lit > 0.0, "{}: {lit}", model.name());
+        }
+        // Bad lights: one line, naming what is wrong.
+        let rect_at_centre = AreaLightSpec {
+            shape: AreaShapeSpec::Rect { size: [10.0, 10.0] },
+            position: [0.0; 3],
+            ..light
+        };
+        let bad = [
+            (AreaShapeSpec::Sphere { radius: 0.0 }, "size 0"),
+            (AreaShapeSpec::Sphere { radius: f64::NAN }, "size NaN"),
+            (AreaShapeSpec::Rect { size: [5.0, -1.0] }, "size -1"),
+        ];
+        for (shape, needle) in bad {
+            let scene = with(LightingModel::Path, vec![AreaLightSpec { shape, ..light }]);
+            let err = r.render(&scene, &|_| {}).unwrap_err().to_string();
+            assert!(
+                err.contains(needle) && !err.contains('\n'),
+                "{needle}: {err}"
+            );
+        }
+        let err = (r.render(&with(LightingModel::Shadows, vec![rect_at_centre]), &|_| {}))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("centre") && !err.contains('\n'), "{err}");
     }
 
     #[test]

@@ -171,6 +171,13 @@ fn check_lights(lights: &[Light], environment_alone: bool) -> Result<(), RenderE
     Ok(())
 }
 
+/// The centre of `field`'s box of voxel centres, world mm: what area lights are
+/// placed about.
+fn volume_center(field: &Field) -> glint_core::Vec3 {
+    let c = field.index_to_world(field.dims().map(|d| (d.max(1) - 1) as f64 / 2.0));
+    glint_core::Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)
+}
+
 impl Scene {
     /// Resolves a surface scene: `field` the volume (if any), `set` its meshes and
     /// isosurface as read for this scene.
@@ -206,6 +213,11 @@ impl Scene {
             ));
         }
         check_lights(&scene.lights, false)?;
+        if !scene.lighting.area_lights.is_empty() {
+            return Err(RenderError::Parameter(
+                "area lights light a volume: a surface scene takes directional lights only".into(),
+            ));
+        }
         scene.clip().validate()?;
         scene.lighting.resolve(RenderMode::Surface)?;
         let material = scene.material.apply(SURFACE_MATERIAL);
@@ -347,7 +359,10 @@ impl Scene {
             }
             (_, None) => 0.0,
         };
-        check_lights(&scene.lights, scene.lighting.model == LightingModel::Path)?;
+        check_lights(
+            &scene.lights,
+            scene.lighting.model == LightingModel::Path || !scene.lighting.area_lights.is_empty(),
+        )?;
         if !scene.gate.is_finite() || !(0.0..=1.0).contains(&scene.gate) {
             return Err(RenderError::Parameter(format!(
                 "gate {}: expected a fraction in 0..=1",
@@ -385,7 +400,8 @@ impl Scene {
             gate,
         )?
         .with_anisotropy(anisotropy)?
-        .with_surface_weight(scene.lighting.surface_weight.unwrap_or(1.0))?;
+        .with_surface_weight(scene.lighting.surface_weight.unwrap_or(1.0))?
+        .with_area_lights(scene.lighting.area_lights.clone(), volume_center(field))?;
         Ok(Resolved {
             scene,
             shader,
