@@ -6,7 +6,7 @@
 //! map): a direction a light drew is weighted by `p_light² / (p_light² + p_bsdf²)`, a
 //! direction the scattering model drew that meets the light by `p_bsdf² / (p_light² +
 //! p_bsdf²)`, both per steradian. Each light is its own estimator (one sample per
-//! light per event). Camera rays do not see the lights (they light the volume only);
+//! light per event, from a Sobol pair of its own for the first four events). Camera rays do not see the lights (they light the volume only);
 //! a scattered path that meets one ends there. A scene without area lights draws no
 //! number here: its images are the same bit for bit.
 
@@ -31,14 +31,15 @@ impl PathTracer<'_> {
     }
 
     /// Adds the area lights' direct light at index point `p` through `bsdf` towards
-    /// `wo`: per light one direction drawn by solid angle (two independent numbers),
+    /// `wo` at event `event` (counted from 0): per light one direction drawn by solid
+    /// angle (its pair of the sampler's numbers, [`Rng::area_dim`]),
     /// its radiance times the transmittance up to the light, weighted against the
     /// scattering model's density.
     #[inline]
     pub(super) fn area_direct(
         &self,
         (p, bsdf, wo): (Vec3, &Bsdf<'_>, Vec3),
-        rng: &mut Rng,
+        (rng, event): (&mut Rng, u32),
         beta: [f32; 3],
         radiance: &mut [f32; 3],
     ) {
@@ -52,8 +53,8 @@ impl PathTracer<'_> {
         } else {
             0.0
         };
-        for light in lights {
-            let u = [rng.uniform(), rng.uniform()];
+        for (i, light) in lights.iter().enumerate() {
+            let u = [0, 1].map(|k| rng.area_dim(event, i as u32, k));
             if self.area_strategy == EnvStrategy::Scatter {
                 continue;
             }

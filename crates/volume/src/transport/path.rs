@@ -506,7 +506,7 @@ impl<'a> PathTracer<'a> {
                 let at = (p, &bsdf, wo);
                 self.env_direct(map, at, (&mut rng, events - 1), beta, &mut radiance);
             }
-            self.area_direct((p, &bsdf, wo), &mut rng, beta, &mut radiance);
+            self.area_direct((p, &bsdf, wo), (&mut rng, events - 1), beta, &mut radiance);
             let u = [
                 rng.dim(block + dims::LOBE),
                 rng.dim(block + dims::DIRECTION),

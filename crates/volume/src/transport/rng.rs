@@ -110,6 +110,12 @@ pub(crate) mod dims {
     ///
     /// [`Rng::light_dim`]: super::Rng::light_dim
     pub(crate) const ENV_LIGHT: u32 = 1 << 12;
+    /// Area light `l`'s two numbers at event `k` are dimensions `AREA_LIGHT + 2(4k +
+    /// l)` and the next: pairs of their own past the environment map's, for the first
+    /// four events and four lights ([`Rng::area_dim`]).
+    ///
+    /// [`Rng::area_dim`]: super::Rng::area_dim
+    pub(crate) const AREA_LIGHT: u32 = ENV_LIGHT + 8;
 
     /// The first dimension of event `k`'s block (events counted from 0).
     #[inline(always)]
@@ -194,6 +200,19 @@ impl Rng {
     pub(crate) fn light_dim(&mut self, event: u32, i: u32) -> f32 {
         match self.sobol {
             Some(s) if event < 4 => s.get(dims::ENV_LIGHT + 2 * event + i),
+            _ => self.pcg_uniform(),
+        }
+    }
+
+    /// Number `i` (0 or 1) of area light `light`'s pair at event `event` (both counted
+    /// from 0): from the Sobol sequence for the first four events and lights (a pair
+    /// of its own, [`dims::AREA_LIGHT`]), else independent.
+    #[inline]
+    pub(crate) fn area_dim(&mut self, event: u32, light: u32, i: u32) -> f32 {
+        match self.sobol {
+            Some(s) if event < 4 && light < 4 => {
+                s.get(dims::AREA_LIGHT + 2 * (4 * event + light) + i)
+            }
             _ => self.pcg_uniform(),
         }
     }
