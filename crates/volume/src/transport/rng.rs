@@ -347,6 +347,32 @@ mod tests {
     }
 
     #[test]
+    fn area_light_pairs_are_stratified_and_their_own() {
+        // Each light's pair at each of the first four events is a (0, 2)-net of its
+        // own (not the map's pair of that event, nor another light's); past four
+        // events the numbers are the pixel's independent ones.
+        let k = 6;
+        let pairs = |f: &dyn Fn(&mut Rng) -> [f32; 2]| -> Vec<[f32; 2]> {
+            (0..1u32 << k)
+                .map(|s| f(&mut Rng::for_path(Sampler::Sobol, 7, 21, s)))
+                .collect()
+        };
+        let env = pairs(&|r| [r.light_dim(1, 0), r.light_dim(1, 1)]);
+        let mut seen = vec![env];
+        for event in 0..4 {
+            for light in 0..4 {
+                let p = pairs(&|r| [r.area_dim(event, light, 0), r.area_dim(event, light, 1)]);
+                assert!(is_net(&p, k), "event {event}, light {light}");
+                assert!(!seen.contains(&p), "event {event}, light {light}");
+                seen.push(p);
+            }
+        }
+        let mut a = Rng::for_path(Sampler::Sobol, 7, 21, 3);
+        let mut b = Rng::new(7, 21, 3);
+        assert_eq!(a.area_dim(4, 0, 0), b.uniform());
+    }
+
+    #[test]
     fn sobol_numbers_are_uniform() {
         // The mean of each dimension over one pixel's samples, and of a whole block's
         // numbers over many pixels, is 1/2 (and the exponential's 1).
