@@ -509,7 +509,8 @@ impl SceneFlags {
                 .retain(|l| (l.azimuth, l.elevation) != (0.0, 0.0));
             let path = scene.lighting.model == LightingModel::Path;
             let area = !self.area_lights.is_empty() || !scene.lighting.area_lights.is_empty();
-            if self.lights.is_empty() && scene.lights.is_empty() && !path && !area {
+            let map = scene.lighting.environment_map.is_some();
+            if self.lights.is_empty() && scene.lights.is_empty() && !path && !area && !map {
                 bail!(
                     "--no-headlight leaves no light: add at least one --light AZ,EL \
                      (path lighting may be lit by its --environment alone)"

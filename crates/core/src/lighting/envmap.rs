@@ -161,6 +161,11 @@ impl EnvMap {
         self.intensity
     }
 
+    /// Radians the map is turned about the vertical axis.
+    pub fn rotation(&self) -> f32 {
+        self.rotation
+    }
+
     /// The radiance arriving from unit world direction `wi`.
     #[inline]
     pub fn eval(&self, wi: Vec3) -> [f32; 3] {

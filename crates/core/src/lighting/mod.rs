@@ -39,6 +39,7 @@ mod envmap;
 #[cfg(test)]
 mod fixtures;
 mod material;
+mod median_cut;
 mod scatter;
 mod scratch;
 mod shadowed;
@@ -52,6 +53,7 @@ pub use envmap::{
     MAX_ENV_WIDTH,
 };
 pub use material::{Material, MaterialOverrides};
+pub use median_cut::MAX_MEDIAN_CUT_SPLITS;
 pub use scatter::{cosine_hemisphere, sample_phase, Bsdf, BsdfSample, Scattering};
 pub use transport::{phase_hg, SurfacePart, MAX_ANISOTROPY, MEDIUM_IRRADIANCE};
 
@@ -136,6 +138,9 @@ pub struct Shader {
     anchor: Vec3,
     /// The area lights in the world for the camera the shader was last placed for.
     placed_area: Vec<AreaLight>,
+    /// An environment map's directional lights ([`EnvMap::median_cut`]: world
+    /// directions and energies), fixed to the world (`shadows`).
+    environment: Vec<(Vec3, f32)>,
     /// Gradient magnitude (value per mm) below which a sample is unshaded; full
     /// shading from twice this value (a linear ramp between).
     gate: f32,
@@ -215,6 +220,7 @@ impl Shader {
             area: Vec::new(),
             anchor: Vec3::ZERO,
             placed_area: Vec::new(),
+            environment: Vec::new(),
             gate,
             anisotropy: 0.0,
             surface_weight: 1.0,
@@ -236,6 +242,7 @@ impl Shader {
                 let (dir, e) = a.irradiance(self.anchor)?;
                 Some((dir, e / std::f32::consts::PI))
             }))
+            .chain((self.environment.iter()).map(|&(d, e)| (d, e / std::f32::consts::PI)))
             .collect();
         Shader {
             lights,
@@ -267,6 +274,40 @@ impl Shader {
         self.area = area;
         self.anchor = center;
         Ok(self)
+    }
+
+    /// This shader with an environment map's directional lights (world directions
+    /// and energies `Φ`, [`EnvMap::median_cut`]), each placed as the directional
+    /// light of intensity `Φ / π` (irradiance `Φ` facing it) after the area lights'
+    /// stand-ins, whatever the camera (`shadows`). Errors for more than
+    /// [`MAX_LIGHTS`] lights in all, or a light that is not a unit direction with a
+    /// finite energy >= 0.
+    pub fn with_environment_lights(
+        mut self,
+        lights: Vec<(Vec3, f32)>,
+    ) -> Result<Shader, RenderError> {
+        let n = self.relative.len() + self.area.len() + lights.len();
+        if n > MAX_LIGHTS {
+            return Err(RenderError::Parameter(format!(
+                "{n} lights with the environment map's {}: at most {MAX_LIGHTS} in all",
+                lights.len()
+            )));
+        }
+        if let Some(l) = (lights.iter())
+            .find(|(d, e)| !e.is_finite() || *e < 0.0 || (d.length() - 1.0).abs() > 1e-3)
+        {
+            return Err(RenderError::Parameter(format!(
+                "environment light {l:?}: expected a unit direction and a finite energy >= 0"
+            )));
+        }
+        self.environment = lights;
+        Ok(self)
+    }
+
+    /// How many lights the shader places besides the environment map's: the
+    /// directional and the area lights.
+    pub fn lights_without_environment(&self) -> usize {
+        self.relative.len() + self.area.len()
     }
 
     /// The area lights in the world, for the camera the shader was

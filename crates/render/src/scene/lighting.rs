@@ -86,16 +86,17 @@ pub struct Lighting {
     /// when not given, so scenes without it keep their JSON.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub denoise: Option<Denoise>,
-    /// `path`: an environment map instead of the uniform environment: an
+    /// `path` and `shadows`: an environment map (in `path` instead of the uniform
+    /// environment; in `shadows` as a few directional lights fitted to it): an
     /// equirectangular `.hdr` or `.exr` file, or a built-in name (`studio`;
     /// [`ENVIRONMENT_NAMES`](crate::ENVIRONMENT_NAMES)) [default: none].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub environment_map: Option<String>,
-    /// `path`: degrees the environment map is turned about the vertical (superior)
+    /// `path` and `shadows`: degrees the environment map is turned about the vertical (superior)
     /// axis, -360..=360 [default: 0 with a map].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub environment_rotation: Option<f64>,
-    /// `path`: the environment map's radiance scale [default: 1 with a map].
+    /// `path` and `shadows`: the environment map's radiance scale [default: 1 with a map].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub environment_intensity: Option<f32>,
     /// `shadows` and `path`: scale of the surface part of the hybrid, 0..=1: 1 the
@@ -164,7 +165,14 @@ impl Lighting {
     fn used_by(model: LightingModel) -> &'static [&'static str] {
         match model {
             LightingModel::Local => &[],
-            LightingModel::Shadows => &["anisotropy", "occlusion", "surface_weight"],
+            LightingModel::Shadows => &[
+                "anisotropy",
+                "occlusion",
+                "surface_weight",
+                "environment_map",
+                "environment_rotation",
+                "environment_intensity",
+            ],
             LightingModel::Path => &[
                 "spp",
                 "bounces",
@@ -260,9 +268,12 @@ impl Lighting {
         }
         let transport = match model {
             LightingModel::Local => Transport::Local,
-            LightingModel::Shadows => Transport::Shadows(ShadowSettings {
-                occlusion: *self.occlusion.get_or_insert(false),
-            }),
+            LightingModel::Shadows => {
+                self.resolve_environment_map()?;
+                Transport::Shadows(ShadowSettings {
+                    occlusion: *self.occlusion.get_or_insert(false),
+                })
+            }
             LightingModel::Path => {
                 let spp = *self.spp.get_or_insert(DEFAULT_SPP);
                 check_spp(spp)?;
@@ -293,11 +304,7 @@ impl Lighting {
     /// or a map and a uniform radiance, are refused.
     fn resolve_environment(&mut self) -> Result<f32, RenderError> {
         if self.environment_map.is_none() {
-            if self.environment_rotation.is_some() || self.environment_intensity.is_some() {
-                return Err(RenderError::Parameter(
-                    "lighting.environment_rotation and environment_intensity need an environment_map".into(),
-                ));
-            }
+            self.resolve_environment_map()?;
             return Ok(*self.environment.get_or_insert(DEFAULT_ENVIRONMENT));
         }
         if let Some(e) = self.environment {
@@ -305,9 +312,24 @@ impl Lighting {
                 "lighting.environment {e} and an environment_map: give one (the map replaces the uniform environment)"
             )));
         }
+        self.resolve_environment_map()?;
+        Ok(0.0)
+    }
+
+    /// With a map, its rotation and intensity written back; without one, its
+    /// settings refused.
+    fn resolve_environment_map(&mut self) -> Result<(), RenderError> {
+        if self.environment_map.is_none() {
+            if self.environment_rotation.is_some() || self.environment_intensity.is_some() {
+                return Err(RenderError::Parameter(
+                    "lighting.environment_rotation and environment_intensity need an environment_map".into(),
+                ));
+            }
+            return Ok(());
+        }
         self.environment_rotation.get_or_insert(0.0);
         self.environment_intensity.get_or_insert(1.0);
-        Ok(0.0)
+        Ok(())
     }
 }
 

@@ -154,6 +154,35 @@ fn over(behind: &mut Image, front: &Image, bg: [f32; 3]) {
 
 /// The lights of a scene: at most [`MAX_LIGHTS`], and at least one unless the
 /// environment may light it alone (`path` lighting).
+/// Most splits of an environment map's median cut in `shadows` (8 lights).
+pub(crate) const SHADOWS_ENV_SPLITS: u32 = 3;
+
+/// `shader` with a `shadows` scene's environment map as directional lights: its
+/// median cut into the most lights (at most `2^SHADOWS_ENV_SPLITS`, a power of two)
+/// that fit beside the scene's other lights ([`MAX_LIGHTS`] in all).
+fn environment_lights(shader: Shader, lighting: &super::Lighting) -> Result<Shader, RenderError> {
+    let Some(name) = lighting
+        .environment_map
+        .as_ref()
+        .filter(|_| lighting.model == LightingModel::Shadows)
+    else {
+        return Ok(shader);
+    };
+    let map = super::load_environment(name)?.placed(
+        lighting.environment_rotation.unwrap_or(0.0),
+        lighting.environment_intensity.unwrap_or(1.0),
+    )?;
+    let room = MAX_LIGHTS.saturating_sub(shader.lights_without_environment());
+    if room == 0 {
+        return Err(RenderError::Parameter(format!(
+            "an environment map in shadows lighting needs room for its lights: at most {} lights and area lights with it",
+            MAX_LIGHTS - 1
+        )));
+    }
+    let splits = (room.ilog2()).min(SHADOWS_ENV_SPLITS);
+    shader.with_environment_lights(map.median_cut(splits))
+}
+
 fn check_lights(lights: &[Light], environment_alone: bool) -> Result<(), RenderError> {
     if lights.is_empty() && !environment_alone {
         return Err(RenderError::Parameter(
@@ -361,7 +390,9 @@ impl Scene {
         };
         check_lights(
             &scene.lights,
-            scene.lighting.model == LightingModel::Path || !scene.lighting.area_lights.is_empty(),
+            scene.lighting.model == LightingModel::Path
+                || !scene.lighting.area_lights.is_empty()
+                || scene.lighting.environment_map.is_some(),
         )?;
         if !scene.gate.is_finite() || !(0.0..=1.0).contains(&scene.gate) {
             return Err(RenderError::Parameter(format!(
@@ -402,6 +433,7 @@ impl Scene {
         .with_anisotropy(anisotropy)?
         .with_surface_weight(scene.lighting.surface_weight.unwrap_or(1.0))?
         .with_area_lights(scene.lighting.area_lights.clone(), volume_center(field))?;
+        let shader = environment_lights(shader, &scene.lighting)?;
         Ok(Resolved {
             scene,
             shader,

@@ -842,6 +842,31 @@ fn env_scene(map: &str) -> Scene {
     }
 }
 
+/// `shadows` takes a map as its median cut's directional lights: lit by it alone
+/// the image is not black, the map's rotation and intensity change it, and the lights
+/// fit beside the scene's own lights (8 alone, 4 beside a headlight).
+#[test]
+fn shadows_takes_an_environment_map_as_directional_lights() {
+    let mut r = Renderer::open(&small(), &ReadOptions::default()).unwrap();
+    let mut scene = env_scene("studio");
+    scene.lighting.model = LightingModel::Shadows;
+    scene.lighting.spp = None;
+    let mean =
+        |img: &glint_core::Image| img.rgb.iter().flatten().map(|&c| f64::from(c)).sum::<f64>();
+    let lit = r.render(&scene, &|_| {}).unwrap().image;
+    assert!(mean(&lit) > 0.0);
+    let mut turned = scene.clone();
+    turned.lighting.environment_rotation = Some(180.0);
+    assert_ne!(r.render(&turned, &|_| {}).unwrap().image.rgb, lit.rgb);
+    let mut dim = scene.clone();
+    dim.lighting.environment_intensity = Some(0.25);
+    assert!(mean(&r.render(&dim, &|_| {}).unwrap().image) < mean(&lit));
+    // Beside a headlight the map gets 4 lights (8 would be refused as too many).
+    let mut headlit = scene.clone();
+    headlit.lights = vec![glint_core::Light::HEADLIGHT];
+    assert!(mean(&r.render(&headlit, &|_| {}).unwrap().image) > mean(&lit));
+}
+
 /// A Radiance `.hdr` of `w x h` texels, written flat (no run-length encoding) with
 /// image-rs's encoder.
 fn write_hdr(path: &std::path::Path, w: usize, h: usize, f: impl Fn(usize, usize) -> f32) {
@@ -967,6 +992,10 @@ fn bad_environment_maps_and_settings_are_one_line_errors() {
     shadows.lighting.model = LightingModel::Shadows;
     shadows.lighting.spp = None;
     shadows.lights = vec![glint_core::Light::HEADLIGHT];
+    shadows.lighting.environment = Some(0.5);
+    let mut crowded = shadows.clone();
+    crowded.lighting.environment = None;
+    crowded.lights = vec![glint_core::Light::HEADLIGHT; glint_core::MAX_LIGHTS];
     let mut rotation = env_scene("studio");
     rotation.lighting.environment_rotation = Some(1000.0);
     let mut intensity = env_scene("studio");
@@ -975,6 +1004,7 @@ fn bad_environment_maps_and_settings_are_one_line_errors() {
         (no_map, "need an environment_map"),
         (both, "give one"),
         (shadows, "not used by shadows"),
+        (crowded, "needs room for its lights"),
         (rotation, "rotation"),
         (intensity, "intensity"),
     ] {
