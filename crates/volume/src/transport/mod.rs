@@ -34,6 +34,8 @@ mod tracking;
 #[cfg(test)]
 mod area_tests;
 #[cfg(test)]
+mod envmap_shadow_tests;
+#[cfg(test)]
 mod tests;
 
 pub(crate) use crate::classification::grid_len;

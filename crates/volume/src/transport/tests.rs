@@ -1064,7 +1064,7 @@ fn ambient_occlusion_treats_clipped_space_as_empty() {
 }
 
 /// The `path` model's frame lit by the environment `map` (no meshes).
-fn path_frame_env(
+pub(super) fn path_frame_env(
     class: &Classification,
     shader: &Shader,
     frame: &FrameSettings,
