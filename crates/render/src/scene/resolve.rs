@@ -187,7 +187,7 @@ fn check_lights(lights: &[Light], environment_alone: bool) -> Result<(), RenderE
     if lights.is_empty() && !environment_alone {
         return Err(RenderError::Parameter(
             "the scene has no light: give at least one (the headlight is azimuth 0, elevation 0), \
-             or light it by the environment alone with path lighting"
+             or light it by the environment alone with path lighting (or an environment map in shadows)"
                 .into(),
         ));
     }

@@ -277,3 +277,47 @@ fn shaders_without_area_lights_place_only_their_lights() {
     assert!(placed.area_lights().is_empty());
     assert_eq!(placed.directional_lights(), placed.world_lights());
 }
+
+#[test]
+fn camera_rays_see_the_area_lights_where_the_environment_is_shown() {
+    // A large sphere light (radius 200 mm, radiance 2.5) 300 mm behind the volume's
+    // centre, away from the camera, in a black environment: with
+    // `show_environment` the pixels that meet no matter see it, opaque and at its
+    // radiance; without it they see the background, as before.
+    let (class, _, frame) = small_scene();
+    let light = AreaLightSpec {
+        shape: AreaShapeSpec::Sphere { radius: 200.0 },
+        frame: LightFrame::Camera,
+        position: [0.0, 0.0, -300.0],
+        radiance: [2.5; 3],
+    };
+    let shader = albedo_one(vec![], 0.05)
+        .with_area_lights(vec![light], center(&class))
+        .unwrap();
+    let image = |show: bool| {
+        let settings = PathSettings {
+            bounces: 1,
+            seed: 3,
+            environment: 0.0,
+            sampler: Sampler::Sobol,
+            time_budget: None,
+            show_environment: show,
+        };
+        let mut img = PathImage::new(frame.width, frame.height);
+        path_frame(&class, &shader, &frame, &settings, &mut img, 4).unwrap()
+    };
+    let seen = |img: &glint_core::Image| {
+        (img.rgb.iter().zip(&img.alpha))
+            .filter(|(c, &a)| **c == [2.5; 3] && a == 1.0)
+            .count()
+    };
+    let (shown, hidden) = (image(true), image(false));
+    assert!(seen(&shown) > 0, "no pixel sees the light");
+    assert_eq!(seen(&hidden), 0);
+    // Where the light is not shown those pixels are transparent.
+    for ((c, &a), &b) in (shown.rgb.iter().zip(&shown.alpha)).zip(&hidden.alpha) {
+        if *c == [2.5; 3] && a == 1.0 {
+            assert!(b < 1.0, "{b}");
+        }
+    }
+}

@@ -94,7 +94,9 @@ impl PathTracer<'_> {
     /// What ends a segment of a path besides the volume and its collisions: for a
     /// scattered ray (after `events > 0` events) over `(t0, t1)`, the meshes' first
     /// hit and the nearest area light in front of it (its index and distance); for a
-    /// camera ray neither (it stops at `t1`, the meshes' depth).
+    /// camera ray no mesh hit (it stops at `t1`, the meshes' depth), and the nearest
+    /// area light only where the scene shows the environment and no mesh is behind
+    /// (the camera then sees the light, opaque, as it sees the map).
     #[inline]
     pub(super) fn stops(
         &self,
@@ -104,7 +106,11 @@ impl PathTracer<'_> {
         events: u32,
     ) -> (Option<f32>, Option<(usize, f32)>) {
         if events == 0 {
-            return (None, None);
+            let shown = self.settings.show_environment && t1 == f32::INFINITY;
+            return (
+                None,
+                shown.then(|| self.area_hit(ray.o, wdir, t0)).flatten(),
+            );
         }
         let mesh = self.mesh_hit_between(ray, t0, t1);
         let area =
@@ -129,10 +135,20 @@ impl PathTracer<'_> {
 
     /// The radiance a path scattered from index point `o` along unit `wdir` (drawn
     /// with density `scatter_pdf`) takes from area light `i`, which it meets: the
-    /// light's radiance weighted against the light's own density.
+    /// light's radiance weighted against the light's own density; a camera ray
+    /// (`events == 0`, no density) takes it whole.
     #[inline]
-    pub(super) fn area_escape(&self, i: usize, o: Vec3, wdir: Vec3, scatter_pdf: f32) -> [f32; 3] {
+    pub(super) fn area_escape(
+        &self,
+        i: usize,
+        o: Vec3,
+        wdir: Vec3,
+        (scatter_pdf, events): (f32, u32),
+    ) -> [f32; 3] {
         let light: &AreaLight = &self.shader.area_lights()[i];
+        if events == 0 {
+            return light.radiance();
+        }
         let weight = match self.area_strategy {
             EnvStrategy::Mis => power_heuristic(scatter_pdf, light.pdf(self.world_point(o), wdir)),
             EnvStrategy::Light => 0.0,

@@ -463,15 +463,15 @@ impl<'a> PathTracer<'a> {
             rng.close();
             let Some(t) = hit else {
                 // A scattered path that meets an area light ends there; one that
-                // leaves sees the environment; a camera ray sees it (opaque) where the
-                // scene shows it and no mesh is behind.
+                // leaves sees the environment; a camera ray sees it, and the area
+                // lights, (opaque) where the scene shows it and no mesh is behind.
                 let seen = if events == 0 {
                     self.settings.show_environment && t1 == f32::INFINITY
                 } else {
                     mesh.is_none()
                 };
                 let l = match area {
-                    Some((i, _)) => Some(self.area_escape(i, ray.o, wdir, scatter_pdf)),
+                    Some((i, _)) => Some(self.area_escape(i, ray.o, wdir, (scatter_pdf, events))),
                     None => seen.then(|| self.escaped(wdir, events, scatter_pdf)),
                 };
                 if let Some(l) = l {
