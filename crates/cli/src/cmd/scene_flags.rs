@@ -248,17 +248,19 @@ pub struct SceneFlags {
     /// Path lighting: the environment: a number, the radiance of a uniform white one
     /// [default: 0.5]; or an environment map replacing it: an equirectangular .hdr
     /// or .exr file, or a built-in name (studio), importance-sampled with MIS.
+    /// Shadows lighting takes a map (not a number) as up to 8 directional lights
+    /// fitted to it by median cut.
     #[arg(long, allow_negative_numbers = true, value_name = "RADIANCE|FILE|NAME")]
     pub environment: Option<Environment>,
-    /// Path lighting: degrees the environment map is turned about the vertical
+    /// Path and shadows lighting: degrees the environment map is turned about the vertical
     /// (superior) axis [default: 0].
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub environment_rotation: Option<f64>,
-    /// Path lighting: the environment map's radiance scale [default: 1].
+    /// Path and shadows lighting: the environment map's radiance scale [default: 1].
     #[arg(long, value_name = "X")]
     pub environment_intensity: Option<f32>,
-    /// Path lighting: camera rays that meet no matter see the environment (opaque)
-    /// instead of the background.
+    /// Path lighting: camera rays that meet no matter see the environment and the
+    /// area lights (opaque) instead of the background.
     #[arg(long)]
     pub show_environment: bool,
     /// Path lighting: where the random numbers come from: sobol (Owen-scrambled Sobol
@@ -513,7 +515,7 @@ impl SceneFlags {
             if self.lights.is_empty() && scene.lights.is_empty() && !path && !area && !map {
                 bail!(
                     "--no-headlight leaves no light: add at least one --light AZ,EL \
-                     (path lighting may be lit by its --environment alone)"
+                     (path lighting may be lit by its --environment alone, shadows by a map)"
                 );
             }
         }
