@@ -168,10 +168,6 @@ fn environment_lights(shader: Shader, lighting: &super::Lighting) -> Result<Shad
     else {
         return Ok(shader);
     };
-    let map = super::load_environment(name)?.placed(
-        lighting.environment_rotation.unwrap_or(0.0),
-        lighting.environment_intensity.unwrap_or(1.0),
-    )?;
     let room = MAX_LIGHTS.saturating_sub(shader.lights_without_environment());
     if room == 0 {
         return Err(RenderError::Parameter(format!(
@@ -180,8 +176,30 @@ fn environment_lights(shader: Shader, lighting: &super::Lighting) -> Result<Shad
         )));
     }
     let splits = (room.ilog2()).min(SHADOWS_ENV_SPLITS);
-    shader.with_environment_lights(map.median_cut(splits))
+    let rotation = lighting.environment_rotation.unwrap_or(0.0);
+    let intensity = lighting.environment_intensity.unwrap_or(1.0);
+    // The last map's lights are kept: a viewer resolves its scene every frame, and a
+    // large probe takes a while to read.
+    let mut last = LAST_MEDIAN_CUT.lock().unwrap_or_else(|e| e.into_inner());
+    let lights = match &*last {
+        Some((key, lights)) if *key == (name.clone(), rotation, intensity, splits) => {
+            lights.clone()
+        }
+        _ => {
+            let map = super::load_environment(name)?.placed(rotation, intensity)?;
+            let lights = map.median_cut(splits);
+            *last = Some(((name.clone(), rotation, intensity, splits), lights.clone()));
+            lights
+        }
+    };
+    shader.with_environment_lights(lights)
 }
+
+/// The map, rotation, intensity and splits of the last median cut, and its lights.
+type MedianCutCache = Option<((String, f64, f32, u32), Vec<(glint_core::Vec3, f32)>)>;
+
+/// The last median cut [`environment_lights`] made.
+static LAST_MEDIAN_CUT: std::sync::Mutex<MedianCutCache> = std::sync::Mutex::new(None);
 
 fn check_lights(lights: &[Light], environment_alone: bool) -> Result<(), RenderError> {
     if lights.is_empty() && !environment_alone {
