@@ -3,8 +3,8 @@
 //! patient's superior `+z`), turned about that axis and scaled; evaluated by
 //! direction and importance-sampled by solid angle for the path tracer's next-event
 //! estimation, combined with the scattering model's own sampling by multiple
-//! importance sampling (`path`), and prefiltered into spherical harmonics and a few
-//! directional lights for the deterministic `shadows` model.
+//! importance sampling (`path`), and fitted by a few directional lights for the
+//! deterministic `shadows` model (its median cut, `median_cut.rs`).
 //!
 //! Sampling is the 2D marginal/conditional piecewise-constant distribution of pbrt-v4
 //! (`PiecewiseConstant2D`, src/pbrt/util/sampling.h; Pharr, Jakob and Humphreys,
