@@ -47,6 +47,17 @@ pub const FETCHED_ENVIRONMENTS: [&str; 17] = [
     "workshop",
 ];
 
+/// The map names a scene can use here: the built-in ones and the fetched probes whose
+/// file is present (a front end's choice of maps).
+pub fn available_environments() -> Vec<&'static str> {
+    (ENVIRONMENT_NAMES.iter().copied())
+        .chain(
+            (FETCHED_ENVIRONMENTS.iter().copied())
+                .filter(|name| fetched_environment(name).is_file()),
+        )
+        .collect()
+}
+
 /// Where `scripts/fetch-samples` puts the fetched map `name`:
 /// `$GLINT_DATA/samples/hdri/NAME.exr`, `GLINT_DATA` by default `~/.cache/glint`.
 pub fn fetched_environment(name: &str) -> PathBuf {
