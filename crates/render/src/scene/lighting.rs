@@ -87,8 +87,10 @@ pub struct Lighting {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub denoise: Option<Denoise>,
     /// `path`: an environment map instead of the uniform environment: an
-    /// equirectangular `.hdr` or `.exr` file, or a built-in name (`studio`;
-    /// [`ENVIRONMENT_NAMES`](crate::ENVIRONMENT_NAMES)) [default: none].
+    /// equirectangular `.hdr` or `.exr` file, or a name: built in (`studio`;
+    /// [`ENVIRONMENT_NAMES`](crate::ENVIRONMENT_NAMES)) or fetched by
+    /// `scripts/fetch-samples` ([`FETCHED_ENVIRONMENTS`](crate::FETCHED_ENVIRONMENTS))
+    /// [default: none].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub environment_map: Option<String>,
     /// `path`: degrees the environment map is turned about the vertical (superior)
