@@ -113,9 +113,10 @@ pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHIN
 pub use pick::{image_point, Pick, PickedObject};
 pub use renderer::{InMemory, Rendered, Renderer};
 pub use scene::{
-    load_environment, Derived, Device, Input, Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan,
-    Resolved, Scene, SceneLobe, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS,
-    DEFAULT_SPP, ENVIRONMENT_NAMES, MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
+    available_environments, fetched_environment, load_environment, Derived, Device, Input,
+    Lighting, LobeSpec, MeshLayer, OpenedVolume, Plan, Resolved, Scene, SceneLobe, Transport,
+    DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SHININESS, DEFAULT_SPP, ENVIRONMENT_NAMES,
+    FETCHED_ENVIRONMENTS, MAX_SCENE_BYTES, MERGED_FIELDS, SCENE_VERSION,
 };
 pub use turntable::{Turntable, TurntableWritten};
 

@@ -934,3 +934,29 @@ fn film_and_lens_fields_patch_and_stay_out_of_default_scenes() {
         assert!(scene.patch(bad.as_object().unwrap()).is_err(), "{bad}");
     }
 }
+
+/// Every probe name `scripts/fetch-samples` fetches loads as a 512x256 map of finite,
+/// non-negative radiance with some light in it (the `@pmndrs/assets` files decode:
+/// OpenEXR with DWAB compression, read by the `exr` crate); an unknown name is refused
+/// naming the known ones.
+#[test]
+fn the_fetched_environment_probes_load_by_name() {
+    if glint_testkit::sample("hdri/lab.exr").is_none() {
+        return;
+    }
+    for name in glint_render::FETCHED_ENVIRONMENTS {
+        let map = glint_render::load_environment(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(map.size(), [512, 256], "{name}");
+        let texels = map.texels();
+        assert!(
+            texels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0),
+            "{name}"
+        );
+        let mean: f32 = texels.iter().map(|t| t[1]).sum::<f32>() / texels.len() as f32;
+        assert!(mean > 0.01, "{name}: mean green {mean}");
+    }
+    let e = glint_render::load_environment("labb")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("workshop") && e.contains("studio"), "{e}");
+}

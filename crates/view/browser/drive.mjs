@@ -99,8 +99,26 @@ try {
     const restarted = after.includes(1);
     const regrown = Math.max(...after.slice(after.lastIndexOf(1)));
     const text = await page.evaluate(() => document.getElementById("samples").textContent);
-    console.log(JSON.stringify({ first, grown, restarted, regrown, text, after, errors: end.errors }));
-    if (!(grown > first) || !restarted || !(regrown > 1) || end.errors.length) process.exitCode = 1;
+    // Issue 42: an environment map chosen in the panel, then turned by an Alt-drag
+    // (the camera stays where it was). Shift works in the page too, but headless
+    // Chromium sends no pointerdown for a Shift-press from Playwright.
+    const lit = await pixels();
+    const mapped = await afterFrame(() => page.selectOption("#envmap", "studio"));
+    await page.waitForFunction(() => window.glint.scene.lighting.environment_map === "studio", null, { timeout: 30000 });
+    const azimuth = await page.evaluate(() => window.glint.scene.camera.azimuth);
+    await page.keyboard.down("Alt");
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    for (let i = 1; i <= 5; i++) await page.mouse.move(cx + 10 * i, cy);
+    await page.mouse.up();
+    await page.keyboard.up("Alt");
+    const turn = await page.evaluate(() => Number(document.getElementById("env-rot").value));
+    await page.waitForFunction((t) => window.glint.scene.lighting.environment_rotation === t, turn, { timeout: 30000 }).catch(() => {});
+    const env = await page.evaluate(() => ({ map: window.glint.scene.lighting.environment_map, rotation: window.glint.scene.lighting.environment_rotation, azimuth: window.glint.scene.camera.azimuth, errors: window.glint.errors }));
+    env.turn = turn;
+    const envOk = mapped !== lit && env.map === "studio" && turn === 25 && env.rotation === 25 && env.azimuth === azimuth && !env.errors.length;
+    console.log(JSON.stringify({ first, grown, restarted, regrown, text, after, errors: end.errors, env, envOk }));
+    if (!(grown > first) || !restarted || !(regrown > 1) || end.errors.length || !envOk) process.exitCode = 1;
   } else if (mode === "test") {
     const before = await pixels();
     const full = await page.evaluate(() => window.glint.full);

@@ -431,6 +431,7 @@ fn hello(viewer: &Viewer, stage: Option<&Stage>) -> ServerMessage {
         presets: PRESETS.iter().map(|p| p.name).collect(),
         lobes: SceneLobe::ALL.map(|k| k.name()).to_vec(),
         views: View::NAMES.to_vec(),
+        environments: glint_render::available_environments(),
         range: stage.map_or(viewer.range, |s| s.range),
         level: stage.map_or_else(|| viewer.level.clone(), |s| Some(s.level.clone())),
         bounds: viewer.bounds,

@@ -67,6 +67,9 @@ pub enum Split {
 }
 
 /// A message to the page.
+// `Hello` is the large variant; it is built and sent once per connection, so boxing
+// it would only add an allocation.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
 pub enum ServerMessage {
@@ -80,6 +83,9 @@ pub enum ServerMessage {
         lobes: Vec<&'static str>,
         /// View names.
         views: Vec<&'static str>,
+        /// The environment maps `path` may name here: built in, and the fetched probes
+        /// present ([`glint_render::available_environments`]).
+        environments: Vec<&'static str>,
         /// The volume's value range (for the iso slider).
         range: [f32; 2],
         /// The labels present in the scene's label map, in value order (empty

@@ -121,6 +121,9 @@ fn a_path_scene_refines_while_the_mouse_is_still_and_a_drag_restarts_it() {
     assert_eq!(report["restarted"], true, "{report}");
     assert!(n("regrown") > 1, "{report}");
     assert!(n("grown") <= 64 && n("regrown") <= 64, "{report}");
+    // Issue 42: the panel's environment map, turned by an Alt-drag, camera unmoved.
+    assert_eq!(report["envOk"], true, "{report}");
+    assert_eq!(report["env"]["rotation"], 25, "{report}");
     assert!(
         report["text"]
             .as_str()

@@ -73,6 +73,13 @@ async fn first_frame_then_rotation_changes_the_image() {
     let hello = json_of(&mut c, "hello").await;
     assert_eq!(hello["scene"]["size"], serde_json::json!([48, 40]));
     assert!(hello["presets"].as_array().unwrap().len() > 20);
+    // The maps a path scene may name: the built-in one first, then the fetched probes
+    // present (scripts/fetch-samples).
+    let maps = hello["environments"].as_array().unwrap();
+    assert_eq!(maps[0], "studio");
+    if glint_testkit::sample("hdri/lab.exr").is_some() {
+        assert!(maps.iter().any(|m| m == "lab"), "{maps:?}");
+    }
     let (h, first) = frame(&mut c, Purpose::Full).await;
     assert_eq!((h.width, h.height), (48, 40));
     assert_eq!(&first[..2], &[0xFF, 0xD8]);

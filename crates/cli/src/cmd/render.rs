@@ -357,11 +357,24 @@ fn build_scene(args: &Options) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
-/// The bar of `frames` renders of the scene's size; none when quiet or stderr is not a
-/// terminal.
+/// The bar of `frames` renders of the scene's size (a spinner for a `path` frame with a
+/// time budget); none when quiet or stderr is not a terminal.
 fn progress_bar(args: &Options, scene: &Scene, frames: u64) -> Option<indicatif::ProgressBar> {
     if args.quiet || !std::io::stderr().is_terminal() {
         return None;
+    }
+    if scene.lighting.time_budget.is_some() {
+        // An adaptive `path` frame adds passes until its budget is spent, each reporting
+        // the rows it went over: no total to fill, so the time spent instead of a percentage.
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} rendering (time budget) {elapsed_precise}",
+            )
+            .expect("static template"),
+        );
+        bar.enable_steady_tick(std::time::Duration::from_millis(100));
+        return Some(bar);
     }
     let [w, h] = scene.size;
     let bar = indicatif::ProgressBar::new(u64::from(w) * u64::from(h) * frames);

@@ -247,9 +247,11 @@ pub struct SceneFlags {
     pub seed: Option<u64>,
     /// Path lighting: the environment: a number, the radiance of a uniform white one
     /// [default: 0.5]; or an environment map replacing it: an equirectangular .hdr
-    /// or .exr file, or a built-in name (studio), importance-sampled with MIS.
-    /// Shadows lighting takes a map (not a number) as up to 8 directional lights
-    /// fitted to it by median cut.
+    /// or .exr file, or a name: studio (built in), or a Poly Haven probe that
+    /// scripts/fetch-samples fetches (apartment, bridge, city, dawn, esplanade, forest,
+    /// hall, lab, lobby, night, park, sky, sunrise, sunset, venice, warehouse,
+    /// workshop); importance-sampled with MIS. Shadows lighting takes a map (not a
+    /// number) as up to 8 directional lights fitted to it by median cut.
     #[arg(long, allow_negative_numbers = true, value_name = "RADIANCE|FILE|NAME")]
     pub environment: Option<Environment>,
     /// Path and shadows lighting: degrees the environment map is turned about the vertical

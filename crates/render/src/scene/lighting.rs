@@ -88,8 +88,10 @@ pub struct Lighting {
     pub denoise: Option<Denoise>,
     /// `path` and `shadows`: an environment map (in `path` instead of the uniform
     /// environment; in `shadows` as a few directional lights fitted to it): an
-    /// equirectangular `.hdr` or `.exr` file, or a built-in name (`studio`;
-    /// [`ENVIRONMENT_NAMES`](crate::ENVIRONMENT_NAMES)) [default: none].
+    /// equirectangular `.hdr` or `.exr` file, or a name: built in (`studio`;
+    /// [`ENVIRONMENT_NAMES`](crate::ENVIRONMENT_NAMES)) or fetched by
+    /// `scripts/fetch-samples` ([`FETCHED_ENVIRONMENTS`](crate::FETCHED_ENVIRONMENTS))
+    /// [default: none].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub environment_map: Option<String>,
     /// `path` and `shadows`: degrees the environment map is turned about the vertical (superior)

@@ -31,7 +31,10 @@ mod tests;
 
 pub use device::Device;
 pub(crate) use envmap::EnvCache;
-pub use envmap::{load_environment, ENVIRONMENT_NAMES};
+pub use envmap::{
+    available_environments, fetched_environment, load_environment, ENVIRONMENT_NAMES,
+    FETCHED_ENVIRONMENTS,
+};
 pub use lighting::{Lighting, Transport, DEFAULT_BOUNCES, DEFAULT_ENVIRONMENT, DEFAULT_SPP};
 pub use lobe::{LobeSpec, SceneLobe};
 pub use patch::MERGED_FIELDS;

@@ -51,6 +51,7 @@ async function handle(ev) {
       scene = msg.scene;
       fill($("preset"), msg.presets);
       fill($("lobe"), msg.lobes);
+      for (const m of msg.environments || []) $("envmap").add(new Option(m, m));
       const views = $("views");
       for (const v of msg.views) {
         const b = document.createElement("button");
@@ -126,6 +127,8 @@ function showScene(s) {
   $("aperture").value = s.camera.aperture || 0;
   $("focus").value = s.camera.focus === undefined ? "auto" : s.camera.focus;
   if (l.model === "path") $("denoise").checked = (l.denoise || "none") !== "none";
+  $("envmap").value = l.environment_map || "";
+  $("env-rot").value = l.environment_rotation || 0;
 }
 
 // The legend of the label map: a checkbox per label present (colour, name, voxel
@@ -189,6 +192,13 @@ canvas.addEventListener("pointermove", (e) => {
   if (!drag || !scene) return;
   const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
   drag = { x: e.clientX, y: e.clientY };
+  // Alt- or Shift-drag turns the environment map (path lighting with a map), not the camera.
+  if ((e.shiftKey || e.altKey) && $("envmap").value !== "" && $("lighting").value === "path") {
+    const turn = Math.round(((Number($("env-rot").value) + dx * 0.5 + 540) % 360) - 180);
+    $("env-rot").value = turn;
+    update({ lighting: { environment_rotation: turn } }, true);
+    return;
+  }
   const c = scene.camera;
   c.azimuth = (((c.azimuth - dx * 0.5) % 360) + 360) % 360;
   c.elevation = Math.max(-89, Math.min(89, c.elevation + dy * 0.5));
@@ -229,11 +239,26 @@ $("lighting").onchange = (e) => {
     patch.spp = Number($("spp").value);
     // Denoised by default (the toggle starts on): OIDN in builds with it, else à-trous.
     patch.denoise = $("denoise").checked ? "auto" : "none";
+    if ($("envmap").value !== "") Object.assign(patch, environment());
+  } else {
+    Object.assign(patch, { environment_map: null, environment_rotation: null });
   }
   update({ lighting: patch });
 };
 $("denoise").onchange = (e) => {
   if ($("lighting").value === "path") update({ lighting: { denoise: e.target.checked ? "auto" : "none" } });
+};
+// The environment: a map replaces the uniform one (the scene refuses both, and a
+// map's rotation without a map); path lighting only.
+const environment = () => {
+  const map = $("envmap").value;
+  return map === ""
+    ? { environment_map: null, environment_rotation: null }
+    : { environment: null, environment_map: map, environment_rotation: Number($("env-rot").value) };
+};
+$("envmap").onchange = () => { if ($("lighting").value === "path") update({ lighting: environment() }); };
+$("env-rot").oninput = (e) => {
+  if ($("lighting").value === "path" && $("envmap").value !== "") update({ lighting: { environment_rotation: Number(e.target.value) } }, true);
 };
 $("spp").onchange = (e) => { if ($("lighting").value === "path") update({ lighting: { spp: Number(e.target.value) } }); };
 // Film: the exposure and tone curve map the radiance for display (a path image keeps
