@@ -6,10 +6,12 @@
 //! the client's own running estimate of milliseconds per pixel of its last path drag
 //! frames ([`DragCost`]); the size is clamped between [`MIN_DRAG_SIDE`] on the long
 //! side and half size. When even the smallest would take more than
-//! [`DRAG_LIMIT_MS`], the frame is today's half-size `local` one, so the viewer never
-//! drags slower than it did; every [`REPROBE_EVERY`] such frames one path frame of
-//! the smallest size measures again (the camera or the classification may have
-//! made it cheaper).
+//! [`DRAG_LIMIT_MS`] and more than the client's half-size `local` drag frames take
+//! (their own running estimate), the frame is that `local` one, so the viewer never
+//! drags slower than it did; a path frame over the limit but cheaper than the `local`
+//! frame is kept (on a loaded machine both are over the limit). Every
+//! [`REPROBE_EVERY`] `local` frames one path frame of the smallest size measures
+//! again (the camera or the classification may have made it cheaper).
 //!
 //! The size depends on time measured; the image for a size does not: a path drag
 //! frame of the same scene at the same size is the same image (the path tracer and
@@ -21,7 +23,8 @@
 pub const DRAG_TARGET_MS: f64 = 40.0;
 
 /// Milliseconds the smallest path drag frame may be expected to take before drag
-/// frames fall back to half-size `local` ones: one frame at 20 frames/s.
+/// frames fall back to half-size `local` ones (unless those take longer still): one
+/// frame at 20 frames/s.
 pub const DRAG_LIMIT_MS: f64 = 50.0;
 
 /// Smallest long side of a path drag frame, pixels (when half size is smaller, half
@@ -68,11 +71,12 @@ fn scaled(half: [u32; 2], long: u32) -> [u32; 2] {
 
 /// The drag frame of a `path` scene whose full frames are `full` pixels, given the
 /// estimated cost of a path drag frame in milliseconds per pixel (`None`: nothing
-/// measured yet, a frame of the smallest size measures it): the largest size (its
-/// long side a multiple of [`DRAG_SIDE_STEP`], between [`MIN_DRAG_SIDE`] and half
-/// size) expected within [`DRAG_TARGET_MS`]; half-size `local` when the smallest is
-/// expected to take more than [`DRAG_LIMIT_MS`].
-pub fn drag_frame(full: [u32; 2], ms_per_pixel: Option<f64>) -> DragFrame {
+/// measured yet, a frame of the smallest size measures it) and of a half-size `local`
+/// drag frame in milliseconds (`None`: not measured): the largest size (its long side
+/// a multiple of [`DRAG_SIDE_STEP`], between [`MIN_DRAG_SIDE`] and half size)
+/// expected within [`DRAG_TARGET_MS`]; half-size `local` when the smallest is
+/// expected to take more than [`DRAG_LIMIT_MS`] and more than the `local` frame.
+pub fn drag_frame(full: [u32; 2], ms_per_pixel: Option<f64>, local_ms: Option<f64>) -> DragFrame {
     let half = half_size(full);
     let long = half[0].max(half[1]);
     let smallest = scaled(half, MIN_DRAG_SIDE.min(long));
@@ -80,7 +84,8 @@ pub fn drag_frame(full: [u32; 2], ms_per_pixel: Option<f64>) -> DragFrame {
         return DragFrame::Path(smallest);
     };
     let pixels = |s: [u32; 2]| f64::from(s[0]) * f64::from(s[1]);
-    if cost * pixels(smallest) > DRAG_LIMIT_MS {
+    let least = cost * pixels(smallest);
+    if least > DRAG_LIMIT_MS && !local_ms.is_some_and(|l| least <= l) {
         return DragFrame::Local(half);
     }
     if cost * pixels(half) <= DRAG_TARGET_MS {
@@ -99,6 +104,8 @@ pub fn drag_frame(full: [u32; 2], ms_per_pixel: Option<f64>) -> DragFrame {
 pub struct DragCost {
     /// Milliseconds per pixel of the path drag frames measured (a moving average).
     ms_per_pixel: Option<f64>,
+    /// Milliseconds of the half-size `local` drag frames measured (a moving average).
+    local_ms: Option<f64>,
     /// Drag frames drawn in `local` since the last path one.
     local_frames: u32,
 }
@@ -112,14 +119,14 @@ impl DragCost {
     /// The drag frame for full frames of `full` pixels ([`drag_frame`]); after
     /// [`REPROBE_EVERY`] `local` ones in a row, a path frame of the smallest size.
     pub fn choose(&mut self, full: [u32; 2]) -> DragFrame {
-        match drag_frame(full, self.ms_per_pixel) {
+        match drag_frame(full, self.ms_per_pixel, self.local_ms) {
             DragFrame::Local(size) if self.local_frames + 1 < REPROBE_EVERY => {
                 self.local_frames += 1;
                 DragFrame::Local(size)
             }
             DragFrame::Local(_) => {
                 self.local_frames = 0;
-                drag_frame(full, None)
+                drag_frame(full, None, None)
             }
             path => {
                 self.local_frames = 0;
@@ -128,20 +135,36 @@ impl DragCost {
         }
     }
 
+    /// The estimate of a half-size `local` drag frame in milliseconds (`None`: none
+    /// measured yet).
+    pub fn local_ms(&self) -> Option<f64> {
+        self.local_ms
+    }
+
     /// A path drag frame of `size` took `ms` milliseconds (rendering, features and
     /// filter): the estimate moves towards it. Frames that did not finish are not
     /// measured.
     pub fn measured(&mut self, size: [u32; 2], ms: f64) {
         let pixels = f64::from(size[0]) * f64::from(size[1]);
-        if !(ms.is_finite() && ms >= 0.0 && pixels > 0.0) {
-            return;
+        if ms.is_finite() && ms >= 0.0 && pixels > 0.0 {
+            average(&mut self.ms_per_pixel, ms / pixels);
         }
-        let newest = ms / pixels;
-        self.ms_per_pixel = Some(match self.ms_per_pixel {
-            Some(old) => old + NEWEST_WEIGHT * (newest - old),
-            None => newest,
-        });
     }
+
+    /// A half-size `local` drag frame took `ms` milliseconds.
+    pub fn measured_local(&mut self, ms: f64) {
+        if ms.is_finite() && ms >= 0.0 {
+            average(&mut self.local_ms, ms);
+        }
+    }
+}
+
+/// `estimate` moved towards `newest` by [`NEWEST_WEIGHT`] (set to it when empty).
+fn average(estimate: &mut Option<f64>, newest: f64) {
+    *estimate = Some(match *estimate {
+        Some(old) => old + NEWEST_WEIGHT * (newest - old),
+        None => newest,
+    });
 }
 
 #[cfg(test)]
@@ -152,36 +175,48 @@ mod tests {
 
     #[test]
     fn nothing_measured_takes_the_smallest_path_frame() {
-        assert_eq!(drag_frame(FULL, None), DragFrame::Path([96, 96]));
+        assert_eq!(drag_frame(FULL, None, None), DragFrame::Path([96, 96]));
         // The aspect is kept; the long side is the minimum.
-        assert_eq!(drag_frame([640, 320], None), DragFrame::Path([96, 48]));
+        assert_eq!(
+            drag_frame([640, 320], None, None),
+            DragFrame::Path([96, 48])
+        );
         // Half size below the minimum: half size.
-        assert_eq!(drag_frame([24, 24], None), DragFrame::Path([12, 12]));
-        assert_eq!(drag_frame([1, 1], None), DragFrame::Path([1, 1]));
+        assert_eq!(drag_frame([24, 24], None, None), DragFrame::Path([12, 12]));
+        assert_eq!(drag_frame([1, 1], None, None), DragFrame::Path([1, 1]));
         // A cost that is not a number measures again.
-        assert_eq!(drag_frame(FULL, Some(f64::NAN)), DragFrame::Path([96, 96]));
+        assert_eq!(
+            drag_frame(FULL, Some(f64::NAN), None),
+            DragFrame::Path([96, 96])
+        );
     }
 
     #[test]
     fn a_cheap_scene_drags_at_half_size_and_a_dearer_one_smaller() {
         // 40 ms for 256x256: half size exactly.
         let at_half = DRAG_TARGET_MS / (256.0 * 256.0);
-        assert_eq!(drag_frame(FULL, Some(at_half)), DragFrame::Path([256, 256]));
-        assert_eq!(drag_frame(FULL, Some(0.0)), DragFrame::Path([256, 256]));
+        assert_eq!(
+            drag_frame(FULL, Some(at_half), None),
+            DragFrame::Path([256, 256])
+        );
+        assert_eq!(
+            drag_frame(FULL, Some(0.0), None),
+            DragFrame::Path([256, 256])
+        );
         // Four times the cost per pixel: a quarter of the pixels, half the side.
         assert_eq!(
-            drag_frame(FULL, Some(4.0 * at_half)),
+            drag_frame(FULL, Some(4.0 * at_half), None),
             DragFrame::Path([128, 128])
         );
         // Just over: the side is stepped down to a multiple of 16.
         assert_eq!(
-            drag_frame(FULL, Some(1.01 * at_half)),
+            drag_frame(FULL, Some(1.01 * at_half), None),
             DragFrame::Path([240, 240])
         );
         // Whatever the cost, the frame expected is within the target.
         for k in [1.1, 1.5, 2.0, 3.0, 5.0, 7.0] {
             let cost = k * at_half;
-            let DragFrame::Path(s) = drag_frame(FULL, Some(cost)) else {
+            let DragFrame::Path(s) = drag_frame(FULL, Some(cost), None) else {
                 panic!("{k}: local")
             };
             let ms = cost * f64::from(s[0] * s[1]);
@@ -190,7 +225,11 @@ mod tests {
         }
         // A wide frame keeps its aspect.
         assert_eq!(
-            drag_frame([1024, 512], Some(4.0 * DRAG_TARGET_MS / (512.0 * 256.0))),
+            drag_frame(
+                [1024, 512],
+                Some(4.0 * DRAG_TARGET_MS / (512.0 * 256.0)),
+                None
+            ),
             DragFrame::Path([256, 128])
         );
     }
@@ -200,11 +239,27 @@ mod tests {
         let smallest = 96.0 * 96.0;
         // Over the target but within the limit at the smallest: the smallest.
         let within = 0.99 * DRAG_LIMIT_MS / smallest;
-        assert_eq!(drag_frame(FULL, Some(within)), DragFrame::Path([96, 96]));
+        assert_eq!(
+            drag_frame(FULL, Some(within), None),
+            DragFrame::Path([96, 96])
+        );
         // Over the limit: today's frame.
         let over = 1.01 * DRAG_LIMIT_MS / smallest;
-        assert_eq!(drag_frame(FULL, Some(over)), DragFrame::Local([256, 256]));
-        assert_eq!(drag_frame(FULL, Some(1e9)), DragFrame::Local([256, 256]));
+        assert_eq!(
+            drag_frame(FULL, Some(over), None),
+            DragFrame::Local([256, 256])
+        );
+        assert_eq!(
+            drag_frame(FULL, Some(1e9), None),
+            DragFrame::Local([256, 256])
+        );
+        // Over the limit but no dearer than the local frame (a loaded machine): the
+        // smallest path frame, which is not slower than before.
+        let least = over * smallest;
+        let local = |ms: f64| drag_frame(FULL, Some(over), Some(ms));
+        assert_eq!(local(least * 1.2), DragFrame::Path([96, 96]));
+        assert_eq!(local(least * 0.8), DragFrame::Local([256, 256]));
+        assert_eq!(local(f64::NAN), DragFrame::Local([256, 256]));
     }
 
     #[test]
@@ -217,6 +272,7 @@ mod tests {
         assert!(locals
             .into_iter()
             .all(|f| f == DragFrame::Local([256, 256])));
+        assert_eq!(c.local_ms(), None);
         // Then one path frame of the smallest size measures again.
         assert_eq!(c.choose(FULL), DragFrame::Path([96, 96]));
         // Cheaper now (a zoom out): the estimate moves halfway per frame.
@@ -230,5 +286,16 @@ mod tests {
         c.measured([0, 0], 5.0);
         c.measured([96, 96], f64::NAN);
         assert_eq!(c.ms_per_pixel(), before);
+        // Dear again (200 ms), but the local frames take 300 ms: path stays.
+        let mut c = DragCost::default();
+        c.measured([96, 96], 200.0);
+        assert_eq!(c.choose(FULL), DragFrame::Local([256, 256]));
+        c.measured_local(300.0);
+        assert_eq!(c.local_ms(), Some(300.0));
+        assert_eq!(c.choose(FULL), DragFrame::Path([96, 96]));
+        // The local frames get quicker (100 ms, moving halfway each): local again.
+        c.measured_local(100.0);
+        c.measured_local(100.0);
+        assert_eq!(c.choose(FULL), DragFrame::Local([256, 256]));
     }
 }

@@ -254,7 +254,8 @@ fn render_image_counted(
     drag: &mut DragCost,
 ) -> Result<FrameImage, RenderError> {
     let mut s = scene.clone();
-    // The size of a path drag frame, measured when it is done.
+    // A path drag frame's size (`Some(Some(size))`) or a local one (`Some(None)`),
+    // measured when it is done.
     let mut measure = None;
     if purpose == Purpose::Interactive {
         if s.lighting.model == LightingModel::Path {
@@ -262,7 +263,7 @@ fn render_image_counted(
                 DragFrame::Path(size) => {
                     s.size = size;
                     s.lighting = drag_lighting(&s.lighting);
-                    measure = Some(size);
+                    measure = Some(Some(size));
                 }
                 DragFrame::Local(size) => {
                     // Even the smallest path frame would be too slow (one path
@@ -270,6 +271,7 @@ fn render_image_counted(
                     // 0.4 s here, docs/performance.md): the cheap model, as before.
                     s.size = size;
                     s.lighting = s.lighting.for_model(LightingModel::Local);
+                    measure = Some(None);
                 }
             }
         } else {
@@ -292,8 +294,10 @@ fn render_image_counted(
         }
     };
     let render_ms = start.elapsed().as_secs_f32() * 1e3;
-    if let Some(size) = measure {
-        drag.measured(size, f64::from(render_ms));
+    match measure {
+        Some(Some(size)) => drag.measured(size, f64::from(render_ms)),
+        Some(None) => drag.measured_local(f64::from(render_ms)),
+        None => {}
     }
     let samples = if main.scene.lighting.model == LightingModel::Path {
         renderer.path_samples()
@@ -826,6 +830,11 @@ mod tests {
             )
             .unwrap();
             let moved = d.ms_per_pixel() != Some(cost);
+            assert_eq!(
+                d.local_ms().is_some(),
+                f.samples == 0,
+                "local frames measured"
+            );
             (f.image.width, f.samples, f.scene.lighting.model, moved)
         };
         let path = LightingModel::Path;
