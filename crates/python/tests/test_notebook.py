@@ -250,7 +250,8 @@ def test_viewer_refines_path_frames_while_the_mouse_rests(mni_path):
     assert samples == [("full", n, (32, 32, 3)) for n in (1, 2, 4)]
     v._session.update({"camera": {"azimuth": 30}}, True)
     f = v._session.next_frame()
-    assert (f[1], f[2], f[0].shape) == ("interactive", 0, (16, 16, 3))
+    # A drag frame: path-traced at one sample, denoised, half size (issue 41).
+    assert (f[1], f[2], f[0].shape) == ("interactive", 1, (16, 16, 3))
     assert v._session.next_frame() is None  # the full frame waits for the settle time
     assert v._session.settle_in() is not None
     snap = v.snapshot()

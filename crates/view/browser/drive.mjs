@@ -136,7 +136,7 @@ try {
     if (!changed || g.errors.length || (foreignUrl && foreign !== "refused")) process.exitCode = 1;
   } else {
     const seconds = Number(arg || 5);
-    await page.evaluate(() => { window.glint.latencies.length = 0; });
+    await page.evaluate(() => { window.glint.latencies.length = 0; if (window.glint.dragLog) window.glint.dragLog.length = 0; });
     const f0 = await page.evaluate(() => window.glint.frames);
     await page.mouse.move(cx, cy);
     await page.mouse.down();
@@ -153,8 +153,20 @@ try {
     await page.mouse.up();
     const lat = (await page.evaluate(() => window.glint.latencies.slice())).sort((a, b) => a - b);
     const q = (p) => lat.length ? lat[Math.min(lat.length - 1, Math.floor(p * lat.length))] : NaN;
+    // The drag frames: how many were path-traced, their sizes (long side) and render times.
+    // (A page older than the log has none: then no drag frame is counted.)
+    const drag = await page.evaluate(() => (window.glint.dragLog || []).slice());
+    const path = drag.filter((d) => d[2] > 0);
+    const sides = path.map((d) => Math.max(d[0], d[1])).sort((a, b) => a - b);
+    const ms = drag.map((d) => d[3]).sort((a, b) => a - b);
+    const pathMs = path.map((d) => d[3]).sort((a, b) => a - b);
+    const localMs = drag.filter((d) => d[2] === 0).map((d) => d[3]).sort((a, b) => a - b);
+    const mid = (a) => a.length ? a[Math.floor(a.length / 2)] : null;
     console.log(JSON.stringify({ seconds: elapsed, events: i, frames: f1 - f0,
-      fps: (f1 - f0) / elapsed, latency_ms_p50: q(0.5), latency_ms_p95: q(0.95), samples: lat.length }));
+      fps: (f1 - f0) / elapsed, latency_ms_p50: q(0.5), latency_ms_p95: q(0.95), samples: lat.length,
+      drag_frames: drag.length, path_frames: path.length,
+      path_side_min: sides[0] ?? null, path_side_median: mid(sides), path_side_max: sides[sides.length - 1] ?? null,
+      render_ms_median: mid(ms), path_render_ms_median: mid(pathMs), local_render_ms_median: mid(localMs) }));
   }
 } finally {
   await browser.close();

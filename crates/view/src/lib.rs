@@ -27,7 +27,9 @@
 //! arrive while a frame renders are merged, never queued. While the user drags,
 //! frames are half size and JPEG at quality 70; 150 ms after the last interactive
 //! update a full-resolution frame follows. A `path` scene is progressive: its
-//! interactive frames take one sample per pixel, and while the scene holds still full
+//! interactive frames take one sample per pixel, denoised, at the size its measured
+//! cost allows ([`drag`]; half-size `local` when even the smallest would be too
+//! slow), and while the scene holds still full
 //! frames follow one another, each adding samples to the last ([`next_samples`]), up
 //! to the scene's `spp`; the frame header carries the sample count. Any change
 //! starts again from one sample.
@@ -42,6 +44,7 @@
 
 pub mod access;
 mod cut;
+pub mod drag;
 pub mod histogram;
 pub mod labels;
 pub mod levels;
@@ -67,14 +70,15 @@ use glint_render::{
 };
 
 pub use access::{is_loopback, Access, Token};
+pub use drag::{drag_frame, DragCost, DragFrame};
 pub use histogram::{Histogram, HISTOGRAM_BINS};
 pub use labels::{LabelInfo, LabelList};
 pub use levels::PyramidLevel;
 pub use pick::MAX_MARKS;
 pub use schedule::{next_samples, Schedule};
 pub use session::{
-    apply_patch, frame_ray_samples, render_frame, render_frame_counted, render_image, Frame,
-    FrameImage, Session, MAX_FRAME_RAY_SAMPLES, MAX_VIEW_SIDE,
+    apply_patch, drag_lighting, frame_ray_samples, render_frame, render_frame_counted,
+    render_image, Frame, FrameImage, Session, MAX_FRAME_RAY_SAMPLES, MAX_VIEW_SIDE,
 };
 
 use levels::Stage;
@@ -444,16 +448,17 @@ fn hello(viewer: &Viewer, stage: Option<&Stage>) -> ServerMessage {
 }
 
 /// Starts rendering `state` for `purpose` on the blocking pool; a full frame of a
-/// progressive (`path`) state takes the sample count `schedule` gives it.
+/// progressive (`path`) state takes the sample count `schedule` gives it, a drag
+/// frame of a `path` state the size the client's `drag` estimate gives it.
 fn spawn_frame(
     viewer: &Viewer,
-    renderer: &Arc<Mutex<Renderer>>,
+    (renderer, drag): (&Arc<Mutex<Renderer>>, &Arc<Mutex<DragCost>>),
     cancel: &Arc<AtomicBool>,
     state: &ClientState,
     purpose: Purpose,
     schedule: &Schedule,
 ) -> FrameJob {
-    let (r, mut s) = (renderer.clone(), state.clone());
+    let (r, d, mut s) = (renderer.clone(), drag.clone(), state.clone());
     let (pixels, stopped) = (viewer.pixels.clone(), viewer.stopped.clone());
     if let Some(list) = viewer.labels() {
         s.scene = list.visible(&s.scene);
@@ -469,10 +474,12 @@ fn spawn_frame(
     cancel.store(false, Ordering::Relaxed);
     tokio::task::spawn_blocking(move || {
         let mut r = r.lock().unwrap_or_else(|e| e.into_inner());
+        let mut d = d.lock().unwrap_or_else(|e| e.into_inner());
         let count = |n| {
             pixels.fetch_add(n, Ordering::Relaxed);
         };
-        let done = render_frame_counted(&mut r, &s.scene, s.split, purpose, s.seq, &count);
+        let (scene, split) = (&s.scene, s.split);
+        let done = render_frame_counted(&mut r, scene, split, purpose, s.seq, &count, &mut d);
         if matches!(done, Err(RenderError::Cancelled)) {
             stopped.fetch_add(1, Ordering::SeqCst);
         }
@@ -666,6 +673,8 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
         return;
     };
     let (renderer, cancel) = client_renderer(&viewer, stage.as_deref());
+    // What this client's `path` drag frames cost: their size follows it.
+    let drag = Arc::new(Mutex::new(DragCost::default()));
     // The finer level, read since and not yet swapped in (when the camera rests).
     let mut finer: Option<Arc<Stage>> = None;
     // What the frame in flight is for, and whether it refines a `path` state: any
@@ -701,7 +710,7 @@ async fn connection(mut socket: WebSocket, viewer: Arc<Viewer>) {
                 inflight_for = Some((purpose, state.progressive().is_some()));
                 let job = spawn_frame(
                     &viewer,
-                    &renderer,
+                    (&renderer, &drag),
                     &cancel,
                     &state,
                     purpose,

@@ -5,11 +5,12 @@
 use std::time::{Duration, Instant};
 
 use glint_render::{
-    luminance_f32, srgb_to_linear, Depth, Image, LightingModel, RenderError, RenderStats, Renderer,
-    Scene, DEFAULT_SPP, MAX_IMAGE_SIDE,
+    luminance_f32, srgb_to_linear, Denoise, Depth, Image, Lighting, LightingModel, RenderError,
+    RenderStats, Renderer, Scene, DEFAULT_SPP, MAX_IMAGE_SIDE,
 };
 use serde_json::{Map, Value};
 
+use crate::drag::{half_size, DragCost, DragFrame};
 use crate::labels::{merge_labels, LabelList};
 use crate::protocol::{Format, FrameHeader, Purpose, Split};
 use crate::schedule::Schedule;
@@ -143,10 +144,10 @@ pub struct FrameImage {
     pub render_ms: f32,
 }
 
-/// Renders `scene` for `purpose` (interactive frames at half size; a `path` scene's
-/// interactive frames in local lighting, its full frames to the scene's sample
-/// count, continuing the samples `renderer` holds for it) with `split`, encoded with
-/// its header.
+/// Renders `scene` for `purpose` (interactive frames at half size, a `path` scene's
+/// path-traced and denoised at the smallest drag size: [`crate::drag`]; a `path`
+/// scene's full frames to the scene's sample count, continuing the samples `renderer`
+/// holds for it) with `split`, encoded with its header.
 pub fn render_frame(
     renderer: &mut Renderer,
     scene: &Scene,
@@ -154,11 +155,21 @@ pub fn render_frame(
     purpose: Purpose,
     seq: u32,
 ) -> Result<Frame, RenderError> {
-    render_frame_counted(renderer, scene, split, purpose, seq, &|_| {})
+    render_frame_counted(
+        renderer,
+        scene,
+        split,
+        purpose,
+        seq,
+        &|_| {},
+        &mut DragCost::default(),
+    )
 }
 
 /// [`render_frame`] calling `progress` (from worker threads) with the pixels each
-/// tile or row of its renders finished: the work a frame did, stopped or not.
+/// tile or row of its renders finished: the work a frame did, stopped or not; a
+/// `path` scene's drag frame sized by the client's `drag` estimate, which the frame's
+/// time updates ([`DragCost`]).
 pub fn render_frame_counted(
     renderer: &mut Renderer,
     scene: &Scene,
@@ -166,13 +177,14 @@ pub fn render_frame_counted(
     purpose: Purpose,
     seq: u32,
     progress: &(dyn Fn(u64) + Sync),
+    drag: &mut DragCost,
 ) -> Result<Frame, RenderError> {
     let FrameImage {
         image,
         scene,
         samples,
         render_ms,
-    } = render_image_counted(renderer, scene, split, purpose, progress)?;
+    } = render_image_counted(renderer, scene, split, purpose, progress, drag)?;
     let (format, bytes) = match purpose {
         Purpose::Save => (
             Format::Png,
@@ -208,25 +220,62 @@ pub fn render_image(
     split: Split,
     purpose: Purpose,
 ) -> Result<FrameImage, RenderError> {
-    render_image_counted(renderer, scene, split, purpose, &|_| {})
+    render_image_counted(
+        renderer,
+        scene,
+        split,
+        purpose,
+        &|_| {},
+        &mut DragCost::default(),
+    )
 }
 
-/// [`render_image`] calling `progress` as [`render_frame_counted`] does.
+/// The lighting of a `path` scene's drag frame: one sample per pixel (no time
+/// budget: the image is the same for the same scene and size) denoised by the
+/// à-trous filter, whatever the scene's own denoiser (Intel Open Image Denoise
+/// takes hundreds of milliseconds; no filter at one sample shows the noise).
+pub fn drag_lighting(lighting: &Lighting) -> Lighting {
+    Lighting {
+        spp: Some(1),
+        time_budget: None,
+        denoise: Some(Denoise::Atrous),
+        ..lighting.clone()
+    }
+}
+
+/// [`render_image`] calling `progress` as [`render_frame_counted`] does, a `path`
+/// scene's drag frame sized by `drag`.
 fn render_image_counted(
     renderer: &mut Renderer,
     scene: &Scene,
     split: Split,
     purpose: Purpose,
     progress: &(dyn Fn(u64) + Sync),
+    drag: &mut DragCost,
 ) -> Result<FrameImage, RenderError> {
     let mut s = scene.clone();
+    // A path drag frame's size (`Some(Some(size))`) or a local one (`Some(None)`),
+    // measured when it is done.
+    let mut measure = None;
     if purpose == Purpose::Interactive {
-        s.size = s.size.map(|x| (x / 2).max(1));
         if s.lighting.model == LightingModel::Path {
-            // Drag frames in the cheap model: one path sample of a 512x512 MNI152
-            // frame at half size takes about 0.4 s here (docs/performance.md), over the
-            // 150 ms an input may wait; local lighting takes tens of milliseconds.
-            s.lighting = s.lighting.for_model(LightingModel::Local);
+            match drag.choose(s.size) {
+                DragFrame::Path(size) => {
+                    s.size = size;
+                    s.lighting = drag_lighting(&s.lighting);
+                    measure = Some(Some(size));
+                }
+                DragFrame::Local(size) => {
+                    // Even the smallest path frame would be too slow (one path
+                    // sample of a 512x512 MNI152 frame at half size takes about
+                    // 0.4 s here, docs/performance.md): the cheap model, as before.
+                    s.size = size;
+                    s.lighting = s.lighting.for_model(LightingModel::Local);
+                    measure = Some(None);
+                }
+            }
+        } else {
+            s.size = half_size(s.size);
         }
     }
     let start = Instant::now();
@@ -245,6 +294,11 @@ fn render_image_counted(
         }
     };
     let render_ms = start.elapsed().as_secs_f32() * 1e3;
+    match measure {
+        Some(Some(size)) => drag.measured(size, f64::from(render_ms)),
+        Some(None) => drag.measured_local(f64::from(render_ms)),
+        None => {}
+    }
     let samples = if main.scene.lighting.model == LightingModel::Path {
         renderer.path_samples()
     } else {
@@ -269,6 +323,8 @@ pub struct Session {
     labels: Option<LabelList>,
     schedule: Schedule,
     settle: Duration,
+    /// What this session's `path` drag frames cost ([`crate::drag`]).
+    drag: DragCost,
 }
 
 impl Session {
@@ -298,6 +354,7 @@ impl Session {
             labels,
             schedule: Schedule::default(),
             settle,
+            drag: DragCost::default(),
         })
     }
 
@@ -366,7 +423,15 @@ impl Session {
                 s.lighting.spp = Some(spp);
             }
         }
-        match render_image(&mut self.renderer, &s, Split::Off, purpose) {
+        let done = render_image_counted(
+            &mut self.renderer,
+            &s,
+            Split::Off,
+            purpose,
+            &|_| {},
+            &mut self.drag,
+        );
+        match done {
             Ok(frame) => {
                 if purpose == Purpose::Full {
                     self.schedule.full_done(frame.samples, goal);
@@ -549,11 +614,11 @@ mod tests {
         let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 1).unwrap();
         assert_eq!(f.samples, 5, "the same scene with more samples continues");
         let f = render_frame(&mut r, &s, Split::Off, Purpose::Interactive, 2).unwrap();
-        assert_eq!(
-            f.samples, 0,
-            "interactive path frames are drawn in local lighting"
-        );
-        assert_eq!(r.path_samples(), 5, "and leave the path samples alone");
+        assert_eq!(f.samples, 1, "interactive path frames take one sample");
+        // The drag frame's samples replaced the full frame's: the next full frame of
+        // the same scene starts again (a drag moves the camera, which would anyway).
+        let f = render_frame(&mut r, &s, Split::Off, Purpose::Full, 2).unwrap();
+        assert_eq!(f.samples, 5);
         let f = render_frame(&mut r, &scene(), Split::Off, Purpose::Full, 3).unwrap();
         assert_eq!(f.samples, 0, "local frames are not path traced");
         let steps: Vec<u32> =
@@ -588,7 +653,7 @@ mod tests {
         assert_eq!(session.scene().camera.azimuth, 40.0);
         assert_eq!(session.next(t0), Some(Purpose::Interactive));
         let f = session.render(Purpose::Interactive).unwrap();
-        assert_eq!((f.samples, f.image.width), (0, 12));
+        assert_eq!((f.samples, f.image.width), (1, 12));
         assert!(session.next(t0).is_none() && session.settle_at() == Some(t0 + settle));
         assert_eq!(session.next(t0 + settle), Some(Purpose::Full));
         let before = session.scene().clone();
@@ -620,7 +685,15 @@ mod tests {
                 flag.store(true, Ordering::SeqCst);
             };
             flag.store(false, Ordering::SeqCst);
-            let f = render_frame_counted(&mut r, &s, Split::Off, Purpose::Full, 1, &stop);
+            let f = render_frame_counted(
+                &mut r,
+                &s,
+                Split::Off,
+                Purpose::Full,
+                1,
+                &stop,
+                &mut DragCost::default(),
+            );
             assert!(matches!(f, Err(RenderError::Cancelled)), "{model:?}");
             let done = pixels.load(Ordering::SeqCst);
             // The tiles begun before the flag was seen finish: a few of 64.
@@ -631,7 +704,16 @@ mod tests {
             let count = |n| {
                 whole.fetch_add(n, Ordering::SeqCst);
             };
-            render_frame_counted(&mut r, &s, Split::Off, Purpose::Full, 2, &count).unwrap();
+            render_frame_counted(
+                &mut r,
+                &s,
+                Split::Off,
+                Purpose::Full,
+                2,
+                &count,
+                &mut DragCost::default(),
+            )
+            .unwrap();
             assert_eq!(whole.load(Ordering::SeqCst), total, "{model:?}");
         }
     }
@@ -658,6 +740,114 @@ mod tests {
         // 2048^2 pixels, the phantom's diagonal (31 sqrt(3) voxels) over 0.5.
         let n = frame_ray_samples(&r, &s).unwrap() / (2048.0 * 2048.0);
         assert!((100.0..115.0).contains(&n), "{n} samples per ray");
+    }
+
+    fn path_scene(size: u32) -> Scene {
+        let mut s = Scene::phantom(Phantom::SheppLogan, 32, [size, size]);
+        s.lighting = glint_render::Lighting {
+            model: LightingModel::Path,
+            spp: Some(16),
+            ..Default::default()
+        };
+        s
+    }
+
+    /// Issue 41, item 3: while the budget allows, a `path` scene's drag frame is
+    /// path-traced at one sample and denoised by the à-trous filter, not `local`:
+    /// the same image as that render, bit for bit, again for the same scene and
+    /// size, and not the `local` image of that size.
+    #[test]
+    fn a_path_scene_drags_in_denoised_path_frames_while_the_budget_allows() {
+        let s = path_scene(64);
+        let mut session = Session::new(
+            Renderer::open(&s, &ReadOptions::default()).unwrap(),
+            &s,
+            Duration::from_millis(150),
+        )
+        .unwrap();
+        let patch = serde_json::from_str(r#"{"camera": {"azimuth": 25}}"#).unwrap();
+        session.update(&patch, true, Instant::now()).unwrap();
+        let drag = session.render(Purpose::Interactive).unwrap();
+        // Half size (32 px) is under the smallest drag size: half size, path.
+        assert_eq!(
+            (drag.samples, drag.image.width, drag.image.height),
+            (1, 32, 32)
+        );
+        assert_eq!(drag.scene.lighting.model, LightingModel::Path);
+        assert_eq!(
+            drag.scene.lighting.denoise,
+            Some(glint_render::Denoise::Atrous)
+        );
+        // The same render made by hand.
+        let mut r = Renderer::open(&s, &ReadOptions::default()).unwrap();
+        let mut by_hand = session.scene().clone();
+        by_hand.size = [32, 32];
+        by_hand.lighting = drag_lighting(&by_hand.lighting);
+        let expected = r.render(&by_hand, &|_| {}).unwrap().image;
+        assert_eq!(drag.image.rgb, expected.rgb);
+        // The filter did something: the undenoised one-sample image differs.
+        let mut raw = by_hand.clone();
+        raw.lighting.denoise = None;
+        let noisy = Renderer::open(&s, &ReadOptions::default())
+            .unwrap()
+            .render(&raw, &|_| {})
+            .unwrap()
+            .image;
+        assert_ne!(drag.image.rgb, noisy.rgb);
+        // Not the local image of that size.
+        let mut local = by_hand.clone();
+        local.lighting = local.lighting.for_model(LightingModel::Local);
+        assert_ne!(drag.image.rgb, r.render(&local, &|_| {}).unwrap().image.rgb);
+        // Deterministic: a drag frame of the same scene on another renderer.
+        let mut other = Renderer::open(&s, &ReadOptions::default()).unwrap();
+        let again = render_image(
+            &mut other,
+            session.scene(),
+            Split::Off,
+            Purpose::Interactive,
+        );
+        assert_eq!(again.unwrap().image.rgb, drag.image.rgb);
+    }
+
+    /// The drag frame's size follows the client's estimate: a cheap one gives half
+    /// size, a dear one the smallest, one too dear even for that today's half-size
+    /// `local` frame; the path frame's time moves the estimate.
+    #[test]
+    fn the_drag_frame_size_follows_the_estimate_and_falls_back_to_local() {
+        let s = path_scene(256);
+        let mut r = Renderer::open(&s, &ReadOptions::default()).unwrap();
+        let mut frame = |cost: f64| {
+            let mut d = DragCost::default();
+            // An estimate of `cost` ms per pixel (one frame measured).
+            d.measured([1, 1], cost);
+            let f = render_image_counted(
+                &mut r,
+                &s,
+                Split::Off,
+                Purpose::Interactive,
+                &|_| {},
+                &mut d,
+            )
+            .unwrap();
+            let moved = d.ms_per_pixel() != Some(cost);
+            assert_eq!(
+                d.local_ms().is_some(),
+                f.samples == 0,
+                "local frames measured"
+            );
+            (f.image.width, f.samples, f.scene.lighting.model, moved)
+        };
+        let path = LightingModel::Path;
+        // 128x128 within the target; at 4e-3 ms per pixel 65 ms, over it, and the
+        // smallest (96x96) 37 ms; at 1 ms per pixel even the smallest is too dear.
+        assert_eq!(frame(0.0), (128, 1, path, true));
+        assert_eq!(frame(4e-3), (96, 1, path, true));
+        let local = (128, 0, LightingModel::Local, false);
+        assert_eq!(
+            frame(1.0),
+            local,
+            "the estimate is not moved by local frames"
+        );
     }
 
     #[test]

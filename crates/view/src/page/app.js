@@ -4,7 +4,7 @@
 const $ = (id) => document.getElementById(id);
 const canvas = $("frame");
 const ctx = canvas.getContext("2d");
-const glint = (window.glint = { level: null, frameLevels: [], frames: 0, full: 0, samples: 0, sampleLog: [], latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
+const glint = (window.glint = { level: null, frameLevels: [], frames: 0, full: 0, samples: 0, sampleLog: [], dragLog: [], latencies: [], errors: [], sent: new Map(), scene: null, saved: null });
 // Scripts beside this one (pick.js) see every text message and send their own.
 glint.hooks = { message: [], binary: [] };
 let seq = 0;
@@ -95,6 +95,10 @@ async function handle(ev) {
   // Path-traced frames: the samples per pixel they hold (refined while the scene holds still).
   glint.samples = h.samples;
   glint.sampleLog.push(h.samples);
+  // Drag frames: their size, samples (path-traced: 1; local: 0) and render time, for
+  // the benchmark (the last 4096).
+  if (h.purpose === 0) glint.dragLog.push([h.width, h.height, h.samples, h.ms]);
+  if (glint.dragLog.length > 4096) glint.dragLog.shift();
   $("samples").textContent = h.samples > 0 ? `${h.samples} samples per pixel` : "";
   // Input-to-frame latency: every event this frame reflects (its seq and the older
   // ones, merged into it on the server) waited from its pointer event until now.
