@@ -197,7 +197,7 @@ canvas.addEventListener("pointermove", (e) => {
   const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
   drag = { x: e.clientX, y: e.clientY };
   // Alt- or Shift-drag turns the environment map (path lighting with a map), not the camera.
-  if ((e.shiftKey || e.altKey) && $("envmap").value !== "" && $("lighting").value === "path") {
+  if ((e.shiftKey || e.altKey) && $("envmap").value !== "" && $("lighting").value !== "local") {
     const turn = Math.round(((Number($("env-rot").value) + dx * 0.5 + 540) % 360) - 180);
     $("env-rot").value = turn;
     update({ lighting: { environment_rotation: turn } }, true);
@@ -243,26 +243,26 @@ $("lighting").onchange = (e) => {
     patch.spp = Number($("spp").value);
     // Denoised by default (the toggle starts on): OIDN in builds with it, else à-trous.
     patch.denoise = $("denoise").checked ? "auto" : "none";
-    if ($("envmap").value !== "") Object.assign(patch, environment());
-  } else {
-    Object.assign(patch, { environment_map: null, environment_rotation: null });
   }
+  if (model !== "local" && $("envmap").value !== "") Object.assign(patch, environment());
+  else Object.assign(patch, { environment_map: null, environment_rotation: null });
   update({ lighting: patch });
 };
 $("denoise").onchange = (e) => {
   if ($("lighting").value === "path") update({ lighting: { denoise: e.target.checked ? "auto" : "none" } });
 };
 // The environment: a map replaces the uniform one (the scene refuses both, and a
-// map's rotation without a map); path lighting only.
+// map's rotation without a map); path lighting, and shadows (the map as a few fitted
+// directional lights).
 const environment = () => {
   const map = $("envmap").value;
   return map === ""
     ? { environment_map: null, environment_rotation: null }
     : { environment: null, environment_map: map, environment_rotation: Number($("env-rot").value) };
 };
-$("envmap").onchange = () => { if ($("lighting").value === "path") update({ lighting: environment() }); };
+$("envmap").onchange = () => { if ($("lighting").value !== "local") update({ lighting: environment() }); };
 $("env-rot").oninput = (e) => {
-  if ($("lighting").value === "path" && $("envmap").value !== "") update({ lighting: { environment_rotation: Number(e.target.value) } }, true);
+  if ($("lighting").value !== "local" && $("envmap").value !== "") update({ lighting: { environment_rotation: Number(e.target.value) } }, true);
 };
 $("spp").onchange = (e) => { if ($("lighting").value === "path") update({ lighting: { spp: Number(e.target.value) } }); };
 // Film: the exposure and tone curve map the radiance for display (a path image keeps
