@@ -14,22 +14,24 @@ use crate::adapter::{FieldCache, Gpu, GpuError};
 /// Pixels per workgroup side (`@workgroup_size(8, 8, 1)` in the shader).
 const GROUP: u32 = 8;
 
-/// The shader's `Params` in f32 words (`size` and `dims` as u32 bits): 15 vec4
+/// The shader's `Params` in f32 words (`size` and `dims` as u32 bits): 21 vec4
 /// fields, two vec4<u32> and 8 lights.
-const PARAM_WORDS: usize = 4 * (15 + 2 + 8);
+const PARAM_WORDS: usize = 4 * (21 + 2 + 8);
+
+/// Bins of the lookup table and its pre-integrated tables (`BINS` in the shader).
+const BINS: usize = 4096;
 
 /// Planes of the volume uploaded per `write_texture` (bounds the staging memory).
 const UPLOAD_PLANES: usize = 16;
 
-/// The lobe as the shader's `[form, n, a, v]`; an error for a table (the `hw` lobe).
-fn lobe_words(specular: &Specular) -> Result<[f32; 4], GpuError> {
+/// The lobe as the shader's `[form, n, a, v]` (form 4: the cosine table of
+/// [`spec_table`]).
+fn lobe_words(specular: &Specular) -> [f32; 4] {
     let Some(lobe) = specular.lobe() else {
-        return Err(GpuError::Unsupported(
-            "the GPU back end does not render a specular table (the hw lobe) yet".into(),
-        ));
+        return [4.0, 0.0, 0.0, 0.0];
     };
     let n = lobe.n() as f32;
-    Ok(match lobe.kind() {
+    match lobe.kind() {
         LobeKind::Exact => [0.0, n, 0.0, 0.0],
         LobeKind::Schlick => [2.0, n, 0.0, 0.0],
         LobeKind::Gauss => [3.0, n, 0.0, 0.0],
@@ -37,16 +39,83 @@ fn lobe_words(specular: &Specular) -> Result<[f32; 4], GpuError> {
             let a = lobe.coefficient().unwrap_or(0.0) as f32;
             [1.0, n, a, lobe.v() as f32]
         }
-    })
+    }
 }
 
-/// The shader's `Params` for `m` on a field of `dims` with gradient scale `scale`.
+/// The hw lobe's cosine table as the shader reads it: `[scale, first code, entries]`
+/// and the values from the first code on (`CosTable::value` clamps a code below it
+/// to the first entry, above the last to the last), read through the table's own
+/// `value`; a one-entry placeholder for a closed-form lobe.
+fn spec_table(specular: &Specular) -> Result<([f32; 3], Vec<f32>), GpuError> {
+    let Specular::Table(table) = specular else {
+        return Ok(([1.0, 0.0, 1.0], vec![0.0]));
+    };
+    let one = 1i32 << table.frac_bits();
+    let codes = -one..=one;
+    let first = codes.clone().map(|c| table.value(c)).next().unwrap_or(0.0);
+    // The leading run of the first value is stored once (as `CosTable` stores it).
+    let lo = codes
+        .clone()
+        .take_while(|&c| table.value(c) == first)
+        .last()
+        .unwrap_or(-one);
+    let values: Vec<f32> = (lo..=one).map(|c| table.value(c)).collect();
+    Ok(([one as f32, lo as f32, values.len() as f32], values))
+}
+
+/// The pre-integrated tables in the shader's layout (`PRE_*`): the point segments,
+/// the integrals' high and low f32 halves, the slopes, then per entry the visible
+/// count and the opacity table; a one-entry placeholder for point sampling.
+fn pre_tables(m: &LocalMarch) -> Result<Vec<[f32; 4]>, GpuError> {
+    let Some(t) = &m.pre else {
+        return Ok(vec![[0.0; 4]]);
+    };
+    if t.point.len() != BINS
+        || t.cum.len() != BINS + 1
+        || t.slope.len() != BINS
+        || t.visible.len() != BINS + 1
+        || t.opacity.len() != BINS
+    {
+        return Err(GpuError::Unsupported(format!(
+            "pre-integrated tables of {} bins (the shader reads {BINS})",
+            t.point.len()
+        )));
+    }
+    let hi = |x: &[f64; 4]| x.map(|v| v as f32);
+    let lo = |x: &[f64; 4]| x.map(|v| (v - f64::from(v as f32)) as f32);
+    let mut out = Vec::with_capacity(5 * BINS + 3);
+    out.extend(&t.point);
+    out.extend(t.cum.iter().map(hi));
+    out.extend(t.cum.iter().map(lo));
+    out.extend(t.slope.iter().map(hi));
+    out.extend((0..=BINS).map(|i| {
+        let opacity = t.opacity.get(i).copied().unwrap_or(0.0);
+        [t.visible[i] as f32, opacity, 0.0, 0.0]
+    }));
+    Ok(out)
+}
+
+/// The clip's half-spaces as the shader's `planes` (two entries each; one
+/// placeholder entry when there is no clip).
+fn clip_planes(m: &LocalMarch) -> Vec<[f32; 4]> {
+    match &m.clip {
+        Some(c) if !c.planes.is_empty() => c
+            .planes
+            .iter()
+            .flat_map(|p| [[p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]])
+            .collect(),
+        _ => vec![[0.0; 4]],
+    }
+}
+
+/// The shader's `Params` for `m` on a field of `dims` with gradient scale `scale`,
+/// the hw lobe's table described by `table` ([`spec_table`]).
 fn params(
     m: &LocalMarch,
     settings: &FrameSettings,
-    dims: [usize; 3],
-    scale: f32,
-) -> Result<Vec<u32>, GpuError> {
+    (dims, scale): ([usize; 3], f32),
+    table: [f32; 3],
+) -> Vec<u32> {
     let shader: &Shader = &m.shader;
     let mut w: Vec<f32> = Vec::with_capacity(PARAM_WORDS);
     let v4 = |w: &mut Vec<f32>, a: [f32; 3], b: f32| w.extend([a[0], a[1], a[2], b]);
@@ -60,6 +129,7 @@ fn params(
     w.extend([m.lut_lo, m.lut_scale, scale, m.lut.len() as f32]);
     let mode = match m.mode {
         RenderMode::Mip => 1.0,
+        RenderMode::Iso => 2.0,
         _ => 0.0,
     };
     v4(&mut w, m.background, mode);
@@ -81,7 +151,23 @@ fn params(
         geometry,
         lights.len() as f32,
     ]);
-    w.extend(lobe_words(shader.specular())?);
+    w.extend(lobe_words(shader.specular()));
+    let (clip_count, depth, strong) = m.clip.as_ref().map_or((0.0, 0.0, 1.0), |c| {
+        (c.planes.len() as f32, c.depth, c.strong)
+    });
+    w.extend([
+        m.iso,
+        f32::from(u8::from(m.pre.is_some())),
+        f32::from(u8::from(m.tricubic.is_some())),
+        clip_count,
+    ]);
+    let (m_max, m_scale) = m.pre.as_ref().map_or((0.0, 0.0), |t| (t.m_max, t.m_scale));
+    w.extend([depth, strong, m_max, m_scale]);
+    w.extend(table);
+    w.push(0.0);
+    for row in m.tricubic.unwrap_or_default() {
+        v4(&mut w, row, 0.0);
+    }
     let mut words: Vec<u32> = w.iter().map(|x| x.to_bits()).collect();
     words.extend([settings.width, settings.height, 0, 0]);
     words.extend([dims[0] as u32, dims[1] as u32, dims[2] as u32, 0]);
@@ -92,16 +178,17 @@ fn params(
         words.extend([d[0], d[1], d[2], intensity].map(f32::to_bits));
     }
     debug_assert_eq!(words.len(), PARAM_WORDS);
-    Ok(words)
+    words
 }
 
 impl Gpu {
     /// The `local` frame of `class` for `settings` lit by `shader`, as
     /// [`Classification::frame`] renders it on the CPU (same rays, samples, lookup
     /// table, gradients and lighting; floating-point differences only): composite with
-    /// point sampling, or MIP. Errors for what the GPU back end does not render yet
-    /// (pre-integration, iso, tricubic, colour volumes, clips, the hw lobe), for a
-    /// volume past the adapter's 3D texture limit, and for device failures.
+    /// point sampling or pre-integrated segments, MIP or iso; either filter; clip
+    /// planes and crop boxes; every lobe, the hw lobe's table included. Errors for
+    /// what the GPU back end does not render yet (colour volumes), for a volume past
+    /// the adapter's 3D texture limit, and for device failures.
     pub fn render_local(
         &mut self,
         class: &Classification,
@@ -129,19 +216,25 @@ impl Gpu {
         let scopes = self.scopes();
         self.upload(field)?;
         let cache = self.field.as_ref().expect("uploaded above");
-        let words = params(&march, settings, dims, cache.gradient_scale)?;
+        let (table, spec) = spec_table(march.shader.specular())?;
+        let words = params(&march, settings, (dims, cache.gradient_scale), table);
         let device = &self.device;
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("glint params"),
             contents: bytemuck::cast_slice(&words),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let lut: Vec<f32> = march.lut.iter().flatten().copied().collect();
-        let lut = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("glint lut"),
-            contents: bytemuck::cast_slice(&lut),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let storage = |label, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let lut = storage("glint lut", bytemuck::cast_slice(&march.lut));
+        let planes = storage("glint planes", bytemuck::cast_slice(&clip_planes(&march)));
+        let pre = storage("glint pre", bytemuck::cast_slice(&pre_tables(&march)?));
+        let spec = storage("glint spec", bytemuck::cast_slice(&spec));
         let out = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("glint image"),
             size: out_size,
@@ -157,6 +250,9 @@ impl Gpu {
                 entry(2, wgpu::BindingResource::TextureView(&cache.gradients)),
                 entry(3, lut.as_entire_binding()),
                 entry(4, out.as_entire_binding()),
+                entry(5, planes.as_entire_binding()),
+                entry(6, pre.as_entire_binding()),
+                entry(7, spec.as_entire_binding()),
             ],
         });
         let mut encoder = device.create_command_encoder(&Default::default());

@@ -4,7 +4,11 @@
 // light_sums, gated; glint-lobe Lobe::eval) term by term. Values and gradients are
 // the field's bricks' own (R32Float and Rgba16Sint texels, read with textureLoad):
 // the 8 neighbours are interpolated here in f32, since texture units (and lavapipe)
-// quantise trilinear weights to 8 bits.
+// quantise trilinear weights to 8 bits. The tricubic filter reads the 64 taps of
+// the CPU's B-spline (field/cubic.rs) from the same values; pre-integrated segments
+// read the CPU's tables (classification/preint.rs) with the f64 integrals split into
+// f32 pairs; clip planes and the crop box cut each ray and light its cut faces
+// (clip.rs); the hw lobe reads its cosine table (glint-lobe CosTable::eval).
 
 struct Params {
     // xyz: the eye (perspective) or image centre (orthographic), index units;
@@ -31,8 +35,21 @@ struct Params {
     material: vec4<f32>,
     // gate, surface weight, geometry (0 Phong, 1 Blinn), light count.
     gate: vec4<f32>,
-    // form (0 exact, 1 power, 2 Schlick, 3 Gauss), n, a, v.
+    // form (0 exact, 1 power, 2 Schlick, 3 Gauss, 4 table), n, a, v.
     lobe: vec4<f32>,
+    // Iso threshold, pre-integrated (1) or point sampling (0), tricubic (1) or
+    // trilinear (0), clip half-spaces.
+    extra: vec4<f32>,
+    // The cut faces' depth (mm) and strong gradient; the pre-integrated opacity
+    // table's m_max and m_scale.
+    cut: vec4<f32>,
+    // The hw lobe's cosine table: scale (2^frac_bits), first code, entries.
+    table: vec4<f32>,
+    // Rows of the matrix from the spline's index-space derivatives to the world
+    // gradient (tricubic).
+    gm0: vec4<f32>,
+    gm1: vec4<f32>,
+    gm2: vec4<f32>,
     // width, height, then the field's dims (x, y: nx, ny; nz in dims).
     size: vec4<u32>,
     dims: vec4<u32>,
@@ -45,6 +62,24 @@ struct Params {
 @group(0) @binding(2) var gradients: texture_3d<i32>;
 @group(0) @binding(3) var<storage, read> lut: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> out: array<vec4<f32>>;
+// Per half-space two entries: (a, b) with signed distance a·p + b (mm), then the
+// unit world normal into the kept side.
+@group(0) @binding(5) var<storage, read> planes: array<vec4<f32>>;
+// The pre-integrated tables (PreIntegrated): per bin the point segment, then the
+// integrals at the bins' lower edges as f32 pairs (high, low), the slopes, and
+// (visible count, opacity table entry).
+@group(0) @binding(6) var<storage, read> pre: array<vec4<f32>>;
+// The hw lobe's cosine table from its first stored code.
+@group(0) @binding(7) var<storage, read> spec: array<f32>;
+
+const BINS: u32 = 4096u;
+const PRE_POINT: u32 = 0u;
+const PRE_HI: u32 = 4096u;
+const PRE_LO: u32 = 8193u;
+const PRE_SLOPE: u32 = 12290u;
+const PRE_AUX: u32 = 16386u;
+const OPACITY_TABLE: u32 = 4096u;
+const ISO_REFINE_STEPS: u32 = 8u;
 
 struct Loc {
     ijk: vec3<i32>,
@@ -144,6 +179,14 @@ fn lobe_eval(c_in: f32) -> f32 {
             b = b * b;
         }
         y = b;
+    } else if form == 4u {
+        // CosTable::code and value: the nearest code, rounded half away from zero.
+        let x = c * P.table.x;
+        let t = trunc(x);
+        let r = x - t;
+        let code = i32(t) + select(0, 1, r >= 0.5) - select(0, 1, r <= -0.5);
+        let i = clamp(code - i32(P.table.y), 0, i32(P.table.z) - 1);
+        return spec[i];
     } else if form == 2u {
         if c > 0.0 {
             y = c / (n * (1.0 - c) + c);
@@ -209,49 +252,264 @@ fn shade(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
     return unshaded + w * (shaded - unshaded);
 }
 
+// Vec3::dot, in its order.
+fn dot3(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+// cubic.rs weights: the B-spline's weights of the taps at -1, 0, 1, 2.
+fn cubic_weights(t: f32) -> vec4<f32> {
+    let s = 1.0 - t;
+    let t2 = t * t;
+    let t3 = t * t * t;
+    return vec4<f32>(
+        s * s * s / 6.0,
+        (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0,
+        (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0,
+        t3 / 6.0,
+    );
+}
+
+// cubic.rs derivatives.
+fn cubic_derivatives(t: f32) -> vec4<f32> {
+    let s = 1.0 - t;
+    return vec4<f32>(-0.5 * s * s, 1.5 * t * t - 2.0 * t, -1.5 * t * t + t + 0.5, 0.5 * t * t);
+}
+
+// cubic.rs dot: w0 x0 + w1 x1 + w2 x2 + w3 x3.
+fn dot4(w: vec4<f32>, x: vec4<f32>) -> f32 {
+    return w.x * x.x + w.y * x.y + w.z * x.z + w.w * x.w;
+}
+
+// A tap of the spline, clamped to the volume (Field::gathered).
+fn tap(c: vec3<i32>) -> f32 {
+    let hi = vec3<i32>(P.dims.xyz) - vec3<i32>(1);
+    return textureLoad(values, clamp(c, vec3<i32>(0), hi), 0).x;
+}
+
+// cubic.rs block: the spline's value (x) and, with `grad`, its index-space
+// derivatives (yzw) from the 64 taps, separably: x, then y, then z.
+fn cubic(l: Loc, grad: bool) -> vec4<f32> {
+    let wx = cubic_weights(l.t.x);
+    let wy = cubic_weights(l.t.y);
+    let wz = cubic_weights(l.t.z);
+    let dx = cubic_derivatives(l.t.x);
+    let dy = cubic_derivatives(l.t.y);
+    let dz = cubic_derivatives(l.t.z);
+    let c0 = l.ijk - vec3<i32>(1);
+    var slices = vec4<f32>(0.0);
+    var gx_s = vec4<f32>(0.0);
+    var gy_s = vec4<f32>(0.0);
+    for (var c = 0; c < 4; c++) {
+        var rows = vec4<f32>(0.0);
+        var rows_dx = vec4<f32>(0.0);
+        for (var b = 0; b < 4; b++) {
+            let o = c0 + vec3<i32>(0, b, c);
+            let x = vec4<f32>(
+                tap(o),
+                tap(o + vec3<i32>(1, 0, 0)),
+                tap(o + vec3<i32>(2, 0, 0)),
+                tap(o + vec3<i32>(3, 0, 0)),
+            );
+            rows[b] = dot4(wx, x);
+            if grad {
+                rows_dx[b] = dot4(dx, x);
+            }
+        }
+        slices[c] = dot4(wy, rows);
+        if grad {
+            gx_s[c] = dot4(wy, rows_dx);
+            gy_s[c] = dot4(dy, rows);
+        }
+    }
+    let value = dot4(wz, slices);
+    if !grad {
+        return vec4<f32>(value, 0.0, 0.0, 0.0);
+    }
+    return vec4<f32>(value, dot4(wz, gx_s), dot4(wz, gy_s), dot4(dz, slices));
+}
+
+// Field::value_at: the field's filter.
+fn sample_value(l: Loc) -> f32 {
+    if P.extra.z != 0.0 {
+        return cubic(l, false).x;
+    }
+    return value_at(l);
+}
+
+// Field::gradient_at: the field's filter (cubic_gradient_at maps the spline's
+// derivatives by the inverse transpose of the affine).
+fn sample_gradient(l: Loc) -> vec3<f32> {
+    if P.extra.z != 0.0 {
+        let g = cubic(l, true).yzw;
+        return vec3<f32>(
+            P.gm0.x * g.x + P.gm0.y * g.y + P.gm0.z * g.z,
+            P.gm1.x * g.x + P.gm1.y * g.y + P.gm1.z * g.z,
+            P.gm2.x * g.x + P.gm2.y * g.y + P.gm2.z * g.z,
+        );
+    }
+    return gradient_at(l);
+}
+
+// Lut::position: the table coordinate of v.
+fn lut_position(v: f32) -> f32 {
+    return min(max((v - P.lut.x) * P.lut.y + 0.5, 0.0), P.lut.w - 1.0);
+}
+
+// PreIntegrated::opacity_of: 1 - exp(-step m), interpolated from the table.
+fn opacity_of(m: f32) -> f32 {
+    let x = clamp(m, 0.0, P.cut.z) * P.cut.w;
+    let i = min(u32(x), OPACITY_TABLE - 2u);
+    let t = x - f32(i);
+    let a = pre[PRE_AUX + i].y;
+    let b = pre[PRE_AUX + i + 1u].y;
+    return a + t * (b - a);
+}
+
+// PreIntegrated::segment between table coordinates f and b: colour and opacity,
+// or w = -1 when no value between them has opacity. The integrals' difference is
+// taken in pairs of f32 (high, low), which keep what the CPU's f64 keeps of it.
+fn segment(f: f32, b: f32) -> vec4<f32> {
+    let bf = u32(f);
+    let bb = u32(b);
+    let lo = min(bf, bb);
+    let hi = max(bf, bb);
+    if pre[PRE_AUX + hi + 1u].x == pre[PRE_AUX + lo].x {
+        return vec4<f32>(-1.0);
+    }
+    if bf == bb {
+        return pre[PRE_POINT + bb];
+    }
+    let ff = f - f32(bf);
+    let fb = b - f32(bb);
+    let d = (pre[PRE_HI + bb] - pre[PRE_HI + bf])
+        + ((pre[PRE_LO + bb] - pre[PRE_LO + bf])
+        + (fb * pre[PRE_SLOPE + bb] - ff * pre[PRE_SLOPE + bf]));
+    if d.w == 0.0 {
+        return vec4<f32>(-1.0);
+    }
+    let inv = 1.0 / d.w;
+    return vec4<f32>(d.xyz * inv, opacity_of(d.w / (b - f)));
+}
+
+// IndexClip::interval: the part of (t0, t1) where the ray is kept (x > y: none).
+fn clip_interval(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> vec2<f32> {
+    var lo = t0;
+    var hi = t1;
+    let count = u32(P.extra.w);
+    for (var i = 0u; i < count; i++) {
+        let q = planes[2u * i];
+        let f0 = dot3(q.xyz, o) + q.w;
+        let slope = dot3(q.xyz, d);
+        if slope > 0.0 {
+            lo = max(lo, -f0 / slope);
+        } else if slope < 0.0 {
+            hi = min(hi, -f0 / slope);
+        } else if f0 < 0.0 {
+            return vec2<f32>(3.4e38, -3.4e38);
+        }
+    }
+    return vec2<f32>(lo, hi);
+}
+
+// IndexClip::cut_gradient: on a cut face, a weak gradient blended towards the
+// nearest plane's normal.
+fn cut_gradient(p: vec3<f32>, g: vec3<f32>) -> vec3<f32> {
+    let count = u32(P.extra.w);
+    var found = false;
+    var best = 0.0;
+    var n = vec3<f32>(0.0);
+    for (var i = 0u; i < count; i++) {
+        let q = planes[2u * i];
+        let s = dot3(q.xyz, p) + q.w;
+        if s < P.cut.x && (!found || s < best) {
+            found = true;
+            best = s;
+            n = planes[2u * i + 1u].xyz;
+        }
+    }
+    if !found {
+        return g;
+    }
+    let m = sqrt(dot3(g, g));
+    let strong = P.cut.y;
+    if m >= strong {
+        return g;
+    }
+    let w = m / strong;
+    return n * (strong * (1.0 - w)) + g * w;
+}
+
+// Caster::add's gradient: the field's, cut by the clip where it has planes.
+fn shading_gradient(l: Loc) -> vec3<f32> {
+    let g = sample_gradient(l);
+    if P.extra.w == 0.0 {
+        return g;
+    }
+    return cut_gradient(vec3<f32>(l.ijk) + l.t, g);
+}
+
 // Caster::cast's interval; the jitter of caster.rs.
 fn jitter(x: f32, y: f32) -> f32 {
     return fract(52.982918 * fract(0.06711056 * x + 0.00583715 * y));
 }
 
-@compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let width = P.size.x;
-    let height = P.size.y;
-    if gid.x >= width || gid.y >= height {
-        return;
-    }
-    let x = f32(gid.x);
-    let y = f32(gid.y);
-    let slot = gid.y * width + gid.x;
-    let bg = P.bg.xyz;
-    out[slot] = vec4<f32>(bg, 0.0);
-    // IndexRays::ray.
+// A ray in index space and its samples (caster.rs Ray).
+struct Ray {
+    o: vec3<f32>,
+    d: vec3<f32>,
+    // The unit world direction.
+    dir: vec3<f32>,
+    k0: i32,
+    k1: i32,
+    j: f32,
+    // Where the ray enters the kept part of the clip box (mm), its first sample.
+    t_entry: f32,
+    k_entry: i32,
+    // Whether it takes a sample.
+    hit: bool,
+}
+
+fn at(r: Ray, k: i32) -> vec3<f32> {
+    return r.o + r.d * ((f32(k) + r.j) * P.clip_lo.w);
+}
+
+// IndexRays::ray, the clip's interval (cut_bounds) and Caster::ray.
+fn make_ray(x: f32, y: f32) -> Ray {
+    var r: Ray;
+    r.hit = false;
     let u = P.plane.x + x * P.plane.y;
     let v = P.plane.z + y * P.plane.w;
-    var o: vec3<f32>;
-    var d: vec3<f32>;
-    var dir: vec3<f32>;
     if P.origin.w != 0.0 {
         let wv = P.f_world.xyz + P.r_world.xyz * u + P.u_world.xyz * v;
         let inv = 1.0 / length(wv);
-        o = P.origin.xyz;
-        d = (P.f_index.xyz + P.r_index.xyz * u + P.u_index.xyz * v) * inv;
-        dir = wv * inv;
+        r.o = P.origin.xyz;
+        r.d = (P.f_index.xyz + P.r_index.xyz * u + P.u_index.xyz * v) * inv;
+        r.dir = wv * inv;
     } else {
-        o = P.origin.xyz + P.r_index.xyz * u + P.u_index.xyz * v;
-        d = P.f_index.xyz;
-        dir = P.f_world.xyz;
+        r.o = P.origin.xyz + P.r_index.xyz * u + P.u_index.xyz * v;
+        r.d = P.f_index.xyz;
+        r.dir = P.f_world.xyz;
+    }
+    var start = 0.0;
+    var end = 3.4e38;
+    if P.extra.w != 0.0 {
+        let kept = clip_interval(r.o, r.d, start, end);
+        if kept.x > kept.y {
+            return r;
+        }
+        start = kept.x;
+        end = kept.y;
     }
     // clip_ray against the clip box from (0, inf).
     var t0 = 0.0;
     var t1 = 3.4e38;
     for (var a = 0; a < 3; a++) {
-        let oa = o[a];
-        let da = d[a];
+        let oa = r.o[a];
+        let da = r.d[a];
         if abs(da) < 1e-12 {
             if oa < P.clip_lo[a] || oa > P.clip_hi[a] {
-                return;
+                return r;
             }
             continue;
         }
@@ -262,51 +520,141 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         t1 = min(t1, max(ta, tb));
     }
     if t0 > t1 {
-        return;
+        return r;
+    }
+    t0 = max(t0, start);
+    t1 = min(t1, end);
+    if t0 > t1 {
+        return r;
     }
     let dt = P.clip_lo.w;
-    let j = jitter(x, y);
-    let k0 = i32(ceil(t0 / dt - j));
-    let k1 = i32(floor(t1 / dt - j));
-    if k1 < k0 {
-        return;
-    }
-    let view = -dir;
+    r.j = jitter(x, y);
+    r.k0 = i32(ceil(t0 / dt - r.j));
+    r.k1 = i32(floor(t1 / dt - r.j));
+    r.t_entry = t0;
+    r.k_entry = r.k0;
+    r.hit = r.k1 >= r.k0;
+    return r;
+}
+
+// Caster::composite with point sampling or pre-integrated segments, and
+// Caster::add: premultiplied colour and opacity.
+fn composite(r: Ray) -> vec4<f32> {
+    let view = -r.dir;
     var color = vec3<f32>(0.0);
     var alpha = 0.0;
-    if P.bg.w == 0.0 {
-        // Caster::composite with point sampling, and Caster::add.
-        for (var k = k0; k <= k1; k++) {
-            let p = o + d * ((f32(k) + j) * dt);
-            let l = locate(p);
-            let e = lut_get(value_at(l));
-            if e.w > 0.0 {
-                let rgb = shade(e.xyz, gradient_at(l), view);
-                let w = (1.0 - alpha) * e.w;
-                color += w * rgb;
-                alpha += w;
-                if alpha >= P.clip_hi.w {
-                    break;
-                }
+    let preintegrated = P.extra.y != 0.0;
+    var front = 0.0;
+    if preintegrated {
+        // Caster::before: the sample before the first.
+        front = lut_position(sample_value(locate(at(r, r.k0 - 1))));
+    }
+    for (var k = r.k0; k <= r.k1; k++) {
+        let l = locate(at(r, k));
+        var e: vec4<f32>;
+        if preintegrated {
+            let back = lut_position(sample_value(l));
+            e = segment(front, back);
+            front = back;
+            if e.w < 0.0 {
+                continue;
+            }
+        } else {
+            e = lut_get(sample_value(l));
+            if !(e.w > 0.0) {
+                continue;
             }
         }
-    } else {
-        // Caster::mip.
-        var best = -3.4e38;
-        var any = false;
-        for (var k = k0; k <= k1; k++) {
-            let p = o + d * ((f32(k) + j) * dt);
-            let val = value_at(locate(p));
-            if !any || val > best {
-                best = val;
-                any = true;
-            }
-        }
-        if any {
-            let e = lut_get(best);
-            color = e.xyz * e.w;
-            alpha = e.w;
+        let rgb = shade(e.xyz, shading_gradient(l), view);
+        let w = (1.0 - alpha) * e.w;
+        color += w * rgb;
+        alpha += w;
+        if alpha >= P.clip_hi.w {
+            break;
         }
     }
-    out[slot] = vec4<f32>(color + (1.0 - alpha) * bg, alpha);
+    return vec4<f32>(color, alpha);
+}
+
+// Caster::mip.
+fn mip(r: Ray) -> vec4<f32> {
+    var best = -3.4e38;
+    var any = false;
+    for (var k = r.k0; k <= r.k1; k++) {
+        let val = sample_value(locate(at(r, k)));
+        if !any || val > best {
+            best = val;
+            any = true;
+        }
+    }
+    if !any {
+        return vec4<f32>(0.0);
+    }
+    let e = lut_get(best);
+    return vec4<f32>(e.xyz * e.w, e.w);
+}
+
+fn value_along(r: Ray, t: f32) -> f32 {
+    return sample_value(locate(r.o + r.d * t));
+}
+
+// Caster::iso and iso_hit: the first sample at or above the threshold, refined by
+// bisection and a linear step towards the sample before, shaded there.
+fn iso(r: Ray) -> vec4<f32> {
+    let threshold = P.extra.x;
+    let dt = P.clip_lo.w;
+    for (var k = r.k0; k <= r.k1; k++) {
+        let t = (f32(k) + r.j) * dt;
+        if value_along(r, t) < threshold {
+            continue;
+        }
+        var lo = max(t - dt, r.t_entry);
+        var hi = t;
+        if k > r.k_entry && value_along(r, lo) < threshold {
+            for (var i = 0u; i < ISO_REFINE_STEPS; i++) {
+                let mid = 0.5 * (lo + hi);
+                if value_along(r, mid) >= threshold {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            let vl = value_along(r, lo);
+            let vh = value_along(r, hi);
+            if vh > vl {
+                hi = lo + (hi - lo) * clamp((threshold - vl) / (vh - vl), 0.0, 1.0);
+            }
+        }
+        let p = r.o + r.d * hi;
+        let e = lut_get(threshold);
+        var g = sample_gradient(locate(p));
+        if P.extra.w != 0.0 {
+            g = cut_gradient(p, g);
+        }
+        return vec4<f32>(shade(e.xyz, g, -r.dir), 1.0);
+    }
+    return vec4<f32>(0.0);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let width = P.size.x;
+    let height = P.size.y;
+    if gid.x >= width || gid.y >= height {
+        return;
+    }
+    let slot = gid.y * width + gid.x;
+    let bg = P.bg.xyz;
+    let r = make_ray(f32(gid.x), f32(gid.y));
+    var c = vec4<f32>(0.0);
+    if r.hit {
+        if P.bg.w == 0.0 {
+            c = composite(r);
+        } else if P.bg.w == 1.0 {
+            c = mip(r);
+        } else {
+            c = iso(r);
+        }
+    }
+    out[slot] = vec4<f32>(c.xyz + (1.0 - c.w) * bg, c.w);
 }

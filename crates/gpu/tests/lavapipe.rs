@@ -6,12 +6,13 @@ use std::sync::Arc;
 
 use glint_analysis::image::{delta_e_map, Srgb8Image};
 use glint_core::camera::{CameraSpec, Projection};
-use glint_core::{Image, Light, Material, RenderMode, Shader};
+use glint_core::{Clip, ClipPlane, CropBox, Image, Light, Material, RenderMode, Shader};
 use glint_gpu::{Choice, Gpu, GpuError};
-use glint_lobe::{Geometry, LobeKind};
+use glint_lobe::{CosTable, Geometry, LobeKind, Specular};
 use glint_volume::phantom::Phantom;
 use glint_volume::{
-    presets, Classification, ClassifySettings, Field, FrameSettings, Prefilter, Sampling, Transport,
+    presets, Classification, ClassifySettings, ColourVolume, Field, Filter, FrameSettings,
+    Prefilter, Sampling, Transport,
 };
 
 /// The largest CIEDE2000 difference allowed between the GPU's and the CPU's pixel
@@ -37,17 +38,77 @@ fn gpu() -> Option<Gpu> {
 /// The head phantom on a `size`^3 grid with the scene's default prefilter, classified
 /// by its preset in `mode`.
 fn head(size: usize, mode: RenderMode) -> Classification {
-    let volume = Phantom::Head.volume(size).unwrap();
-    let field = Arc::new(Field::with_prefilter(&volume, Prefilter::Binomial).unwrap());
-    let tf = presets::preset(Phantom::Head.preset())
-        .unwrap()
-        .transfer_function(field.range().1 as f64)
-        .unwrap();
     let settings = ClassifySettings {
         mode,
         ..Default::default()
     };
+    head_with(size, Filter::Trilinear, settings)
+}
+
+/// The iso value of the tests' iso frames: half the head phantom's largest value
+/// (inside its bone layer's ramp).
+const ISO_SHARE: f32 = 0.5;
+
+/// [`head`] reconstructed with `filter` and classified with `settings` (an iso
+/// frame's threshold set to [`ISO_SHARE`] of the range).
+fn head_with(size: usize, filter: Filter, mut settings: ClassifySettings) -> Classification {
+    let volume = Phantom::Head.volume(size).unwrap();
+    let field = Field::with_prefilter(&volume, Prefilter::Binomial).unwrap();
+    let field = Arc::new(field.with_filter(filter));
+    let tf = presets::preset(Phantom::Head.preset())
+        .unwrap()
+        .transfer_function(field.range().1 as f64)
+        .unwrap();
+    settings.iso = ISO_SHARE * field.range().1;
     Classification::new(field, &tf, &settings).unwrap()
+}
+
+/// The CPU's and the GPU's frames of `class`: within [`MAX_DELTA_E`] and an opacity
+/// within 0.02, and the volume covering more than `cover` of the GPU's frame.
+fn matches(
+    gpu: &mut Gpu,
+    class: &Classification,
+    shader: &Shader,
+    settings: &FrameSettings,
+    (name, cover): (&str, f64),
+) {
+    let cpu = class
+        .frame(shader, settings, None, Transport::Local, &|_| {})
+        .unwrap();
+    let got = gpu.render_local(class, shader, settings).unwrap();
+    let (de, covered) = max_delta_e(&cpu, &got);
+    let da = cpu
+        .alpha
+        .iter()
+        .zip(&got.alpha)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    eprintln!("{name}: max ΔE00 {de:.3}, max |Δalpha| {da:.4}, covered {covered:.2}");
+    assert!(covered > cover, "{name}: only {covered} covered");
+    assert!(de <= MAX_DELTA_E, "{name}: max ΔE00 {de}");
+    assert!(da < 0.02, "{name}: alpha differs by {da}");
+}
+
+/// A clip through the phantom's middle: an oblique plane and a crop box that cuts
+/// off the front of the head along z, in world mm.
+fn clip(class: &Classification) -> Clip {
+    let field = class.field();
+    let [nx, ny, nz] = field.dims();
+    let c = field.index_to_world([nx as f64 / 2.0, ny as f64 / 2.0, nz as f64 / 2.0]);
+    let a = field.index_to_world([(nx - 1) as f64, (ny - 1) as f64, (nz - 1) as f64]);
+    let b = field.index_to_world([0.0; 3]);
+    let lo = [0, 1, 2].map(|i| a[i].min(b[i]));
+    let hi = [0, 1, 2].map(|i| a[i].max(b[i]));
+    Clip {
+        planes: vec![ClipPlane {
+            point: c,
+            normal: [0.6, -0.3, 0.5],
+        }],
+        crop: Some(CropBox {
+            min: [lo[0] - 1.0, lo[1] - 1.0, lo[2] - 1.0],
+            max: [hi[0] + 1.0, hi[1] + 1.0, 0.5 * (c[2] + hi[2])],
+        }),
+    }
 }
 
 fn shader(kind: LobeKind, geometry: Geometry) -> Shader {
@@ -161,27 +222,112 @@ fn gpu_frames_repeat_bit_for_bit_and_refuse_what_they_cannot_render() {
             .collect()
     };
     assert_eq!(bits(&a), bits(&b));
-    // Pre-integrated sampling is not on the GPU yet: a typed error naming it.
-    let field = class.field().clone();
-    let tf = presets::preset("head")
-        .unwrap()
-        .transfer_function(field.range().1 as f64)
+    // A colour volume is not on the GPU yet: a typed error naming it.
+    let dims = class.field().dims();
+    let colours = ColourVolume::new(dims, vec![[200, 120, 60]; dims.iter().product()]).unwrap();
+    let coloured = head(48, RenderMode::Composite)
+        .with_colour(Arc::new(colours))
         .unwrap();
-    let pre = ClassifySettings {
-        sampling: Sampling::PreIntegrated,
-        ..Default::default()
-    };
-    let pre = Classification::new(field, &tf, &pre).unwrap();
-    match gpu.render_local(&pre, &shader, &settings) {
+    match gpu.render_local(&coloured, &shader, &settings) {
         Err(e @ GpuError::Unsupported(_)) => {
             let line = e.to_string();
-            assert!(
-                line.contains("pre-integrated") && !line.contains('\n'),
-                "{line}"
-            );
+            assert!(line.contains("colour") && !line.contains('\n'), "{line}");
         }
         other => panic!("expected Unsupported, got {:?}", other.map(|_| ())),
     }
+}
+
+#[test]
+fn gpu_iso_and_tricubic_frames_match_the_cpu() {
+    let Some(mut gpu) = gpu() else { return };
+    let shader = shader(LobeKind::EnergyFit, Geometry::Blinn);
+    let settings = frame(64, 64);
+    let iso = ClassifySettings {
+        mode: RenderMode::Iso,
+        ..Default::default()
+    };
+    let composite = ClassifySettings::default();
+    for (name, filter, s) in [
+        ("iso", Filter::Trilinear, iso),
+        ("iso tricubic", Filter::Tricubic, iso),
+        ("composite tricubic", Filter::Tricubic, composite),
+    ] {
+        let class = head_with(48, filter, s);
+        matches(&mut gpu, &class, &shader, &settings, (name, 0.2));
+    }
+}
+
+#[test]
+fn gpu_clipped_frames_match_the_cpu() {
+    let Some(mut gpu) = gpu() else { return };
+    let shader = shader(LobeKind::Exact, Geometry::Phong);
+    for mode in [RenderMode::Composite, RenderMode::Iso, RenderMode::Mip] {
+        let class = head(48, mode);
+        let mut settings = frame(64, 64);
+        settings.clip = clip(&class);
+        let name = format!("{mode:?} clipped");
+        matches(&mut gpu, &class, &shader, &settings, (&name, 0.1));
+        // The clip shows: the unclipped frame differs.
+        let whole = gpu.render_local(&class, &shader, &frame(64, 64)).unwrap();
+        let cut = gpu.render_local(&class, &shader, &settings).unwrap();
+        assert_ne!(whole.alpha, cut.alpha, "{name}: the clip cut nothing");
+    }
+}
+
+#[test]
+fn gpu_preintegrated_and_hw_table_frames_match_the_cpu() {
+    let Some(mut gpu) = gpu() else { return };
+    let settings = frame(64, 64);
+    let pre = head_with(
+        48,
+        Filter::Trilinear,
+        ClassifySettings {
+            sampling: Sampling::PreIntegrated,
+            ..Default::default()
+        },
+    );
+    let blinn = shader(LobeKind::Exact, Geometry::Blinn);
+    matches(&mut gpu, &pre, &blinn, &settings, ("pre-integrated", 0.2));
+    // The segments are not the point samples (the tables were read).
+    let point = head(48, RenderMode::Composite);
+    let a = gpu.render_local(&pre, &blinn, &settings).unwrap();
+    let b = gpu.render_local(&point, &blinn, &settings).unwrap();
+    assert_ne!(
+        a.rgb, b.rgb,
+        "pre-integrated frame equals the point-sampled one"
+    );
+    // A table as a hardware unit's: pow(c, 40) quantised to 8 bits, over codes of
+    // 2^-6 (coarse, so that a code off by one shows).
+    let table = CosTable::from_fn(6, |code| {
+        let c = code as f32 / 64.0;
+        (c.max(0.0).powf(40.0) * 255.0).round() / 255.0
+    })
+    .unwrap();
+    let lights = vec![Light::HEADLIGHT];
+    let hw = Shader::with_specular(
+        Specular::from(table),
+        Geometry::Phong,
+        Material::default(),
+        lights,
+        0.0,
+    )
+    .unwrap();
+    let class = head(48, RenderMode::Composite);
+    matches(&mut gpu, &class, &hw, &settings, ("hw table", 0.2));
+    // The table is not the closed form it quantises.
+    let exact = Shader::new(
+        LobeKind::Exact,
+        40.0,
+        4,
+        Geometry::Phong,
+        Material::default(),
+        vec![Light::HEADLIGHT],
+        0.0,
+    )
+    .unwrap();
+    let a = gpu.render_local(&class, &hw, &settings).unwrap();
+    let b = gpu.render_local(&class, &exact, &settings).unwrap();
+    assert_ne!(a.rgb, b.rgb, "the hw table's frame equals pow's");
 }
 
 #[test]

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use glint_core::camera::{Camera, Projection};
 use glint_core::{RenderError, RenderMode, Shader};
 
-use crate::classification::{Classification, Sampling};
+use crate::classification::{Classification, PreIntegratedTables, Sampling};
 use crate::field::brick::{brick_dims, BRICK, BRICK_ROW, BRICK_SLICE, BRICK_VOXELS};
 use crate::field::{Field, Filter};
 use crate::raycast::FrameSettings;
@@ -123,12 +123,38 @@ pub struct LocalMarch {
     pub background: [f32; 3],
     /// Accumulated opacity at which a composite ray stops.
     pub termination: f32,
+    /// The iso mode's threshold ([`ClassifySettings::iso`](crate::ClassifySettings::iso)).
+    pub iso: f32,
+    /// A pre-integrated composite frame's tables (`None`: point sampling).
+    pub pre: Option<PreIntegratedTables>,
+    /// The frame's clip planes and crop box in index space (`None`: no clip).
+    pub clip: Option<DeviceClip>,
+    /// For the tricubic filter, the matrix taking the spline's index-space
+    /// derivatives to the world gradient (rows); `None` for the trilinear filter.
+    pub tricubic: Option<[[f32; 3]; 3]>,
+}
+
+/// A frame's clip in index space, as the ray caster applies it (`clip.rs`): each ray
+/// keeps the part where every plane's signed distance is non-negative, and a sample
+/// within `depth` mm of its nearest plane with a gradient weaker than `strong` is
+/// shaded with the gradient blended towards that plane's normal.
+#[derive(Clone, Debug)]
+pub struct DeviceClip {
+    /// Per half-space `[a.x, a.y, a.z, b, n.x, n.y, n.z, 0]`: signed distance (mm)
+    /// `a · p + b` of index-space point `p`, and the unit world normal into the kept
+    /// side.
+    pub planes: Vec<[f32; 8]>,
+    /// Samples closer than this (mm) to a plane lie on its cut face.
+    pub depth: f32,
+    /// The gradient magnitude a cut face's normal is given.
+    pub strong: f32,
 }
 
 impl Classification {
-    /// The numbers of `settings`' `local` frame lit by `shader`, for a device back end;
-    /// an error naming what the device path does not do yet (pre-integrated sampling,
-    /// a tricubic filter, a colour volume, clip planes or a crop box, iso mode).
+    /// The numbers of `settings`' `local` frame lit by `shader`, for a device back end
+    /// (composite with point or pre-integrated sampling, MIP or iso; either filter;
+    /// clip planes and crop boxes); an error naming what the device path does not do
+    /// yet (a colour volume).
     pub fn local_march(
         &self,
         shader: &Shader,
@@ -139,25 +165,28 @@ impl Classification {
                 "the GPU back end does not render {what} yet"
             )))
         };
-        if self.settings.mode == RenderMode::Iso {
-            return unsupported("iso mode");
-        }
-        if self.settings.mode == RenderMode::Composite && self.settings.sampling != Sampling::Point
-        {
-            return unsupported("pre-integrated sampling");
-        }
-        if self.field.filter() != Filter::Trilinear {
-            return unsupported("the tricubic filter");
-        }
         if self.colour.is_some() {
             return unsupported("colour volumes");
         }
-        if !settings.clip.is_empty() {
-            return unsupported("clip planes or a crop box");
+        if self.settings.mode == RenderMode::Surface {
+            return unsupported("surface mode");
         }
         let camera = self.camera(settings)?;
         let shader = shader.placed(&camera);
         let field = &*self.field;
+        let pre = (self.settings.mode == RenderMode::Composite
+            && self.settings.sampling == Sampling::PreIntegrated)
+            .then(|| self.lut.pre.device_tables());
+        let clip = self.index_clip(&shader, settings).map(|c| {
+            let (planes, depth, strong) = c.device_planes();
+            DeviceClip {
+                planes,
+                depth,
+                strong,
+            }
+        });
+        let tricubic =
+            (field.filter() == Filter::Tricubic).then_some(field.recipe.to_world_gradient);
         let to_index = |v: glint_core::Vec3| {
             let d = field.direction_to_index([v.x as f64, v.y as f64, v.z as f64]);
             [d[0] as f32, d[1] as f32, d[2] as f32]
@@ -182,6 +211,10 @@ impl Classification {
             mode: self.settings.mode,
             background: settings.background,
             termination: crate::raycast::TERMINATION_OPACITY,
+            iso: self.settings.iso,
+            pre,
+            clip,
+            tricubic,
             camera,
             shader,
         })
