@@ -3,7 +3,7 @@
 
 use std::sync::Weak;
 
-use glint_volume::Field;
+use glint_volume::{ColourVolume, Field};
 use wgpu::{Backends, DeviceType, DownlevelFlags};
 
 /// Why the GPU back end cannot run: each variant one line for the user.
@@ -137,6 +137,7 @@ pub struct Gpu {
     pub(crate) limits: wgpu::Limits,
     pub(crate) local: wgpu::ComputePipeline,
     pub(crate) field: Option<FieldCache>,
+    pub(crate) colour: Option<ColourCache>,
 }
 
 impl Gpu {
@@ -180,6 +181,7 @@ impl Gpu {
             limits,
             local,
             field: None,
+            colour: None,
         })
     }
 
@@ -252,6 +254,13 @@ impl Gpu {
         staging.unmap();
         Ok(bytes)
     }
+}
+
+/// The colour volume last uploaded (`None`: the placeholder of frames without one)
+/// and its texture of 8-bit sRGB codes.
+pub(crate) struct ColourCache {
+    pub(crate) colour: Option<Weak<ColourVolume>>,
+    pub(crate) codes: wgpu::TextureView,
 }
 
 /// A field's textures on the device, kept while the same field is rendered.

@@ -6,10 +6,10 @@ use std::sync::Arc;
 
 use glint_core::{Image, RenderMode, RenderStats, Shader};
 use glint_lobe::{Geometry, LobeKind, Specular};
-use glint_volume::{Classification, Field, FrameSettings, LocalMarch};
+use glint_volume::{Classification, ColourVolume, Field, FrameSettings, LocalMarch};
 use wgpu::util::DeviceExt;
 
-use crate::adapter::{FieldCache, Gpu, GpuError};
+use crate::adapter::{ColourCache, FieldCache, Gpu, GpuError};
 
 /// Pixels per workgroup side (`@workgroup_size(8, 8, 1)` in the shader).
 const GROUP: u32 = 8;
@@ -164,7 +164,7 @@ fn params(
     let (m_max, m_scale) = m.pre.as_ref().map_or((0.0, 0.0), |t| (t.m_max, t.m_scale));
     w.extend([depth, strong, m_max, m_scale]);
     w.extend(table);
-    w.push(0.0);
+    w.push(f32::from(u8::from(m.colour.is_some())));
     for row in m.tricubic.unwrap_or_default() {
         v4(&mut w, row, 0.0);
     }
@@ -186,9 +186,9 @@ impl Gpu {
     /// [`Classification::frame`] renders it on the CPU (same rays, samples, lookup
     /// table, gradients and lighting; floating-point differences only): composite with
     /// point sampling or pre-integrated segments, MIP or iso; either filter; clip
-    /// planes and crop boxes; every lobe, the hw lobe's table included. Errors for
-    /// what the GPU back end does not render yet (colour volumes), for a volume past
-    /// the adapter's 3D texture limit, and for device failures.
+    /// planes and crop boxes; a colour volume's colours; every lobe, the hw lobe's
+    /// table included. Errors for a volume past the adapter's 3D texture limit and
+    /// for device failures.
     pub fn render_local(
         &mut self,
         class: &Classification,
@@ -214,8 +214,15 @@ impl Gpu {
             out_size,
         )?;
         let scopes = self.scopes();
+        if let Some(c) = &march.colour {
+            let side = *c.dims().iter().max().expect("three dims") as u64;
+            let have = u64::from(self.limits.max_texture_dimension_3d);
+            self.need("the largest 3D texture side", have, side)?;
+        }
         self.upload(field)?;
+        self.upload_colour(march.colour.as_ref());
         let cache = self.field.as_ref().expect("uploaded above");
+        let colours = self.colour.as_ref().expect("uploaded above");
         let (table, spec) = spec_table(march.shader.specular())?;
         let words = params(&march, settings, (dims, cache.gradient_scale), table);
         let device = &self.device;
@@ -235,6 +242,8 @@ impl Gpu {
         let planes = storage("glint planes", bytemuck::cast_slice(&clip_planes(&march)));
         let pre = storage("glint pre", bytemuck::cast_slice(&pre_tables(&march)?));
         let spec = storage("glint spec", bytemuck::cast_slice(&spec));
+        let linear = march.colour.as_ref().map_or([0.0; 256], |c| *c.linear());
+        let linear = storage("glint srgb", bytemuck::cast_slice(&linear));
         let out = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("glint image"),
             size: out_size,
@@ -253,6 +262,8 @@ impl Gpu {
                 entry(5, planes.as_entire_binding()),
                 entry(6, pre.as_entire_binding()),
                 entry(7, spec.as_entire_binding()),
+                entry(8, wgpu::BindingResource::TextureView(&colours.codes)),
+                entry(9, linear.as_entire_binding()),
             ],
         });
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -275,6 +286,47 @@ impl Gpu {
         })
     }
 
+    /// Uploads `colour`'s 8-bit sRGB codes (as an Rgba8Uint texture) unless they are
+    /// on the device already; a one-texel placeholder for a frame without one.
+    fn upload_colour(&mut self, colour: Option<&Arc<ColourVolume>>) {
+        if let Some(c) = &self.colour {
+            let same = match (&c.colour, colour) {
+                (None, None) => true,
+                (Some(w), Some(a)) => w.upgrade().is_some_and(|f| Arc::ptr_eq(&f, a)),
+                _ => false,
+            };
+            if same {
+                return;
+            }
+        }
+        self.colour = None;
+        let (dims, codes): ([usize; 3], Vec<[u8; 4]>) = match colour {
+            Some(c) => (
+                c.dims(),
+                c.codes().iter().map(|&[r, g, b]| [r, g, b, 0]).collect(),
+            ),
+            None => ([1; 3], vec![[0; 4]]),
+        };
+        let [nx, ny, nz] = dims;
+        let size = wgpu::Extent3d {
+            width: nx as u32,
+            height: ny as u32,
+            depth_or_array_layers: nz as u32,
+        };
+        let format = wgpu::TextureFormat::Rgba8Uint;
+        let texture = texture_3d(&self.device, size, format, "glint colours");
+        let plane = nx * ny;
+        for z0 in (0..nz).step_by(UPLOAD_PLANES) {
+            let planes = UPLOAD_PLANES.min(nz - z0);
+            let bytes = bytemuck::cast_slice(&codes[z0 * plane..(z0 + planes) * plane]);
+            write_slab(&texture, bytes, 4, ([nx, ny, planes], z0, &self.queue));
+        }
+        self.colour = Some(ColourCache {
+            colour: colour.map(Arc::downgrade),
+            codes: texture.create_view(&Default::default()),
+        });
+    }
+
     /// Uploads `field`'s values and gradients unless they are on the device already.
     fn upload(&mut self, field: &Arc<Field>) -> Result<(), GpuError> {
         if let Some(c) = &self.field {
@@ -291,54 +343,31 @@ impl Gpu {
             height: ny as u32,
             depth_or_array_layers: nz as u32,
         };
-        let texture = |format, label| {
-            self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            })
-        };
-        let values = texture(wgpu::TextureFormat::R32Float, "glint values");
-        let gradients = texture(wgpu::TextureFormat::Rgba16Sint, "glint gradients");
+        let values = texture_3d(
+            &self.device,
+            size,
+            wgpu::TextureFormat::R32Float,
+            "glint values",
+        );
+        let gradients = texture_3d(
+            &self.device,
+            size,
+            wgpu::TextureFormat::Rgba16Sint,
+            "glint gradients",
+        );
         let plane = nx * ny;
         for z0 in (0..nz).step_by(UPLOAD_PLANES) {
             let planes = UPLOAD_PLANES.min(nz - z0);
             let range = z0 * plane..(z0 + planes) * plane;
-            let write = |t: &wgpu::Texture, bytes: &[u8], texel: usize| {
-                self.queue.write_texture(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: t,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d {
-                            x: 0,
-                            y: 0,
-                            z: z0 as u32,
-                        },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    bytes,
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some((nx * texel) as u32),
-                        rows_per_image: Some(ny as u32),
-                    },
-                    wgpu::Extent3d {
-                        depth_or_array_layers: planes as u32,
-                        ..size
-                    },
-                );
-            };
-            write(
-                &values,
-                bytemuck::cast_slice(&grids.values[range.clone()]),
-                4,
+            let slab = ([nx, ny, planes], z0, &self.queue);
+            let values_bytes = bytemuck::cast_slice(&grids.values[range.clone()]);
+            write_slab(&values, values_bytes, 4, slab);
+            write_slab(
+                &gradients,
+                bytemuck::cast_slice(&grids.gradients[range]),
+                8,
+                slab,
             );
-            write(&gradients, bytemuck::cast_slice(&grids.gradients[range]), 8);
         }
         self.field = Some(FieldCache {
             field: Arc::downgrade(field),
@@ -352,4 +381,57 @@ impl Gpu {
 
 fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource }
+}
+
+/// A 3D texture of `size` texels of `format`, sampled by `textureLoad` and written
+/// from the host.
+fn texture_3d(
+    device: &wgpu::Device,
+    size: wgpu::Extent3d,
+    format: wgpu::TextureFormat,
+    label: &str,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D3,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    })
+}
+
+/// Writes `planes` planes of `nx` x `ny` texels of `texel` bytes from `bytes` into
+/// `texture` from plane `z0`.
+fn write_slab(
+    texture: &wgpu::Texture,
+    bytes: &[u8],
+    texel: usize,
+    ([nx, ny, planes], z0, queue): ([usize; 3], usize, &wgpu::Queue),
+) {
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: z0 as u32,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some((nx * texel) as u32),
+            rows_per_image: Some(ny as u32),
+        },
+        wgpu::Extent3d {
+            width: nx as u32,
+            height: ny as u32,
+            depth_or_array_layers: planes as u32,
+        },
+    );
 }

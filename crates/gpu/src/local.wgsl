@@ -8,7 +8,8 @@
 // the CPU's B-spline (field/cubic.rs) from the same values; pre-integrated segments
 // read the CPU's tables (classification/preint.rs) with the f64 integrals split into
 // f32 pairs; clip planes and the crop box cut each ray and light its cut faces
-// (clip.rs); the hw lobe reads its cosine table (glint-lobe CosTable::eval).
+// (clip.rs); the hw lobe reads its cosine table (glint-lobe CosTable::eval); a
+// colour volume's codes replace the table's colours (ColourVolume::at).
 
 struct Params {
     // xyz: the eye (perspective) or image centre (orthographic), index units;
@@ -43,7 +44,8 @@ struct Params {
     // The cut faces' depth (mm) and strong gradient; the pre-integrated opacity
     // table's m_max and m_scale.
     cut: vec4<f32>,
-    // The hw lobe's cosine table: scale (2^frac_bits), first code, entries.
+    // The hw lobe's cosine table: scale (2^frac_bits), first code, entries; w: 1
+    // when a colour volume's colours replace the lookup table's.
     table: vec4<f32>,
     // Rows of the matrix from the spline's index-space derivatives to the world
     // gradient (tricubic).
@@ -71,6 +73,9 @@ struct Params {
 @group(0) @binding(6) var<storage, read> pre: array<vec4<f32>>;
 // The hw lobe's cosine table from its first stored code.
 @group(0) @binding(7) var<storage, read> spec: array<f32>;
+// A colour volume's 8-bit sRGB codes, and the linear light of each code.
+@group(0) @binding(8) var colours: texture_3d<u32>;
+@group(0) @binding(9) var<storage, read> srgb: array<f32>;
 
 const BINS: u32 = 4096u;
 const PRE_POINT: u32 = 0u;
@@ -440,6 +445,32 @@ fn cut_gradient(p: vec3<f32>, g: vec3<f32>) -> vec3<f32> {
     return n * (strong * (1.0 - w)) + g * w;
 }
 
+// ColourVolume::at: the cell's corners' linear colours weighted trilinearly, in
+// its order (corner c: x = bit 0, y = bit 1, z = bit 2; weights of 0 skipped).
+fn colour_at(l: Loc) -> vec3<f32> {
+    var out = vec3<f32>(0.0);
+    for (var c = 0u; c < 8u; c++) {
+        let o = vec3<u32>(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u);
+        let w = select(1.0 - l.t.x, l.t.x, o.x == 1u)
+            * select(1.0 - l.t.y, l.t.y, o.y == 1u)
+            * select(1.0 - l.t.z, l.t.z, o.z == 1u);
+        if w == 0.0 {
+            continue;
+        }
+        let v = textureLoad(colours, l.ijk + vec3<i32>(o), 0);
+        out += w * vec3<f32>(srgb[v.x], srgb[v.y], srgb[v.z]);
+    }
+    return out;
+}
+
+// Caster::add's and Caster::iso's base colour: the colour volume's, or the table's.
+fn base_colour(e: vec4<f32>, l: Loc) -> vec3<f32> {
+    if P.table.w != 0.0 {
+        return colour_at(l);
+    }
+    return e.xyz;
+}
+
 // Caster::add's gradient: the field's, cut by the clip where it has planes.
 fn shading_gradient(l: Loc) -> vec3<f32> {
     let g = sample_gradient(l);
@@ -565,7 +596,7 @@ fn composite(r: Ray) -> vec4<f32> {
                 continue;
             }
         }
-        let rgb = shade(e.xyz, shading_gradient(l), view);
+        let rgb = shade(base_colour(e, l), shading_gradient(l), view);
         let w = (1.0 - alpha) * e.w;
         color += w * rgb;
         alpha += w;
@@ -627,11 +658,12 @@ fn iso(r: Ray) -> vec4<f32> {
         }
         let p = r.o + r.d * hi;
         let e = lut_get(threshold);
-        var g = sample_gradient(locate(p));
+        let l = locate(p);
+        var g = sample_gradient(l);
         if P.extra.w != 0.0 {
             g = cut_gradient(p, g);
         }
-        return vec4<f32>(shade(e.xyz, g, -r.dir), 1.0);
+        return vec4<f32>(shade(base_colour(e, l), g, -r.dir), 1.0);
     }
     return vec4<f32>(0.0);
 }

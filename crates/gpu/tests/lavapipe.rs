@@ -225,18 +225,58 @@ fn gpu_frames_repeat_bit_for_bit_and_refuse_what_they_cannot_render() {
             .collect()
     };
     assert_eq!(bits(&a), bits(&b));
-    // A colour volume is not on the GPU yet: a typed error naming it.
-    let dims = class.field().dims();
-    let colours = ColourVolume::new(dims, vec![[200, 120, 60]; dims.iter().product()]).unwrap();
-    let coloured = head(48, RenderMode::Composite)
-        .with_colour(Arc::new(colours))
-        .unwrap();
-    match gpu.render_local(&coloured, &shader, &settings) {
-        Err(e @ GpuError::Unsupported(_)) => {
+    // A volume longer than the adapter's 3D texture side (small: 2 x 2 across): a
+    // typed error, one line, naming the limit.
+    let long = gpu.adapter().max_texture_3d as usize + 1;
+    let volume = Volume::new([long, 2, 2], [1.0; 3], Samples::F32(vec![1.0; long * 4])).unwrap();
+    let field = Arc::new(Field::new(&volume).unwrap());
+    let tf = TransferFunction::from_flat(&[0.0, 0.0, 1.0, 0.5], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+    let too_long = Classification::new(field, &tf, &ClassifySettings::default()).unwrap();
+    match gpu.render_local(&too_long, &shader, &settings) {
+        Err(e @ GpuError::Limits { .. }) => {
             let line = e.to_string();
-            assert!(line.contains("colour") && !line.contains('\n'), "{line}");
+            assert!(
+                line.contains("3D texture") && !line.contains('\n'),
+                "{line}"
+            );
         }
-        other => panic!("expected Unsupported, got {:?}", other.map(|_| ())),
+        other => panic!("expected Limits, got {:?}", other.map(|_| ())),
+    }
+}
+
+#[test]
+fn gpu_colour_volume_frames_match_the_cpu() {
+    let Some(mut gpu) = gpu() else { return };
+    let shader = shader(LobeKind::EnergyFit, Geometry::Phong);
+    let settings = frame(64, 64);
+    let dims = [48; 3];
+    // Red alternating from voxel to voxel, green and blue ramps: the interpolation
+    // between the corners shows.
+    let mut codes = Vec::with_capacity(48 * 48 * 48);
+    for k in 0..48u32 {
+        for j in 0..48u32 {
+            for i in 0..48u32 {
+                let red = (i + j + k) % 2 * 200 + 30;
+                codes.push([red, 255 - j * 5, 60 + k * 4].map(|c| c as u8));
+            }
+        }
+    }
+    let colours = Arc::new(ColourVolume::new(dims, codes).unwrap());
+    for mode in [RenderMode::Composite, RenderMode::Iso] {
+        let settings_of = ClassifySettings {
+            mode,
+            ..Default::default()
+        };
+        let class = head_with(48, Filter::Trilinear, settings_of)
+            .with_colour(colours.clone())
+            .unwrap();
+        let name = format!("{mode:?} colour volume");
+        matches(&mut gpu, &class, &shader, &settings, (&name, 0.2));
+        // The colours show: the frame differs from the table's colours.
+        let plain = head_with(48, Filter::Trilinear, settings_of);
+        let a = gpu.render_local(&class, &shader, &settings).unwrap();
+        let b = gpu.render_local(&plain, &shader, &settings).unwrap();
+        assert_ne!(a.rgb, b.rgb, "{name}: the colours changed nothing");
     }
 }
 

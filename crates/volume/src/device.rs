@@ -5,12 +5,14 @@
 //! faces; the CPU's empty-space leaps and start bounds skip only samples of zero
 //! opacity, so they change no pixel.
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
 use glint_core::camera::{Camera, Projection};
 use glint_core::{RenderError, RenderMode, Shader};
 
-use crate::classification::{Classification, PreIntegratedTables, Sampling};
+use crate::classification::{Classification, ColourVolume, PreIntegratedTables, Sampling};
 use crate::field::brick::{brick_dims, BRICK, BRICK_ROW, BRICK_SLICE, BRICK_VOXELS};
 use crate::field::{Field, Filter};
 use crate::raycast::FrameSettings;
@@ -132,6 +134,9 @@ pub struct LocalMarch {
     /// For the tricubic filter, the matrix taking the spline's index-space
     /// derivatives to the world gradient (rows); `None` for the trilinear filter.
     pub tricubic: Option<[[f32; 3]; 3]>,
+    /// A colour volume whose colours replace the lookup table's (in composite and
+    /// iso frames; MIP keeps the table's).
+    pub colour: Option<Arc<ColourVolume>>,
 }
 
 /// A frame's clip in index space, as the ray caster applies it (`clip.rs`): each ray
@@ -153,8 +158,8 @@ pub struct DeviceClip {
 impl Classification {
     /// The numbers of `settings`' `local` frame lit by `shader`, for a device back end
     /// (composite with point or pre-integrated sampling, MIP or iso; either filter;
-    /// clip planes and crop boxes); an error naming what the device path does not do
-    /// yet (a colour volume).
+    /// clip planes and crop boxes; a colour volume's colours); an error for the
+    /// surface mode, which is rasterised, never ray cast.
     pub fn local_march(
         &self,
         shader: &Shader,
@@ -165,9 +170,6 @@ impl Classification {
                 "the GPU back end does not render {what} yet"
             )))
         };
-        if self.colour.is_some() {
-            return unsupported("colour volumes");
-        }
         if self.settings.mode == RenderMode::Surface {
             return unsupported("surface mode");
         }
@@ -215,6 +217,7 @@ impl Classification {
             pre,
             clip,
             tricubic,
+            colour: self.colour.clone(),
             camera,
             shader,
         })
