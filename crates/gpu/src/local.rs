@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use glint_core::{Image, RenderMode, RenderStats, Shader};
+use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader};
 use glint_lobe::{Geometry, LobeKind, Specular};
 use glint_volume::{Classification, ColourVolume, Field, FrameSettings, LocalMarch};
 use wgpu::util::DeviceExt;
@@ -195,9 +195,13 @@ impl Gpu {
         shader: &Shader,
         settings: &FrameSettings,
     ) -> Result<Image, GpuError> {
-        let march = class
-            .local_march(shader, settings)
-            .map_err(|e| GpuError::Unsupported(e.to_string()))?;
+        let march = class.local_march(shader, settings).map_err(|e| {
+            // The caller names the parameter error once (`--device gpu: ...`).
+            GpuError::Unsupported(match e {
+                RenderError::Parameter(line) => line,
+                e => e.to_string(),
+            })
+        })?;
         let field = class.field();
         let dims = field.dims();
         let side = *dims.iter().max().expect("three dims") as u64;
