@@ -95,6 +95,24 @@ fn pre_tables(m: &LocalMarch) -> Result<Vec<[f32; 4]>, GpuError> {
     Ok(out)
 }
 
+/// The empty-space map as the shader's `distance`: four cells a word, the first in
+/// the low byte (at least one word).
+fn distance_words(m: &LocalMarch) -> Vec<u32> {
+    let mut words: Vec<u32> = m
+        .distance
+        .chunks(4)
+        .map(|c| {
+            c.iter()
+                .enumerate()
+                .fold(0u32, |w, (i, &d)| w | u32::from(d) << (8 * i))
+        })
+        .collect();
+    if words.is_empty() {
+        words.push(0);
+    }
+    words
+}
+
 /// The clip's half-spaces as the shader's `planes` (two entries each; one
 /// placeholder entry when there is no clip).
 fn clip_planes(m: &LocalMarch) -> Vec<[f32; 4]> {
@@ -169,8 +187,9 @@ fn params(
         v4(&mut w, row, 0.0);
     }
     let mut words: Vec<u32> = w.iter().map(|x| x.to_bits()).collect();
-    words.extend([settings.width, settings.height, 0, 0]);
-    words.extend([dims[0] as u32, dims[1] as u32, dims[2] as u32, 0]);
+    let cd = m.cell_dims.map(|c| c as u32);
+    words.extend([settings.width, settings.height, cd[0], cd[1]]);
+    words.extend([dims[0] as u32, dims[1] as u32, dims[2] as u32, cd[2]]);
     for i in 0..8 {
         let (d, intensity) = lights
             .get(i)
@@ -248,6 +267,10 @@ impl Gpu {
         let spec = storage("glint spec", bytemuck::cast_slice(&spec));
         let linear = march.colour.as_ref().map_or([0.0; 256], |c| *c.linear());
         let linear = storage("glint srgb", bytemuck::cast_slice(&linear));
+        let distance = storage(
+            "glint distance",
+            bytemuck::cast_slice(&distance_words(&march)),
+        );
         let out = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("glint image"),
             size: out_size,
@@ -268,6 +291,7 @@ impl Gpu {
                 entry(7, spec.as_entire_binding()),
                 entry(8, wgpu::BindingResource::TextureView(&colours.codes)),
                 entry(9, linear.as_entire_binding()),
+                entry(10, distance.as_entire_binding()),
             ],
         });
         let mut encoder = device.create_command_encoder(&Default::default());

@@ -52,8 +52,9 @@ struct Params {
     gm0: vec4<f32>,
     gm1: vec4<f32>,
     gm2: vec4<f32>,
-    // width, height, then the field's dims (x, y: nx, ny; nz in dims).
+    // width, height, then the macro cells along i and j.
     size: vec4<u32>,
+    // The field's dims; w: the macro cells along k.
     dims: vec4<u32>,
     // Per light: unit world direction towards it, intensity.
     lights: array<vec4<f32>, 8>,
@@ -76,6 +77,9 @@ struct Params {
 // A colour volume's 8-bit sRGB codes, and the linear light of each code.
 @group(0) @binding(8) var colours: texture_3d<u32>;
 @group(0) @binding(9) var<storage, read> srgb: array<f32>;
+// The empty-space map (Classification's distance), four cells a word, cell c in
+// bits 8 (c mod 4) and up.
+@group(0) @binding(10) var<storage, read> distance: array<u32>;
 
 const BINS: u32 = 4096u;
 const PRE_POINT: u32 = 0u;
@@ -85,6 +89,7 @@ const PRE_SLOPE: u32 = 12290u;
 const PRE_AUX: u32 = 16386u;
 const OPACITY_TABLE: u32 = 4096u;
 const ISO_REFINE_STEPS: u32 = 8u;
+const MACRO_CELL: u32 = 4u;
 
 struct Loc {
     ijk: vec3<i32>,
@@ -568,40 +573,103 @@ fn make_ray(x: f32, y: f32) -> Ray {
     return r;
 }
 
+fn cell_dims() -> vec3<u32> {
+    return vec3<u32>(P.size.z, P.size.w, P.dims.w);
+}
+
+// The distance map's entry of macro cell c.
+fn distance_at(c: vec3<u32>) -> u32 {
+    let cd = cell_dims();
+    let i = c.x + cd.x * (c.y + cd.y * c.z);
+    return (distance[i >> 2u] >> (8u * (i & 3u))) & 0xffu;
+}
+
+// Caster::cell_of: the macro cell holding index-space point p.
+fn cell_of(p: vec3<f32>) -> vec3<u32> {
+    return min(vec3<u32>(max(p, vec3<f32>(0.0))) / MACRO_CELL, cell_dims() - vec3<u32>(1u));
+}
+
+// caster.rs ceil_i64.
+fn ceil_i(x: f32) -> i32 {
+    let k = i32(x);
+    return k + select(0, 1, f32(k) < x);
+}
+
+// Caster::leap: past the cube of empty cells around cell c (distance dist), to the
+// first sample beyond it (a sixty-fourth of a step short), or k + 1.
+fn leap(r: Ray, c: vec3<u32>, dist: u32, k: i32) -> i32 {
+    let reach = dist - 1u;
+    var q = 3.4e38;
+    for (var a = 0; a < 3; a++) {
+        let da = r.d[a];
+        if abs(da) < 1e-12 {
+            continue;
+        }
+        var face: u32;
+        if da > 0.0 {
+            face = (c[a] + reach + 1u) * MACRO_CELL;
+        } else {
+            face = (c[a] - min(c[a], reach)) * MACRO_CELL;
+        }
+        let inv_dk = (1.0 / da) / P.clip_lo.w;
+        q = min(q, (f32(face) - r.o[a]) * inv_dk);
+    }
+    return max(ceil_i(q - r.j - 1.0 / 64.0), k + 1);
+}
+
 // Caster::composite with point sampling or pre-integrated segments, and
-// Caster::add: premultiplied colour and opacity.
+// Caster::add: premultiplied colour and opacity. Samples in empty macro cells are
+// leapt over as the CPU leaps (they show nothing; a pre-integrated segment that
+// ends in one is still taken when its front sample was read).
 fn composite(r: Ray) -> vec4<f32> {
     let view = -r.dir;
     var color = vec3<f32>(0.0);
     var alpha = 0.0;
     let preintegrated = P.extra.y != 0.0;
-    var front = 0.0;
-    if preintegrated {
-        // Caster::before: the sample before the first.
-        front = lut_position(sample_value(locate(at(r, r.k0 - 1))));
-    }
-    for (var k = r.k0; k <= r.k1; k++) {
+    // The last sample read and its table coordinate (pre-integrated).
+    var prev_k = r.k0 - 2;
+    var prev_u = 0.0;
+    var k = r.k0;
+    loop {
+        if k > r.k1 {
+            break;
+        }
         let l = locate(at(r, k));
-        var e: vec4<f32>;
+        let c = vec3<u32>(l.ijk) / MACRO_CELL;
+        let dist = distance_at(c);
+        let empty = dist != 0u;
+        var e = vec4<f32>(0.0);
+        var take = false;
         if preintegrated {
-            let back = lut_position(sample_value(l));
-            e = segment(front, back);
-            front = back;
-            if e.w < 0.0 {
-                continue;
+            if !empty || prev_k == k - 1 {
+                // Caster::before when the sample before was not read.
+                var front = prev_u;
+                if prev_k != k - 1 {
+                    front = lut_position(sample_value(locate(at(r, k - 1))));
+                }
+                let back = lut_position(sample_value(l));
+                prev_k = k;
+                prev_u = back;
+                e = segment(front, back);
+                take = e.w >= 0.0;
             }
-        } else {
+        } else if !empty {
             e = lut_get(sample_value(l));
-            if !(e.w > 0.0) {
-                continue;
+            take = e.w > 0.0;
+        }
+        if take {
+            let rgb = shade(base_colour(e, l), shading_gradient(l), view);
+            let w = (1.0 - alpha) * e.w;
+            color += w * rgb;
+            alpha += w;
+            if alpha >= P.clip_hi.w {
+                break;
             }
         }
-        let rgb = shade(base_colour(e, l), shading_gradient(l), view);
-        let w = (1.0 - alpha) * e.w;
-        color += w * rgb;
-        alpha += w;
-        if alpha >= P.clip_hi.w {
-            break;
+        if empty {
+            k = leap(r, c, dist, k);
+        } else {
+            k += 1;
         }
     }
     return vec4<f32>(color, alpha);
@@ -630,13 +698,25 @@ fn value_along(r: Ray, t: f32) -> f32 {
 }
 
 // Caster::iso and iso_hit: the first sample at or above the threshold, refined by
-// bisection and a linear step towards the sample before, shaded there.
+// bisection and a linear step towards the sample before, shaded there; empty macro
+// cells (none reaches the threshold) leapt over.
 fn iso(r: Ray) -> vec4<f32> {
     let threshold = P.extra.x;
     let dt = P.clip_lo.w;
-    for (var k = r.k0; k <= r.k1; k++) {
+    var k = r.k0;
+    loop {
+        if k > r.k1 {
+            break;
+        }
         let t = (f32(k) + r.j) * dt;
+        let c = cell_of(r.o + r.d * t);
+        let dist = distance_at(c);
+        if dist != 0u {
+            k = leap(r, c, dist, k);
+            continue;
+        }
         if value_along(r, t) < threshold {
+            k += 1;
             continue;
         }
         var lo = max(t - dt, r.t_entry);

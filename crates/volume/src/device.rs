@@ -1,9 +1,9 @@
 //! What a device back end (glint-gpu's compute shaders) needs to ray cast a
 //! classification's `local` frame as the reference loop (`raycast/caster.rs`) does: the
 //! field's voxels as the bricks hold them, and a frame's rays, step, lookup table and
-//! lit shader in plain numbers. The device marches every sample between the clip box's
-//! faces; the CPU's empty-space leaps and start bounds skip only samples of zero
-//! opacity, so they change no pixel.
+//! lit shader in plain numbers, and the empty-space map its composite and iso rays
+//! leap by as the CPU's do. The device starts each ray at the clip box's face: the
+//! CPU's start bounds skip only samples of zero opacity, so they change no pixel.
 
 use std::sync::Arc;
 
@@ -137,6 +137,13 @@ pub struct LocalMarch {
     /// A colour volume whose colours replace the lookup table's (in composite and
     /// iso frames; MIP keeps the table's).
     pub colour: Option<Arc<ColourVolume>>,
+    /// Macro cells ([`crate::MACRO_CELL`] voxels a side) along i, j, k.
+    pub cell_dims: [usize; 3],
+    /// Per macro cell (i fastest): 0 where a sample can contribute (composite) or
+    /// reach the threshold (iso), else the chessboard distance in cells to the
+    /// nearest such cell: the empty-space map the CPU's rays leap by (all 0 without
+    /// [`ClassifySettings::skip_empty`](crate::ClassifySettings::skip_empty)).
+    pub distance: Vec<u8>,
 }
 
 /// A frame's clip in index space, as the ray caster applies it (`clip.rs`): each ray
@@ -218,6 +225,8 @@ impl Classification {
             clip,
             tricubic,
             colour: self.colour.clone(),
+            cell_dims: field.cell_dims,
+            distance: self.distance.clone(),
             camera,
             shader,
         })
