@@ -244,6 +244,13 @@ impl Gpu {
         }
         self.upload(field)?;
         self.upload_colour(march.colour.as_ref());
+        if march.tricubic.is_some() && self.local_tricubic.is_none() {
+            self.local_tricubic = Some(crate::adapter::pipeline(&self.device, true));
+        }
+        let pipeline = match (&march.tricubic, &self.local_tricubic) {
+            (Some(_), Some(p)) => p,
+            _ => &self.local,
+        };
         let cache = self.field.as_ref().expect("uploaded above");
         let colours = self.colour.as_ref().expect("uploaded above");
         let (table, spec) = spec_table(march.shader.specular())?;
@@ -279,7 +286,7 @@ impl Gpu {
         });
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("glint local"),
-            layout: &self.local.get_bind_group_layout(0),
+            layout: &pipeline.get_bind_group_layout(0),
             entries: &[
                 entry(0, uniform.as_entire_binding()),
                 entry(1, wgpu::BindingResource::TextureView(&cache.values)),
@@ -297,7 +304,7 @@ impl Gpu {
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.local);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(w.div_ceil(GROUP), h.div_ceil(GROUP), 1);
         }

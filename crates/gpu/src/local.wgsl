@@ -39,7 +39,7 @@ struct Params {
     // form (0 exact, 1 power, 2 Schlick, 3 Gauss, 4 table), n, a, v.
     lobe: vec4<f32>,
     // Iso threshold, pre-integrated (1) or point sampling (0), tricubic (1) or
-    // trilinear (0), clip half-spaces.
+    // trilinear (0; the pipeline's TRICUBIC decides), clip half-spaces.
     extra: vec4<f32>,
     // The cut faces' depth (mm) and strong gradient; the pre-integrated opacity
     // table's m_max and m_scale.
@@ -90,6 +90,10 @@ const PRE_AUX: u32 = 16386u;
 const OPACITY_TABLE: u32 = 4096u;
 const ISO_REFINE_STEPS: u32 = 8u;
 const MACRO_CELL: u32 = 4u;
+
+// The field's filter, fixed per pipeline: the tricubic spline's 64 taps are
+// compiled into the tricubic pipeline only.
+override TRICUBIC: bool = false;
 
 struct Loc {
     ijk: vec3<i32>,
@@ -341,7 +345,7 @@ fn cubic(l: Loc, grad: bool) -> vec4<f32> {
 
 // Field::value_at: the field's filter.
 fn sample_value(l: Loc) -> f32 {
-    if P.extra.z != 0.0 {
+    if TRICUBIC {
         return cubic(l, false).x;
     }
     return value_at(l);
@@ -350,7 +354,7 @@ fn sample_value(l: Loc) -> f32 {
 // Field::gradient_at: the field's filter (cubic_gradient_at maps the spline's
 // derivatives by the inverse transpose of the affine).
 fn sample_gradient(l: Loc) -> vec3<f32> {
-    if P.extra.z != 0.0 {
+    if TRICUBIC {
         let g = cubic(l, true).yzw;
         return vec3<f32>(
             P.gm0.x * g.x + P.gm0.y * g.y + P.gm0.z * g.z,
