@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader};
 use glint_lobe::{Geometry, LobeKind, Specular};
-use glint_volume::{Classification, ColourVolume, Field, FrameSettings, LocalMarch};
+use glint_volume::{Classification, ColourVolume, Field, FrameSettings, LocalMarch, ShadowField};
 use wgpu::util::DeviceExt;
 
 use crate::adapter::{ColourCache, FieldCache, Gpu, GpuError};
@@ -200,6 +200,54 @@ fn params(
     words
 }
 
+/// The `shadows` model's light volumes as the shader's `shadow` (header) and
+/// `light` (values): `shadow[0]` = `[on, has occlusion, anisotropy, 1 / cell]`,
+/// `shadow[1]` = the occlusion grid's dims and first value's index, then per light
+/// its axes and first value's index, its extents, its bias; the values of every
+/// light's grid, then the occlusion's. Placeholders (off) without light volumes.
+fn shadow_tables(
+    shadows: Option<&ShadowField>,
+    anisotropy: f32,
+) -> Result<(Vec<[f32; 4]>, Vec<f32>), GpuError> {
+    let Some(s) = shadows else {
+        return Ok((vec![[0.0; 4]; 2], vec![1.0]));
+    };
+    let mut head = vec![[0.0; 4]; 2];
+    let mut values: Vec<f32> = Vec::new();
+    let index = |values: &Vec<f32>| -> Result<f32, GpuError> {
+        // The shader reads the indices as f32: exact below 2^24.
+        if values.len() >= 1 << 24 {
+            return Err(GpuError::Unsupported(
+                "light volumes of 2^24 values or more".into(),
+            ));
+        }
+        Ok(values.len() as f32)
+    };
+    for i in 0..s.lights() {
+        let g = s.light_grid(i).expect("i < lights");
+        let first = index(&values)?;
+        head.push([g.axes[0] as f32, g.axes[1] as f32, g.axes[2] as f32, first]);
+        head.push([g.len[0] as f32, g.len[1] as f32, g.len[2] as f32, 0.0]);
+        head.push([g.offset[0], g.offset[1], g.offset[2], 0.0]);
+        values.extend_from_slice(g.t);
+    }
+    let occlusion = s.occlusion_grid();
+    if let Some((o, d)) = occlusion {
+        head[1] = [d[0] as f32, d[1] as f32, d[2] as f32, index(&values)?];
+        values.extend_from_slice(o);
+    }
+    head[0] = [
+        1.0,
+        f32::from(u8::from(occlusion.is_some())),
+        anisotropy,
+        1.0 / ShadowField::cell(),
+    ];
+    if values.is_empty() {
+        values.push(1.0);
+    }
+    Ok((head, values))
+}
+
 impl Gpu {
     /// The `local` frame of `class` for `settings` lit by `shader`, as
     /// [`Classification::frame`] renders it on the CPU (same rays, samples, lookup
@@ -214,6 +262,33 @@ impl Gpu {
         shader: &Shader,
         settings: &FrameSettings,
     ) -> Result<Image, GpuError> {
+        self.render(class, shader, settings, None)
+    }
+
+    /// The `shadows` frame of `class` for `settings` lit by `shader` through the
+    /// light volumes `shadows` (built on the CPU by
+    /// [`Classification::shadow_field`] for this shader and frame, uploaded as
+    /// buffers): [`Gpu::render_local`]'s march, each shaded sample lit as the CPU's
+    /// `shadows` model lights it (each light scaled by its transmittance, the medium
+    /// by the phase function, the ambient term by the occlusion). Errors as
+    /// [`Gpu::render_local`] does, and for light volumes built for other lights.
+    pub fn render_shadows(
+        &mut self,
+        class: &Classification,
+        shader: &Shader,
+        settings: &FrameSettings,
+        shadows: &ShadowField,
+    ) -> Result<Image, GpuError> {
+        self.render(class, shader, settings, Some(shadows))
+    }
+
+    fn render(
+        &mut self,
+        class: &Classification,
+        shader: &Shader,
+        settings: &FrameSettings,
+        shadows: Option<&ShadowField>,
+    ) -> Result<Image, GpuError> {
         let march = class.local_march(shader, settings).map_err(|e| {
             // The caller names the parameter error once (`--device gpu: ...`).
             GpuError::Unsupported(match e {
@@ -221,6 +296,7 @@ impl Gpu {
                 e => e.to_string(),
             })
         })?;
+        let (shadow_head, light_values) = self.shadow_inputs(&march, shader, shadows)?;
         let field = class.field();
         let dims = field.dims();
         let side = *dims.iter().max().expect("three dims") as u64;
@@ -278,6 +354,8 @@ impl Gpu {
             "glint distance",
             bytemuck::cast_slice(&distance_words(&march)),
         );
+        let shadow_head = storage("glint shadow", bytemuck::cast_slice(&shadow_head));
+        let light_values = storage("glint light", bytemuck::cast_slice(&light_values));
         let out = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("glint image"),
             size: out_size,
@@ -299,6 +377,8 @@ impl Gpu {
                 entry(8, wgpu::BindingResource::TextureView(&colours.codes)),
                 entry(9, linear.as_entire_binding()),
                 entry(10, distance.as_entire_binding()),
+                entry(11, shadow_head.as_entire_binding()),
+                entry(12, light_values.as_entire_binding()),
             ],
         });
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -319,6 +399,34 @@ impl Gpu {
             alpha: px.iter().map(|p| p[3]).collect(),
             stats: RenderStats::default(),
         })
+    }
+
+    /// The light volumes' tables ([`shadow_tables`]) for a frame of `march` lit by
+    /// `shader`: refused for MIP (as the CPU refuses it), for light volumes built for
+    /// other lights, and past the adapter's storage buffer binding.
+    fn shadow_inputs(
+        &self,
+        march: &LocalMarch,
+        shader: &Shader,
+        shadows: Option<&ShadowField>,
+    ) -> Result<(Vec<[f32; 4]>, Vec<f32>), GpuError> {
+        if shadows.is_some() && march.mode == RenderMode::Mip {
+            return Err(GpuError::Unsupported(
+                "shadows lighting needs composite or iso mode (MIP is not lit)".into(),
+            ));
+        }
+        if shadows.is_some_and(|s| !s.is_for(shader, &march.camera)) {
+            return Err(GpuError::Unsupported(
+                "the light volumes were built for other lights (or another camera)".into(),
+            ));
+        }
+        let (head, values) = shadow_tables(shadows, shader.anisotropy())?;
+        self.need(
+            "the largest storage buffer binding",
+            self.limits.max_storage_buffer_binding_size,
+            values.len() as u64 * 4,
+        )?;
+        Ok((head, values))
     }
 
     /// Uploads `colour`'s 8-bit sRGB codes (as an Rgba8Uint texture) unless they are

@@ -80,6 +80,11 @@ struct Params {
 // The empty-space map (Classification's distance), four cells a word, cell c in
 // bits 8 (c mod 4) and up.
 @group(0) @binding(10) var<storage, read> distance: array<u32>;
+// The `shadows` model's light volumes (local.rs shadow_tables): [0] on, has
+// occlusion, anisotropy, 1 / cell; [1] the occlusion's dims and first index; per
+// light its axes and first index, its extents, its bias. Their values in `light`.
+@group(0) @binding(11) var<storage, read> shadow: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read> light: array<f32>;
 
 const BINS: u32 = 4096u;
 const PRE_POINT: u32 = 0u;
@@ -264,6 +269,139 @@ fn shade(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
     let shaded = base * lit + vec3<f32>(spec);
     let unshaded = base * flat;
     return unshaded + w * (shaded - unshaded);
+}
+
+// light.rs trilinear: the grid of `len` from `light[first]` (storage
+// [q0][q2][q1]) at `q`, clamped to the grid.
+fn grid_trilinear(first: u32, len: vec3<u32>, q: vec3<f32>) -> f32 {
+    var i = vec3<u32>(0u);
+    var f = vec3<f32>(0.0);
+    for (var a = 0; a < 3; a++) {
+        let top = f32(len[a] - 1u);
+        let x = min(max(q[a], 0.0), top);
+        let lo = min(u32(x), max(len[a], 2u) - 2u);
+        i[a] = lo;
+        if len[a] > 1u {
+            f[a] = x - f32(lo);
+        }
+    }
+    let s1 = len.y;
+    let s0 = len.y * len.z;
+    let o1 = select(0u, 1u, len.y > 1u);
+    let o2 = select(0u, s1, len.z > 1u);
+    let o0 = select(0u, s0, len.x > 1u);
+    let b = first + i.x * s0 + i.z * s1 + i.y;
+    let c00 = lerp1(light[b], light[b + o1], f.y);
+    let c01 = lerp1(light[b + o2], light[b + o2 + o1], f.y);
+    let c10 = lerp1(light[b + o0], light[b + o0 + o1], f.y);
+    let c11 = lerp1(light[b + o0 + o2], light[b + o0 + o2 + o1], f.y);
+    return lerp1(lerp1(c00, c01, f.z), lerp1(c10, c11, f.z), f.x);
+}
+
+fn lerp1(a: f32, b: f32, t: f32) -> f32 {
+    return a + t * (b - a);
+}
+
+// The transmittance of each light to index-space point `p` and the ambient
+// occlusion there (ShadowField::at).
+struct Shadowing {
+    t: array<f32, 8>,
+    occlusion: f32,
+}
+
+fn shadowing(p: vec3<f32>) -> Shadowing {
+    var s: Shadowing;
+    let g = p * shadow[0].w;
+    let count = u32(P.gate.w);
+    for (var i = 0u; i < count; i++) {
+        let h = 2u + 3u * i;
+        let axes = vec3<u32>(shadow[h].xyz);
+        let len = vec3<u32>(shadow[h + 1u].xyz);
+        let gb = g + shadow[h + 2u].xyz;
+        let q = vec3<f32>(gb[axes.x], gb[axes.y], gb[axes.z]);
+        s.t[i] = grid_trilinear(u32(shadow[h].w), len, q);
+    }
+    s.occlusion = 1.0;
+    if shadow[0].y != 0.0 {
+        let d = vec3<u32>(shadow[1].xyz);
+        s.occlusion = grid_trilinear(u32(shadow[1].w), d.zxy, g.zxy);
+    }
+    return s;
+}
+
+// transport.rs phase_hg.
+fn phase_hg(g: f32, l_dot_v: f32) -> f32 {
+    let g2 = g * g;
+    let denom = 1.0 + g2 + 2.0 * g * l_dot_v;
+    return (1.0 - g2) / (denom * sqrt(denom));
+}
+
+// Shader::shade_shadowed = Scattering::shadowed for a sample at index-space point
+// `p`: each light scaled by its transmittance, the medium lit through the phase
+// function (MEDIUM_IRRADIANCE 0.25), the ambient term by the occlusion.
+fn shade_shadowed(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
+    let amb = P.material.x;
+    let dif = P.material.y;
+    let spc = P.material.z;
+    if P.material.w == 0.0 {
+        return base;
+    }
+    let s = shadowing(p);
+    let count = u32(P.gate.w);
+    // Shader::phase_sum.
+    var phase = 0.0;
+    for (var i = 0u; i < count; i++) {
+        let l = P.lights[i].xyz;
+        phase += (P.lights[i].w * s.t[i]) * phase_hg(shadow[0].z, dot3(l, view));
+    }
+    // Shader::surface_at.
+    let gm2 = dot(grad, grad);
+    let g0 = P.gate.x;
+    if P.gate.y == 0.0 || !(gm2 > g0 * g0 && gm2 < 3.4e38) {
+        return base * (amb * s.occlusion + dif * (0.25 * phase));
+    }
+    let gm = sqrt(gm2);
+    var n = grad * (-1.0 / gm);
+    var w = 1.0;
+    if g0 > 0.0 {
+        w = min((gm - g0) / g0, 1.0);
+    }
+    w = w * P.gate.y;
+    var n_dot_v = dot(n, view);
+    if n_dot_v < 0.0 {
+        n = -n;
+        n_dot_v = -n_dot_v;
+    }
+    var diffuse = 0.0;
+    var specular = 0.0;
+    for (var i = 0u; i < count; i++) {
+        let l = P.lights[i].xyz;
+        let intensity = P.lights[i].w * s.t[i];
+        let n_dot_l = dot(n, l);
+        if n_dot_l > 0.0 {
+            var c: f32;
+            if P.gate.z == 0.0 {
+                c = 2.0 * n_dot_l * n_dot_v - dot(l, view);
+            } else {
+                c = dot(n, normalize_or_zero(l + view));
+            }
+            diffuse += intensity * n_dot_l;
+            specular += intensity * lobe_eval(c);
+        }
+    }
+    // transport.rs hybrid_terms.
+    let lit = amb * s.occlusion + dif * (w * diffuse + (1.0 - w) * (0.25 * phase));
+    let spec = w * (spc * specular);
+    return base * lit + vec3<f32>(spec);
+}
+
+// The sample's lighting under the frame's model: local, or `shadows` when the
+// frame has light volumes.
+fn shade_at(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
+    if shadow[0].x != 0.0 {
+        return shade_shadowed(base, grad, view, p);
+    }
+    return shade(base, grad, view);
 }
 
 // Vec3::dot, in its order.
@@ -662,7 +800,8 @@ fn composite(r: Ray) -> vec4<f32> {
             take = e.w > 0.0;
         }
         if take {
-            let rgb = shade(base_colour(e, l), shading_gradient(l), view);
+            let p = vec3<f32>(l.ijk) + l.t;
+            let rgb = shade_at(base_colour(e, l), shading_gradient(l), view, p);
             let w = (1.0 - alpha) * e.w;
             color += w * rgb;
             alpha += w;
@@ -747,7 +886,7 @@ fn iso(r: Ray) -> vec4<f32> {
         if P.extra.w != 0.0 {
             g = cut_gradient(p, g);
         }
-        return vec4<f32>(shade(base_colour(e, l), g, -r.dir), 1.0);
+        return vec4<f32>(shade_at(base_colour(e, l), g, -r.dir, p), 1.0);
     }
     return vec4<f32>(0.0);
 }

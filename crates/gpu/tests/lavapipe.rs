@@ -13,7 +13,7 @@ use glint_lobe::{CosTable, Geometry, LobeKind, Specular};
 use glint_volume::phantom::Phantom;
 use glint_volume::{
     presets, Classification, ClassifySettings, ColourVolume, Field, Filter, FrameSettings,
-    Prefilter, Sampling, TransferFunction, Transport,
+    Prefilter, Sampling, ShadowSettings, TransferFunction, Transport,
 };
 
 /// The largest CIEDE2000 difference allowed between the GPU's and the CPU's pixel
@@ -442,4 +442,69 @@ fn gpu_preintegrated_faint_tissue_above_dense_bins_matches_the_cpu() {
     // of the segment's own (lavapipe: 0.0000); plain f32 integrals (the low halves
     // dropped) differ by 0.005 here.
     assert!(da <= 1e-3, "faint shell: alpha differs by {da}");
+}
+
+/// The `shadows` model: the light volumes built on the CPU and read by the GPU's
+/// march, in composite (with and without ambient occlusion, a pure medium) and iso
+/// frames, against the CPU's frames through the same light volumes; MIP refused as
+/// the CPU refuses it; light volumes of another camera refused.
+#[test]
+fn gpu_shadows_frames_match_the_cpu() {
+    let Some(mut gpu) = gpu() else { return };
+    let settings = frame(64, 64);
+    let lit = shader(LobeKind::EnergyFit, Geometry::Phong);
+    let medium = lit.clone().with_surface_weight(0.0).unwrap();
+    let iso = ClassifySettings {
+        mode: RenderMode::Iso,
+        ..Default::default()
+    };
+    let cases = [
+        ("shadows", ClassifySettings::default(), &lit, false),
+        ("shadows occlusion", ClassifySettings::default(), &lit, true),
+        ("shadows medium", ClassifySettings::default(), &medium, true),
+        ("shadows iso", iso, &lit, true),
+    ];
+    for (name, classify, shader, occlusion) in cases {
+        let class = head_with(48, Filter::Trilinear, classify);
+        let lights = class
+            .shadow_field(shader, &settings, &ShadowSettings { occlusion }, None)
+            .unwrap();
+        let cpu = class
+            .frame(
+                shader,
+                &settings,
+                None,
+                Transport::Shadows(&lights),
+                &|_| {},
+            )
+            .unwrap();
+        let local = class
+            .frame(shader, &settings, None, Transport::Local, &|_| {})
+            .unwrap();
+        let got = gpu
+            .render_shadows(&class, shader, &settings, &lights)
+            .unwrap();
+        let (de, covered) = max_delta_e(&cpu, &got);
+        // The shadows must show: the GPU's frame is not the local one.
+        let (de_local, _) = max_delta_e(&local, &got);
+        eprintln!("{name}: max ΔE00 {de:.3} (against local {de_local:.3}), covered {covered:.2}");
+        assert!(covered > 0.2, "{name}: only {covered} covered");
+        assert!(de <= MAX_DELTA_E, "{name}: max ΔE00 {de}");
+        assert!(de_local > 5.0, "{name}: no shadow shows ({de_local})");
+    }
+    let class = head(48, RenderMode::Mip);
+    let lights = class
+        .shadow_field(&lit, &settings, &ShadowSettings::default(), None)
+        .unwrap();
+    let e = gpu
+        .render_shadows(&class, &lit, &settings, &lights)
+        .unwrap_err();
+    assert!(e.to_string().contains("MIP is not lit"), "{e}");
+    let class = head(48, RenderMode::Composite);
+    let mut turned = frame(64, 64);
+    turned.camera.azimuth += 90.0;
+    let e = gpu
+        .render_shadows(&class, &lit, &turned, &lights)
+        .unwrap_err();
+    assert!(e.to_string().contains("other lights"), "{e}");
 }

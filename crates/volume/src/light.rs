@@ -63,6 +63,19 @@ fn trilinear(grid: &[f32], len: [usize; 3], q: [f32; 3]) -> f32 {
     lerp(lerp(c00, c01, f[2]), lerp(c10, c11, f[2]), f[0])
 }
 
+/// One light's transmittance grid as a device uploads it ([`ShadowField::light_grid`]).
+pub struct LightGridView<'a> {
+    /// The sweep axis, then the two others.
+    pub axes: [usize; 3],
+    /// The grid's extents along `axes`.
+    pub len: [usize; 3],
+    /// The values, storage `[m][v][u]`: `m` along `axes[0]`, `v` along `axes[2]`,
+    /// `u` along `axes[1]`.
+    pub t: &'a [f32],
+    /// Added to a sample's grid position before the lookup (the shadow bias).
+    pub offset: [f32; 3],
+}
+
 /// The light volumes of one frame: each placed light's transmittance grid, and the
 /// classification's ambient occlusion when asked for. Built by
 /// [`Classification::shadow_field`](crate::Classification::shadow_field) for a shader
@@ -123,6 +136,30 @@ impl ShadowField {
             Some((ao, d)) => trilinear(ao, [d[2], d[0], d[1]], [g.z, g.x, g.y]),
             None => 1.0,
         }
+    }
+
+    /// The side of a grid cell in voxels: a sample at index-space point `p` reads the
+    /// grids at `p / cell` (grid units).
+    pub fn cell() -> f32 {
+        LIGHT_CELL as f32
+    }
+
+    /// Light `i`'s transmittance grid as a device uploads it.
+    pub fn light_grid(&self, i: usize) -> Option<LightGridView<'_>> {
+        let l = self.lights.get(i)?;
+        let o = l.offset;
+        Some(LightGridView {
+            axes: l.axes,
+            len: l.len,
+            t: &l.t,
+            offset: [o.x, o.y, o.z],
+        })
+    }
+
+    /// The ambient occlusion grid (storage `[k][j][i]`) and its dims `[ni, nj, nk]`,
+    /// when it holds one.
+    pub fn occlusion_grid(&self) -> Option<(&[f32], [usize; 3])> {
+        self.occlusion.as_ref().map(|(o, d)| (o.as_slice(), *d))
     }
 
     /// The transmittance of light `i` at index-space point `p` (tests and reports).
