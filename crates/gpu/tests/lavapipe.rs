@@ -445,7 +445,8 @@ fn gpu_preintegrated_faint_tissue_above_dense_bins_matches_the_cpu() {
 }
 
 /// The `shadows` model: the light volumes built on the CPU and read by the GPU's
-/// march, in composite (with and without ambient occlusion, a pure medium) and iso
+/// march, in composite (with and without ambient occlusion, a pure medium with an
+/// anisotropic phase function) and iso
 /// frames, against the CPU's frames through the same light volumes; MIP refused as
 /// the CPU refuses it; light volumes of another camera refused.
 #[test]
@@ -453,7 +454,12 @@ fn gpu_shadows_frames_match_the_cpu() {
     let Some(mut gpu) = gpu() else { return };
     let settings = frame(64, 64);
     let lit = shader(LobeKind::EnergyFit, Geometry::Phong);
-    let medium = lit.clone().with_surface_weight(0.0).unwrap();
+    let medium = lit
+        .clone()
+        .with_surface_weight(0.0)
+        .unwrap()
+        .with_anisotropy(0.4)
+        .unwrap();
     let iso = ClassifySettings {
         mode: RenderMode::Iso,
         ..Default::default()
