@@ -139,6 +139,8 @@ pub struct Gpu {
     /// The same for the tricubic filter (its 64-tap spline compiled in only there),
     /// built on the first tricubic frame.
     pub(crate) local_tricubic: Option<wgpu::ComputePipeline>,
+    /// The `shadows` light volumes' sweep, built on the first frame that sweeps.
+    pub(crate) sweep: Option<wgpu::ComputePipeline>,
     pub(crate) field: Option<FieldCache>,
     pub(crate) colour: Option<ColourCache>,
 }
@@ -184,6 +186,7 @@ impl Gpu {
             limits,
             local,
             local_tricubic: None,
+            sweep: None,
             field: None,
             colour: None,
         })

@@ -31,6 +31,7 @@
 mod adapter;
 mod bench;
 mod local;
+mod sweep;
 
 pub use adapter::{adapters, AdapterSummary, Choice, Gpu, GpuError};
 pub use bench::{bench_lobes, LobeRate};

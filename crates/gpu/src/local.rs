@@ -6,7 +6,9 @@ use std::sync::Arc;
 
 use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader};
 use glint_lobe::{Geometry, LobeKind, Specular};
-use glint_volume::{Classification, ColourVolume, Field, FrameSettings, LocalMarch, ShadowField};
+use glint_volume::{
+    Classification, ColourVolume, Field, FrameSettings, LocalMarch, ShadowField, ShadowSettings,
+};
 use wgpu::util::DeviceExt;
 
 use crate::adapter::{ColourCache, FieldCache, Gpu, GpuError};
@@ -248,6 +250,15 @@ fn shadow_tables(
     Ok((head, values))
 }
 
+/// Where a `shadows` frame's light volumes come from.
+#[derive(Clone, Copy)]
+enum LightVolumes<'a> {
+    /// Built on the CPU ([`Classification::shadow_field`]), uploaded.
+    Built(&'a ShadowField),
+    /// Swept on the GPU for these settings.
+    Swept(ShadowSettings),
+}
+
 impl Gpu {
     /// The `local` frame of `class` for `settings` lit by `shader`, as
     /// [`Classification::frame`] renders it on the CPU (same rays, samples, lookup
@@ -279,7 +290,22 @@ impl Gpu {
         settings: &FrameSettings,
         shadows: &ShadowField,
     ) -> Result<Image, GpuError> {
-        self.render(class, shader, settings, Some(shadows))
+        self.render(class, shader, settings, Some(LightVolumes::Built(shadows)))
+    }
+
+    /// The `shadows` frame as [`Gpu::render_shadows`] renders it, its light volumes
+    /// swept on the GPU (`sweep.wgsl`, one dispatch per grid plane of each light)
+    /// from the classification's averaged extinction, the ambient occlusion (when
+    /// `shadows` asks for it) the classification's own; a clipped frame's light
+    /// volumes (the clip empties grid points) are built on the CPU.
+    pub fn render_shadows_swept(
+        &mut self,
+        class: &Classification,
+        shader: &Shader,
+        settings: &FrameSettings,
+        shadows: &ShadowSettings,
+    ) -> Result<Image, GpuError> {
+        self.render(class, shader, settings, Some(LightVolumes::Swept(*shadows)))
     }
 
     fn render(
@@ -287,7 +313,7 @@ impl Gpu {
         class: &Classification,
         shader: &Shader,
         settings: &FrameSettings,
-        shadows: Option<&ShadowField>,
+        shadows: Option<LightVolumes<'_>>,
     ) -> Result<Image, GpuError> {
         let march = class.local_march(shader, settings).map_err(|e| {
             // The caller names the parameter error once (`--device gpu: ...`).
@@ -296,7 +322,8 @@ impl Gpu {
                 e => e.to_string(),
             })
         })?;
-        let (shadow_head, light_values) = self.shadow_inputs(&march, shader, shadows)?;
+        let (shadow_head, light_values) =
+            self.shadow_inputs((class, &march), (shader, settings), shadows)?;
         let field = class.field();
         let dims = field.dims();
         let side = *dims.iter().max().expect("three dims") as u64;
@@ -355,7 +382,6 @@ impl Gpu {
             bytemuck::cast_slice(&distance_words(&march)),
         );
         let shadow_head = storage("glint shadow", bytemuck::cast_slice(&shadow_head));
-        let light_values = storage("glint light", bytemuck::cast_slice(&light_values));
         let out = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("glint image"),
             size: out_size,
@@ -401,20 +427,45 @@ impl Gpu {
         })
     }
 
-    /// The light volumes' tables ([`shadow_tables`]) for a frame of `march` lit by
-    /// `shader`: refused for MIP (as the CPU refuses it), for light volumes built for
+    /// The light volumes' header and values ([`shadow_tables`]) for a frame of
+    /// `march` lit by `shader`: the values uploaded from the CPU's grids or swept on
+    /// the GPU; refused for MIP (as the CPU refuses it), for light volumes built for
     /// other lights, and past the adapter's storage buffer binding.
     fn shadow_inputs(
-        &self,
-        march: &LocalMarch,
-        shader: &Shader,
-        shadows: Option<&ShadowField>,
-    ) -> Result<(Vec<[f32; 4]>, Vec<f32>), GpuError> {
+        &mut self,
+        (class, march): (&Classification, &LocalMarch),
+        (shader, settings): (&Shader, &FrameSettings),
+        shadows: Option<LightVolumes<'_>>,
+    ) -> Result<(Vec<[f32; 4]>, wgpu::Buffer), GpuError> {
         if shadows.is_some() && march.mode == RenderMode::Mip {
             return Err(GpuError::Unsupported(
                 "shadows lighting needs composite or iso mode (MIP is not lit)".into(),
             ));
         }
+        let parameter = |e: RenderError| {
+            GpuError::Unsupported(match e {
+                RenderError::Parameter(line) => line,
+                e => e.to_string(),
+            })
+        };
+        let built;
+        let shadows = match shadows {
+            Some(LightVolumes::Swept(s)) => match class.light_sweeps(shader, settings, &s) {
+                Ok(Some(sweeps)) => {
+                    let (head, len) = crate::sweep::header(&sweeps, shader.anisotropy());
+                    return Ok((head, self.sweep(&sweeps, len)?));
+                }
+                Ok(None) => {
+                    built = class
+                        .shadow_field(shader, settings, &s, None)
+                        .map_err(parameter)?;
+                    Some(&built)
+                }
+                Err(e) => return Err(parameter(e)),
+            },
+            Some(LightVolumes::Built(s)) => Some(s),
+            None => None,
+        };
         if shadows.is_some_and(|s| !s.is_for(shader, &march.camera)) {
             return Err(GpuError::Unsupported(
                 "the light volumes were built for other lights (or another camera)".into(),
@@ -426,7 +477,14 @@ impl Gpu {
             self.limits.max_storage_buffer_binding_size,
             values.len() as u64 * 4,
         )?;
-        Ok((head, values))
+        let buffer = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("glint light"),
+                contents: bytemuck::cast_slice(&values),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        Ok((head, buffer))
     }
 
     /// Uploads `colour`'s 8-bit sRGB codes (as an Rgba8Uint texture) unless they are

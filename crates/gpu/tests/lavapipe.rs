@@ -497,7 +497,30 @@ fn gpu_shadows_frames_match_the_cpu() {
         assert!(covered > 0.2, "{name}: only {covered} covered");
         assert!(de <= MAX_DELTA_E, "{name}: max ΔE00 {de}");
         assert!(de_local > 5.0, "{name}: no shadow shows ({de_local})");
+        // The light volumes swept on the GPU instead of the CPU's.
+        let swept = ShadowSettings { occlusion };
+        let got = gpu
+            .render_shadows_swept(&class, shader, &settings, &swept)
+            .unwrap();
+        let (de, _) = max_delta_e(&cpu, &got);
+        eprintln!("{name} swept on the GPU: max ΔE00 {de:.3}");
+        assert!(de <= MAX_DELTA_E, "{name} swept: max ΔE00 {de}");
     }
+    // Clipped: the light volumes are the CPU's (the clip empties grid points).
+    let class = head(48, RenderMode::Composite);
+    let mut clipped = frame(64, 64);
+    clipped.clip = clip(&class);
+    let on = ShadowSettings { occlusion: true };
+    let lights = class.shadow_field(&lit, &clipped, &on, None).unwrap();
+    let cpu = class
+        .frame(&lit, &clipped, None, Transport::Shadows(&lights), &|_| {})
+        .unwrap();
+    let got = gpu
+        .render_shadows_swept(&class, &lit, &clipped, &on)
+        .unwrap();
+    let (de, _) = max_delta_e(&cpu, &got);
+    eprintln!("shadows clipped: max ΔE00 {de:.3}");
+    assert!(de <= MAX_DELTA_E, "shadows clipped: max ΔE00 {de}");
     let class = head(48, RenderMode::Mip);
     let lights = class
         .shadow_field(&lit, &settings, &ShadowSettings::default(), None)

@@ -88,9 +88,9 @@ impl GpuSlot {
         }
     }
 
-    /// The frame on the GPU: `local`, or `shadows` with its light volumes built on
-    /// the CPU (as [`Classification::shadow_field`] builds them for the CPU's frame;
-    /// no occluders, as frames with meshes stay on the CPU) and read by the GPU.
+    /// The frame on the GPU: `local`, or `shadows` with its light volumes swept on
+    /// the GPU (built on the CPU for a clipped frame; no occluders, as frames with
+    /// meshes stay on the CPU).
     #[cfg(feature = "gpu")]
     fn gpu_frame(
         &mut self,
@@ -128,8 +128,7 @@ impl GpuSlot {
         }
         let image = match transport {
             Transport::Shadows(settings) => {
-                let lights = class.shadow_field(shader, frame, &settings, None)?;
-                gpu.render_shadows(class, shader, frame, &lights)
+                gpu.render_shadows_swept(class, shader, frame, &settings)
             }
             _ => gpu.render_local(class, shader, frame),
         };

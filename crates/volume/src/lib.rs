@@ -60,7 +60,7 @@ pub use field::{
     MAX_FIELD_VOXELS, MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
 };
 pub use frames::Transport;
-pub use light::LightGridView;
+pub use light::{LightGridView, LightSweep, LightSweeps};
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{
