@@ -3,7 +3,7 @@
 
 use std::sync::Weak;
 
-use glint_volume::Field;
+use glint_volume::{ColourVolume, Field};
 use wgpu::{Backends, DeviceType, DownlevelFlags};
 
 /// Why the GPU back end cannot run: each variant one line for the user.
@@ -136,7 +136,13 @@ pub struct Gpu {
     pub(crate) queue: wgpu::Queue,
     pub(crate) limits: wgpu::Limits,
     pub(crate) local: wgpu::ComputePipeline,
+    /// The same for the tricubic filter (its 64-tap spline compiled in only there),
+    /// built on the first tricubic frame.
+    pub(crate) local_tricubic: Option<wgpu::ComputePipeline>,
+    /// The `shadows` light volumes' sweep, built on the first frame that sweeps.
+    pub(crate) sweep: Option<wgpu::ComputePipeline>,
     pub(crate) field: Option<FieldCache>,
+    pub(crate) colour: Option<ColourCache>,
 }
 
 impl Gpu {
@@ -172,14 +178,17 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        let local = pipeline(&device);
+        let local = pipeline(&device, false);
         Ok(Gpu {
             summary,
             device,
             queue,
             limits,
             local,
+            local_tricubic: None,
+            sweep: None,
             field: None,
+            colour: None,
         })
     }
 
@@ -254,6 +263,13 @@ impl Gpu {
     }
 }
 
+/// The colour volume last uploaded (`None`: the placeholder of frames without one)
+/// and its texture of 8-bit sRGB codes.
+pub(crate) struct ColourCache {
+    pub(crate) colour: Option<Weak<ColourVolume>>,
+    pub(crate) codes: wgpu::TextureView,
+}
+
 /// A field's textures on the device, kept while the same field is rendered.
 pub(crate) struct FieldCache {
     pub(crate) field: Weak<Field>,
@@ -262,8 +278,12 @@ pub(crate) struct FieldCache {
     pub(crate) gradient_scale: f32,
 }
 
-/// The `local` compute pipeline (its bind group layout derived from the shader).
-pub(crate) fn pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
+/// The `local` compute pipeline (its bind group layout derived from the shader),
+/// for the tricubic filter or the trilinear one: the shader's `TRICUBIC` override,
+/// so that the other filter's code is compiled out (the spline's 64 taps, inlined
+/// into every sample of a trilinear frame behind a branch on a uniform, made
+/// lavapipe's trilinear frames 3.5 times slower).
+pub(crate) fn pipeline(device: &wgpu::Device, tricubic: bool) -> wgpu::ComputePipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("glint local"),
         source: wgpu::ShaderSource::Wgsl(include_str!("local.wgsl").into()),
@@ -273,7 +293,10 @@ pub(crate) fn pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
         layout: None,
         module: &module,
         entry_point: Some("main"),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &[("TRICUBIC", f64::from(u8::from(tricubic)))],
+            ..Default::default()
+        },
         cache: None,
     })
 }

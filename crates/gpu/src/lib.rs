@@ -1,6 +1,10 @@
 //! glint-gpu: the GPU back end. WGSL compute shaders on [`wgpu`] (Vulkan, Metal, DX12)
-//! render the same scene as the CPU: so far the `local` lighting model's composite and
-//! MIP frames ([`Gpu::render_local`]), mirroring the CPU's reference ray caster and
+//! render the same scene as the CPU: so far the `local` lighting model's frames
+//! ([`Gpu::render_local`]: composite with point or pre-integrated sampling, MIP and
+//! iso; trilinear or tricubic; clip planes and crop boxes; colour volumes; every
+//! lobe, the hw lobe's table included) and the `shadows` model's
+//! ([`Gpu::render_shadows_swept`]: the light volumes swept on the GPU;
+//! [`Gpu::render_shadows`]: the CPU's), mirroring the CPU's reference ray caster and
 //! the core's lighting term by term, checked against it on Mesa's lavapipe. The
 //! adapters are listed by [`adapters`] (`glint info --devices`), and the lobe
 //! micro-benchmark ([`bench_lobes`]) measures K_v against `pow` on any adapter.
@@ -29,6 +33,7 @@
 mod adapter;
 mod bench;
 mod local;
+mod sweep;
 
 pub use adapter::{adapters, AdapterSummary, Choice, Gpu, GpuError};
 pub use bench::{bench_lobes, LobeRate};

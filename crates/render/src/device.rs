@@ -24,10 +24,9 @@ pub(crate) struct GpuSlot {
 /// without meshes; `None` when it renders it.
 fn not_yet(transport: Transport, meshes: bool) -> Option<&'static str> {
     match transport {
-        Transport::Shadows(_) => Some("the shadows lighting model"),
         Transport::Path { .. } => Some("the path lighting model"),
-        Transport::Local if meshes => Some("meshes or label surfaces"),
-        Transport::Local => None,
+        Transport::Local | Transport::Shadows(_) if meshes => Some("meshes or label surfaces"),
+        Transport::Local | Transport::Shadows(_) => None,
     }
 }
 
@@ -80,7 +79,7 @@ impl GpuSlot {
         }
         #[cfg(feature = "gpu")]
         {
-            self.gpu_frame(device, class, shader, frame)
+            self.gpu_frame(device, (class, shader, frame), transport)
         }
         #[cfg(not(feature = "gpu"))]
         {
@@ -89,13 +88,15 @@ impl GpuSlot {
         }
     }
 
+    /// The frame on the GPU: `local`, or `shadows` with its light volumes swept on
+    /// the GPU (built on the CPU for a clipped frame; no occluders, as frames with
+    /// meshes stay on the CPU).
     #[cfg(feature = "gpu")]
     fn gpu_frame(
         &mut self,
         device: Device,
-        class: &Classification,
-        shader: &Shader,
-        frame: &FrameSettings,
+        (class, shader, frame): (&Classification, &Shader, &FrameSettings),
+        transport: Transport,
     ) -> Result<Option<Image>, RenderError> {
         use glint_gpu::{Choice, Gpu, GpuError};
         if self.gpu.is_none() {
@@ -125,7 +126,13 @@ impl GpuSlot {
             };
             return self.decline(device, e);
         }
-        match gpu.render_local(class, shader, frame) {
+        let image = match transport {
+            Transport::Shadows(settings) => {
+                gpu.render_shadows_swept(class, shader, frame, &settings)
+            }
+            _ => gpu.render_local(class, shader, frame),
+        };
+        match image {
             Ok(image) => Ok(Some(image)),
             Err(e) => self.decline(device, e),
         }

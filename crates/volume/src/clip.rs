@@ -81,6 +81,22 @@ impl IndexClip {
         (lo, hi)
     }
 
+    /// The half-spaces as `[a.x, a.y, a.z, b, n.x, n.y, n.z, 0]` (signed distance
+    /// `a · p + b` of index-space `p`, unit world normal `n`), the cut faces' depth
+    /// (mm) and the strong gradient magnitude: what a device back end mirrors
+    /// [`IndexClip::interval`] and [`IndexClip::cut_gradient`] with.
+    pub(crate) fn device_planes(&self) -> (Vec<[f32; 8]>, f32, f32) {
+        let planes = self
+            .planes
+            .iter()
+            .map(|p| {
+                let (a, n) = (p.a, p.normal);
+                [a.x, a.y, a.z, p.b, n.x, n.y, n.z, 0.0]
+            })
+            .collect();
+        (planes, self.depth, self.strong)
+    }
+
     /// Whether a gradient `g` is weak enough for a cut face to replace it: the test
     /// [`IndexClip::cut_gradient`] makes first, which needs no position.
     #[inline]

@@ -1,16 +1,18 @@
 //! What a device back end (glint-gpu's compute shaders) needs to ray cast a
 //! classification's `local` frame as the reference loop (`raycast/caster.rs`) does: the
 //! field's voxels as the bricks hold them, and a frame's rays, step, lookup table and
-//! lit shader in plain numbers. The device marches every sample between the clip box's
-//! faces; the CPU's empty-space leaps and start bounds skip only samples of zero
-//! opacity, so they change no pixel.
+//! lit shader in plain numbers, and the empty-space map its composite and iso rays
+//! leap by as the CPU's do. The device starts each ray at the clip box's face: the
+//! CPU's start bounds skip only samples of zero opacity, so they change no pixel.
+
+use std::sync::Arc;
 
 use rayon::prelude::*;
 
 use glint_core::camera::{Camera, Projection};
 use glint_core::{RenderError, RenderMode, Shader};
 
-use crate::classification::{Classification, Sampling};
+use crate::classification::{Classification, ColourVolume, PreIntegratedTables, Sampling};
 use crate::field::brick::{brick_dims, BRICK, BRICK_ROW, BRICK_SLICE, BRICK_VOXELS};
 use crate::field::{Field, Filter};
 use crate::raycast::FrameSettings;
@@ -123,12 +125,48 @@ pub struct LocalMarch {
     pub background: [f32; 3],
     /// Accumulated opacity at which a composite ray stops.
     pub termination: f32,
+    /// The iso mode's threshold ([`ClassifySettings::iso`](crate::ClassifySettings::iso)).
+    pub iso: f32,
+    /// A pre-integrated composite frame's tables (`None`: point sampling).
+    pub pre: Option<PreIntegratedTables>,
+    /// The frame's clip planes and crop box in index space (`None`: no clip).
+    pub clip: Option<DeviceClip>,
+    /// For the tricubic filter, the matrix taking the spline's index-space
+    /// derivatives to the world gradient (rows); `None` for the trilinear filter.
+    pub tricubic: Option<[[f32; 3]; 3]>,
+    /// A colour volume whose colours replace the lookup table's (in composite and
+    /// iso frames; MIP keeps the table's).
+    pub colour: Option<Arc<ColourVolume>>,
+    /// Macro cells ([`crate::MACRO_CELL`] voxels a side) along i, j, k.
+    pub cell_dims: [usize; 3],
+    /// Per macro cell (i fastest): 0 where a sample can contribute (composite) or
+    /// reach the threshold (iso), else the chessboard distance in cells to the
+    /// nearest such cell: the empty-space map the CPU's rays leap by (all 0 without
+    /// [`ClassifySettings::skip_empty`](crate::ClassifySettings::skip_empty)).
+    pub distance: Vec<u8>,
+}
+
+/// A frame's clip in index space, as the ray caster applies it (`clip.rs`): each ray
+/// keeps the part where every plane's signed distance is non-negative, and a sample
+/// within `depth` mm of its nearest plane with a gradient weaker than `strong` is
+/// shaded with the gradient blended towards that plane's normal.
+#[derive(Clone, Debug)]
+pub struct DeviceClip {
+    /// Per half-space `[a.x, a.y, a.z, b, n.x, n.y, n.z, 0]`: signed distance (mm)
+    /// `a · p + b` of index-space point `p`, and the unit world normal into the kept
+    /// side.
+    pub planes: Vec<[f32; 8]>,
+    /// Samples closer than this (mm) to a plane lie on its cut face.
+    pub depth: f32,
+    /// The gradient magnitude a cut face's normal is given.
+    pub strong: f32,
 }
 
 impl Classification {
-    /// The numbers of `settings`' `local` frame lit by `shader`, for a device back end;
-    /// an error naming what the device path does not do yet (pre-integrated sampling,
-    /// a tricubic filter, a colour volume, clip planes or a crop box, iso mode).
+    /// The numbers of `settings`' `local` frame lit by `shader`, for a device back end
+    /// (composite with point or pre-integrated sampling, MIP or iso; either filter;
+    /// clip planes and crop boxes; a colour volume's colours); an error for the
+    /// surface mode, which is rasterised, never ray cast.
     pub fn local_march(
         &self,
         shader: &Shader,
@@ -139,25 +177,25 @@ impl Classification {
                 "the GPU back end does not render {what} yet"
             )))
         };
-        if self.settings.mode == RenderMode::Iso {
-            return unsupported("iso mode");
-        }
-        if self.settings.mode == RenderMode::Composite && self.settings.sampling != Sampling::Point
-        {
-            return unsupported("pre-integrated sampling");
-        }
-        if self.field.filter() != Filter::Trilinear {
-            return unsupported("the tricubic filter");
-        }
-        if self.colour.is_some() {
-            return unsupported("colour volumes");
-        }
-        if !settings.clip.is_empty() {
-            return unsupported("clip planes or a crop box");
+        if self.settings.mode == RenderMode::Surface {
+            return unsupported("surface mode");
         }
         let camera = self.camera(settings)?;
         let shader = shader.placed(&camera);
         let field = &*self.field;
+        let pre = (self.settings.mode == RenderMode::Composite
+            && self.settings.sampling == Sampling::PreIntegrated)
+            .then(|| self.lut.pre.device_tables());
+        let clip = self.index_clip(&shader, settings).map(|c| {
+            let (planes, depth, strong) = c.device_planes();
+            DeviceClip {
+                planes,
+                depth,
+                strong,
+            }
+        });
+        let tricubic =
+            (field.filter() == Filter::Tricubic).then_some(field.recipe.to_world_gradient);
         let to_index = |v: glint_core::Vec3| {
             let d = field.direction_to_index([v.x as f64, v.y as f64, v.z as f64]);
             [d[0] as f32, d[1] as f32, d[2] as f32]
@@ -182,6 +220,13 @@ impl Classification {
             mode: self.settings.mode,
             background: settings.background,
             termination: crate::raycast::TERMINATION_OPACITY,
+            iso: self.settings.iso,
+            pre,
+            clip,
+            tricubic,
+            colour: self.colour.clone(),
+            cell_dims: field.cell_dims,
+            distance: self.distance.clone(),
             camera,
             shader,
         })

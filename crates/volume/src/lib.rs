@@ -51,15 +51,16 @@ pub mod transport;
 
 pub use classification::presets;
 pub use classification::{
-    Classification, ClassifySettings, ColourVolume, Lut, Sampling, TfFormat, TransferFunction,
-    TransferFunctionFile, WindowLevel, LUT_SIZE,
+    Classification, ClassifySettings, ColourVolume, Lut, PreIntegratedTables, Sampling, TfFormat,
+    TransferFunction, TransferFunctionFile, WindowLevel, LUT_SIZE,
 };
-pub use device::{LocalMarch, VoxelGrids};
+pub use device::{DeviceClip, LocalMarch, VoxelGrids};
 pub use field::{
     memory_limit, open_zarr, set_memory_limit, Field, Filter, Prefilter, Source, MACRO_CELL,
     MAX_FIELD_VOXELS, MIN_BRICK_SLOTS, PROCESS_OVERHEAD,
 };
 pub use frames::Transport;
+pub use light::{LightGridView, LightSweep, LightSweeps};
 pub use phantom::Phantom;
 pub use presets::{preset, Preset, PRESETS};
 pub use raycast::{

@@ -63,6 +63,19 @@ fn trilinear(grid: &[f32], len: [usize; 3], q: [f32; 3]) -> f32 {
     lerp(lerp(c00, c01, f[2]), lerp(c10, c11, f[2]), f[0])
 }
 
+/// One light's transmittance grid as a device uploads it ([`ShadowField::light_grid`]).
+pub struct LightGridView<'a> {
+    /// The sweep axis, then the two others.
+    pub axes: [usize; 3],
+    /// The grid's extents along `axes`.
+    pub len: [usize; 3],
+    /// The values, storage `[m][v][u]`: `m` along `axes[0]`, `v` along `axes[2]`,
+    /// `u` along `axes[1]`.
+    pub t: &'a [f32],
+    /// Added to a sample's grid position before the lookup (the shadow bias).
+    pub offset: [f32; 3],
+}
+
 /// The light volumes of one frame: each placed light's transmittance grid, and the
 /// classification's ambient occlusion when asked for. Built by
 /// [`Classification::shadow_field`](crate::Classification::shadow_field) for a shader
@@ -125,9 +138,144 @@ impl ShadowField {
         }
     }
 
+    /// The side of a grid cell in voxels: a sample at index-space point `p` reads the
+    /// grids at `p / cell` (grid units).
+    pub fn cell() -> f32 {
+        LIGHT_CELL as f32
+    }
+
+    /// Light `i`'s transmittance grid as a device uploads it.
+    pub fn light_grid(&self, i: usize) -> Option<LightGridView<'_>> {
+        let l = self.lights.get(i)?;
+        let o = l.offset;
+        Some(LightGridView {
+            axes: l.axes,
+            len: l.len,
+            t: &l.t,
+            offset: [o.x, o.y, o.z],
+        })
+    }
+
+    /// The ambient occlusion grid (storage `[k][j][i]`) and its dims `[ni, nj, nk]`,
+    /// when it holds one.
+    pub fn occlusion_grid(&self) -> Option<(&[f32], [usize; 3])> {
+        self.occlusion.as_ref().map(|(o, d)| (o.as_slice(), *d))
+    }
+
     /// The transmittance of light `i` at index-space point `p` (tests and reports).
     pub fn transmittance(&self, i: usize, p: [f32; 3]) -> Option<f32> {
         let l = self.lights.get(i)?;
         Some(l.at(Vec3::new(p[0], p[1], p[2]) * (1.0 / LIGHT_CELL as f32)))
+    }
+}
+
+/// Grid planes between a sample and the point whose transmittance it reads (towards
+/// the light): `transport/shadows.rs`'s `SHADOW_BIAS_PLANES`, which a device's sweep
+/// mirrors.
+const SWEEP_BIAS_PLANES: f32 = 1.0;
+
+/// One light's sweep as a device runs it (`transport/shadows.rs`' `LightGrid::new`
+/// set up for the light's index-space direction): the grid's axes and extents, the
+/// step between planes and the shift of the upstream point, the plane order, the
+/// lookup's bias.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSweep {
+    /// The sweep axis (the direction's largest component), then the two others.
+    pub axes: [usize; 3],
+    /// The grid's extents along `axes`.
+    pub len: [usize; 3],
+    /// mm along the light between two planes (the segment's length).
+    pub s: f32,
+    /// The upstream point's shift along `axes[1]` and `axes[2]`, grid units.
+    pub shift: [f32; 2],
+    /// Whether the planes run from the last to the first (the light on the high side).
+    pub from_last: bool,
+    /// Whether the light has a component along the sweep axis (else every
+    /// transmittance is 1).
+    pub swept: bool,
+    /// Added to a sample's grid position before the lookup.
+    pub offset: [f32; 3],
+}
+
+/// What a device needs to build a frame's light volumes itself
+/// ([`Classification::light_sweeps`]).
+pub struct LightSweeps<'a> {
+    /// The averaged extinction on the grid (i fastest) and the grid's dims.
+    pub sigma: (&'a [f32], [usize; 3]),
+    /// One sweep per placed light, in light order.
+    pub lights: Vec<LightSweep>,
+    /// The ambient occlusion grid when asked for (storage `[k][j][i]`).
+    pub occlusion: Option<Arc<Vec<f32>>>,
+}
+
+impl LightSweep {
+    /// The sweep for index-space direction `d` (towards the light) on a grid of `dims`.
+    fn new(d: Vec3, dims: [usize; 3]) -> LightSweep {
+        let da = [d.x, d.y, d.z];
+        let a = (0..3)
+            .max_by(|&x, &y| da[x].abs().total_cmp(&da[y].abs()))
+            .expect("three axes");
+        let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+        let len = [dims[a], dims[b], dims[c]];
+        let h = LIGHT_CELL as f32;
+        if da[a] == 0.0 {
+            return LightSweep {
+                axes: [a, b, c],
+                len,
+                s: 0.0,
+                shift: [0.0; 2],
+                from_last: false,
+                swept: false,
+                offset: [0.0; 3],
+            };
+        }
+        let s = h / da[a].abs();
+        let x = s * SWEEP_BIAS_PLANES / h;
+        LightSweep {
+            axes: [a, b, c],
+            len,
+            s,
+            shift: [da[b] * s / h, da[c] * s / h],
+            from_last: da[a] > 0.0,
+            swept: true,
+            offset: [x * da[0], x * da[1], x * da[2]],
+        }
+    }
+}
+
+impl crate::Classification {
+    /// The inputs of `frame`'s light volumes for a device that sweeps them itself, as
+    /// [`Classification::shadow_field`](crate::Classification::shadow_field) would
+    /// build them without occluders; `None` for a clipped frame (the clip empties
+    /// grid points: such frames take the CPU's light volumes).
+    pub fn light_sweeps(
+        &self,
+        shader: &Shader,
+        frame: &crate::FrameSettings,
+        settings: &crate::ShadowSettings,
+    ) -> Result<Option<LightSweeps<'_>>, RenderError> {
+        let camera = self.camera(frame)?;
+        let placed = shader.placed(&camera);
+        if self.index_clip(shader, frame).is_some() {
+            return Ok(None);
+        }
+        if placed.world_lights().len() > MAX_LIGHTS {
+            return Err(RenderError::Parameter(format!(
+                "{} lights: at most {MAX_LIGHTS}",
+                placed.world_lights().len()
+            )));
+        }
+        let field = &**self.field();
+        let density = self.density();
+        let lights = placed
+            .world_lights()
+            .iter()
+            .map(|&(l, _)| LightSweep::new(field.index_direction(l), density.dims))
+            .collect();
+        Ok(Some(LightSweeps {
+            sigma: (&density.sigma, density.dims),
+            lights,
+            occlusion: settings.occlusion.then(|| self.occlusion()),
+        }))
     }
 }

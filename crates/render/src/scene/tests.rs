@@ -1035,28 +1035,29 @@ fn the_device_is_cpu_by_default_left_out_of_the_json_and_parsed_by_name() {
 fn device_gpu_refuses_what_it_does_not_render_and_auto_falls_back_with_a_note() {
     let mut renderer = Renderer::open(&small(), &ReadOptions::default()).unwrap();
     let cpu = renderer.render(&small(), &|_| {}).unwrap().image;
-    // `shadows` is not on the GPU yet: `gpu` is one line naming it, `auto` renders
+    // `path` is not on the GPU yet: `gpu` is one line naming it, `auto` renders
     // the CPU's image and says why.
-    let mut shadows = small();
-    shadows.lighting.model = LightingModel::Shadows;
+    let mut path = small();
+    path.lighting.model = LightingModel::Path;
+    path.lighting.spp = Some(2);
     let refused = Scene {
         device: Device::Gpu,
-        ..shadows.clone()
+        ..path.clone()
     };
     let e = renderer.render(&refused, &|_| {}).unwrap_err().to_string();
     assert!(
-        e.contains("--device gpu") && e.contains("shadows") && !e.contains('\n'),
+        e.contains("--device gpu") && e.contains("path") && !e.contains('\n'),
         "{e}"
     );
     let auto = Scene {
         device: Device::Auto,
-        ..shadows.clone()
+        ..path.clone()
     };
     let got = renderer.render(&auto, &|_| {}).unwrap().image;
-    let want = renderer.render(&shadows, &|_| {}).unwrap().image;
+    let want = renderer.render(&path, &|_| {}).unwrap().image;
     assert_eq!(got.rgb, want.rgb);
     let notes = renderer.device_notes();
-    assert!(notes.iter().any(|n| n.contains("shadows")), "{notes:?}");
+    assert!(notes.iter().any(|n| n.contains("path")), "{notes:?}");
     // Taken: each note is handed out once.
     assert!(renderer.device_notes().is_empty());
     // `local` under `auto`: the GPU's frame on a hardware GPU, else (lavapipe, no

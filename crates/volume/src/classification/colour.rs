@@ -68,6 +68,16 @@ impl ColourVolume {
         self.dims
     }
 
+    /// Every voxel's 8-bit sRGB codes, `i + dims[0] * (j + dims[1] * k)` (x fastest).
+    pub fn codes(&self) -> &[[u8; 3]] {
+        &self.rgb
+    }
+
+    /// The linear light of each 8-bit sRGB code, as the interpolation reads it.
+    pub fn linear(&self) -> &[f32; 256] {
+        &self.linear
+    }
+
     /// The 8-bit sRGB code of voxel `(i, j, k)`; `None` outside the grid.
     pub fn code(&self, i: usize, j: usize, k: usize) -> Option<[u8; 3]> {
         let [nx, ny, nz] = self.dims;

@@ -32,7 +32,7 @@ pub use exchange::TfFormat;
 pub use lut::{Lut, LUT_SIZE};
 pub(crate) use medium::Medium;
 pub(crate) use preint::Last;
-pub use preint::Sampling;
+pub use preint::{PreIntegratedTables, Sampling};
 pub use settings::ClassifySettings;
 pub use tf::{TransferFunction, TransferFunctionFile, WindowLevel};
 

@@ -114,6 +114,28 @@ pub fn bin(u: f32) -> u32 {
     unsafe { u.to_int_unchecked::<u32>() }
 }
 
+/// The pre-integrated tables of a classification (the crate-private `PreIntegrated`), as
+/// `PreIntegrated::segment` reads them: table coordinates `u` come from the lookup
+/// table's position (`(v - lut_lo) · lut_scale + 0.5`, clamped to `[0, 4095]`).
+#[derive(Clone, Debug)]
+pub struct PreIntegratedTables {
+    /// `visible[i]`: how many bins below `i` have opacity (4097 entries).
+    pub visible: Vec<u32>,
+    /// Per bin `[r, g, b, alpha']`: a segment inside one bin.
+    pub point: Vec<[f32; 4]>,
+    /// At each bin's lower edge, colour × extinction and extinction integrated over
+    /// the bins below (4097 entries, f64).
+    pub cum: Vec<[f64; 4]>,
+    /// Per bin, the rate of the same.
+    pub slope: Vec<[f64; 4]>,
+    /// `1 - exp(-step m)` at `m = i / m_scale` (4096 entries).
+    pub opacity: Vec<f32>,
+    /// Largest extinction of a bin.
+    pub m_max: f32,
+    /// `(entries of opacity - 1) / m_max`.
+    pub m_scale: f32,
+}
+
 /// The integral last computed along a ray and where ([`PreIntegrated::segment`]): a
 /// cache, which changes no result.
 #[derive(Clone, Copy, Debug)]
@@ -179,6 +201,20 @@ impl PreIntegrated {
             opacity,
             m_max: m_max as f32,
             m_scale: m_scale as f32,
+        }
+    }
+
+    /// The tables as they are, for a device back end that mirrors
+    /// [`PreIntegrated::segment`].
+    pub(crate) fn device_tables(&self) -> PreIntegratedTables {
+        PreIntegratedTables {
+            visible: self.visible.clone(),
+            point: self.point.clone(),
+            cum: self.cum.clone(),
+            slope: self.slope.clone(),
+            opacity: self.opacity.clone(),
+            m_max: self.m_max,
+            m_scale: self.m_scale,
         }
     }
 
