@@ -216,6 +216,42 @@ fn lobe_eval(c_in: f32) -> f32 {
     return clamp(y, 0.0, 1.0);
 }
 
+// Shader::surface_at for world gradient `grad` seen along `view`: `lit` false where
+// the gate leaves no surface; else the unit normal turned to face the eye, N·V, and
+// the surface weight (the gate's ramp times the scene's surface weight).
+struct Surface {
+    lit: bool,
+    n: vec3<f32>,
+    n_dot_v: f32,
+    w: f32,
+}
+
+fn surface_at(grad: vec3<f32>, view: vec3<f32>) -> Surface {
+    var sf: Surface;
+    let gm2 = dot(grad, grad);
+    let g0 = P.gate.x;
+    if P.gate.y == 0.0 || !(gm2 > g0 * g0 && gm2 < 3.4e38) {
+        sf.lit = false;
+        return sf;
+    }
+    let gm = sqrt(gm2);
+    var n = grad * (-1.0 / gm);
+    var w = 1.0;
+    if g0 > 0.0 {
+        w = min((gm - g0) / g0, 1.0);
+    }
+    var n_dot_v = dot(n, view);
+    if n_dot_v < 0.0 {
+        n = -n;
+        n_dot_v = -n_dot_v;
+    }
+    sf.lit = true;
+    sf.n = n;
+    sf.n_dot_v = n_dot_v;
+    sf.w = w * P.gate.y;
+    return sf;
+}
+
 // Shader::shade = Scattering::local for a volume sample of colour `base` and world
 // gradient `grad`, viewed along unit `view` (towards the eye).
 fn shade(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
@@ -226,25 +262,14 @@ fn shade(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
         return base;
     }
     let flat = amb + dif;
-    // Shader::surface_at.
-    let gm2 = dot(grad, grad);
-    let g0 = P.gate.x;
-    if P.gate.y == 0.0 || !(gm2 > g0 * g0 && gm2 < 3.4e38) {
+    let sf = surface_at(grad, view);
+    if !sf.lit {
         return base * flat;
     }
-    let gm = sqrt(gm2);
-    var n = grad * (-1.0 / gm);
-    var w = 1.0;
-    if g0 > 0.0 {
-        w = min((gm - g0) / g0, 1.0);
-    }
-    w = w * P.gate.y;
-    // light_sums: facing, then each light with N·L > 0.
-    var n_dot_v = dot(n, view);
-    if n_dot_v < 0.0 {
-        n = -n;
-        n_dot_v = -n_dot_v;
-    }
+    let n = sf.n;
+    let n_dot_v = sf.n_dot_v;
+    let w = sf.w;
+    // light_sums: each light with N·L > 0.
     var diffuse = 0.0;
     var specular = 0.0;
     let count = u32(P.gate.w);
@@ -354,24 +379,13 @@ fn shade_shadowed(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>, p: vec3<f32
         let l = P.lights[i].xyz;
         phase += (P.lights[i].w * s.t[i]) * phase_hg(shadow[0].z, dot3(l, view));
     }
-    // Shader::surface_at.
-    let gm2 = dot(grad, grad);
-    let g0 = P.gate.x;
-    if P.gate.y == 0.0 || !(gm2 > g0 * g0 && gm2 < 3.4e38) {
+    let sf = surface_at(grad, view);
+    if !sf.lit {
         return base * (amb * s.occlusion + dif * (0.25 * phase));
     }
-    let gm = sqrt(gm2);
-    var n = grad * (-1.0 / gm);
-    var w = 1.0;
-    if g0 > 0.0 {
-        w = min((gm - g0) / g0, 1.0);
-    }
-    w = w * P.gate.y;
-    var n_dot_v = dot(n, view);
-    if n_dot_v < 0.0 {
-        n = -n;
-        n_dot_v = -n_dot_v;
-    }
+    let n = sf.n;
+    let n_dot_v = sf.n_dot_v;
+    let w = sf.w;
     var diffuse = 0.0;
     var specular = 0.0;
     for (var i = 0u; i < count; i++) {
