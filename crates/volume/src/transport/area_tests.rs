@@ -6,7 +6,9 @@ use glint_core::{Shader, Vec3};
 use glint_lobe::Geometry;
 
 use super::path::{EnvStrategy, PathTracer};
-use super::tests::{albedo_one, classify, path_frame, small_scene, volume, white};
+use super::tests::{
+    albedo_one, classify, green_mean_and_variance, path_frame, small_scene, volume, white,
+};
 use super::*;
 use crate::classification::Classification;
 use crate::raycast::FrameSettings;
@@ -235,19 +237,7 @@ fn mis_of_the_area_lights_agrees_with_each_strategy() {
         )
         .unwrap();
         tracer.area_strategy = strategy;
-        let (mut sum, mut var) = (0.0f64, 0.0f64);
-        for y in 0..size[1] {
-            for x in 0..size[0] {
-                let v: Vec<f64> = (0..spp)
-                    .map(|s| f64::from(tracer.trace(x, y, s, f32::INFINITY).radiance[1]))
-                    .collect();
-                let m = v.iter().sum::<f64>() / f64::from(spp);
-                sum += m;
-                var += v.iter().map(|a| (a - m) * (a - m)).sum::<f64>() / f64::from(spp - 1);
-            }
-        }
-        let pixels = f64::from(size[0] * size[1]);
-        (sum / pixels, var / pixels)
+        green_mean_and_variance(&tracer, size, spp)
     };
     let (mis, var_mis) = run(EnvStrategy::Mis);
     let (light, var_light) = run(EnvStrategy::Light);

@@ -1212,19 +1212,7 @@ fn mis_of_the_map_agrees_with_each_strategy_and_is_deterministic() {
         .unwrap()
         .lit_by(Some(&map));
         tracer.env_strategy = strategy;
-        let (mut sum, mut var) = (0.0f64, 0.0f64);
-        for y in 0..size[1] {
-            for x in 0..size[0] {
-                let v: Vec<f64> = (0..spp)
-                    .map(|s| f64::from(tracer.trace(x, y, s, f32::INFINITY).radiance[1]))
-                    .collect();
-                let m = v.iter().sum::<f64>() / f64::from(spp);
-                sum += m;
-                var += v.iter().map(|a| (a - m) * (a - m)).sum::<f64>() / f64::from(spp - 1);
-            }
-        }
-        let pixels = f64::from(size[0] * size[1]);
-        (sum / pixels, var / pixels)
+        green_mean_and_variance(&tracer, size, spp)
     };
     let (mis, var_mis) = run(EnvStrategy::Mis);
     let (light, var_light) = run(EnvStrategy::Light);
@@ -1258,4 +1246,26 @@ fn mis_of_the_map_agrees_with_each_strategy_and_is_deterministic() {
     let (one, two) = (img(1), img(2));
     assert_eq!(one.rgb, two.rgb);
     assert!(mean_luminance(&one) > 0.0);
+}
+
+/// The mean over the pixels of `size` of each pixel's mean green radiance over `spp`
+/// samples of `tracer`, and the mean of the pixels' sample variances.
+pub(super) fn green_mean_and_variance(
+    tracer: &PathTracer<'_>,
+    size: [u32; 2],
+    spp: u32,
+) -> (f64, f64) {
+    let (mut sum, mut var) = (0.0f64, 0.0f64);
+    for y in 0..size[1] {
+        for x in 0..size[0] {
+            let v: Vec<f64> = (0..spp)
+                .map(|s| f64::from(tracer.trace(x, y, s, f32::INFINITY).radiance[1]))
+                .collect();
+            let m = v.iter().sum::<f64>() / f64::from(spp);
+            sum += m;
+            var += v.iter().map(|a| (a - m) * (a - m)).sum::<f64>() / f64::from(spp - 1);
+        }
+    }
+    let pixels = f64::from(size[0] * size[1]);
+    (sum / pixels, var / pixels)
 }
