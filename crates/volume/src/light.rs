@@ -198,7 +198,7 @@ pub struct LightSweep {
 }
 
 /// What a device needs to build a frame's light volumes itself
-/// ([`Classification::light_sweeps`]).
+/// ([`Classification::light_sweeps`](crate::Classification::light_sweeps)).
 pub struct LightSweeps<'a> {
     /// The averaged extinction on the grid (i fastest) and the grid's dims.
     pub sigma: (&'a [f32], [usize; 3]),

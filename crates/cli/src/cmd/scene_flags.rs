@@ -154,7 +154,7 @@ pub struct SceneFlags {
     pub lights: Vec<Light>,
     /// Area light (every lighting model; path samples it with soft shadows, local and
     /// shadows take it as the directional light of its irradiance at the volume's
-    /// centre), repeatable: KIND:SIZE:X,Y,Z:RADIANCE[:FRAME]. KIND sphere (SIZE its
+    /// centre), repeatable: KIND:SIZE:X,Y,Z:RADIANCE, then optionally :FRAME. KIND sphere (SIZE its
     /// radius, mm) or rect (SIZE WxH mm, facing the volume's centre); X,Y,Z its centre
     /// in mm from the volume's centre, along the camera's right, up and towards the
     /// viewer (FRAME camera, the default: it orbits with the camera) or the world's
