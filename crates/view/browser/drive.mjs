@@ -117,8 +117,18 @@ try {
     const env = await page.evaluate(() => ({ map: window.glint.scene.lighting.environment_map, rotation: window.glint.scene.lighting.environment_rotation, azimuth: window.glint.scene.camera.azimuth, errors: window.glint.errors }));
     env.turn = turn;
     const envOk = mapped !== lit && env.map === "studio" && turn === 25 && env.rotation === 25 && env.azimuth === azimuth && !env.errors.length;
+    // The area key light: on (a sphere where the light sliders point), then off again.
+    const keyed = await afterFrame(() => page.selectOption("#area-key", "sphere"));
+    await page.waitForFunction(() => (window.glint.scene.lighting.area_lights || []).length === 1, null, { timeout: 30000 }).catch(() => {});
+    const key = await page.evaluate(() => (window.glint.scene.lighting.area_lights || [])[0] || null);
+    await afterFrame(() => page.selectOption("#area-key", ""));
+    await page.waitForFunction(() => !window.glint.scene.lighting.area_lights, null, { timeout: 30000 }).catch(() => {});
+    const keyOff = await page.evaluate(() => window.glint.scene.lighting.area_lights === undefined && !window.glint.errors.length);
+    env.key = key;
+    const keyOk = keyed !== (await pixels()) && key !== null && key.frame === "camera" && key.shape.sphere.radius === 40 && Math.abs(key.position[2] - 300) < 1e-6 && keyOff;
+    env.keyOk = keyOk;
     console.log(JSON.stringify({ first, grown, restarted, regrown, text, after, errors: end.errors, env, envOk }));
-    if (!(grown > first) || !restarted || !(regrown > 1) || end.errors.length || !envOk) process.exitCode = 1;
+    if (!(grown > first) || !restarted || !(regrown > 1) || end.errors.length || !envOk || !keyOk) process.exitCode = 1;
   } else if (mode === "test") {
     const before = await pixels();
     const full = await page.evaluate(() => window.glint.full);

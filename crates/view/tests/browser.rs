@@ -124,6 +124,8 @@ fn a_path_scene_refines_while_the_mouse_is_still_and_a_drag_restarts_it() {
     // Issue 42: the panel's environment map, turned by an Alt-drag, camera unmoved.
     assert_eq!(report["envOk"], true, "{report}");
     assert_eq!(report["env"]["rotation"], 25, "{report}");
+    // The area key light from the panel: a 40 mm sphere 300 mm towards the eye, then off.
+    assert_eq!(report["env"]["keyOk"], true, "{report}");
     assert!(
         report["text"]
             .as_str()

@@ -23,7 +23,8 @@ impl Scene {
     /// The scene with the fields of `patch` (scene JSON's field names and values)
     /// applied: the objects of [`MERGED_FIELDS`] (`camera`, `lobe`, `material`,
     /// `lighting`) merged field by field, every other field replaced; `null` gives a field its default
-    /// (inside a merged object, for its optional fields). The result is checked as a
+    /// (inside a merged object too: `{"lighting": {"area_lights": null}}` clears the
+    /// list). The result is checked as a
     /// scene file is ([`Scene::from_value`]): unknown fields and bad values are errors
     /// that name the field.
     ///
@@ -53,7 +54,13 @@ impl Scene {
                     if MERGED_FIELDS.contains(&key.as_str()) =>
                 {
                     for (k, v) in changes {
-                        current.insert(k.clone(), v.clone());
+                        // A null gives the field its default, as at the top level
+                        // (a list such as `lighting.area_lights` has no null).
+                        if v.is_null() {
+                            current.remove(k);
+                        } else {
+                            current.insert(k.clone(), v.clone());
+                        }
                     }
                 }
                 _ => {
@@ -152,6 +159,12 @@ mod tests {
         // A null inside a merged object resets an optional field.
         let next = patched(&scene, json!({"lobe": {"n": null}})).unwrap();
         assert_eq!(next.lobe.n, None);
+        // And a list's, which has no null: the area lights set, then cleared.
+        let lit = json!({"lighting": {"area_lights": [{"shape": {"sphere": {"radius": 20}}, "position": [0, 0, 300], "radiance": [5, 5, 5]}]}});
+        let lit = patched(&scene, lit).unwrap();
+        assert_eq!(lit.lighting.area_lights.len(), 1);
+        let cleared = patched(&lit, json!({"lighting": {"area_lights": null}})).unwrap();
+        assert!(cleared.lighting.area_lights.is_empty());
         // Fields outside the merged objects are replaced whole.
         let next = patched(
             &scene,

@@ -131,6 +131,9 @@ function showScene(s) {
   $("aperture").value = s.camera.aperture || 0;
   $("focus").value = s.camera.focus === undefined ? "auto" : s.camera.focus;
   if (l.model === "path") $("denoise").checked = (l.denoise || "none") !== "none";
+  const key = (l.area_lights || [])[0];
+  $("area-key").value = key ? Object.keys(key.shape)[0] : "";
+  if (key) $("area-radiance").value = key.radiance[1];
   $("envmap").value = l.environment_map || "";
   $("env-rot").value = l.environment_rotation || 0;
 }
@@ -231,9 +234,28 @@ $("v").onchange = (e) => update({ lobe: { v: Number(e.target.value) } });
 $("geometry").onchange = (e) => update({ lobe: { geometry: e.target.value } });
 $("projection").onchange = (e) => update({ camera: { projection: e.target.value } });
 $("split").onchange = (e) => send({ type: "split", split: e.target.value });
-const light = () => update({ lights: [{ azimuth: Number($("light-az").value), elevation: Number($("light-el").value), intensity: 1 }] }, true);
+// The area key light (lighting.area_lights, camera frame): 300 mm from the volume's
+// centre towards Azimuth (the image's right) and Elevation (its top); while it is on,
+// the two sliders move it instead of the directional light.
+const KEY_DISTANCE = 300;
+const areaKey = (interactive) => {
+  const kind = $("area-key").value;
+  if (kind === "") return update({ lighting: { area_lights: [] } }, interactive);
+  const az = Number($("light-az").value) * Math.PI / 180, el = Number($("light-el").value) * Math.PI / 180;
+  const size = Number($("area-size").value), radiance = Number($("area-radiance").value);
+  const position = [Math.sin(az) * Math.cos(el), Math.sin(el), Math.cos(az) * Math.cos(el)].map((c) => KEY_DISTANCE * c);
+  const shape = kind === "sphere" ? { sphere: { radius: size } } : { rect: { size: [size, Math.round(size * 2 / 3)] } };
+  update({ lighting: { area_lights: [{ shape, frame: "camera", position, radiance: [radiance, radiance, radiance] }] } }, interactive);
+};
+const light = () => {
+  if ($("area-key").value !== "") return areaKey(true);
+  update({ lights: [{ azimuth: Number($("light-az").value), elevation: Number($("light-el").value), intensity: 1 }] }, true);
+};
 $("light-az").oninput = light;
 $("light-el").oninput = light;
+$("area-key").onchange = () => areaKey(false);
+$("area-size").onchange = () => areaKey(false);
+$("area-radiance").onchange = () => areaKey(false);
 // The lighting model: only the settings the model uses are sent (the others are
 // refused by the scene), the sample count with `path`.
 $("lighting").onchange = (e) => {
