@@ -252,6 +252,31 @@ fn surface_at(grad: vec3<f32>, view: vec3<f32>) -> Surface {
     return sf;
 }
 
+// Shader::light_sums at the surface `sf` seen along `view`: the diffuse and specular
+// sums over the lights with N·L > 0, each light's intensity scaled by `t[i]` (its
+// transmittance in `shadows`, 1 in `local`).
+fn light_sums(sf: Surface, view: vec3<f32>, t: array<f32, 8>) -> vec2<f32> {
+    var diffuse = 0.0;
+    var specular = 0.0;
+    let count = u32(P.gate.w);
+    for (var i = 0u; i < count; i++) {
+        let l = P.lights[i].xyz;
+        let intensity = P.lights[i].w * t[i];
+        let n_dot_l = dot(sf.n, l);
+        if n_dot_l > 0.0 {
+            var c: f32;
+            if P.gate.z == 0.0 {
+                c = 2.0 * n_dot_l * sf.n_dot_v - dot(l, view);
+            } else {
+                c = dot(sf.n, normalize_or_zero(l + view));
+            }
+            diffuse += intensity * n_dot_l;
+            specular += intensity * lobe_eval(c);
+        }
+    }
+    return vec2<f32>(diffuse, specular);
+}
+
 // Shader::shade = Scattering::local for a volume sample of colour `base` and world
 // gradient `grad`, viewed along unit `view` (towards the eye).
 fn shade(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
@@ -266,31 +291,15 @@ fn shade(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
     if !sf.lit {
         return base * flat;
     }
-    let n = sf.n;
-    let n_dot_v = sf.n_dot_v;
     let w = sf.w;
-    // light_sums: each light with N·L > 0.
-    var diffuse = 0.0;
-    var specular = 0.0;
-    let count = u32(P.gate.w);
-    for (var i = 0u; i < count; i++) {
-        let l = P.lights[i].xyz;
-        let intensity = P.lights[i].w;
-        let n_dot_l = dot(n, l);
-        if n_dot_l > 0.0 {
-            var c: f32;
-            if P.gate.z == 0.0 {
-                c = 2.0 * n_dot_l * n_dot_v - dot(l, view);
-            } else {
-                c = dot(n, normalize_or_zero(l + view));
-            }
-            diffuse += intensity * n_dot_l;
-            specular += intensity * lobe_eval(c);
-        }
+    var unshadowed: array<f32, 8>;
+    for (var i = 0u; i < 8u; i++) {
+        unshadowed[i] = 1.0;
     }
+    let sums = light_sums(sf, view, unshadowed);
     // gated.
-    let lit = amb + dif * diffuse;
-    let spec = spc * specular;
+    let lit = amb + dif * sums.x;
+    let spec = spc * sums.y;
     let shaded = base * lit + vec3<f32>(spec);
     let unshaded = base * flat;
     return unshaded + w * (shaded - unshaded);
@@ -383,29 +392,11 @@ fn shade_shadowed(base: vec3<f32>, grad: vec3<f32>, view: vec3<f32>, p: vec3<f32
     if !sf.lit {
         return base * (amb * s.occlusion + dif * (0.25 * phase));
     }
-    let n = sf.n;
-    let n_dot_v = sf.n_dot_v;
     let w = sf.w;
-    var diffuse = 0.0;
-    var specular = 0.0;
-    for (var i = 0u; i < count; i++) {
-        let l = P.lights[i].xyz;
-        let intensity = P.lights[i].w * s.t[i];
-        let n_dot_l = dot(n, l);
-        if n_dot_l > 0.0 {
-            var c: f32;
-            if P.gate.z == 0.0 {
-                c = 2.0 * n_dot_l * n_dot_v - dot(l, view);
-            } else {
-                c = dot(n, normalize_or_zero(l + view));
-            }
-            diffuse += intensity * n_dot_l;
-            specular += intensity * lobe_eval(c);
-        }
-    }
+    let sums = light_sums(sf, view, s.t);
     // transport.rs hybrid_terms.
-    let lit = amb * s.occlusion + dif * (w * diffuse + (1.0 - w) * (0.25 * phase));
-    let spec = w * (spc * specular);
+    let lit = amb * s.occlusion + dif * (w * sums.x + (1.0 - w) * (0.25 * phase));
+    let spec = w * (spc * sums.y);
     return base * lit + vec3<f32>(spec);
 }
 
