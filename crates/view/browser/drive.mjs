@@ -103,8 +103,11 @@ try {
     // (the camera stays where it was). Shift works in the page too, but headless
     // Chromium sends no pointerdown for a Shift-press from Playwright.
     const lit = await pixels();
-    const mapped = await afterFrame(() => page.selectOption("#envmap", "studio"));
+    // A frame counted after the change may be a refinement of the scene before it:
+    // the canvas is read once the served scene (sent after its frame) shows the change.
+    await page.selectOption("#envmap", "studio");
     await page.waitForFunction(() => window.glint.scene.lighting.environment_map === "studio", null, { timeout: 30000 });
+    const mapped = await pixels();
     const azimuth = await page.evaluate(() => window.glint.scene.camera.azimuth);
     await page.keyboard.down("Alt");
     await page.mouse.move(cx, cy);
@@ -118,14 +121,17 @@ try {
     env.turn = turn;
     const envOk = mapped !== lit && env.map === "studio" && turn === 25 && env.rotation === 25 && env.azimuth === azimuth && !env.errors.length;
     // The area key light: on (a sphere where the light sliders point), then off again.
-    const keyed = await afterFrame(() => page.selectOption("#area-key", "sphere"));
+    await page.selectOption("#area-key", "sphere");
     await page.waitForFunction(() => (window.glint.scene.lighting.area_lights || []).length === 1, null, { timeout: 30000 }).catch(() => {});
+    const keyed = await pixels();
     const key = await page.evaluate(() => (window.glint.scene.lighting.area_lights || [])[0] || null);
-    await afterFrame(() => page.selectOption("#area-key", ""));
+    await page.selectOption("#area-key", "");
     await page.waitForFunction(() => !window.glint.scene.lighting.area_lights, null, { timeout: 30000 }).catch(() => {});
+    const unkeyed = await pixels();
     const keyOff = await page.evaluate(() => window.glint.scene.lighting.area_lights === undefined && !window.glint.errors.length);
     env.key = key;
-    const keyOk = keyed !== (await pixels()) && key !== null && key.frame === "camera" && key.shape.sphere.radius === 40 && Math.abs(key.position[2] - 300) < 1e-6 && keyOff;
+    env.keyChanged = keyed !== unkeyed;
+    const keyOk = env.keyChanged && key !== null && key.frame === "camera" && key.shape.sphere.radius === 40 && Math.abs(key.position[2] - 300) < 1e-6 && keyOff;
     env.keyOk = keyOk;
     console.log(JSON.stringify({ first, grown, restarted, regrown, text, after, errors: end.errors, env, envOk }));
     if (!(grown > first) || !restarted || !(regrown > 1) || end.errors.length || !envOk || !keyOk) process.exitCode = 1;
