@@ -141,6 +141,10 @@ pub struct Gpu {
     pub(crate) local_tricubic: Option<wgpu::ComputePipeline>,
     /// The `shadows` light volumes' sweep, built on the first frame that sweeps.
     pub(crate) sweep: Option<wgpu::ComputePipeline>,
+    /// The light volumes last swept, kept while their inputs are the same.
+    pub(crate) lights: Option<SweptCache>,
+    /// Light-volume sweeps run so far (each builds every light's grid).
+    pub(crate) sweeps_run: u64,
     pub(crate) field: Option<FieldCache>,
     pub(crate) colour: Option<ColourCache>,
 }
@@ -187,6 +191,8 @@ impl Gpu {
             local,
             local_tricubic: None,
             sweep: None,
+            lights: None,
+            sweeps_run: 0,
             field: None,
             colour: None,
         })
@@ -261,6 +267,17 @@ impl Gpu {
         staging.unmap();
         Ok(bytes)
     }
+}
+
+/// Light volumes swept on the device and what they were swept from: the same
+/// extinction grid (alive, the same allocation), the same sweeps (one per light,
+/// in index space: a world-fixed light keeps its sweep while the camera orbits)
+/// and the same occlusion give the same values, so a frame reuses the buffer.
+pub(crate) struct SweptCache {
+    pub(crate) sigma: Weak<Vec<f32>>,
+    pub(crate) lights: Vec<glint_volume::LightSweep>,
+    pub(crate) occlusion: Option<Weak<Vec<f32>>>,
+    pub(crate) buffer: wgpu::Buffer,
 }
 
 /// The colour volume last uploaded (`None`: the placeholder of frames without one)

@@ -453,7 +453,7 @@ impl Gpu {
             Some(LightVolumes::Swept(s)) => match class.light_sweeps(shader, settings, &s) {
                 Ok(Some(sweeps)) => {
                     let (head, len) = crate::sweep::header(&sweeps, shader.anisotropy());
-                    return Ok((head, self.sweep(&sweeps, len)?));
+                    return Ok((head, self.swept(&sweeps, len)?));
                 }
                 Ok(None) => {
                     built = class

@@ -4,10 +4,12 @@
 //! buffer the march reads, laid out as [`crate::local`]'s `shadow_tables` lays out
 //! the CPU's grids.
 
+use std::sync::{Arc, Weak};
+
 use glint_volume::LightSweeps;
 use wgpu::util::DeviceExt;
 
-use crate::adapter::{Gpu, GpuError};
+use crate::adapter::{Gpu, GpuError, SweptCache};
 
 /// Grid points per workgroup (`@workgroup_size(64, 1, 1)` in the shader).
 const GROUP: u32 = 64;
@@ -103,7 +105,52 @@ fn plane_words(sweeps: &LightSweeps, words_per: usize) -> (Vec<u32>, Vec<u32>, u
     (words, dispatches, first)
 }
 
+impl SweptCache {
+    /// Whether these light volumes were swept from `sweeps`.
+    fn holds(&self, sweeps: &LightSweeps) -> bool {
+        let alive =
+            |w: &Weak<Vec<f32>>, a: &Arc<Vec<f32>>| w.upgrade().is_some_and(|w| Arc::ptr_eq(&w, a));
+        let occlusion = match (&self.occlusion, &sweeps.occlusion) {
+            (None, None) => true,
+            (Some(w), Some(a)) => alive(w, a),
+            _ => false,
+        };
+        occlusion && self.lights == sweeps.lights && alive(&self.sigma, sweeps.sigma.0)
+    }
+}
+
 impl Gpu {
+    /// The light volumes of `sweeps` ([`Gpu::sweep`]): the last ones when they were
+    /// swept from the same inputs ([`SweptCache`]), as the CPU keeps its light volumes
+    /// across frames.
+    pub(crate) fn swept(
+        &mut self,
+        sweeps: &LightSweeps,
+        len: usize,
+    ) -> Result<wgpu::Buffer, GpuError> {
+        if let Some(c) = &self.lights {
+            if c.holds(sweeps) {
+                return Ok(c.buffer.clone());
+            }
+        }
+        // The old buffer goes first: two sets need not fit at once.
+        self.lights = None;
+        let buffer = self.sweep(sweeps, len)?;
+        self.lights = Some(SweptCache {
+            sigma: Arc::downgrade(sweeps.sigma.0),
+            lights: sweeps.lights.clone(),
+            occlusion: sweeps.occlusion.as_ref().map(Arc::downgrade),
+            buffer: buffer.clone(),
+        });
+        Ok(buffer)
+    }
+
+    /// The number of light-volume sweeps this device has run (a frame that reuses
+    /// the last light volumes runs none).
+    pub fn sweeps_run(&self) -> u64 {
+        self.sweeps_run
+    }
+
     /// The light volumes of `sweeps` swept into a new storage buffer of `len` f32
     /// (the layout of [`header`]), the occlusion copied after the grids.
     pub(crate) fn sweep(
@@ -122,6 +169,7 @@ impl Gpu {
         if self.sweep.is_none() {
             self.sweep = Some(pipeline(&self.device));
         }
+        self.sweeps_run += 1;
         let pipeline = self.sweep.as_ref().expect("built above");
         let device = &self.device;
         let t = device.create_buffer(&wgpu::BufferDescriptor {
@@ -132,7 +180,7 @@ impl Gpu {
         });
         let sigma = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("glint sigma"),
-            contents: bytemuck::cast_slice(sweeps.sigma.0),
+            contents: bytemuck::cast_slice(&sweeps.sigma.0[..]),
             usage: wgpu::BufferUsages::STORAGE,
         });
         // One `Sweep` per plane, each at the adapter's uniform offset alignment.

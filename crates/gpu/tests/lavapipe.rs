@@ -537,3 +537,48 @@ fn gpu_shadows_frames_match_the_cpu() {
         .unwrap_err();
     assert!(e.to_string().contains("other lights"), "{e}");
 }
+
+/// The swept light volumes are kept across frames while what they were swept from
+/// is the same, as the CPU keeps its own: a second frame, a zoom, an image size or
+/// an exposure of the same lights sweep nothing, and match the CPU's frame; turning
+/// the camera (the lights are camera-relative) or a new classification sweeps again.
+#[test]
+fn gpu_swept_light_volumes_are_kept_while_their_inputs_are_the_same() {
+    let Some(mut gpu) = gpu() else { return };
+    let lit = shader(LobeKind::EnergyFit, Geometry::Phong);
+    let on = ShadowSettings { occlusion: true };
+    let class = head(48, RenderMode::Composite);
+    let render = |gpu: &mut Gpu, class: &Classification, settings: &FrameSettings| {
+        let got = gpu
+            .render_shadows_swept(class, &lit, settings, &on)
+            .unwrap();
+        let lights = class.shadow_field(&lit, settings, &on, None).unwrap();
+        let cpu = class
+            .frame(&lit, settings, None, Transport::Shadows(&lights), &|_| {})
+            .unwrap();
+        let (de, covered) = max_delta_e(&cpu, &got);
+        assert!(covered > 0.2, "only {covered} covered");
+        assert!(de <= MAX_DELTA_E, "max ΔE00 {de}");
+        gpu.sweeps_run()
+    };
+    let settings = frame(64, 64);
+    let first = render(&mut gpu, &class, &settings);
+    assert_eq!(render(&mut gpu, &class, &settings), first, "the same frame");
+    let mut zoomed = frame(48, 40);
+    zoomed.camera.zoom = 1.6;
+    assert_eq!(
+        render(&mut gpu, &class, &zoomed),
+        first,
+        "a zoom and a size"
+    );
+    let mut turned = frame(64, 64);
+    turned.camera.azimuth += 60.0;
+    let after_turn = render(&mut gpu, &class, &turned);
+    assert_eq!(after_turn, first + 1, "a turned camera turns the lights");
+    let other = head(48, RenderMode::Composite);
+    assert_eq!(
+        render(&mut gpu, &other, &turned),
+        after_turn + 1,
+        "another classification"
+    );
+}

@@ -200,8 +200,9 @@ pub struct LightSweep {
 /// What a device needs to build a frame's light volumes itself
 /// ([`Classification::light_sweeps`](crate::Classification::light_sweeps)).
 pub struct LightSweeps<'a> {
-    /// The averaged extinction on the grid (i fastest) and the grid's dims.
-    pub sigma: (&'a [f32], [usize; 3]),
+    /// The averaged extinction on the grid (i fastest) and the grid's dims (shared:
+    /// a device may keep a weak reference to know when it is gone).
+    pub sigma: (&'a Arc<Vec<f32>>, [usize; 3]),
     /// One sweep per placed light, in light order.
     pub lights: Vec<LightSweep>,
     /// The ambient occlusion grid when asked for (storage `[k][j][i]`).

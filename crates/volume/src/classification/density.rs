@@ -2,6 +2,8 @@
 //! averaged over each grid cell) and its local ambient occlusion: built once per
 //! classification, on first use by the `shadows` model.
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
 use glint_core::Vec3;
@@ -25,7 +27,8 @@ const OCCLUSION_STEPS: usize = 4;
 /// The extinction averaged over the light volume's cells, for one classification.
 pub(crate) struct DensityGrid {
     pub(crate) dims: [usize; 3],
-    pub(crate) sigma: Vec<f32>,
+    /// Shared, so a device can keep what it built from it while it lives.
+    pub(crate) sigma: Arc<Vec<f32>>,
     /// mm per grid step along each index axis.
     pub(crate) step_mm: [f32; 3],
 }
@@ -66,7 +69,7 @@ impl DensityGrid {
         });
         DensityGrid {
             dims: g,
-            sigma: src,
+            sigma: Arc::new(src),
             step_mm,
         }
     }
