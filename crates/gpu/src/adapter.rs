@@ -139,6 +139,10 @@ pub struct Gpu {
     /// The same for the tricubic filter (its 64-tap spline compiled in only there),
     /// built on the first tricubic frame.
     pub(crate) local_tricubic: Option<wgpu::ComputePipeline>,
+    /// The same two for a paged field (trilinear, tricubic), built on first use.
+    pub(crate) local_paged: [Option<wgpu::ComputePipeline>; 2],
+    /// A 3D texture side below the adapter's to keep to ([`Gpu::limit_texture_side`]).
+    pub(crate) side_limit: Option<u32>,
     /// The `shadows` light volumes' sweep, built on the first frame that sweeps.
     pub(crate) sweep: Option<wgpu::ComputePipeline>,
     /// The light volumes last swept, kept while their inputs are the same.
@@ -182,7 +186,7 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        let local = pipeline(&device, false);
+        let local = pipeline(&device, false, false);
         Ok(Gpu {
             summary,
             device,
@@ -190,6 +194,8 @@ impl Gpu {
             limits,
             local,
             local_tricubic: None,
+            local_paged: [None, None],
+            side_limit: None,
             sweep: None,
             lights: None,
             sweeps_run: 0,
@@ -201,6 +207,21 @@ impl Gpu {
     /// The adapter this device runs on.
     pub fn adapter(&self) -> &AdapterSummary {
         &self.summary
+    }
+
+    /// Keeps the field's 3D textures to `side` texels along each axis (at most the
+    /// adapter's own limit), as an adapter with that limit would: a field past it is
+    /// paged into an atlas within it. For holding GPU memory to smaller textures,
+    /// and for testing paging on any adapter. Applies from the next field uploaded.
+    pub fn limit_texture_side(&mut self, side: u32) {
+        self.side_limit = Some(side.max(1));
+    }
+
+    /// The largest 3D texture side the field's textures may take: the adapter's,
+    /// or the lower one [`Gpu::limit_texture_side`] set.
+    pub fn texture_side(&self) -> u32 {
+        let have = self.limits.max_texture_dimension_3d;
+        self.side_limit.map_or(have, |s| s.min(have))
     }
 
     /// A limit check: `have >= need`, else [`GpuError::Limits`].
@@ -293,6 +314,10 @@ pub(crate) struct FieldCache {
     pub(crate) values: wgpu::TextureView,
     pub(crate) gradients: wgpu::TextureView,
     pub(crate) gradient_scale: f32,
+    /// The page table of a paged field ([`crate::pages`]); a placeholder otherwise.
+    pub(crate) pages: wgpu::Buffer,
+    /// Whether the textures are a paged atlas.
+    pub(crate) paged: bool,
 }
 
 /// The `local` compute pipeline (its bind group layout derived from the shader),
@@ -300,7 +325,11 @@ pub(crate) struct FieldCache {
 /// so that the other filter's code is compiled out (the spline's 64 taps, inlined
 /// into every sample of a trilinear frame behind a branch on a uniform, made
 /// lavapipe's trilinear frames 3.5 times slower).
-pub(crate) fn pipeline(device: &wgpu::Device, tricubic: bool) -> wgpu::ComputePipeline {
+pub(crate) fn pipeline(
+    device: &wgpu::Device,
+    tricubic: bool,
+    paged: bool,
+) -> wgpu::ComputePipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("glint local"),
         source: wgpu::ShaderSource::Wgsl(include_str!("local.wgsl").into()),
@@ -311,7 +340,10 @@ pub(crate) fn pipeline(device: &wgpu::Device, tricubic: bool) -> wgpu::ComputePi
         module: &module,
         entry_point: Some("main"),
         compilation_options: wgpu::PipelineCompilationOptions {
-            constants: &[("TRICUBIC", f64::from(u8::from(tricubic)))],
+            constants: &[
+                ("TRICUBIC", f64::from(u8::from(tricubic))),
+                ("PAGED", f64::from(u8::from(paged))),
+            ],
             ..Default::default()
         },
         cache: None,

@@ -33,6 +33,7 @@
 mod adapter;
 mod bench;
 mod local;
+mod pages;
 mod sweep;
 
 pub use adapter::{adapters, AdapterSummary, Choice, Gpu, GpuError};

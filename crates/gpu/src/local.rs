@@ -8,6 +8,7 @@ use glint_core::{Image, RenderError, RenderMode, RenderStats, Shader};
 use glint_lobe::{Geometry, LobeKind, Specular};
 use glint_volume::{
     Classification, ColourVolume, Field, FrameSettings, LocalMarch, ShadowField, ShadowSettings,
+    VoxelGrids,
 };
 use wgpu::util::DeviceExt;
 
@@ -326,12 +327,6 @@ impl Gpu {
             self.shadow_inputs((class, &march), (shader, settings), shadows)?;
         let field = class.field();
         let dims = field.dims();
-        let side = *dims.iter().max().expect("three dims") as u64;
-        self.need(
-            "the largest 3D texture side",
-            u64::from(self.limits.max_texture_dimension_3d),
-            side,
-        )?;
         let (w, h) = (settings.width, settings.height);
         let out_size = u64::from(w) * u64::from(h) * 16;
         self.need(
@@ -339,21 +334,19 @@ impl Gpu {
             self.limits.max_storage_buffer_binding_size,
             out_size,
         )?;
-        let scopes = self.scopes();
         if let Some(c) = &march.colour {
             let side = *c.dims().iter().max().expect("three dims") as u64;
             let have = u64::from(self.limits.max_texture_dimension_3d);
             self.need("the largest 3D texture side", have, side)?;
         }
+        // Refused before the error scopes open (an early return leaves them open).
+        crate::pages::layout(dims, self.texture_side() as usize)?;
+        let scopes = self.scopes();
         self.upload(field)?;
         self.upload_colour(march.colour.as_ref());
-        if march.tricubic.is_some() && self.local_tricubic.is_none() {
-            self.local_tricubic = Some(crate::adapter::pipeline(&self.device, true));
-        }
-        let pipeline = match (&march.tricubic, &self.local_tricubic) {
-            (Some(_), Some(p)) => p,
-            _ => &self.local,
-        };
+        let paged = self.field.as_ref().is_some_and(|c| c.paged);
+        let tricubic = march.tricubic.is_some();
+        let pipeline = self.pipeline(tricubic, paged);
         let cache = self.field.as_ref().expect("uploaded above");
         let colours = self.colour.as_ref().expect("uploaded above");
         let (table, spec) = spec_table(march.shader.specular())?;
@@ -405,12 +398,13 @@ impl Gpu {
                 entry(10, distance.as_entire_binding()),
                 entry(11, shadow_head.as_entire_binding()),
                 entry(12, light_values.as_entire_binding()),
+                entry(13, cache.pages.as_entire_binding()),
             ],
         });
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
+            pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(w.div_ceil(GROUP), h.div_ceil(GROUP), 1);
         }
@@ -520,7 +514,12 @@ impl Gpu {
         for z0 in (0..nz).step_by(UPLOAD_PLANES) {
             let planes = UPLOAD_PLANES.min(nz - z0);
             let bytes = bytemuck::cast_slice(&codes[z0 * plane..(z0 + planes) * plane]);
-            write_slab(&texture, bytes, 4, ([nx, ny, planes], z0, &self.queue));
+            write_slab(
+                &texture,
+                bytes,
+                4,
+                ([nx, ny, planes], [0, 0, z0], &self.queue),
+            );
         }
         self.colour = Some(ColourCache {
             colour: colour.map(Arc::downgrade),
@@ -528,22 +527,131 @@ impl Gpu {
         });
     }
 
-    /// Uploads `field`'s values and gradients unless they are on the device already.
+    /// The `local` pipeline for the filter and the field's layout, built on first use
+    /// (a handle: wgpu's pipelines are shared by reference).
+    fn pipeline(&mut self, tricubic: bool, paged: bool) -> wgpu::ComputePipeline {
+        let device = &self.device;
+        match (tricubic, paged) {
+            (false, false) => self.local.clone(),
+            (true, false) => self
+                .local_tricubic
+                .get_or_insert_with(|| crate::adapter::pipeline(device, true, false))
+                .clone(),
+            (t, true) => self.local_paged[usize::from(t)]
+                .get_or_insert_with(|| crate::adapter::pipeline(device, t, true))
+                .clone(),
+        }
+    }
+
+    /// Uploads `field`'s values and gradients unless they are on the device already:
+    /// as 3D textures of the field's dims, or, for a field past the texture side
+    /// ([`Gpu::texture_side`]), paged into an atlas within it ([`crate::pages`]).
+    /// Errors when even the atlas cannot hold it.
     fn upload(&mut self, field: &Arc<Field>) -> Result<(), GpuError> {
         if let Some(c) = &self.field {
             if c.field.upgrade().is_some_and(|f| Arc::ptr_eq(&f, field)) {
                 return Ok(());
             }
         }
+        let layout = crate::pages::layout(field.dims(), self.texture_side() as usize)?;
         // The old textures go first: two fields need not fit at once.
         self.field = None;
         let grids = field.voxel_grids();
+        let (values, gradients, pages) = match layout {
+            None => {
+                let (v, g) = self.plain_textures(&grids);
+                (v, g, vec![0u32; crate::pages::HEADER + 1])
+            }
+            Some(layout) => {
+                let paged =
+                    crate::pages::pages(grids.dims, (&grids.values, &grids.gradients), &layout);
+                let (v, g) = self.atlas_textures(&paged, &layout);
+                (v, g, paged.table)
+            }
+        };
+        let pages = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("glint pages"),
+                contents: bytemuck::cast_slice(&pages),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        self.field = Some(FieldCache {
+            field: Arc::downgrade(field),
+            values: values.create_view(&Default::default()),
+            gradients: gradients.create_view(&Default::default()),
+            gradient_scale: grids.gradient_scale,
+            pages,
+            paged: layout.is_some(),
+        });
+        Ok(())
+    }
+
+    /// The field's values and gradients as 3D textures of its own dims.
+    fn plain_textures(&self, grids: &VoxelGrids) -> (wgpu::Texture, wgpu::Texture) {
         let [nx, ny, nz] = grids.dims;
         let size = wgpu::Extent3d {
             width: nx as u32,
             height: ny as u32,
             depth_or_array_layers: nz as u32,
         };
+        let (values, gradients) = self.field_textures(size);
+        let plane = nx * ny;
+        for z0 in (0..nz).step_by(UPLOAD_PLANES) {
+            let planes = UPLOAD_PLANES.min(nz - z0);
+            let range = z0 * plane..(z0 + planes) * plane;
+            let slab = ([nx, ny, planes], [0, 0, z0], &self.queue);
+            let values_bytes = bytemuck::cast_slice(&grids.values[range.clone()]);
+            write_slab(&values, values_bytes, 4, slab);
+            write_slab(
+                &gradients,
+                bytemuck::cast_slice(&grids.gradients[range]),
+                8,
+                slab,
+            );
+        }
+        (values, gradients)
+    }
+
+    /// A paged field's atlas: each used slot's page written at its place.
+    fn atlas_textures(
+        &self,
+        paged: &crate::pages::Paged,
+        layout: &crate::pages::Layout,
+    ) -> (wgpu::Texture, wgpu::Texture) {
+        let b = layout.side;
+        let [sx, sy, _] = layout.slots;
+        // Only the rows of slots in use along z.
+        let sz = paged.used.div_ceil(sx * sy);
+        let size = wgpu::Extent3d {
+            width: (sx * b) as u32,
+            height: (sy * b) as u32,
+            depth_or_array_layers: (sz * b) as u32,
+        };
+        let (values, gradients) = self.field_textures(size);
+        let voxels = b * b * b;
+        for s in 0..paged.used {
+            let origin = [s % sx, (s / sx) % sy, s / (sx * sy)].map(|x| x * b);
+            let range = s * voxels..(s + 1) * voxels;
+            let slab = ([b, b, b], origin, &self.queue);
+            write_slab(
+                &values,
+                bytemuck::cast_slice(&paged.values[range.clone()]),
+                4,
+                slab,
+            );
+            write_slab(
+                &gradients,
+                bytemuck::cast_slice(&paged.gradients[range]),
+                8,
+                slab,
+            );
+        }
+        (values, gradients)
+    }
+
+    /// Empty value (R32Float) and gradient (Rgba16Sint) textures of `size`.
+    fn field_textures(&self, size: wgpu::Extent3d) -> (wgpu::Texture, wgpu::Texture) {
         let values = texture_3d(
             &self.device,
             size,
@@ -556,27 +664,7 @@ impl Gpu {
             wgpu::TextureFormat::Rgba16Sint,
             "glint gradients",
         );
-        let plane = nx * ny;
-        for z0 in (0..nz).step_by(UPLOAD_PLANES) {
-            let planes = UPLOAD_PLANES.min(nz - z0);
-            let range = z0 * plane..(z0 + planes) * plane;
-            let slab = ([nx, ny, planes], z0, &self.queue);
-            let values_bytes = bytemuck::cast_slice(&grids.values[range.clone()]);
-            write_slab(&values, values_bytes, 4, slab);
-            write_slab(
-                &gradients,
-                bytemuck::cast_slice(&grids.gradients[range]),
-                8,
-                slab,
-            );
-        }
-        self.field = Some(FieldCache {
-            field: Arc::downgrade(field),
-            values: values.create_view(&Default::default()),
-            gradients: gradients.create_view(&Default::default()),
-            gradient_scale: grids.gradient_scale,
-        });
-        Ok(())
+        (values, gradients)
     }
 }
 
@@ -610,15 +698,15 @@ fn write_slab(
     texture: &wgpu::Texture,
     bytes: &[u8],
     texel: usize,
-    ([nx, ny, planes], z0, queue): ([usize; 3], usize, &wgpu::Queue),
+    ([nx, ny, planes], [x0, y0, z0], queue): ([usize; 3], [usize; 3], &wgpu::Queue),
 ) {
     queue.write_texture(
         wgpu::TexelCopyTextureInfo {
             texture,
             mip_level: 0,
             origin: wgpu::Origin3d {
-                x: 0,
-                y: 0,
+                x: x0 as u32,
+                y: y0 as u32,
                 z: z0 as u32,
             },
             aspect: wgpu::TextureAspect::All,

@@ -85,6 +85,9 @@ struct Params {
 // light its axes and first index, its extents, its bias. Their values in `light`.
 @group(0) @binding(11) var<storage, read> shadow: array<vec4<f32>>;
 @group(0) @binding(12) var<storage, read> light: array<f32>;
+// A paged field's page table (pages.rs): the page side, the pages along x and y,
+// the atlas's slots along x and y, padding to 8 words, then each page's slot.
+@group(0) @binding(13) var<storage, read> pages: array<u32>;
 
 const BINS: u32 = 4096u;
 const PRE_POINT: u32 = 0u;
@@ -99,6 +102,25 @@ const MACRO_CELL: u32 = 4u;
 // The field's filter, fixed per pipeline: the tricubic spline's 64 taps are
 // compiled into the tricubic pipeline only.
 override TRICUBIC: bool = false;
+// Whether the values and gradients are a paged atlas (a field past the adapter's
+// 3D texture side): every voxel read goes through the page table.
+override PAGED: bool = false;
+
+// The texel holding voxel c (inside the volume): c itself, or in a paged field its
+// page's slot in the atlas plus its offset in the page.
+fn texel(c: vec3<i32>) -> vec3<i32> {
+    if !PAGED {
+        return c;
+    }
+    let b = i32(pages[0]);
+    let pc = c / b;
+    let p = u32(pc.x) + pages[1] * (u32(pc.y) + pages[2] * u32(pc.z));
+    let s = pages[8u + p];
+    let sx = pages[3];
+    let sy = pages[4];
+    let slot = vec3<i32>(vec3<u32>(s % sx, (s / sx) % sy, s / (sx * sy)));
+    return slot * b + (c - pc * b);
+}
 
 struct Loc {
     ijk: vec3<i32>,
@@ -115,7 +137,7 @@ fn locate(p: vec3<f32>) -> Loc {
 }
 
 fn v_at(c: vec3<i32>) -> f32 {
-    return textureLoad(values, c, 0).x;
+    return textureLoad(values, texel(c), 0).x;
 }
 
 // trilinear (field.rs): x, then y, then z, each a + t (b - a).
@@ -139,7 +161,7 @@ fn value_at(l: Loc) -> f32 {
 }
 
 fn g_at(c: vec3<i32>) -> vec3<f32> {
-    return vec3<f32>(textureLoad(gradients, c, 0).xyz);
+    return vec3<f32>(textureLoad(gradients, texel(c), 0).xyz);
 }
 
 // trilinear_gradient (field.rs): the stored integers interpolated, then scaled.
@@ -441,7 +463,7 @@ fn dot4(w: vec4<f32>, x: vec4<f32>) -> f32 {
 // A tap of the spline, clamped to the volume (Field::gathered).
 fn tap(c: vec3<i32>) -> f32 {
     let hi = vec3<i32>(P.dims.xyz) - vec3<i32>(1);
-    return textureLoad(values, clamp(c, vec3<i32>(0), hi), 0).x;
+    return v_at(clamp(c, vec3<i32>(0), hi));
 }
 
 // cubic.rs block: the spline's value (x) and, with `grad`, its index-space

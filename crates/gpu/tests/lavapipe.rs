@@ -225,22 +225,109 @@ fn gpu_frames_repeat_bit_for_bit_and_refuse_what_they_cannot_render() {
             .collect()
     };
     assert_eq!(bits(&a), bits(&b));
-    // A volume longer than the adapter's 3D texture side (small: 2 x 2 across): a
-    // typed error, one line, naming the limit.
+    // A volume longer than the adapter's 3D texture side (small: 2 x 2 across): paged
+    // into an atlas within the side, it renders as the CPU renders it.
     let long = gpu.adapter().max_texture_3d as usize + 1;
     let volume = Volume::new([long, 2, 2], [1.0; 3], Samples::F32(vec![1.0; long * 4])).unwrap();
     let field = Arc::new(Field::new(&volume).unwrap());
     let tf = TransferFunction::from_flat(&[0.0, 0.0, 1.0, 0.5], &[0.0, 1.0, 1.0, 1.0]).unwrap();
     let too_long = Classification::new(field, &tf, &ClassifySettings::default()).unwrap();
-    match gpu.render_local(&too_long, &shader, &settings) {
-        Err(e @ GpuError::Limits { .. }) => {
+    let got = gpu.render_local(&too_long, &shader, &settings).unwrap();
+    let cpu = too_long
+        .frame(&shader, &settings, None, Transport::Local, &|_| {})
+        .unwrap();
+    assert!(max_delta_e(&cpu, &got).0 <= MAX_DELTA_E);
+    // Past what an atlas within the side holds (48^3 voxels under a side of 32): a
+    // typed error, one line, naming the volume and the side.
+    let mut small = self::gpu().unwrap();
+    small.limit_texture_side(32);
+    match small.render_local(&class, &shader, &settings) {
+        Err(e @ GpuError::Unsupported(_)) => {
             let line = e.to_string();
             assert!(
-                line.contains("3D texture") && !line.contains('\n'),
+                line.contains("48x48x48") && line.contains("side of 32") && !line.contains('\n'),
                 "{line}"
             );
         }
-        other => panic!("expected Limits, got {:?}", other.map(|_| ())),
+        other => panic!("expected Unsupported, got {:?}", other.map(|_| ())),
+    }
+}
+
+/// A field past the texture side, paged into an atlas (pages of 16 voxels for a
+/// 24x24x96 volume under a side of 48, the air pages sharing a slot): the same image,
+/// bit for bit, as the plain textures give, for composite, tricubic iso and swept
+/// `shadows` frames, and within the bound of the CPU's.
+#[test]
+fn gpu_paged_fields_render_as_the_plain_textures_do() {
+    let Some(mut plain) = gpu() else { return };
+    let mut paged = gpu().unwrap();
+    paged.limit_texture_side(48);
+    assert_eq!(paged.texture_side(), 48);
+    let dims = [24usize, 24, 96];
+    let mut v = Vec::with_capacity(24 * 24 * 96);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                // Three balls along z in air (0): the pages above and below are flat.
+                let (x, y) = (i as f32 - 11.5, j as f32 - 11.5);
+                let z = ((k as f32 - 8.0) % 32.0) - 12.0;
+                let r = (x * x + y * y + z * z).sqrt();
+                v.push(if !(8..88).contains(&k) {
+                    0.0
+                } else {
+                    (10.0 - r).clamp(0.0, 4.0) * 250.0
+                });
+            }
+        }
+    }
+    let volume = Volume::new(dims, [1.0, 1.0, 1.5], Samples::F32(v)).unwrap();
+    let tf = TransferFunction::from_flat(&[0.0, 0.0, 1000.0, 0.6], &[0.0, 1.0, 1.0, 1.0]).unwrap();
+    let lit = shader(LobeKind::EnergyFit, Geometry::Phong);
+    let settings = frame(48, 64);
+    let bits = |i: &Image| -> Vec<u32> {
+        i.rgb
+            .iter()
+            .flatten()
+            .chain(&i.alpha)
+            .map(|x| x.to_bits())
+            .collect()
+    };
+    for (name, filter, mode) in [
+        ("composite", Filter::Trilinear, RenderMode::Composite),
+        ("tricubic iso", Filter::Tricubic, RenderMode::Iso),
+    ] {
+        let field = Field::with_prefilter(&volume, Prefilter::Binomial).unwrap();
+        let field = Arc::new(field.with_filter(filter));
+        let classify = ClassifySettings {
+            mode,
+            iso: 500.0,
+            ..Default::default()
+        };
+        let class = Classification::new(field, &tf, &classify).unwrap();
+        let a = plain.render_local(&class, &lit, &settings).unwrap();
+        let b = paged.render_local(&class, &lit, &settings).unwrap();
+        assert!(bits(&a) == bits(&b), "{name}: paged differs from plain");
+        let (de, covered) = max_delta_e(
+            &class
+                .frame(&lit, &settings, None, Transport::Local, &|_| {})
+                .unwrap(),
+            &b,
+        );
+        eprintln!("paged {name}: bit-identical to plain, max ΔE00 {de:.3} to the CPU, covered {covered:.2}");
+        assert!(
+            covered > 0.03 && de <= MAX_DELTA_E,
+            "{name}: {de}, {covered}"
+        );
+        if mode == RenderMode::Composite {
+            let on = ShadowSettings { occlusion: true };
+            let a = plain
+                .render_shadows_swept(&class, &lit, &settings, &on)
+                .unwrap();
+            let b = paged
+                .render_shadows_swept(&class, &lit, &settings, &on)
+                .unwrap();
+            assert!(bits(&a) == bits(&b), "shadows: paged differs from plain");
+        }
     }
 }
 
