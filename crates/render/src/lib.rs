@@ -53,10 +53,9 @@
 //! It re-exports what front ends use, so they depend on it alone.
 
 #![warn(missing_docs)]
-// No unsafe code, but for the `oidn` feature's device creation (src/denoise/oidn.rs),
-// whose raw calls set OIDN's thread count.
-#![cfg_attr(not(feature = "oidn"), forbid(unsafe_code))]
-#![cfg_attr(feature = "oidn", deny(unsafe_code))]
+// No unsafe code, but for Intel Open Image Denoise's C API, loaded at run time
+// (src/denoise/oidn.rs).
+#![deny(unsafe_code)]
 
 mod animation;
 mod camera_path;

@@ -290,8 +290,8 @@ pub struct SceneFlags {
     pub occlusion: bool,
     /// Path lighting: denoise the image, guided by the albedo, normal and depth of
     /// each pixel's first hit: none, atrous (the built-in edge-avoiding wavelet
-    /// filter), oidn (Intel Open Image Denoise; builds with --features oidn, after
-    /// scripts/fetch-oidn) or auto (oidn when built in, else atrous) [default: none].
+    /// filter), oidn (Intel Open Image Denoise, loaded at run time: scripts/fetch-oidn
+    /// fetches it) or auto (oidn where it loads, else atrous) [default: none].
     #[arg(long, value_parser = choice::<Denoise>(Denoise::ALL.map(|d| d.name())))]
     pub denoise: Option<Denoise>,
     /// Testing: turn empty-space skipping off.

@@ -1,6 +1,6 @@
 //! Denoising of `path` images ([`Denoise`]): the built-in edge-avoiding à-trous
-//! wavelet filter ([`atrous`]) and, in builds with the `oidn` cargo feature, Intel
-//! Open Image Denoise, both on the linear HDR radiance (before the tone curve and the
+//! wavelet filter ([`atrous`]) and Intel Open Image Denoise (loaded at run time where
+//! scripts/fetch-oidn or the system put it), both on the linear HDR radiance (before the tone curve and the
 //! 8-bit encoding) and guided by the frame's feature buffers
 //! ([`glint_volume::PathFeatures`]: albedo, normal and depth of a deterministic first
 //! hit, clean at 1 sample per pixel).
@@ -11,18 +11,23 @@ use glint_core::{Image, RenderError};
 use glint_volume::PathFeatures;
 
 mod atrous;
-#[cfg(feature = "oidn")]
 #[allow(unsafe_code)]
 mod oidn;
 
 pub use atrous::{atrous, AtrousSettings, MAX_RADIANCE};
 
-/// Whether this build has Intel Open Image Denoise (the `oidn` cargo feature).
-pub const HAS_OIDN: bool = cfg!(feature = "oidn");
+/// Whether Intel Open Image Denoise loads on this machine (its library in
+/// `$OIDN_DIR/lib`, where scripts/fetch-oidn puts it, or on the system's library
+/// path); loaded once, on the first call.
+pub fn has_oidn() -> bool {
+    oidn::available()
+}
 
-/// The one line a build without the `oidn` feature gives when asked for it.
-pub const NO_OIDN: &str = "denoise oidn: this glint was built without the `oidn` feature; \
-    run scripts/fetch-oidn and build with --features oidn (or use --denoise atrous)";
+/// The one line `oidn` gives on a machine without the library: where it was looked
+/// for and how to get it.
+pub fn no_oidn() -> String {
+    oidn::missing()
+}
 
 /// How a `path` image is denoised (a scene's `lighting.denoise`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -35,9 +40,9 @@ pub enum Denoise {
     /// milliseconds at 512x512), in every build.
     Atrous,
     /// Intel Open Image Denoise (its `RT` filter, HDR, with albedo and normal, CPU
-    /// device): builds with the `oidn` feature only.
+    /// device): where its library loads ([`has_oidn`]).
     Oidn,
-    /// `oidn` in builds that have it, else `atrous`.
+    /// `oidn` where its library loads, else `atrous`.
     Auto,
 }
 
@@ -55,12 +60,12 @@ impl Denoise {
         }
     }
 
-    /// The denoiser this build runs for the choice (`auto` resolved); an error naming
-    /// the feature for `oidn` in a build without it ([`NO_OIDN`]).
+    /// The denoiser this machine runs for the choice (`auto` resolved); for `oidn`
+    /// without its library, the one line saying how to get it ([`no_oidn`]).
     pub fn effective(self) -> Result<Denoise, RenderError> {
         match self {
-            Denoise::Oidn if !HAS_OIDN => Err(RenderError::Parameter(NO_OIDN.into())),
-            Denoise::Auto if HAS_OIDN => Ok(Denoise::Oidn),
+            Denoise::Oidn if !has_oidn() => Err(RenderError::Parameter(no_oidn())),
+            Denoise::Auto if has_oidn() => Ok(Denoise::Oidn),
             Denoise::Auto => Ok(Denoise::Atrous),
             d => Ok(d),
         }
@@ -105,10 +110,7 @@ pub fn denoise(
             variance,
             &AtrousSettings::default(),
         )),
-        #[cfg(feature = "oidn")]
         Denoise::Oidn => oidn::denoise(image, features),
-        #[cfg(not(feature = "oidn"))]
-        Denoise::Oidn => Err(RenderError::Parameter(NO_OIDN.into())),
     }
 }
 
