@@ -25,12 +25,12 @@
 //!   same arithmetic;
 //! - when a brick cannot be built (the cache is full), Sigg and Hadwiger's eight
 //!   trilinear fetches ("Fast third-order texture filtering", GPU Gems 2, ch. 20,
-//!   2005): per axis the pairs of taps `w0 v0 + w1 v1` are one linear fetch at `i - 1 + w1 / (w0 + w1)`
-//!   weighted by `w0 + w1` (both weights are non-negative, so the position lies between
-//!   the pair), so the spline is eight trilinear samples, each inside one brick
-//!   ([`Field::value_at`]'s bricks need no wider apron). The derivative along an axis
-//!   takes the derivative weights there (both of each pair have the same sign), so the
-//!   gradient is 24 more.
+//!   2005): per axis the pairs of taps `w0 v0 + w1 v1` are one linear fetch at
+//!   `i - 1 + w1 / (w0 + w1)` weighted by `w0 + w1` (both weights are non-negative,
+//!   so the position lies between the pair), so the spline is eight trilinear
+//!   samples, each inside one brick ([`Field::value_at`]'s bricks need no wider
+//!   apron). The derivative along an axis takes the derivative weights there (both of
+//!   each pair have the same sign), so the gradient is 24 more.
 //!
 //! The scalar evaluations read the 64 taps once for the value and all three
 //! derivatives. The AVX2 ray caster reads them too, as 16 rows of four per sample,
