@@ -44,11 +44,11 @@ pub struct EnvMap {
     rotation: f32,
     intensity: f32,
     /// Per row: the conditional CDF over its columns (`width + 1` entries).
-    conditional: Vec<Vec<f32>>,
+    conditional: Vec<Guided>,
     /// Per row: the integral of its function over `[0, 1)`.
     row_integral: Vec<f32>,
     /// The marginal CDF over the rows (`height + 1` entries).
-    marginal: Vec<f32>,
+    marginal: Guided,
     /// The integral of the whole function over the unit square.
     integral: f32,
 }
@@ -102,10 +102,11 @@ impl EnvMap {
             let sin = (PI * (y as f32 + 0.5) / h as f32).sin();
             let row = &texels[y * w..(y + 1) * w];
             let (cdf, integral) = cdf(row.iter().map(|&t| luminance_f32(t) * sin));
-            conditional.push(cdf);
+            conditional.push(Guided::new(cdf));
             row_integral.push(integral);
         }
         let (marginal, integral) = cdf(row_integral.iter().copied());
+        let marginal = Guided::new(marginal);
         Ok(EnvMap {
             width,
             height,
@@ -186,7 +187,7 @@ impl EnvMap {
         let (w, h) = (self.width as usize, self.height as usize);
         let x = ((u * w as f32) as usize).min(w - 1);
         let y = ((v * h as f32) as usize).min(h - 1);
-        let c = &self.conditional[y];
+        let c = &self.conditional[y].cdf;
         // The function's value at the texel over the whole integral: the texel's CDF
         // step times the row's integral, times the width (a texel is 1/w wide).
         let f = (c[x + 1] - c[x]) * self.row_integral[y] * w as f32;
@@ -204,8 +205,8 @@ impl EnvMap {
         if self.integral <= 0.0 || self.intensity == 0.0 {
             return None;
         }
-        let (v, y, pv) = sample_1d(&self.marginal, u[1]);
-        let (uu, x, pu) = sample_1d(&self.conditional[y], u[0]);
+        let (v, y, pv) = self.marginal.sample(u[1]);
+        let (uu, x, pu) = self.conditional[y].sample(u[0]);
         let pdf_uv = pv * pu * (self.width as f32 * self.height as f32);
         let theta = PI * v;
         let sin = theta.sin();
@@ -220,6 +221,15 @@ impl EnvMap {
             radiance: t.map(|c| c * self.intensity),
             pdf: pdf_uv / (2.0 * PI * PI * sin),
         })
+    }
+
+    /// The map's radiance (luminance, times the intensity) averaged over the sphere,
+    /// by solid angle: `∫ L dω / 4π`.
+    #[inline]
+    pub fn mean_radiance(&self) -> f32 {
+        // `integral` is the mean of luminance times sin θ over the texels; a texel
+        // spans (2π / w)(π / h) sin θ steradians.
+        self.integral * self.intensity * (PI / 2.0)
     }
 
     /// The point of the unit square of unit world direction `wi`: `u` the azimuth
@@ -259,18 +269,63 @@ fn cdf(values: impl ExactSizeIterator<Item = f32>) -> (Vec<f32>, f32) {
     (cdf, (sum / n as f64) as f32)
 }
 
-/// Samples a piecewise-constant distribution given by its CDF: the continuous point
-/// in `[0, 1)`, the segment, and the segment's probability (its density is that times
-/// the number of segments).
-#[inline]
-fn sample_1d(cdf: &[f32], u: f32) -> (f32, usize, f32) {
-    let n = cdf.len() - 1;
-    // The last segment whose CDF start is <= u, skipping empty segments.
-    let i = cdf.partition_point(|&c| c <= u).clamp(1, n) - 1;
-    let p = cdf[i + 1] - cdf[i];
-    let du = if p > 0.0 { (u - cdf[i]) / p } else { 0.5 };
-    let x = ((i as f32 + du.clamp(0.0, 1.0)) / n as f32).min(1.0 - f32::EPSILON);
-    (x, i, p)
+/// Entries of a [`Guided`] CDF's guide table: at most this many, so a map of the
+/// largest size keeps its tables to 8 MiB.
+const GUIDE: usize = 256;
+
+/// A normalised CDF and its guide table (Chen and Asau, 1974; Devroye, "Non-Uniform
+/// Random Variate Generation", 1986, III.2.4): entry `g` of `G` is the last CDF index
+/// at or below `g / G`, so the segment of `u` lies between the entries of `floor(u G)`
+/// and the next, a bracket of a few entries searched in place of the whole CDF. The result is the full binary
+/// search's exactly (checked, and the full search taken, where float rounding puts
+/// `u` outside the bracket), so sampling draws the same directions as before.
+#[derive(Clone, Debug)]
+struct Guided {
+    cdf: Vec<f32>,
+    guide: Vec<u32>,
+}
+
+impl Guided {
+    fn new(cdf: Vec<f32>) -> Guided {
+        let n = cdf.len() - 1;
+        let g = n.clamp(1, GUIDE);
+        let guide = (0..=g)
+            .map(|k| {
+                let x = k as f32 / g as f32;
+                // The last index whose entry is at most x (entry 0 is 0).
+                (cdf.partition_point(|&c| c <= x).max(1) - 1) as u32
+            })
+            .collect();
+        Guided { cdf, guide }
+    }
+
+    /// `cdf.partition_point(|&c| c <= u)`, by the guide table.
+    #[inline]
+    fn first_above(&self, u: f32) -> usize {
+        let (cdf, g) = (&self.cdf, self.guide.len() - 1);
+        let k = ((u * g as f32) as usize).min(g - 1);
+        let lo = self.guide[k] as usize;
+        let hi = (self.guide[k + 1] as usize + 1).min(cdf.len());
+        if cdf[lo] <= u && (hi == cdf.len() || cdf[hi] > u) {
+            lo + cdf[lo..hi].partition_point(|&c| c <= u)
+        } else {
+            cdf.partition_point(|&c| c <= u)
+        }
+    }
+
+    /// Samples a piecewise-constant distribution given by its CDF: the continuous point
+    /// in `[0, 1)`, the segment, and the segment's probability (its density is that times
+    /// the number of segments).
+    #[inline]
+    fn sample(&self, u: f32) -> (f32, usize, f32) {
+        let cdf = &self.cdf;
+        let n = cdf.len() - 1;
+        let i = self.first_above(u).clamp(1, n) - 1;
+        let p = cdf[i + 1] - cdf[i];
+        let du = if p > 0.0 { (u - cdf[i]) / p } else { 0.5 };
+        let x = ((i as f32 + du.clamp(0.0, 1.0)) / n as f32).min(1.0 - f32::EPSILON);
+        (x, i, p)
+    }
 }
 
 /// The power heuristic with β = 2 (Veach, "Robust Monte Carlo Methods for Light

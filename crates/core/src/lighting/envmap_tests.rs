@@ -311,3 +311,28 @@ fn mis_has_the_mean_of_either_strategy_and_less_variance() {
     }
     assert!(var_mis < var_light.min(var_scatter) / 3.0);
 }
+
+#[test]
+fn the_guide_tables_find_the_binary_searchs_segment() {
+    // The guided search is an exact replacement: for numbers spread over [0, 1), the
+    // ends, and the CDF entries themselves (where a tie decides), every row's and the
+    // marginal's segment is the full binary search's.
+    let map = probe(200, 100, 4000.0, 3.0);
+    let mut cdfs: Vec<&Guided> = map.conditional.iter().collect();
+    cdfs.push(&map.marginal);
+    let mut checked = 0;
+    for g in cdfs {
+        let mut us: Vec<f32> = (0..997).map(|i| i as f32 / 997.0).collect();
+        us.extend(g.cdf.iter().copied().filter(|&c| c < 1.0));
+        us.extend([0.0, 1.0 - f32::EPSILON, 0.5 * f32::EPSILON]);
+        for u in us {
+            assert_eq!(
+                g.first_above(u),
+                g.cdf.partition_point(|&c| c <= u),
+                "u = {u}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100 * 997, "{checked}");
+}

@@ -23,21 +23,20 @@
 //! - elsewhere (the taps span bricks or reach past the volume), the 64 taps gathered
 //!   from the bricks holding them (`Field::gathered`, clamped to the volume), the
 //!   same arithmetic;
-//! - when a brick cannot be built (the cache is full), and in the AVX2 ray caster's
-//!   march for every sample, Sigg and Hadwiger's eight trilinear fetches
-//!   ("Fast third-order texture filtering", GPU Gems 2, ch. 20, 2005): per axis the
-//!   pairs of taps `w0 v0 + w1 v1` are one linear fetch at `i - 1 + w1 / (w0 + w1)`
-//!   weighted by `w0 + w1` (both weights are non-negative, so the position lies between
-//!   the pair), so the spline is eight trilinear samples, each inside one brick
-//!   ([`Field::value_at`]'s bricks need no wider apron). The derivative along an axis
-//!   takes the derivative weights there (both of each pair have the same sign), so the
-//!   gradient is 24 more.
+//! - when a brick cannot be built (the cache is full), Sigg and Hadwiger's eight
+//!   trilinear fetches ("Fast third-order texture filtering", GPU Gems 2, ch. 20,
+//!   2005): per axis the pairs of taps `w0 v0 + w1 v1` are one linear fetch at
+//!   `i - 1 + w1 / (w0 + w1)` weighted by `w0 + w1` (both weights are non-negative,
+//!   so the position lies between the pair), so the spline is eight trilinear
+//!   samples, each inside one brick ([`Field::value_at`]'s bricks need no wider
+//!   apron). The derivative along an axis takes the derivative weights there (both of
+//!   each pair have the same sign), so the gradient is 24 more.
 //!
 //! The scalar evaluations read the 64 taps once for the value and all three
-//! derivatives. The AVX2 march reads eight rays' samples as eight vector trilinear
-//! reads, one per fetch, which handles a block across bricks without a special case
-//! (`raycast::avx2`); its kept samples' gradients come from the 64 taps. The frame
-//! cost is in docs/lighting.md, "Smooth reconstruction".
+//! derivatives. The AVX2 ray caster reads them too, as 16 rows of four per sample,
+//! eight samples at a time, for the march's values and the kept samples' gradients
+//! (`raycast::avx2::spline`; the same spline up to float rounding). The frame cost is
+//! in docs/lighting.md, "Smooth reconstruction".
 
 use crossbeam_epoch::Guard;
 

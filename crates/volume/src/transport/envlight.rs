@@ -55,6 +55,12 @@ impl PathTracer<'_> {
             EnvStrategy::Mis => power_heuristic(s.pdf, bsdf.pdf(wo, s.wi)),
             _ => 1.0,
         };
+        // f is π times the BSDF (times the cosine for a surface): see glint-core's
+        // scattering model.
+        let k = weight / (PI * s.pdf);
+        let Some(survival) = self.env_survival(map, beta, f, s.radiance, k, rng) else {
+            return;
+        };
         let t0 = if bsdf.is_surface() {
             self.surface_bias
         } else {
@@ -71,12 +77,42 @@ impl PathTracer<'_> {
         if tr <= 0.0 {
             return;
         }
-        // f is π times the BSDF (times the cosine for a surface): see glint-core's
-        // scattering model.
         let k = weight * tr / (PI * s.pdf);
+        let k = if survival < 1.0 { k / survival } else { k };
         for c in 0..3 {
             radiance[c] += beta[c] * f[c] * s.radiance[c] * k;
         }
+    }
+
+    /// Russian roulette on the map's shadow ray: the probability of tracing it,
+    /// `min(1, c / (r m))` for the contribution `c` it would add unshadowed
+    /// (the largest channel of `beta f L k`) the map's mean radiance `m` and `r` the tracer's `env_roulette`, or `None`
+    /// when it is not traced (one independent number drawn, only where the probability
+    /// is below one). A traced ray's contribution is divided by the probability, so the
+    /// estimate's mean is unchanged (Arvo and Kirk 1990; pbrt-v4 applies the same
+    /// test to a path's throughput); the rays skipped are those that could add little.
+    #[inline]
+    fn env_survival(
+        &self,
+        map: &EnvMap,
+        beta: [f32; 3],
+        f: [f32; 3],
+        l: [f32; 3],
+        k: f32,
+        rng: &mut Rng,
+    ) -> Option<f32> {
+        let c = (0..3)
+            .map(|i| beta[i] * f[i] * l[i] * k)
+            .fold(0.0f32, f32::max);
+        if c.is_nan() || c <= 0.0 {
+            return None;
+        }
+        let scale = self.env_roulette * map.mean_radiance();
+        if c >= scale {
+            return Some(1.0);
+        }
+        let q = c / scale;
+        (rng.uniform() < q).then_some(q)
     }
 
     /// The map's radiance seen along unit `wdir` by a path that leaves the volume

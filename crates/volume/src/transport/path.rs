@@ -314,7 +314,16 @@ pub(crate) struct PathTracer<'a> {
     pub(crate) env_strategy: EnvStrategy,
     /// How the shader's area lights light the paths (MIS but in tests).
     pub(crate) area_strategy: EnvStrategy,
+    /// Russian roulette on the map's shadow rays: a ray whose unshadowed contribution
+    /// is below this times the map's mean radiance is traced with probability
+    /// contribution / (this times the mean), its result divided by it; 0 traces every
+    /// one (`envlight.rs`, `env_survival`).
+    pub(crate) env_roulette: f32,
 }
+
+/// [`PathTracer::env_roulette`]'s default (measured in docs/lighting.md, "Environment
+/// maps", Cost).
+pub(crate) const ENV_ROULETTE: f32 = 1.0;
 
 /// One path's result: radiance, whether the camera ray met matter, scattering events.
 pub(crate) struct PathSample {
@@ -363,6 +372,7 @@ impl<'a> PathTracer<'a> {
             env_map: None,
             env_strategy: EnvStrategy::Mis,
             area_strategy: EnvStrategy::Mis,
+            env_roulette: ENV_ROULETTE,
         })
     }
 

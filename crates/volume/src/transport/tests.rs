@@ -1248,6 +1248,57 @@ fn mis_of_the_map_agrees_with_each_strategy_and_is_deterministic() {
     assert!(mean_luminance(&one) > 0.0);
 }
 
+#[test]
+fn roulette_on_the_maps_shadow_rays_keeps_the_mean() {
+    // Russian roulette on the map's shadow rays (`env_survival`) divides the rays it
+    // keeps by their survival probability: the mean is that of tracing every one,
+    // within the noise, at the default threshold and at one eight times higher (where
+    // most rays are played, so the variance visibly grows: the roulette acts).
+    let (class, shader, frame) = small_scene();
+    let map = small_source_map();
+    let settings = PathSettings {
+        bounces: 3,
+        seed: 4,
+        environment: 0.0,
+        sampler: Sampler::Independent,
+        time_budget: None,
+        show_environment: false,
+    };
+    let camera = class.camera(&frame).unwrap();
+    let placed = shader.placed(&camera);
+    let size = [frame.width, frame.height];
+    let spp = 48u32;
+    let run = |threshold: f32| {
+        let mut tracer = PathTracer::new(
+            class.field(),
+            class.medium(),
+            &placed,
+            camera,
+            size,
+            settings,
+        )
+        .unwrap()
+        .lit_by(Some(&map));
+        tracer.env_roulette = threshold;
+        green_mean_and_variance(&tracer, size, spp)
+    };
+    let (all, var_all) = run(0.0);
+    let (default, var_default) = run(super::path::ENV_ROULETTE);
+    let (heavy, var_heavy) = run(8.0 * super::path::ENV_ROULETTE);
+    eprintln!(
+        "map shadow-ray roulette: mean every ray {all:.4}, default {default:.4}, 8x {heavy:.4}; \
+         variance per sample {var_all:.4}, {var_default:.4}, {var_heavy:.4}"
+    );
+    let n = f64::from(size[0] * size[1] * spp);
+    let se = |v: f64| (v / n).sqrt();
+    assert!(all > 0.01, "{all}");
+    for (name, m, v) in [("default", default, var_default), ("8x", heavy, var_heavy)] {
+        let tol = 4.0 * (se(v) + se(var_all));
+        assert!((m - all).abs() < tol, "{name}: {m} vs {all} (±{tol})");
+    }
+    assert!(var_heavy > var_all, "{var_heavy} vs {var_all}");
+}
+
 /// The mean over the pixels of `size` of each pixel's mean green radiance over `spp`
 /// samples of `tracer`, and the mean of the pixels' sample variances.
 pub(super) fn green_mean_and_variance(

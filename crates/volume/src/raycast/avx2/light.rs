@@ -79,29 +79,59 @@ pub(super) unsafe fn gradients(c: &Caster, kept: &Kept, r0: usize) -> [__m256; 3
 }
 
 /// The tricubic B-spline's world gradients of the kept samples `r0 .. r0 + 8`
-/// (`Field::gradient_at`, one read of each sample's 4^3 taps), in component order.
+/// (`Field::gradient_at`: the index-space derivatives from one read of each sample's
+/// 64 taps, [`super::spline::gradients`], mapped by the inverse transpose of the
+/// affine's 3x3 part), in component order. Samples whose taps reach past the volume
+/// take the scalar evaluation.
 ///
 /// # Safety
-/// AVX2 must be available; `kept` holds at least `r0 + 8` samples.
+/// AVX2 and FMA must be available; `kept` holds at least `r0 + 8` samples from clamped
+/// positions.
 #[inline(always)]
 unsafe fn cubic_gradients(c: &Caster, kept: &Kept, r0: usize, guard: &Guard) -> [__m256; 3] {
     let f = c.field;
-    let mut g = [[0.0f32; LANES]; 3];
+    let mut cell = [[0i32; LANES]; 3];
+    let mut t = [[0.0f32; LANES]; 3];
     for (j, s) in kept.0[r0..r0 + LANES].iter().enumerate() {
-        let loc = Loc {
-            ijk: grid_cell(f.brick_dims, s),
-            t: s.t,
-        };
-        let v = f.gradient_at(&loc, guard);
-        (g[0][j], g[1][j], g[2][j]) = (v.x, v.y, v.z);
+        let ijk = grid_cell(f.brick_dims, s);
+        for a in 0..3 {
+            // Cells fit in i32: the grid's dimensions do (Field::new checks).
+            (cell[a][j], t[a][j]) = (ijk[a] as i32, s.t[a]);
+        }
     }
-    // SAFETY: AVX2 (this function's contract); each load reads a whole array of eight.
+    // SAFETY: AVX2 and FMA (this function's contract); each load reads a whole array
+    // of eight; the cells are clamped ones (kept samples').
     unsafe {
-        [
-            _mm256_loadu_ps(g[0].as_ptr()),
-            _mm256_loadu_ps(g[1].as_ptr()),
-            _mm256_loadu_ps(g[2].as_ptr()),
-        ]
+        let ijk = axes!(|a| _mm256_loadu_si256(cell[a].as_ptr().cast()));
+        let fr = axes!(|a| _mm256_loadu_ps(t[a].as_ptr()));
+        let (g, edge) =
+            super::spline::gradients(c, (ijk, fr), guard).unwrap_or(([[0.0; LANES]; 3], u8::MAX));
+        let g = axes!(|a| _mm256_loadu_ps(g[a].as_ptr()));
+        let m = &f.recipe.to_world_gradient;
+        let world = axes!(|r| {
+            let x = _mm256_mul_ps(_mm256_set1_ps(m[r][0]), g[0]);
+            let y = _mm256_mul_ps(_mm256_set1_ps(m[r][1]), g[1]);
+            let z = _mm256_mul_ps(_mm256_set1_ps(m[r][2]), g[2]);
+            _mm256_add_ps(_mm256_add_ps(x, y), z)
+        });
+        if edge == 0 {
+            return world;
+        }
+        let mut out = [[0.0f32; LANES]; 3];
+        for a in 0..3 {
+            _mm256_storeu_ps(out[a].as_mut_ptr(), world[a]);
+        }
+        for (j, s) in kept.0[r0..r0 + LANES].iter().enumerate() {
+            if edge & (1 << j) != 0 {
+                let loc = Loc {
+                    ijk: grid_cell(f.brick_dims, s),
+                    t: s.t,
+                };
+                let v = f.gradient_at(&loc, guard);
+                (out[0][j], out[1][j], out[2][j]) = (v.x, v.y, v.z);
+            }
+        }
+        axes!(|a| _mm256_loadu_ps(out[a].as_ptr()))
     }
 }
 

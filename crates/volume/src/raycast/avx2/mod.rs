@@ -68,11 +68,14 @@ macro_rules! axes {
 
 mod lanes;
 mod light;
+mod probe;
 mod rays;
 mod reads;
+mod spline;
 
 use lanes::Lanes;
 use light::light;
+use probe::*;
 use rays::LaneRay;
 use reads::*;
 

@@ -1,4 +1,5 @@
-//! Eight samples read at once: positions, cells, trilinear values, table entries.
+//! Eight samples located at once: positions, cells, bricks, trilinear values, table
+//! coordinates.
 
 use std::arch::x86_64::*;
 use std::sync::atomic::{AtomicI32, Ordering};
@@ -8,55 +9,6 @@ use crossbeam_epoch::Guard;
 use super::*;
 use crate::field::brick::{BRICK, BRICK_ROW, BRICK_SHIFT, BRICK_SLICE};
 use crate::field::cache::ABSENT;
-
-/// One sample per lane, as [`Lanes::keep_segments`] uses it.
-#[derive(Clone, Copy)]
-pub(super) struct Reads {
-    /// Fractions inside the trilinear cell, per axis.
-    pub(super) t: [[f32; LANES]; 3],
-    /// Corner-000 voxel in the brick pool, and its brick's grid index.
-    pub(super) base: [i32; LANES],
-    pub(super) brick: [i32; LANES],
-    /// Table coordinate (`Lut::position` of the trilinear value).
-    pub(super) u: [f32; LANES],
-    /// Sample index.
-    pub(super) k: [i32; LANES],
-}
-
-/// The samples at positions `p` (cells `ijk`, clamped) with sample indices `k`, read
-/// for the lanes `mask` (the others read the dummy brick); `None` when a brick could
-/// not be built (the cache is full of bricks in use).
-///
-/// # Safety
-/// The CPU must support AVX2 (inlined into [`composite_lanes`]); `ijk` must be
-/// clamped to the field's cells.
-#[inline(always)]
-pub(super) unsafe fn reads_at<const CUBIC: bool>(
-    c: &Caster,
-    inv: &Invariants,
-    (p, ijk, k): ([__m256; 3], [__m256i; 3], __m256i),
-    (mask, memos): (u8, &mut Memos),
-    guard: &Guard,
-) -> Option<Reads> {
-    // SAFETY: this function's `# Safety` contract, which its callers uphold,
-    // covers every unsafe operation below (CPU features, pointer ranges).
-    unsafe {
-        let ((base, brick), fr, uv) = sample::<CUBIC>(c, inv, (p, ijk), (mask, memos), guard)?;
-        let mut r = Reads {
-            t: [[0.0; LANES]; 3],
-            base,
-            brick,
-            u: [0.0; LANES],
-            k: [0; LANES],
-        };
-        for (a, v) in fr.iter().enumerate() {
-            _mm256_storeu_ps(r.t[a].as_mut_ptr(), *v);
-        }
-        _mm256_storeu_ps(r.u.as_mut_ptr(), uv);
-        _mm256_storeu_si256(r.k.as_mut_ptr().cast(), k);
-        Some(r)
-    }
-}
 
 /// Each lane's last brick and its slot's offset: a ray stays in a brick for many
 /// samples, so the page table is read only when a lane enters another brick.
@@ -110,7 +62,7 @@ pub(super) unsafe fn bases(
 /// # Safety
 /// The CPU must support AVX2 (inlined into [`composite_lanes`]).
 #[inline(always)]
-unsafe fn index_local(inv: &Invariants, ijk: [__m256i; 3]) -> (__m256i, __m256i) {
+pub(super) unsafe fn index_local(inv: &Invariants, ijk: [__m256i; 3]) -> (__m256i, __m256i) {
     // SAFETY: the caller runs with AVX2 (this function's contract).
     unsafe {
         const SHIFT: i32 = BRICK_SHIFT as i32;
@@ -142,7 +94,7 @@ unsafe fn index_local(inv: &Invariants, ijk: [__m256i; 3]) -> (__m256i, __m256i)
 /// # Safety
 /// As for [`bases`]: `index` and `local` from [`index_local`] of clamped cells.
 #[inline(always)]
-unsafe fn resolve(
+pub(super) unsafe fn resolve(
     c: &Caster,
     inv: &Invariants,
     (index, local): (__m256i, __m256i),
@@ -248,16 +200,6 @@ pub(super) unsafe fn positions(
     }
 }
 
-/// One sample per lane: its table entry, corner voxel (in the pool) and brick (in the
-/// grid), cell fractions, and which lanes' entries have opacity.
-pub(super) struct Probe {
-    pub(super) li: [i32; LANES],
-    pub(super) base: [i32; LANES],
-    pub(super) brick: [i32; LANES],
-    pub(super) fr: [__m256; 3],
-    pub(super) opaque: u8,
-}
-
 /// For eight samples at positions `p` in the cells `ijk` (clamped to `[0, dims-2]`)
 /// whose corner voxels are `base` in the brick pool ([`bases`]): their fractions in the
 /// cell and their table coordinates (`Lut::position` of the trilinear value), with the
@@ -288,7 +230,7 @@ pub(super) unsafe fn values_at(
 /// # Safety
 /// The CPU must support AVX2.
 #[inline(always)]
-unsafe fn fractions(inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3]) -> [__m256; 3] {
+pub(super) unsafe fn fractions(inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3]) -> [__m256; 3] {
     // SAFETY: the caller runs with AVX2 (this function's contract).
     unsafe {
         axes!(|a| {
@@ -303,7 +245,7 @@ unsafe fn fractions(inv: &Invariants, p: [__m256; 3], ijk: [__m256i; 3]) -> [__m
 /// # Safety
 /// The CPU must support AVX2.
 #[inline(always)]
-unsafe fn table_coordinate(inv: &Invariants, v: __m256) -> __m256 {
+pub(super) unsafe fn table_coordinate(inv: &Invariants, v: __m256) -> __m256 {
     // SAFETY: the caller runs with AVX2 (this function's contract).
     unsafe {
         let Invariants {
@@ -353,166 +295,12 @@ unsafe fn trilinear(inv: &Invariants, base: &[i32; LANES], fr: [__m256; 3]) -> _
 }
 
 /// The brick look-ups of the cells a sample reads: its own cell's (for the kept
-/// sample's record) and, for the tricubic filter, those of its eight fetches
-/// ([`cubic`]), each lane's last brick per fetch.
+/// sample's record) and, for the tricubic filter, those of the eight 2^3 cubes its
+/// 64 taps lie in ([`super::spline::cubic`]), each lane's last brick per cube.
 #[derive(Default)]
 pub(super) struct Memos {
     pub(super) cell: Memo,
     pub(super) fetch: [Memo; 8],
-}
-
-/// The tricubic B-spline at positions `p` (cells `ijk`, clamped, fractions `fr`) for
-/// the lanes `mask`: Sigg and Hadwiger's eight trilinear fetches (`field::cubic`),
-/// each one [`trilinear`] read of eight lanes, with the scalar `Field::fetched`'s
-/// arithmetic (no FMA). Every fetch lies in one brick (its cell's), so the block of
-/// 4^3 taps may span bricks without a special case; clamp-to-edge comes from clamping
-/// the fetch positions' cells and fractions as `Field::locate` does. `None` when a
-/// brick could not be built.
-///
-/// # Safety
-/// The CPU must support AVX2; `ijk` clamped to the field's cells; `memos` filled under
-/// `guard`.
-#[inline(always)]
-unsafe fn cubic(
-    c: &Caster,
-    inv: &Invariants,
-    (ijk, fr): ([__m256i; 3], [__m256; 3]),
-    (mask, memos): (u8, &mut [Memo; 8]),
-    guard: &Guard,
-) -> Option<__m256> {
-    // SAFETY: this function's `# Safety` contract, which its callers uphold,
-    // covers every unsafe operation below (CPU features, pointer ranges).
-    unsafe {
-        let set = _mm256_set1_ps;
-        let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
-        // Per axis, the two fetches: their cells' parts of the brick index and of the
-        // voxel offset, their fractions and weights (`Field::fetched`'s `pairs`).
-        let mut idx = [[_mm256_setzero_si256(); 2]; 3];
-        let mut loc = [[_mm256_setzero_si256(); 2]; 3];
-        let mut frac = [[inv.zero; 2]; 3];
-        let mut wt = [[inv.zero; 2]; 3];
-        for a in 0..3 {
-            let t = fr[a];
-            let s = sub(inv.one, t);
-            let (t2, t3) = (mul(t, t), mul(mul(t, t), t));
-            let six = set(6.0);
-            let w0 = _mm256_div_ps(mul(mul(s, s), s), six);
-            let w1 = _mm256_div_ps(add(sub(mul(set(3.0), t3), mul(six, t2)), set(4.0)), six);
-            let w2 = _mm256_div_ps(
-                add(
-                    add(add(mul(set(-3.0), t3), mul(set(3.0), t2)), mul(set(3.0), t)),
-                    inv.one,
-                ),
-                six,
-            );
-            let w3 = _mm256_div_ps(t3, six);
-            let i = _mm256_cvtepi32_ps(ijk[a]);
-            let (g0, g1) = (add(w0, w1), add(w2, w3));
-            let h = [
-                add(sub(i, inv.one), _mm256_div_ps(w1, g0)),
-                add(add(i, inv.one), _mm256_div_ps(w3, g1)),
-            ];
-            wt[a] = [g0, g1];
-            for (n, &x) in h.iter().enumerate() {
-                let cell =
-                    _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(x, inv.zero), inv.hi[a]));
-                let tf = sub(x, _mm256_cvtepi32_ps(cell));
-                frac[a][n] = _mm256_min_ps(_mm256_max_ps(tf, inv.zero), inv.one);
-                const SHIFT: i32 = BRICK_SHIFT as i32;
-                let b = _mm256_srli_epi32::<SHIFT>(cell);
-                let l = _mm256_and_si256(cell, inv.brick_mask);
-                (idx[a][n], loc[a][n]) = match a {
-                    0 => (b, l),
-                    1 => (
-                        _mm256_mullo_epi32(inv.bdx, b),
-                        _mm256_mullo_epi32(l, inv.brick_row),
-                    ),
-                    _ => (
-                        _mm256_mullo_epi32(inv.bdx, _mm256_mullo_epi32(inv.bdy, b)),
-                        _mm256_mullo_epi32(l, inv.brick_slice),
-                    ),
-                };
-            }
-        }
-        let mut sum = inv.zero;
-        for (f, memo) in memos.iter_mut().enumerate() {
-            let [x, y, z] = [f & 1, (f >> 1) & 1, f >> 2];
-            let index = _mm256_add_epi32(idx[0][x], _mm256_add_epi32(idx[1][y], idx[2][z]));
-            let local = _mm256_add_epi32(loc[0][x], _mm256_add_epi32(loc[1][y], loc[2][z]));
-            let base = resolve(c, inv, (index, local), (mask, memo), guard)?;
-            let v = trilinear(inv, &base, [frac[0][x], frac[1][y], frac[2][z]]);
-            let w = mul(mul(wt[0][x], wt[1][y]), wt[2][z]);
-            sum = add(sum, mul(w, v));
-        }
-        Some(sum)
-    }
-}
-
-/// The samples at positions `p` (cells `ijk`, clamped) for the lanes `mask`: their
-/// corner voxels and bricks ([`bases`]), fractions, and table coordinates, of the
-/// trilinear value or, with `CUBIC`, of the tricubic B-spline ([`cubic`]). `None` when
-/// a brick could not be built.
-///
-/// # Safety
-/// The CPU must support AVX2; `ijk` clamped to the field's cells; `memos` filled under
-/// `guard`.
-#[inline(always)]
-#[allow(clippy::type_complexity)]
-unsafe fn sample<const CUBIC: bool>(
-    c: &Caster,
-    inv: &Invariants,
-    (p, ijk): ([__m256; 3], [__m256i; 3]),
-    (mask, memos): (u8, &mut Memos),
-    guard: &Guard,
-) -> Option<(([i32; LANES], [i32; LANES]), [__m256; 3], __m256)> {
-    // SAFETY: this function's `# Safety` contract, which its callers uphold,
-    // covers every unsafe operation below (CPU features, pointer ranges).
-    unsafe {
-        let (base, brick) = bases(c, inv, ijk, (mask, &mut memos.cell), guard)?;
-        let (fr, uv) = if CUBIC {
-            let fr = fractions(inv, p, ijk);
-            let v = cubic(c, inv, (ijk, fr), (mask, &mut memos.fetch), guard)?;
-            (fr, table_coordinate(inv, v))
-        } else {
-            values_at(inv, p, ijk, &base)
-        };
-        Some(((base, brick), fr, uv))
-    }
-}
-
-/// Reads the samples at positions `p` (cells `ijk`, clamped) for the lanes `mask`:
-/// the reference loop's trilinear value and `Lut::index`; `None` when a brick could
-/// not be built.
-///
-/// # Safety
-/// The CPU must support AVX2 (inlined into [`composite_lanes`]).
-#[inline(always)]
-pub(super) unsafe fn probe<const CUBIC: bool>(
-    c: &Caster,
-    inv: &Invariants,
-    (p, ijk): ([__m256; 3], [__m256i; 3]),
-    (mask, memos): (u8, &mut Memos),
-    guard: &Guard,
-) -> Option<Probe> {
-    // SAFETY: this function's `# Safety` contract, which its callers uphold,
-    // covers every unsafe operation below (CPU features, pointer ranges).
-    unsafe {
-        let ((base, brick), fr, uv) = sample::<CUBIC>(c, inv, (p, ijk), (mask, memos), guard)?;
-        let mut li = [0i32; LANES];
-        _mm256_storeu_si256(li.as_mut_ptr().cast(), _mm256_cvttps_epi32(uv));
-        let mut opaque = 0u8;
-        for (l, &i) in li.iter().enumerate() {
-            // SAFETY: the index was clamped to the table.
-            opaque |= *c.lut.opaque.get_unchecked(i as usize) << l;
-        }
-        Some(Probe {
-            li,
-            base,
-            brick,
-            fr,
-            opaque,
-        })
-    }
 }
 
 /// The lane steps' values that are the same for every ray of a frame, computed once per
