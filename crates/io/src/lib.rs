@@ -60,7 +60,7 @@ mod robust;
 mod types;
 pub mod zarr;
 
-pub use common::{write_atomic, Endian, ParseScalarTypeError, ScalarType};
+pub use common::{recycle, write_atomic, Endian, ParseScalarTypeError, ScalarType};
 pub use gifti::{read_surface_data, Label, VertexData, VertexValues};
 pub use link::broken_link;
 pub use message::one_line;

@@ -180,6 +180,11 @@ impl Samples {
         each_samples!(self, v => v.len())
     }
 
+    /// Samples the buffer holds without growing.
+    pub fn capacity(&self) -> usize {
+        each_samples!(self, v => v.capacity())
+    }
+
     /// Whether there are no samples.
     pub fn is_empty(&self) -> bool {
         self.len() == 0

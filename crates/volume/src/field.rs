@@ -283,6 +283,7 @@ impl Field {
             fill: None,
             to_world_gradient: grad_to_world,
             inv_scale: 1.0,
+            axis_aligned: None,
         };
         let mut timings = Timings::default();
         let total = dims[2] as u64;
@@ -303,6 +304,10 @@ impl Field {
         }
         let gradient_scale = filter::gradient_scale(p.largest);
         recipe.inv_scale = 1.0 / gradient_scale;
+        // Values (prefiltered: within the range) below a quarter of f32's largest have
+        // finite differences, which the diagonal bricks' gradients need.
+        let bounded = p.range.0.abs().max(p.range.1.abs()) <= f32::MAX / 4.0;
+        recipe.axis_aligned = prepare::diagonal(&recipe.to_world_gradient).filter(|_| bounded);
         let cache = BrickCache::new(bricks, slots).ok_or_else(|| {
             RenderError::Volume(format!("cannot allocate a pool of {slots} bricks"))
         })?;

@@ -12,7 +12,9 @@
 use std::cell::RefCell;
 use std::sync::Arc;
 
-use super::filter::{binomial_box_into, quantise, row_gradients, span, Neighbours};
+use super::filter::{
+    binomial_box_into, quantise, row_gradients, row_quantised_diagonal, span, Neighbours,
+};
 use super::source::Source;
 use super::Prefilter;
 
@@ -57,6 +59,10 @@ pub(crate) struct Recipe {
     pub(crate) to_world_gradient: [[f32; 3]; 3],
     /// `1 / gradient_scale`.
     pub(crate) inv_scale: f32,
+    /// The diagonal of `to_world_gradient` when it is diagonal and no difference of
+    /// two values can overflow: bricks then take [`row_quantised_diagonal`], the same
+    /// stored gradients without the matrix's zero products.
+    pub(crate) axis_aligned: Option<[f32; 3]>,
 }
 
 /// Reusable buffers for [`Recipe::values_into`]: the physical values read and the
@@ -80,9 +86,13 @@ impl Scratch {
     }
 
     /// Voxels the read buffer holds without growing.
-    #[cfg(test)]
     pub(crate) fn capacity(&self) -> usize {
         self.raw.capacity()
+    }
+
+    /// Bytes the buffers hold.
+    pub(crate) fn bytes(&self) -> usize {
+        std::mem::size_of::<f32>() * (self.raw.capacity() + self.filter.capacity())
     }
 }
 
@@ -177,18 +187,17 @@ impl Recipe {
                     span_k: sk,
                 };
                 let len = ihi - ilo;
-                row_gradients(
-                    c,
-                    &n,
-                    (ilo, ihi),
-                    faces,
-                    &self.to_world_gradient,
-                    &mut out[..len],
-                );
                 let at = BRICK_ROW * (j - lo[1]) + BRICK_SLICE * (k - lo[2]);
                 values[at..at + len].copy_from_slice(&c[ilo..ihi]);
+                let grads = &mut gradients[at..at + len];
+                if let Some(d) = self.axis_aligned {
+                    row_quantised_diagonal(c, &n, (ilo, ihi), faces, d, self.inv_scale, grads);
+                    continue;
+                }
+                let g = &self.to_world_gradient;
+                row_gradients(c, &n, (ilo, ihi), faces, g, &mut out[..len]);
                 let q = |x: f32| quantise(x, self.inv_scale);
-                for (o, w) in gradients[at..at + len].iter_mut().zip(&out[..len]) {
+                for (o, w) in grads.iter_mut().zip(&out[..len]) {
                     *o = [q(w[0]), q(w[1]), q(w[2]), 0];
                 }
             }

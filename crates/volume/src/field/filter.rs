@@ -131,6 +131,46 @@ pub(super) fn row_gradients(
     }
 }
 
+/// [`row_gradients`] and [`quantise`] of each component into `out`, for a `g` whose
+/// only non-zero entries are its diagonal `d`, and values whose differences are finite
+/// (the caller bounds them): the same stored gradients bit for bit, without the
+/// matrix. World component a is `d[a] * g_a` plus two products `0 * g_b`, each a zero
+/// (the differences are finite), and adding a zero changes at most the sign of a zero
+/// result; both signs of zero, and every other value, quantise alike. The differences
+/// are `row_gradients`'s, in the same operations. (The matrix and a second loop over
+/// the row to quantise were half of a brick's build, issue 47.)
+pub(super) fn row_quantised_diagonal(
+    c: &[f32],
+    n: &Neighbours,
+    (lo, hi): (usize, usize),
+    (face_lo, face_hi): (bool, bool),
+    d: [f32; 3],
+    inv_scale: f32,
+    out: &mut [[i16; 4]],
+) {
+    let (sj, sk) = (n.span_j, n.span_k);
+    let q = |x: f32| quantise(x, inv_scale);
+    let put = |i: usize, gi: f32| {
+        [
+            q(d[0] * gi),
+            q(d[1] * ((n.jp[i] - n.jm[i]) / sj)),
+            q(d[2] * ((n.kp[i] - n.km[i]) / sk)),
+            0,
+        ]
+    };
+    let first = lo + usize::from(face_lo);
+    let last = hi - usize::from(face_hi);
+    if face_lo {
+        out[0] = put(lo, (c[lo + 1] - c[lo]) / 1.0);
+    }
+    if face_hi && hi > first {
+        out[hi - 1 - lo] = put(hi - 1, (c[hi - 1] - c[hi - 2]) / 1.0);
+    }
+    for i in first..last.max(first) {
+        out[i - lo] = put(i, (c[i + 1] - c[i - 1]) / 2.0);
+    }
+}
+
 /// A world gradient component in units of `1 / inv_scale`, rounded half away from zero
 /// (without libm's roundf, a call per component on baseline x86-64); `|x| * inv_scale
 /// <= 32767` up to rounding, and `as` saturates.
@@ -244,6 +284,67 @@ mod tests {
             assert_eq!(out.len(), whole.len(), "{dims:?}");
             for (i, (a, b)) in out.iter().zip(&whole).enumerate() {
                 assert_eq!(a.to_bits(), b.to_bits(), "{dims:?} voxel {i}");
+            }
+        }
+    }
+
+    /// The fused diagonal row gives the general row's quantised gradients, bit for bit:
+    /// rows with and without faces, spans of 1 and 2, negative and tiny diagonals,
+    /// equal neighbours (zero differences of either sign), and large values.
+    #[test]
+    fn diagonal_rows_quantise_as_the_matrix() {
+        let m = 23;
+        let row = |seed: usize, scale: f32| -> Vec<f32> {
+            (0..m)
+                .map(|i| match (i + seed) % 7 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    _ => samples(1, i * 31 + seed)[0] * scale - scale,
+                })
+                .collect()
+        };
+        for (d, scale) in [
+            ([1.0f32, 1.0, 1.0], 1.0f32),
+            ([-1.0, 0.5, 2.0], 300.0),
+            ([0.7, -1.3, 1e-3], 1e30),
+            ([1e20, 1.0, -1.0], 1e-30),
+        ] {
+            let g = [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]];
+            let c = row(0, scale);
+            let (jm, jp, km) = (row(1, scale), row(2, scale), row(3, scale));
+            for (span_j, span_k, kp) in [(2.0, 2.0, row(4, scale)), (1.0, 2.0, c.clone())] {
+                let n = Neighbours {
+                    jm: &jm,
+                    jp: &jp,
+                    span_j,
+                    km: &km,
+                    kp: &kp,
+                    span_k,
+                };
+                for (lo, hi, faces) in [
+                    (0, m, (true, true)),
+                    (1, m - 1, (false, false)),
+                    (0, 9, (true, false)),
+                    (5, m, (false, true)),
+                ] {
+                    let inv = 1.0 / gradient_scale(3.0 * scale);
+                    let mut w = vec![[0.0f32; 3]; hi - lo];
+                    row_gradients(&c, &n, (lo, hi), faces, &g, &mut w);
+                    let want: Vec<[i16; 4]> = w
+                        .iter()
+                        .map(|w| {
+                            [
+                                quantise(w[0], inv),
+                                quantise(w[1], inv),
+                                quantise(w[2], inv),
+                                0,
+                            ]
+                        })
+                        .collect();
+                    let mut got = vec![[9i16; 4]; hi - lo];
+                    row_quantised_diagonal(&c, &n, (lo, hi), faces, d, inv, &mut got);
+                    assert_eq!(got, want, "{d:?} {scale} {lo}..{hi}");
+                }
             }
         }
     }

@@ -63,7 +63,17 @@ struct Spares<T, F>(Mutex<Vec<T>>, F);
 impl<T, F: Fn() -> T> Spares<T, F> {
     /// A pool whose new sets of buffers `make` makes (with room for the largest slab).
     fn new(make: F) -> Self {
-        Spares(Mutex::new(Vec::new()), make)
+        Spares::with_kept(Vec::new(), make)
+    }
+
+    /// A pool that hands out the sets `kept` first.
+    fn with_kept(kept: Vec<T>, make: F) -> Self {
+        Spares(Mutex::new(kept), make)
+    }
+
+    /// The sets of buffers the pool holds.
+    fn into_sets(self) -> Vec<T> {
+        self.0.into_inner().unwrap_or_else(PoisonError::into_inner)
     }
 
     /// `f` with a spare set of buffers (or a new one), which then goes back.
@@ -158,7 +168,7 @@ pub(super) fn prepare(
     // A slab filters at most its cell layers' slices and one more on each side, and
     // reads one more on each side again for the prefilter.
     let slices = layers * MACRO_CELL + 2;
-    let spares = Spares::new(|| slab_buffers(dims, slices));
+    let spares = Spares::with_kept(take_kept(dims, slices), || slab_buffers(dims, slices));
     // Each slab writes its layers' cells in place: collected per slab and joined, the
     // cells were held twice at the end of the pass (512 MiB more at the peak of a
     // 2048x2048x1024 level).
@@ -182,6 +192,7 @@ pub(super) fn prepare(
             slab
         })
         .collect();
+    keep(spares.into_sets());
     debug_assert_eq!(parts.len(), slabs);
     let mut out = Prepared {
         range: range.unwrap_or((f32::INFINITY, f32::NEG_INFINITY)),
@@ -207,10 +218,32 @@ pub(super) fn prepare(
             "no finite sample (all NaN or infinite)".into(),
         ));
     }
-    out.robust = glint_io::robust_range(count, |i| sub[i / stride] as f64)
-        .map(|(a, b)| (a as f32, b as f32))
-        .unwrap_or(out.range);
+    debug_assert_eq!(sub.len(), count.div_ceil(stride));
+    out.robust = robust_in_place(&mut sub).unwrap_or(out.range);
     Ok(out)
+}
+
+/// [`glint_io::robust_range`] of the pass's subsample `sub` (the values that function
+/// takes, in its order), found in place and in f32: the same ranks, and the same
+/// values, since f32 to f64 is exact and keeps the order. That function's f64 copy of
+/// the subsample (8 MiB of fresh pages per volume) was 5% of a `glint batch`
+/// subject's CPU, most of it the kernel clearing those pages (issue 47).
+fn robust_in_place(sub: &mut Vec<f32>) -> Option<(f32, f32)> {
+    sub.retain(|x| x.is_finite());
+    if sub.is_empty() {
+        return None;
+    }
+    let (p_lo, p_hi) = glint_io::ROBUST_PERCENTILES;
+    let rank = |p: f64| ((p / 100.0) * (sub.len() - 1) as f64).round() as usize;
+    let (lo_rank, hi_rank) = (rank(p_lo), rank(p_hi));
+    let lo = *sub.select_nth_unstable_by(lo_rank, f32::total_cmp).1;
+    let hi = *sub.select_nth_unstable_by(hi_rank, f32::total_cmp).1;
+    if hi > lo {
+        return Some((lo, hi));
+    }
+    // The maximum as that function takes it, in f64.
+    let max = sub.iter().fold(f64::from(lo), |m, &x| m.max(f64::from(x)));
+    Some((lo, max as f32))
 }
 
 /// The voxel slices a slab of cell layers `cz` owns (its gradients, range and robust
@@ -228,6 +261,44 @@ fn slab_slices(dims: [usize; 3], cz: (usize, usize), layers: usize) -> (usize, u
 
 /// A slab's buffers: the prefilter's, and the filtered values.
 type Buffers = (Scratch, Vec<f32>);
+
+/// The pass's buffers, kept from one field's pass for the next (at most one set per
+/// thread, each at most [`KEPT_BYTES`]): a study of many volumes of one size (`glint
+/// batch`) then pages them in once, not per volume. Fresh sets per pass made the
+/// kernel's clearing of their pages 7-14% of a batch subject's CPU once the volume's
+/// samples were reused (issue 47).
+static KEPT: Mutex<Vec<Buffers>> = Mutex::new(Vec::new());
+
+/// Largest set of pass buffers [`KEPT`] keeps: 64 MiB (the sets of a 197x233x189
+/// volume take 14 MiB; those of 2048^2 slices, over 100 MiB, are freed).
+const KEPT_BYTES: usize = 64 << 20;
+
+/// The kept sets that can hold a slab of `slices` filtered slices of `dims` without
+/// growing (the others are freed).
+fn take_kept(dims: [usize; 3], slices: usize) -> Vec<Buffers> {
+    let mut kept = std::mem::take(&mut *KEPT.lock().unwrap_or_else(PoisonError::into_inner));
+    kept.retain(|b| fits(b, dims, slices));
+    kept
+}
+
+/// Whether `b` holds a slab of `slices` filtered slices of `dims` without growing: as
+/// much room as [`slab_buffers`] makes.
+fn fits((scratch, f): &Buffers, [nx, ny, _]: [usize; 3], slices: usize) -> bool {
+    scratch.capacity() >= (nx + 2) * (ny + 2) * (slices + 2) && f.capacity() >= nx * ny * slices
+}
+
+/// Keeps the pass's sets of buffers for the next pass (up to one per thread, each at
+/// most [`KEPT_BYTES`]).
+fn keep(sets: Vec<Buffers>) {
+    let bytes = |(scratch, f): &Buffers| scratch.bytes() + 4 * f.capacity();
+    let mut kept = KEPT.lock().unwrap_or_else(PoisonError::into_inner);
+    let room = rayon::current_num_threads().saturating_sub(kept.len());
+    kept.extend(
+        sets.into_iter()
+            .filter(|b| bytes(b) <= KEPT_BYTES)
+            .take(room),
+    );
+}
 
 /// Buffers for the slabs of a volume of `dims` that filter at most `slices` slices:
 /// the read box has the prefilter's halo on every side, not only along z. (Sized for
@@ -321,7 +392,7 @@ fn largest_world<'a>(
 
 /// The diagonal of `g` when every other entry is zero and the diagonal's are finite
 /// and non-zero (the affine is a scaling, perhaps with flips, as for most scans).
-fn diagonal(g: &[[f32; 3]; 3]) -> Option<[f32; 3]> {
+pub(super) fn diagonal(g: &[[f32; 3]; 3]) -> Option<[f32; 3]> {
     let off = (0..3).all(|a| (0..3).all(|b| a == b || g[a][b] == 0.0));
     let d = [g[0][0], g[1][1], g[2][2]];
     (off && d.iter().all(|x| x.is_finite() && *x != 0.0)).then_some(d)
@@ -479,6 +550,41 @@ mod tests {
     use super::*;
     use crate::field::{Field, Prefilter};
     use glint_io::{Samples, Volume};
+
+    /// The in-place f32 robust range is glint_io's, bit for bit: spread values with
+    /// outliers, negative and positive zeros, a sparse set whose percentiles coincide
+    /// (the maximum then), a constant, one value, none finite.
+    #[test]
+    fn robust_in_place_is_glint_io_robust_range() {
+        let spread: Vec<f32> = (0..20_011)
+            .map(|i| ((i * 7919 % 10_007) as f32 - 5000.0) * 0.37)
+            .chain([-1.5e37, 1e30, -0.0, 0.0, f32::NAN])
+            .collect();
+        let mut sparse = vec![0.0f32; 5000];
+        sparse[17] = 200.0;
+        sparse[4000] = -0.0;
+        for v in [spread, sparse, vec![3.5; 99], vec![-2.0], vec![f32::NAN; 3]] {
+            let want = glint_io::robust_range(v.len(), |i| f64::from(v[i]))
+                .map(|(a, b)| (a as f32, b as f32));
+            let got = robust_in_place(&mut v.clone());
+            let bits = |r: Option<(f32, f32)>| r.map(|(a, b)| (a.to_bits(), b.to_bits()));
+            assert_eq!(bits(got), bits(want), "{} values", v.len());
+        }
+    }
+
+    /// A kept set of pass buffers serves a later volume only when it holds that
+    /// volume's slabs without growing: made for the same or larger slices, not smaller.
+    #[test]
+    fn kept_buffers_serve_volumes_whose_slabs_they_hold() {
+        let made = slab_buffers([40, 30, 9], 10);
+        assert!(fits(&made, [40, 30, 9], 10));
+        assert!(fits(&made, [40, 30, 500], 10));
+        assert!(fits(&made, [30, 40, 9], 10));
+        assert!(fits(&made, [20, 30, 9], 6));
+        assert!(!fits(&made, [41, 30, 9], 10));
+        assert!(!fits(&made, [40, 30, 9], 11));
+        assert!(!fits(&(Scratch::default(), Vec::new()), [2, 2, 2], 1));
+    }
 
     /// Every slab of the pass reads and filters within the buffers made for it, so
     /// the pass never grows (reallocates and copies) them: thin, flat and cubic
