@@ -9,7 +9,7 @@ use std::time::Instant;
 use glint_io::one_line;
 use glint_render::{Depth, Input, RenderError, Renderer, Scene};
 
-use crate::picture::{mosaic, slices, Window};
+use crate::picture::{mosaic, mosaic_exr, slices, Window, MOSAIC_EXR_FILE};
 use crate::row::{Outputs, Row, Seconds, Status, VolumeInfo};
 use crate::{checksum, os_error, BatchError, Item, Spec};
 
@@ -150,7 +150,9 @@ fn make(
     };
     seconds.slices = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let outputs = write_outputs(item, dir, &picture, cuts.as_ref(), &scene).map_err(fail(&sum))?;
+    let exr = spec.exr.then_some(&picture);
+    let outputs =
+        write_outputs(item, dir, (&picture, exr), cuts.as_ref(), &scene).map_err(fail(&sum))?;
     seconds.write = t.elapsed().as_secs_f64();
     seconds.total = start.elapsed().as_secs_f64();
     let row = Row {
@@ -206,11 +208,12 @@ fn render_views(
     Ok((tiles, scene))
 }
 
-/// Writes the mosaic, the slices (or removes old ones) and the scene.
+/// Writes the mosaic (and its EXR when given, or removes an old one), the slices (or
+/// removes old ones) and the scene.
 fn write_outputs(
     item: &Item,
     dir: &Path,
-    picture: &glint_render::Image,
+    (picture, exr): (&glint_render::Image, Option<&glint_render::Image>),
     cuts: Option<&glint_render::Image>,
     scene: &Scene,
 ) -> Result<Outputs, BatchError> {
@@ -219,6 +222,10 @@ fn write_outputs(
             .map_err(|e| BatchError::Render(RenderError::Encode(e)))
     };
     write_if_changed(&dir.join(MOSAIC_FILE), &png(picture)?)?;
+    match exr {
+        Some(p) => write_if_changed(&dir.join(MOSAIC_EXR_FILE), &mosaic_exr(p)?)?,
+        None => remove_file(&dir.join(MOSAIC_EXR_FILE)),
+    }
     match cuts {
         Some(c) => write_if_changed(&dir.join(SLICES_FILE), &png(c)?)?,
         None => remove_file(&dir.join(SLICES_FILE)),
@@ -259,7 +266,7 @@ pub(crate) fn write_if_changed(path: &Path, bytes: &[u8]) -> Result<(), BatchErr
 
 /// Removes an input's outputs (after a failure: the folder keeps only the row).
 fn remove_outputs(dir: &Path) {
-    for name in [MOSAIC_FILE, SLICES_FILE, SCENE_FILE] {
+    for name in [MOSAIC_FILE, MOSAIC_EXR_FILE, SLICES_FILE, SCENE_FILE] {
         remove_file(&dir.join(name));
     }
 }

@@ -69,7 +69,7 @@ pub use checksum::checksum;
 pub use discover::{discover, Discover, Item, BIDS_ANAT_SUFFIXES, VOLUME_SUFFIXES};
 pub use job::{run_job, Outcome, ROW_FILE};
 pub use local::{finish, run_local, LocalOptions, Summary, REPORT_FILE, RESULTS_FILE};
-pub use picture::{mosaic, slices, Window};
+pub use picture::{mosaic, mosaic_exr, slices, Window, MOSAIC_EXR_FILE};
 pub use report::report_html;
 pub use row::{Outputs, Row, Seconds, Status, VolumeInfo};
 pub use spec::{Spec, FORMAT_VERSION};

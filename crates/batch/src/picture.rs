@@ -6,6 +6,17 @@ use glint_render::{srgb_to_linear, Image, RenderStats};
 
 use crate::BatchError;
 
+/// The linear float mosaic's file name, written beside `mosaic.png` when the spec
+/// asks for it ([`Spec::exr`](crate::Spec::exr)).
+pub const MOSAIC_EXR_FILE: &str = "mosaic.exr";
+
+/// The mosaic's linear radiance as OpenEXR bytes: R, G, B and A as 32-bit floats,
+/// the pixels as rendered before any tone curve, sRGB encoding or clip (the render
+/// crate's writer, [`Image::encode_exr`], the one `glint render -o x.exr` uses).
+pub fn mosaic_exr(picture: &Image) -> Result<Vec<u8>, BatchError> {
+    picture.encode_exr().map_err(BatchError::Render)
+}
+
 /// The views side by side, left to right, on one row (every tile as tall as the
 /// first).
 pub fn mosaic(tiles: &[Image]) -> Result<Image, BatchError> {
@@ -269,5 +280,62 @@ mod tests {
         assert_eq!(w.grey(f64::NAN), 0.0);
         let flat = Window { lo: 3.0, hi: 3.0 };
         assert_eq!((flat.grey(3.0), flat.grey(4.0)), (0.0, 1.0));
+    }
+
+    #[test]
+    fn the_exr_mosaic_holds_the_linear_render_of_each_view() {
+        use crate::{discover, run_job, Discover, Spec, Status};
+        use glint_render::{Phantom, ReadOptions, Renderer, Scene, View};
+        let data = tempfile::tempdir().unwrap();
+        let path = data.path().join("vol.nii.gz");
+        let vol = Phantom::SheppLogan.volume(20).unwrap();
+        glint_io::nifti::write(&path, &vol, true, glint_io::Endian::Little).unwrap();
+        let items = discover(std::slice::from_ref(&path), &Discover::default()).unwrap();
+        let views = vec![View::Left, View::Anterior];
+        let scene = Scene {
+            size: [24, 20],
+            ..Scene::default()
+        };
+        let mut spec = Spec::new(scene, views.clone(), false);
+        spec.exr = true;
+        let out = tempfile::tempdir().unwrap();
+        let row = run_job(&items[0], &spec, out.path(), false).row;
+        assert_eq!(row.status, Status::Ok, "{:?}", row.error);
+        let file = out.path().join(&items[0].id).join(MOSAIC_EXR_FILE);
+        let read = exr::prelude::read_first_rgba_layer_from_file(
+            &file,
+            |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+            |(w, px), p, (r, g, b, a): (f32, f32, f32, f32)| px[p.y() * *w + p.x()] = [r, g, b, a],
+        )
+        .unwrap();
+        let (w, px) = &read.layer_data.channel_data.pixels;
+        assert_eq!((*w, read.layer_data.size.height()), (48, 20));
+        // Each view rendered alone, as `glint render --view V -o x.exr` does: its
+        // floats, bit for bit, in its tile.
+        let mut lit = 0;
+        for (k, &view) in views.iter().enumerate() {
+            let scene = spec.scene_for(&path, view).unwrap();
+            let mut renderer = Renderer::open(&scene, &ReadOptions::default()).unwrap();
+            let alone = renderer.render(&scene, &|_| {}).unwrap().image;
+            for y in 0..20 {
+                for x in 0..24 {
+                    let i = y * 24 + x;
+                    let [r, g, b] = alone.rgb[i];
+                    let got = px[y * 48 + 24 * k + x];
+                    assert_eq!(
+                        got.map(f32::to_bits),
+                        [r, g, b, alone.alpha[i]].map(f32::to_bits),
+                        "{view:?} ({x}, {y})"
+                    );
+                    lit += usize::from(r > 0.0);
+                }
+            }
+        }
+        assert!(lit > 50, "{lit} lit pixels: the views show the phantom");
+        // Without the option a rerun removes the EXR.
+        spec.exr = false;
+        let row = run_job(&items[0], &spec, out.path(), false).row;
+        assert_eq!(row.status, Status::Ok);
+        assert!(!file.exists());
     }
 }

@@ -25,6 +25,9 @@ pub struct Spec {
     pub slices: bool,
     /// Refuse what lenient readers accept with a note (`glint render --strict`).
     pub strict: bool,
+    /// Also write the mosaic's linear radiance as 32-bit float OpenEXR
+    /// ([`MOSAIC_EXR_FILE`](crate::MOSAIC_EXR_FILE), beside the PNG the report shows).
+    pub exr: bool,
 }
 
 impl Spec {
@@ -38,6 +41,7 @@ impl Spec {
             views,
             slices,
             strict: false,
+            exr: false,
         }
     }
 
@@ -70,12 +74,16 @@ impl Spec {
         let scene = serde_json::to_string(&scene)
             .map_err(|e| BatchError::Spec(format!("the scene does not serialise: {e}")))?;
         let views: Vec<&str> = self.views.iter().map(|v| v.name()).collect();
-        let text = format!(
+        let mut text = format!(
             "glint-batch {FORMAT_VERSION}\nscene {scene}\nviews {}\nslices {}\nstrict {}\n",
             views.join(","),
             self.slices,
             self.strict
         );
+        // Only when asked: the keys of PNG-only studies stay what they were.
+        if self.exr {
+            text.push_str("exr true\n");
+        }
         Ok(format!("sha256:{:x}", Sha256::digest(text.as_bytes())))
     }
 
@@ -122,6 +130,10 @@ mod tests {
             },
             Spec {
                 strict: true,
+                ..base.clone()
+            },
+            Spec {
+                exr: true,
                 ..base.clone()
             },
             Spec {

@@ -52,7 +52,9 @@ mod table;
 pub use builtin::{FREESURFER_LUT, TOTALSEGMENTATOR_CLASSES};
 pub use grid::{world_box, LabelExtent, LabelGrid};
 pub use segmentation::cielab_to_srgb;
-pub use surface::{label_surfaces, MAX_SMOOTHING};
+pub use surface::{
+    default_label_smoothing, label_surfaces, label_surfaces_keeping_thin, MAX_SMOOTHING, MIN_KEPT,
+};
 pub use table::{
     generated_color, named_color, LabelEntry, LabelTable, BUILTIN_TABLES, MAX_TABLE_BYTES, OPAQUE,
 };

@@ -21,6 +21,30 @@ use crate::{LabelError, LabelExtent, LabelGrid};
 /// The largest smoothing accepted, in voxels of the grid's coarsest axis.
 pub const MAX_SMOOTHING: f32 = 8.0;
 
+/// The smoothing a label map's surfaces get when none is asked for, in voxels of the
+/// grid's coarsest axis, from its voxel spacing (mm): 1 for grids whose coarsest axis
+/// is at most 1.5 times the finest (isotropic data keep a Gaussian of one voxel), 2
+/// from 2.5 times on (thick slices: 2.5 or 3 mm under 0.7 to 0.8 mm pixels), linear
+/// between.
+///
+/// Why: a shallow surface cut by slices `dz` apart is a staircase of steps `dz` high
+/// and `dz / slope` wide in plane. A Gaussian of `σ = smoothing · dz` damps the
+/// staircase's first harmonic by `exp(-2π² σ² slope²)`: scale-free, so one voxel
+/// leaves the same relative ripple on a 1 mm grid as on a 3 mm one, but the thick
+/// slices' ripple is three times larger on the same organ, and shows as terrace bands
+/// (issue 42, item 6c). On a surface at 11° from the slices (slope 0.19) one voxel
+/// leaves 50% of the ripple, two voxels 6%; the cost is
+/// structures thinner than about `1.2 σ` in radius against the background (measured
+/// in docs/formats.md).
+pub fn default_label_smoothing(spacing: [f64; 3]) -> f32 {
+    let coarsest = spacing.iter().cloned().fold(0.0, f64::max);
+    let finest = spacing.iter().cloned().fold(f64::INFINITY, f64::min);
+    if !(finest > 0.0 && coarsest.is_finite()) {
+        return 1.0;
+    }
+    ((coarsest / finest - 0.5).clamp(1.0, 2.0)) as f32
+}
+
 /// The blur of a grid: per-axis standard deviations (voxels) and kernels.
 struct Blur {
     sigma: [f64; 3],
@@ -97,7 +121,8 @@ fn checked_count(dims: [usize; 3], what: &str) -> Result<usize, LabelError> {
         })
 }
 
-/// The surface of label `value` (whose `extent` is [`LabelGrid::summary`]'s): the zero
+/// The surface of label `value` (whose `extent` is [`LabelGrid::summary`]'s), and the
+/// fraction of the label's voxels whose centres it keeps inside: the zero
 /// level of `g = f - max(b, o)`, where `f` is the label's blurred indicator, `b` the
 /// blurred background (`1 - F`, `F` the blurred foreground) and `o = F - f` the other
 /// labels': the label against its strongest competitor. Where the label meets only the
@@ -110,7 +135,7 @@ fn label_surface(
     extent: &LabelExtent,
     blur: &Blur,
     fg: &Foreground,
-) -> Result<Mesh, LabelError> {
+) -> Result<(Mesh, f64), LabelError> {
     let pad = blur.pad;
     let size: [usize; 3] = std::array::from_fn(|a| extent.hi[a] - extent.lo[a] + 1 + 2 * pad[a]);
     let count = checked_count(size, &format!("label {value}'s crop"))?;
@@ -141,13 +166,26 @@ fn label_surface(
             }
         }
     }
+    let mut kept = 0u64;
+    for k in extent.lo[2]..=extent.hi[2] {
+        for j in extent.lo[1]..=extent.hi[1] {
+            let row = nx * (j + ny * k);
+            let out = size[0] * (j - extent.lo[1] + pad[1] + size[1] * (k - extent.lo[2] + pad[2]));
+            for i in extent.lo[0]..=extent.hi[0] {
+                if grid.labels[row + i] == value && values[out + i - extent.lo[0] + pad[0]] > 0.0 {
+                    kept += 1;
+                }
+            }
+        }
+    }
+    let kept = kept as f64 / extent.voxels.max(1) as f64;
     let mut affine = grid.affine;
     for row in affine.iter_mut().take(3) {
         row[3] += (0..3)
             .map(|a| row[a] * (extent.lo[a] as f64 - pad[a] as f64))
             .sum::<f64>();
     }
-    Ok(glint_mesh::extract_grid(&values, size, &affine, 0.0)?)
+    Ok((glint_mesh::extract_grid(&values, size, &affine, 0.0)?, kept))
 }
 
 /// The surfaces of the labels in `values` that the grid holds, in world mm: normals
@@ -162,14 +200,71 @@ pub fn label_surfaces(
     values: &[u32],
     smoothing: f32,
 ) -> Result<Vec<(u32, Mesh)>, LabelError> {
+    let surfaces = surfaces_at(grid, values, smoothing)?;
+    Ok(surfaces.into_iter().map(|(v, m, _)| (v, m)).collect())
+}
+
+/// The surfaces of `values` at `smoothing`, with the fraction of each label's voxels
+/// they keep.
+fn surfaces_at(
+    grid: &LabelGrid,
+    values: &[u32],
+    smoothing: f32,
+) -> Result<Vec<(u32, Mesh, f64)>, LabelError> {
     let blur = Blur::new(grid, smoothing)?;
     let summary = grid.summary();
     let fg = Foreground::new(grid, &blur)?;
     values
         .par_iter()
         .filter_map(|v| summary.get(v).map(|e| (*v, e)))
-        .map(|(v, e)| label_surface(grid, v, e, &blur, &fg).map(|m| (v, m)))
+        .map(|(v, e)| label_surface(grid, v, e, &blur, &fg).map(|(m, k)| (v, m, k)))
         .collect()
+}
+
+/// The least fraction of a label's voxels (their centres) that the default smoothing
+/// must keep inside the label's surface; a thinner label keeps one voxel's smoothing
+/// ([`label_surfaces_keeping_thin`]).
+pub const MIN_KEPT: f64 = 0.8;
+
+/// The surfaces of [`label_surfaces`] at `smoothing`, but each label whose surface
+/// would keep less than [`MIN_KEPT`] of its voxels inside (a vessel, a rib, a
+/// cartilage a few voxels thick, which a wide Gaussian thins or removes: the blurred
+/// indicator of a slab of half-thickness `t` stays above one half only while
+/// `t > 0.67 σ`) extracted at `fallback` instead. Returns, per label, the surface and
+/// the smoothing it got. Where a thin label meets another, the two surfaces come
+/// from different blurs and no longer share their vertices (a sliver of gap or
+/// overlap along the contact).
+pub fn label_surfaces_keeping_thin(
+    grid: &LabelGrid,
+    values: &[u32],
+    smoothing: f32,
+    fallback: f32,
+) -> Result<Vec<(u32, Mesh, f32)>, LabelError> {
+    let first = surfaces_at(grid, values, smoothing)?;
+    let thin: Vec<u32> = (first.iter())
+        .filter(|(_, _, kept)| *kept < MIN_KEPT)
+        .map(|(v, _, _)| *v)
+        .collect();
+    let mut again = if thin.is_empty() || fallback == smoothing {
+        Vec::new()
+    } else {
+        surfaces_at(grid, &thin, fallback)?
+    }
+    .into_iter();
+    let mut next = again.next();
+    Ok(first
+        .into_iter()
+        .map(|(v, m, _)| match next.take() {
+            Some((w, m2, _)) if w == v => {
+                next = again.next();
+                (v, m2, fallback)
+            }
+            other => {
+                next = other;
+                (v, m, smoothing)
+            }
+        })
+        .collect())
 }
 
 /// A normalised Gaussian of standard deviation `sigma` over `-radius..=radius`.

@@ -6,7 +6,10 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glint_io::{Mesh, Samples, Volume};
-use glint_labels::{label_surfaces, LabelError, LabelGrid, LabelTable, FREESURFER_LUT};
+use glint_labels::{
+    default_label_smoothing, label_surfaces, label_surfaces_keeping_thin, LabelError, LabelGrid,
+    LabelTable, FREESURFER_LUT,
+};
 
 #[test]
 fn freesurfer_table_has_every_line_of_the_lut() {
@@ -340,4 +343,103 @@ fn table_alpha_from_freesurfer_slicer_and_json() {
     // FreeSurfer's own LUT: every structure opaque (its column is 0 throughout).
     let fs = LabelTable::freesurfer();
     assert!(fs.entries().all(|(_, e)| e.alpha == 255));
+}
+
+#[test]
+fn the_default_smoothing_follows_the_slices_against_the_pixels() {
+    // Isotropic grids (and nearly: rounding in a header) keep one voxel: their images
+    // stay as they were.
+    for spacing in [[1.0; 3], [0.98, 1.0, 1.0], [0.5, 0.5, 0.75], [3.0; 3]] {
+        assert_eq!(default_label_smoothing(spacing), 1.0, "{spacing:?}");
+    }
+    // Thick slices: the chest sample's 2.5 mm under 0.703 mm pixels, an abdominal
+    // CT's 3 mm under 0.8 mm.
+    assert_eq!(default_label_smoothing([0.703, 0.703, 2.5]), 2.0);
+    assert_eq!(default_label_smoothing([0.8, 3.0, 0.8]), 2.0);
+    assert_eq!(default_label_smoothing([1.0, 1.0, 2.0]), 1.5);
+    // A degenerate spacing (refused when a grid is read) falls back to one voxel.
+    assert_eq!(default_label_smoothing([0.0, 1.0, 1.0]), 1.0);
+}
+
+/// The RMS angle (degrees) between the normals of `m`'s vertices on the tilted top
+/// of the slab below and the slab's true normal (vertices at least 12 mm inside the
+/// grid's sides in x and y, facing up).
+fn terrace_rms(m: &Mesh, slope: f64, side: f32) -> f64 {
+    let n = m.normals.as_ref().unwrap();
+    let truth = {
+        let l = (1.0 + slope * slope).sqrt();
+        [-slope / l, 0.0, 1.0 / l]
+    };
+    let angles: Vec<f64> = (m.positions.iter().zip(n))
+        .filter(|(p, n)| {
+            (12.0..side - 12.0).contains(&p[0]) && (12.0..side - 12.0).contains(&p[1]) && n[2] > 0.5
+        })
+        .map(|(_, n)| {
+            let dot: f64 = (0..3).map(|a| f64::from(n[a]) * truth[a]).sum();
+            dot.clamp(-1.0, 1.0).acos().to_degrees()
+        })
+        .collect();
+    assert!(angles.len() > 100, "{} vertices on the top", angles.len());
+    (angles.iter().map(|a| a * a).sum::<f64>() / angles.len() as f64).sqrt()
+}
+
+#[test]
+fn the_default_smoothing_removes_the_terraces_of_thick_slices() {
+    // A slab whose top rises 1 mm per 5 mm in x (11 degrees from the slices), on 3 mm
+    // slices under 0.75 mm pixels: its voxels are terraces 3 mm high, 15 mm wide.
+    let slope = 0.2;
+    let (nxy, nz) = (96, 14);
+    let spacing = [0.75, 0.75, 3.0];
+    let vol = volume([nxy, nxy, nz], spacing, |x, _, z| {
+        let (xm, zm) = (x as f64 * spacing[0], z as f64 * spacing[2]);
+        u8::from(zm < 12.0 + slope * xm)
+    });
+    let grid = LabelGrid::from_volume(&vol).unwrap();
+    let side = (nxy - 1) as f32 * 0.75;
+    let rms = |s: f32| terrace_rms(&label_surfaces(&grid, &[1], s).unwrap()[0].1, slope, side);
+    let (one, default) = (rms(1.0), rms(default_label_smoothing(grid.spacing())));
+    // Terrace bands: one voxel leaves half the staircase's ripple (its first harmonic
+    // damped by exp(-2 pi^2 0.2^2) = 0.45), two voxels 4% of it.
+    assert!(
+        one > 3.0 * default,
+        "RMS {one:.2} deg at 1 voxel, {default:.2} at the default"
+    );
+    assert!(default < 2.0, "RMS {default:.2} deg at the default");
+}
+
+#[test]
+fn thin_labels_keep_one_voxels_smoothing() {
+    // On 3 mm slices under 0.75 mm pixels: label 1 a rod 9 mm across (3 slices, 12
+    // pixels) running along x (a vessel, a rib), label 2 a block 60 mm on a side beside
+    // it (an organ: a Gaussian of 6 mm rounds its edges off, losing 9% of its voxels).
+    let spacing = [0.75, 0.75, 3.0];
+    let vol = volume([96, 120, 22], spacing, |x, y, z| {
+        if (8..88).contains(&x) && (8..20).contains(&y) && (10..13).contains(&z) {
+            1
+        } else if (8..88).contains(&x) && (32..112).contains(&y) && (1..21).contains(&z) {
+            2
+        } else {
+            0
+        }
+    });
+    let grid = LabelGrid::from_volume(&vol).unwrap();
+    let s = default_label_smoothing(grid.spacing());
+    assert_eq!(s, 2.0);
+    // A Gaussian of 6 mm removes the rod (its blurred indicator stays under 1/2)...
+    let raw = label_surfaces(&grid, &[1, 2], s).unwrap();
+    assert!(
+        raw[0].1.triangles.is_empty(),
+        "the rod survived a 6 mm blur"
+    );
+    // ...so it keeps one voxel's (3 mm), which keeps it; the block keeps the default.
+    let kept = label_surfaces_keeping_thin(&grid, &[1, 2], s, 1.0).unwrap();
+    let one = label_surfaces(&grid, &[1], 1.0).unwrap();
+    assert_eq!((kept[0].0, kept[0].2), (1, 1.0));
+    assert_eq!(kept[0].1, one[0].1);
+    assert!(is_closed(&kept[0].1) && enclosed_volume(&kept[0].1) > 0.0);
+    assert_eq!((kept[1].0, kept[1].2), (2, 2.0));
+    assert_eq!(kept[1].1, raw[1].1);
+    // With a fallback equal to the smoothing nothing changes.
+    let same = label_surfaces_keeping_thin(&grid, &[1, 2], 1.0, 1.0).unwrap();
+    assert!(same.iter().zip(&one).all(|(a, b)| a.0 == b.0 && a.2 == 1.0));
 }

@@ -11,15 +11,10 @@ use std::sync::Arc;
 use glint_core::{srgb_to_linear, Legend, RenderError};
 use glint_io::affine::{inverse3, linear_part, mul3};
 use glint_io::{read_volume, Mesh, ReadOptions};
-use glint_labels::{label_surfaces, LabelGrid, LabelTable};
+use glint_labels::{default_label_smoothing, label_surfaces_keeping_thin, LabelGrid, LabelTable};
 use glint_volume::{LabelLook, LabelVolume};
 
 use serde::{Deserialize, Serialize};
-
-/// Smoothing of label surfaces when the scene gives none: a Gaussian of one voxel
-/// (of the label grid's coarsest axis) removes the voxel stairs and keeps structures
-/// a few voxels thin (ribs, vessels) whole. glint's choice.
-pub const DEFAULT_LABEL_SMOOTHING: f32 = 1.0;
 
 /// A label map of a scene: which file, which colour table, which labels.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -43,7 +38,10 @@ pub struct LabelSpec {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub hide: Vec<String>,
     /// Gaussian smoothing of the surfaces, in voxels of the label grid's coarsest axis
-    /// (default [`DEFAULT_LABEL_SMOOTHING`]; 0: voxel stairs).
+    /// (default from the grid's spacing, [`glint_labels::default_label_smoothing`]: 1
+    /// for isotropic grids, 2 for thick slices; 0: voxel stairs). A label it would
+    /// thin below [`glint_labels::MIN_KEPT`] of its voxels gets one voxel's at most
+    /// ([`glint_labels::label_surfaces_keeping_thin`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub smoothing: Option<f32>,
     /// Whether the image lists the labels shown (default: yes).
@@ -143,12 +141,19 @@ impl LabelSpec {
         LabelTable::default_for(path).map(str::to_string)
     }
 
-    /// Writes the defaults (table, smoothing) into the spec.
-    pub(crate) fn resolve(&mut self) {
+    /// Writes the defaults into the spec: the table, and the smoothing
+    /// (`default_smoothing`, the label grid's: [`LabelLookup::default_smoothing`]).
+    pub(crate) fn resolve(&mut self, default_smoothing: f32) {
+        self.resolve_table();
+        self.smoothing.get_or_insert(default_smoothing);
+    }
+
+    /// Writes the default table into the spec (the smoothing's default needs the
+    /// label grid: [`LabelSpec::resolve`]).
+    pub(crate) fn resolve_table(&mut self) {
         if self.table.is_none() {
             self.table = LabelSpec::default_table(&self.path);
         }
-        self.smoothing.get_or_insert(DEFAULT_LABEL_SMOOTHING);
     }
 
     fn error(&self, e: impl std::error::Error + Send + Sync + 'static) -> RenderError {
@@ -188,7 +193,8 @@ pub(crate) struct LabelMeshes {
 }
 
 impl LabelMeshes {
-    /// Reads `spec`'s label volume and table (`spec` resolved: [`LabelSpec::resolve`])
+    /// Reads `spec`'s label volume and table (`spec`'s table resolved:
+    /// [`LabelSpec::resolve_table`]; no smoothing: the grid's default)
     /// and extracts the surfaces of the labels it shows. `image` is the scene's volume
     /// file, the grid an RT structure set's contours are rasterised onto.
     pub(crate) fn build(
@@ -246,12 +252,16 @@ impl LabelMeshes {
                     "per-label opacity applies to a label volume (labels as volume or both); surfaces are opaque".into(),
                 ));
             }
-            let smoothing = spec.smoothing.unwrap_or(DEFAULT_LABEL_SMOOTHING);
-            let surfaces = label_surfaces(&grid, &values, smoothing).map_err(|e| spec.error(e))?;
+            let smoothing =
+                (spec.smoothing).unwrap_or_else(|| default_label_smoothing(grid.spacing()));
+            // Labels thinner than the smoothing keeps whole take one voxel's at most.
+            let surfaces =
+                label_surfaces_keeping_thin(&grid, &values, smoothing, smoothing.min(1.0))
+                    .map_err(|e| spec.error(e))?;
             surfaces
                 .into_iter()
-                .filter(|(_, m)| !m.triangles.is_empty())
-                .map(|(v, m)| (m, (linear(v), v)))
+                .filter(|(_, m, _)| !m.triangles.is_empty())
+                .map(|(v, m, _)| (m, (linear(v), v)))
                 .unzip()
         } else {
             (Vec::new(), Vec::new())
@@ -357,6 +367,8 @@ pub(crate) struct LabelLookup {
     to_index: ([[f64; 3]; 3], [f64; 3]),
     voxels: LabelVoxels,
     table: LabelTable,
+    /// The grid's default surface smoothing ([`default_label_smoothing`]).
+    default_smoothing: f32,
 }
 
 /// A label grid's values, two bytes a voxel when every value fits (nearly every
@@ -375,6 +387,7 @@ impl LabelLookup {
         // which glint-io checked to be invertible; a singular one finds no label.
         let inverse = inverse3(&linear).unwrap_or([[f64::NAN; 3]; 3]);
         let shift = [0, 1, 2].map(|r| grid.affine[r][3]);
+        let default_smoothing = default_label_smoothing(grid.spacing());
         let voxels = match grid.labels.iter().all(|&v| v <= u32::from(u16::MAX)) {
             true => LabelVoxels::U16(grid.labels.iter().map(|&v| v as u16).collect()),
             false => LabelVoxels::U32(grid.labels),
@@ -384,7 +397,14 @@ impl LabelLookup {
             to_index: (inverse, shift),
             voxels,
             table,
+            default_smoothing,
         }
+    }
+
+    /// The smoothing of the grid's surfaces when the scene gives none
+    /// ([`default_label_smoothing`] of its spacing).
+    pub(crate) fn default_smoothing(&self) -> f32 {
+        self.default_smoothing
     }
 
     /// The name of label `id` in the table.

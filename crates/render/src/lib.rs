@@ -92,6 +92,7 @@ pub use glint_core::{Clip, ClipPlane, CropBox, HalfSpace};
 pub use glint_gpu as gpu;
 pub use glint_io::ReadOptions;
 pub use glint_labels as label_maps;
+pub use glint_labels::default_label_smoothing;
 pub use glint_mesh as mesh;
 pub use glint_mesh::vertex_normals;
 pub use glint_raster::{SurfaceSettings, Surfaces, SSAA_FACTORS, SURFACE_COLOR};
@@ -107,7 +108,7 @@ pub use glint_volume::{
     MAX_SPP,
 };
 pub use glint_volume::{PathFeatures, FEATURE_OPACITY};
-pub use labels::{label_read_options, LabelSpec, LabelsAs, PickLabel, DEFAULT_LABEL_SMOOTHING};
+pub use labels::{label_read_options, LabelSpec, LabelsAs, PickLabel};
 pub use meshes::{MeshSpec, Overlay, DEFAULT_SSAA, SURFACE_MATERIAL, SURFACE_SHININESS};
 pub use pick::{image_point, Pick, PickedObject};
 pub use renderer::{InMemory, Rendered, Renderer};

@@ -393,7 +393,7 @@ impl Renderer {
             None
         };
         let labels = scene.labels.clone().map(|mut l| {
-            l.resolve();
+            l.resolve_table();
             l
         });
         let key = MeshKey::new(&scene.meshes, iso, labels.as_ref());

@@ -76,7 +76,8 @@ fn labels_render_in_their_table_colours_with_a_legend() {
     // The file is named like FreeSurfer's: its table was chosen and written back.
     let spec = rendered.scene.labels.as_ref().unwrap();
     assert_eq!(spec.table.as_deref(), Some("freesurfer"));
-    assert_eq!(spec.smoothing, Some(glint_render::DEFAULT_LABEL_SMOOTHING));
+    // Its grid is isotropic: the smoothing of one voxel.
+    assert_eq!(spec.smoothing, Some(1.0));
     let legend = rendered.legend.as_ref().unwrap();
     let names: Vec<&str> = legend.entries.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(names, ["Left-Hippocampus", "Left-Amygdala"]);

@@ -70,6 +70,11 @@ struct Options {
     /// Also write three orthogonal slices per input, for quality control.
     #[arg(long)]
     slices: bool,
+    /// Also write OUT/<id>/mosaic.exr: the mosaic's linear radiance as 32-bit float
+    /// OpenEXR (RGBA, before the sRGB encoding and clip; as `glint render -o x.exr`),
+    /// beside mosaic.png.
+    #[arg(long)]
+    exr: bool,
     /// BIDS datasets: the anat/ suffixes to take [default: T1w, T2w, PDw, T2starw,
     /// FLAIR, inplaneT1, inplaneT2, PDT2, angio].
     #[arg(
@@ -203,6 +208,7 @@ fn spec(args: &Options) -> anyhow::Result<Spec> {
     };
     let mut spec = Spec::new(scene, views, args.slices);
     spec.strict = args.scene.strict;
+    spec.exr = args.exr;
     spec.check()?;
     Ok(spec)
 }

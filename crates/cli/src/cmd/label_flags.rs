@@ -28,7 +28,8 @@ pub struct LabelFlags {
     #[arg(long, value_name = "LABELS", value_delimiter = ',')]
     pub hide: Vec<String>,
     /// Gaussian smoothing of the label surfaces, in voxels of the label grid's
-    /// coarsest axis (0: voxel stairs) [default: 1].
+    /// coarsest axis (0: voxel stairs) [default: 1 for isotropic grids, 2 for slices
+    /// 2.5 times their pixels or more (thick slices' terraces), linear between].
     #[arg(long, value_name = "VOXELS")]
     pub label_smoothing: Option<f32>,
     /// No legend of the labels shown.

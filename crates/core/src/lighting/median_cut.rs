@@ -36,6 +36,24 @@ impl EnvMap {
     /// surface facing it. A region without energy gives no light, so a black map
     /// gives none.
     pub fn median_cut(&self, splits: u32) -> Vec<(Vec3, f32)> {
+        (self.cut(splits).into_iter())
+            .map(|(d, e, _)| (d, e))
+            .collect()
+    }
+
+    /// The lights of [`EnvMap::median_cut`] (the same regions and directions) with
+    /// their colour: per region the RGB power `Σ L_c · intensity · dω` over its texels
+    /// for each channel `c`, so the lights carry the map's tint as well as its energy
+    /// (their luminances are `median_cut`'s energies). The powers of all lights sum to
+    /// the map's integral `∫ L dω` per channel.
+    pub fn median_cut_rgb(&self, splits: u32) -> Vec<(Vec3, [f32; 3])> {
+        (self.cut(splits).into_iter())
+            .map(|(d, _, rgb)| (d, rgb))
+            .collect()
+    }
+
+    /// The median cut's lights: direction, energy (luminance) and RGB power.
+    fn cut(&self, splits: u32) -> Vec<(Vec3, f32, [f32; 3])> {
         let [w, h] = self.size().map(|s| s as usize);
         let d_omega = (2.0 * PI / w as f32) * (PI / h as f32);
         let sin: Vec<f32> = (0..h)
@@ -73,9 +91,15 @@ impl EnvMap {
         (regions.iter())
             .filter_map(|r| {
                 let mut c = [0.0f64; 3];
+                let mut rgb = [0.0f64; 3];
                 for y in r.y0..r.y1 {
                     let theta = PI * (y as f32 + 0.5) / h as f32;
+                    let weight = f64::from(sin[y] * d_omega);
                     for x in r.x0..r.x1 {
+                        let t = self.texels()[y * w + x];
+                        for (p, v) in rgb.iter_mut().zip(t) {
+                            *p += f64::from(v) * weight;
+                        }
                         let e = f64::from(energy[y * w + x]);
                         if e == 0.0 {
                             continue;
@@ -93,7 +117,8 @@ impl EnvMap {
                 }
                 let e = sum(r) as f32 * self.intensity();
                 let dir = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32).normalize_or_zero();
-                (e > 0.0 && dir != Vec3::ZERO).then_some((dir, e))
+                let rgb = rgb.map(|p| p as f32 * self.intensity());
+                (e > 0.0 && dir != Vec3::ZERO).then_some((dir, e, rgb))
             })
             .collect()
     }

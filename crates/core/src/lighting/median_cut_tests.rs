@@ -127,3 +127,61 @@ fn a_black_map_gives_no_light() {
     assert!(map.median_cut(3).is_empty());
     assert_eq!(map.mean_luminance(), 0.0);
 }
+
+#[test]
+fn a_red_and_blue_map_gives_red_and_blue_lights_of_its_whole_power() {
+    // Red radiance (1, 0, 0) towards +z (rows of polar angle under 90°), blue
+    // (0, 0, b) towards -z, b chosen so both hemispheres hold the same luminance
+    // (0.2126 = 0.0722 b): the energy's median in polar angle is the equator, so
+    // every region after the third split is one colour.
+    let (w, h) = (512, 256);
+    let b = 0.2126 / 0.0722;
+    let texels: Vec<[f32; 3]> = (0..w * h)
+        .map(|i| {
+            if i / w < h / 2 {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 0.0, b]
+            }
+        })
+        .collect();
+    let intensity = 2.0;
+    let map = EnvMap::new(w as u32, h as u32, texels)
+        .unwrap()
+        .placed(25.0, intensity)
+        .unwrap();
+    for splits in [3, 4, 6] {
+        let lights = map.median_cut_rgb(splits);
+        assert_eq!(lights.len(), 1 << splits);
+        for &(d, [r, g, bl]) in &lights {
+            assert_eq!(g, 0.0);
+            if d.z > 0.0 {
+                assert!(r > 0.0 && bl == 0.0, "{d:?}: {r} {g} {bl}");
+            } else {
+                assert!(r == 0.0 && bl > 0.0, "{d:?}: {r} {g} {bl}");
+            }
+        }
+        // Each hemisphere's power is its radiance times 2π sr, the intensity applied.
+        let total = lights.iter().fold([0.0f64; 3], |mut t, (_, p)| {
+            for c in 0..3 {
+                t[c] += f64::from(p[c]);
+            }
+            t
+        });
+        let truth = [1.0, 0.0, f64::from(b)].map(|l| l * 2.0 * std::f64::consts::PI * 2.0);
+        for c in [0, 2] {
+            assert!(
+                (total[c] - truth[c]).abs() < 1e-4 * truth[c],
+                "{splits} splits, channel {c}: {} against {}",
+                total[c],
+                truth[c]
+            );
+        }
+        // The luminance of each light's power is median_cut's energy, same direction.
+        for ((d, p), (d2, e)) in lights.iter().zip(map.median_cut(splits)) {
+            assert_eq!(*d, d2);
+            let lum = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+            assert!((lum - e).abs() < 1e-4 * e, "{lum} {e}");
+        }
+    }
+}

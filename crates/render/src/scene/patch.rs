@@ -115,6 +115,13 @@ impl Scene {
         if matches!(field, "preset" | "transfer_function") && !also_set("window_level") {
             self.window_level = None;
         }
+        // A preset brings its sampling: pre-integrated when its opacity is steep
+        // (moiré otherwise, issue 42 item 6d); an unknown name is refused later.
+        if field == "preset" && !also_set("sampling") {
+            if let Some(p) = (self.preset.as_deref()).and_then(|n| glint_volume::preset(n).ok()) {
+                self.sampling = p.sampling();
+            }
+        }
         match field {
             "preset" if !also_set("transfer_function") => self.transfer_function = None,
             "transfer_function" if !also_set("preset") => self.preset = None,
@@ -248,5 +255,27 @@ mod tests {
                 size: 16
             }
         );
+    }
+
+    #[test]
+    fn a_steep_preset_brings_pre_integration() {
+        use glint_volume::Sampling;
+        let scene = Scene::default();
+        assert_eq!(scene.sampling, Sampling::Point);
+        let mut edited = scene.clone();
+        edited.set_preset("ct-soft-tissue");
+        assert_eq!(edited.sampling, Sampling::PreIntegrated);
+        let next = patched(&scene, json!({"preset": "ct-soft-tissue"})).unwrap();
+        assert_eq!(next, edited);
+        // Back to a gentle preset: point sampling again.
+        edited.set_preset("ct-bone");
+        assert_eq!(edited.sampling, Sampling::Point);
+        // Sampling set in the same edit wins.
+        let both = patched(
+            &scene,
+            json!({"preset": "ct-soft-tissue", "sampling": "point"}),
+        )
+        .unwrap();
+        assert_eq!(both.sampling, Sampling::Point);
     }
 }

@@ -318,7 +318,9 @@ impl Scene {
             .collect();
         mesh_colors.extend(&set.extra_colors);
         if let Some(l) = &mut self.labels {
-            l.resolve();
+            // A scene with labels has their lookup in its mesh set.
+            let smoothing = (set.labels.as_ref()).map_or(1.0, |k| k.default_smoothing());
+            l.resolve(smoothing);
         }
         let colors = set.resolve_overlays(&mut self.meshes)?;
         let settings = SurfaceSettings {

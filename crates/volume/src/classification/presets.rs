@@ -13,6 +13,7 @@
 //! presets are *relative*: their values are scaled so the preset's last point lands on
 //! the volume's maximum.
 
+use super::preint::Sampling;
 use super::tf::TransferFunction;
 use glint_core::Material;
 use glint_core::RenderError;
@@ -63,7 +64,40 @@ impl Preset {
     pub fn specular_power(&self) -> f64 {
         self.material[3] as f64
     }
+
+    /// Whether the preset's opacity is steep: somewhere it changes by 1 over less than
+    /// [`STEEP_FRACTION`] of the function's domain (under 29 HU for Slicer's CT
+    /// presets, whose domain is -2048..3661: `ct-soft-tissue` goes from 0 to 1 over
+    /// 7 HU). A step of half a voxel crosses such a ramp at a skin or vessel edge
+    /// between two samples, and where the crossing falls varies slowly over the image:
+    /// moiré (issue 42, item 6d). Such presets are pre-integrated by default
+    /// ([`Preset::sampling`]).
+    pub fn is_steep(&self) -> bool {
+        let points: Vec<(f64, f64)> = self.opacity.chunks(2).map(|p| (p[0], p[1])).collect();
+        let span = match (points.first(), points.last()) {
+            (Some(a), Some(b)) if b.0 > a.0 => b.0 - a.0,
+            _ => return false,
+        };
+        (points.windows(2)).any(|w| {
+            let (dv, da) = (w[1].0 - w[0].0, (w[1].1 - w[0].1).abs());
+            da > 0.0 && da * span * STEEP_FRACTION > dv
+        })
+    }
+
+    /// The sampling a scene takes when it chooses this preset: pre-integrated for a
+    /// steep preset ([`Preset::is_steep`]), else point sampling.
+    pub fn sampling(&self) -> Sampling {
+        if self.is_steep() {
+            Sampling::PreIntegrated
+        } else {
+            Sampling::Point
+        }
+    }
 }
+
+/// The fraction of a preset's domain under which an opacity change of 1 is steep
+/// ([`Preset::is_steep`]).
+pub const STEEP_FRACTION: f64 = 1.0 / 200.0;
 
 macro_rules! preset {
     ($name:literal, [$($o:expr),*], [$($c:expr),*], [$a:expr, $d:expr, $s:expr, $p:expr], $shade:expr, $rel:expr) => {
@@ -453,6 +487,29 @@ mod tests {
                 .unwrap_or_else(|e| panic!("{}: {e}", p.name));
             assert!(tf.validate().is_ok());
             assert!(p.material().validate().is_ok(), "{}", p.name);
+        }
+    }
+
+    #[test]
+    fn steep_presets_are_the_narrow_ramps() {
+        // ct-soft-tissue: opacity 0 to 1 over -167..-160 HU; ct-lung over 0.15 per HU.
+        for name in ["ct-soft-tissue", "ct-lung", "ct-fat", "mr-angio"] {
+            let p = preset(name).unwrap();
+            assert!(p.is_steep(), "{name}");
+            assert_eq!(p.sampling(), Sampling::PreIntegrated, "{name}");
+        }
+        // Ramps of hundreds of HU, and the phantom's (0.02 of its 0..1 domain).
+        for name in [
+            "ct-bone",
+            "ct-muscle",
+            "mr-t2-brain",
+            "mr-default",
+            "phantom",
+            "ct-aaa",
+        ] {
+            let p = preset(name).unwrap();
+            assert!(!p.is_steep(), "{name}");
+            assert_eq!(p.sampling(), Sampling::Point, "{name}");
         }
     }
 
