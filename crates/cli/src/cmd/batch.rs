@@ -70,9 +70,9 @@ struct Options {
     /// Also write three orthogonal slices per input, for quality control.
     #[arg(long)]
     slices: bool,
-    /// Also write OUT/<id>/mosaic.exr: the mosaic's linear radiance as 32-bit float
-    /// OpenEXR (RGBA, before the sRGB encoding and clip; as `glint render -o x.exr`),
-    /// beside mosaic.png.
+    /// Also write the mosaic's linear radiance beside each mosaic.png, as mosaic.exr:
+    /// 32-bit float OpenEXR (RGBA, before the sRGB encoding and clip; as `glint
+    /// render -o x.exr`).
     #[arg(long)]
     exr: bool,
     /// BIDS datasets: the anat/ suffixes to take [default: T1w, T2w, PDw, T2starw,
