@@ -608,8 +608,8 @@ fn simd_rays_are_the_scalar_rays_on_axis_aligned_views() {
 
 #[test]
 fn simd_tricubic_is_the_scalar_tricubic_within_rounding() {
-    // The SIMD loop evaluates the B-spline as eight trilinear fetches per sample, the
-    // scalar loop from the 64 taps: the same spline up to float rounding, so the same
+    // The SIMD loop evaluates the B-spline from its 64 taps read as 16 four-wide rows
+    // per sample, the scalar loop tap by tap: the same spline up to float rounding, so the same
     // image within a small tolerance, in `local` and `shadows`, point sampled and
     // pre-integrated, with the gradients (and so the shading) the scalar loop's.
     let mut renderer = Renderer::from_source(shepp_logan(40), None).unwrap();
